@@ -1,0 +1,36 @@
+# Two commands do everything on a fresh machine:
+#   make run    install into .venv, train a short run, evaluate it, write the figures
+#   make test   install into .venv (with test extras), lint, run the test suite
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+RUN_DIR ?= runs/quickstart
+
+.PHONY: install install-test run test lint bench clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+
+install: $(BIN)/python
+	$(BIN)/pip install --quiet torch==2.13.0
+	$(BIN)/pip install --quiet -e ".[train,export]"
+
+install-test: install
+	$(BIN)/pip install --quiet -e ".[train,export,test]"
+
+run: install
+	$(BIN)/activevision quickstart --out $(RUN_DIR)
+
+lint: install-test
+	$(BIN)/ruff check src tests bench
+
+test: install-test
+	$(BIN)/ruff check src tests bench
+	NUMBA_CACHE_DIR=$(CURDIR)/.numba_cache $(BIN)/python -m pytest -q tests
+
+bench: install
+	for b in bench/*.py; do $(BIN)/python $$b || exit 1; done
+
+clean:
+	rm -rf $(VENV) .numba_cache build *.egg-info src/*.egg-info
