@@ -76,8 +76,11 @@ class CameraConfig:
 def head_in_limits(pan, tilt, cam: CameraConfig) -> np.ndarray:
     """True where the head angles lie within the (closed) limits."""
     pan, tilt = np.asarray(pan), np.asarray(tilt)
-    return (pan >= cam.pan_min) & (pan <= cam.pan_max) & (tilt >= cam.tilt_min) & (
-        tilt <= cam.tilt_max
+    return (
+        (pan >= cam.pan_min)
+        & (pan <= cam.pan_max)
+        & (tilt >= cam.tilt_min)
+        & (tilt <= cam.tilt_max)
     )
 
 
@@ -166,7 +169,9 @@ def pixel_to_ground(uv, pose, pan, tilt, cam: CameraConfig):
         ],
         axis=-1,
     )
-    rays = np.einsum("nji,n...j->n...i", rot, np.broadcast_to(rays_cam, (len(pose),) + uv.shape[-2:-1] + (3,)))
+    rays = np.einsum(
+        "nji,n...j->n...i", rot, np.broadcast_to(rays_cam, (len(pose),) + uv.shape[-2:-1] + (3,))
+    )
     valid = rays[..., 2] < -1e-12
     with np.errstate(divide="ignore", invalid="ignore"):
         scale = np.where(valid, cam.camera_height / -rays[..., 2], np.nan)
@@ -180,13 +185,12 @@ def image_halfplanes(pose, pan, tilt, cam: CameraConfig) -> np.ndarray:
     four rows (left, right, top, bottom border). Together they also imply depth > 0."""
     g = ground_to_pixel_homography(pose, pan, tilt, cam)
     u_row, v_row, w_row = g[:, 0], g[:, 1], g[:, 2]
-    return np.stack(
-        [u_row, cam.width * w_row - u_row, v_row, cam.height * w_row - v_row], axis=1
-    )
+    return np.stack([u_row, cam.width * w_row - u_row, v_row, cam.height * w_row - v_row], axis=1)
 
 
-def footprint_polygon(pose, pan, tilt, cam: CameraConfig, max_distance: float = 4.0,
-                      points_per_side: int = 16) -> np.ndarray:
+def footprint_polygon(
+    pose, pan, tilt, cam: CameraConfig, max_distance: float = 4.0, points_per_side: int = 16
+) -> np.ndarray:
     """The ground seen by each camera, up to ``max_distance`` (horizontal, from the robot).
 
     The image border is sampled and back-projected; rays that miss the ground (above the
@@ -208,7 +212,11 @@ def footprint_polygon(pose, pan, tilt, cam: CameraConfig, max_distance: float = 
     pose = np.atleast_2d(np.asarray(pose, float))
     rot = world_to_camera_rotation(pose[:, 2] + np.asarray(pan), np.asarray(tilt))
     rays_cam = np.stack(
-        [(border[:, 0] - w / 2) / cam.focal, (border[:, 1] - h / 2) / cam.focal, np.ones(len(border))],
+        [
+            (border[:, 0] - w / 2) / cam.focal,
+            (border[:, 1] - h / 2) / cam.focal,
+            np.ones(len(border)),
+        ],
         axis=-1,
     )
     rays = np.einsum("nji,mj->nmi", rot, rays_cam)

@@ -119,7 +119,10 @@ class FieldSpec:
     @property
     def carpet_half_extent(self) -> tuple[float, float]:
         """Half size of the green carpet (field plus border strip)."""
-        return (self.half_length + self.border_strip_width, self.half_width + self.border_strip_width)
+        return (
+            self.half_length + self.border_strip_width,
+            self.half_width + self.border_strip_width,
+        )
 
 
 FIELD_PRESETS = {"kidsize": FieldSpec.kidsize, "paper2019": FieldSpec.paper_2019}
@@ -130,4 +133,6 @@ def field_preset(name: str) -> FieldSpec:
     try:
         return FIELD_PRESETS[name]()
     except KeyError:
-        raise ValueError(f"unknown field preset {name!r}; choose from {sorted(FIELD_PRESETS)}") from None
+        raise ValueError(
+            f"unknown field preset {name!r}; choose from {sorted(FIELD_PRESETS)}"
+        ) from None

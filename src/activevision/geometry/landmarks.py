@@ -57,7 +57,11 @@ def _goal_end_features(spec: FieldSpec, s: float):
             )
         )
         pts.append(
-            (f"goal_area_t{side}{y}", LandmarkType.T_JUNCTION, (s * hl, sy * spec.goal_area_width / 2))
+            (
+                f"goal_area_t{side}{y}",
+                LandmarkType.T_JUNCTION,
+                (s * hl, sy * spec.goal_area_width / 2),
+            )
         )
         pts.append(
             (
@@ -67,7 +71,11 @@ def _goal_end_features(spec: FieldSpec, s: float):
             )
         )
     pts.append(
-        (f"penalty_mark{side}", LandmarkType.PENALTY_MARK, (s * (hl - spec.penalty_mark_distance), 0.0))
+        (
+            f"penalty_mark{side}",
+            LandmarkType.PENALTY_MARK,
+            (s * (hl - spec.penalty_mark_distance), 0.0),
+        )
     )
     lines.append((f"goal_line{side}", (s * hl, -hw), (s * hl, hw)))
     boxes = [("goal_area", spec.goal_area_length, spec.goal_area_width)]
@@ -89,7 +97,9 @@ def _goal_end_features(spec: FieldSpec, s: float):
         lines.append((f"{name}_front{side}", (x_front, -width / 2), (x_front, width / 2)))
         for sy in (1.0, -1.0):
             y = "+y" if sy > 0 else "-y"
-            lines.append((f"{name}_side{side}{y}", (x_front, sy * width / 2), (s * hl, sy * width / 2)))
+            lines.append(
+                (f"{name}_side{side}{y}", (x_front, sy * width / 2), (s * hl, sy * width / 2))
+            )
     return pts, lines
 
 

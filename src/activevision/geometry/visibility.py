@@ -83,8 +83,9 @@ def visible_landmarks(landmarks: LandmarkSet, pose, pan, tilt, cam: CameraConfig
     planes = image_halfplanes(pose, pan, tilt, cam)
     t0, t1 = clip_segments(landmarks.segments, planes, pose[:, :2], landmarks.max_distance)
     visible = t0 <= t1
-    points = closest_points(landmarks.segments, pose[:, :2], np.where(visible, t0, 0.0),
-                            np.where(visible, t1, 1.0))
+    points = closest_points(
+        landmarks.segments, pose[:, :2], np.where(visible, t0, 0.0), np.where(visible, t1, 1.0)
+    )
     points = np.where(visible[..., None], points, np.nan)
     return Visibility(visible=visible, points=points)
 

@@ -1,0 +1,32 @@
+"""The discrete head actions: stay, or move the head by a fixed step in one of 4 or 8
+directions. Diagonals move ``step * sqrt(2) / 2`` on each axis, so every move has the same
+length (the release's convention)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+ACTION_NAMES_8WAY = (
+    "stay",
+    "pan_left",
+    "pan_right",
+    "tilt_up",
+    "tilt_down",
+    "pan_left_tilt_up",
+    "pan_left_tilt_down",
+    "pan_right_tilt_up",
+    "pan_right_tilt_down",
+)
+
+
+def action_table(step_deg: float, action_set: str = "8way") -> np.ndarray:
+    """(A, 2) head moves ``(d_pan, d_tilt)`` in radians; pan left and tilt down positive."""
+    s = math.radians(step_deg)
+    d = s * math.sqrt(2) / 2
+    moves = [(0, 0), (s, 0), (-s, 0), (0, -s), (0, s), (d, -d), (d, d), (-d, -d), (-d, d)]
+    count = {"8way": 9, "4way": 5}.get(action_set)
+    if count is None:
+        raise ValueError(f"action_set must be '8way' or '4way', got {action_set!r}")
+    return np.asarray(moves[:count], dtype=np.float64)

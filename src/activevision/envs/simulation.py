@@ -1,0 +1,267 @@
+"""Batched simulation of N ActiveVision episodes: the task itself, free of Gymnasium API.
+
+Both :class:`~activevision.envs.active_vision.ActiveVisionEnv` (N = 1) and the native
+vector environment drive this one class, so a vector environment and N single environments
+with the same seeds produce identical trajectories by construction. Each episode draws from
+its own generator; nothing here touches global random state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from activevision.envs.actions import action_table
+from activevision.envs.config import EnvConfig
+from activevision.envs.reward import approach_reward, viewpoint_distance_deg
+from activevision.geometry import clip_head, field_landmarks
+from activevision.geometry.kernels import ball_visible_mask, visible_mask
+from activevision.localisation import LocalisationConfig, best_viewpoints
+from activevision.rendering import Renderer
+
+
+@dataclass(frozen=True)
+class EpisodeStart:
+    """One episode's initial state."""
+
+    pose: np.ndarray  #: (3,) true robot pose
+    believed_pose: np.ndarray  #: (3,) pose the goal search believes
+    pan: float
+    tilt: float
+    ball: np.ndarray  #: (2,)
+
+
+class StartGenerationError(RuntimeError):
+    """No valid episode start was found within ``EnvConfig.max_start_draws`` draws."""
+
+
+def draw_start_candidate(rng: np.random.Generator, cfg: EnvConfig) -> EpisodeStart:
+    """Robot pose, head pose and the ball, as in the release: the ball lies 1-3 m from the
+    robot, on the field and inside the current view. Believed pose: the true one moved
+    ``localisation_error`` metres in a random direction, its heading by +-error rad."""
+    cam, spec = cfg.camera, cfg.field
+    for _ in range(cfg.max_start_draws):
+        pose = np.array(
+            [
+                rng.uniform(*cfg.robot_x_range),
+                rng.uniform(*cfg.robot_y_range),
+                rng.uniform(-np.pi, np.pi),
+            ]
+        )
+        pan = rng.uniform(cam.pan_min, cam.pan_max)
+        tilt = rng.uniform(*np.radians(cfg.start_tilt_range_deg))
+        # Ball candidates in a batch, the first valid one wins: one vectorised check.
+        n = 16
+        dist = rng.uniform(*cfg.ball_distance_range, n)
+        bearing = pose[2] + pan + rng.uniform(-cam.hfov / 2, cam.hfov / 2, n)
+        balls = pose[:2] + dist[:, None] * np.stack([np.cos(bearing), np.sin(bearing)], 1)
+        r = spec.ball_radius
+        on_field = (np.abs(balls[:, 0]) <= spec.half_length - r) & (
+            np.abs(balls[:, 1]) <= spec.half_width - r
+        )
+        seen = ball_visible_mask(balls, np.repeat(pose[None], n, 0), pan, tilt, cam, r)
+        ok = np.flatnonzero(on_field & seen)
+        if len(ok) == 0:
+            continue
+        direction = rng.uniform(-np.pi, np.pi)
+        heading_sign = rng.choice([-1.0, 1.0])
+        e = cfg.localisation_error
+        believed = pose + np.array([e * np.cos(direction), e * np.sin(direction), heading_sign * e])
+        believed[2] = (believed[2] + np.pi) % (2 * np.pi) - np.pi
+        return EpisodeStart(pose, believed, float(pan), float(tilt), balls[ok[0]])
+    raise StartGenerationError(
+        f"no start with the ball in view after {cfg.max_start_draws} draws; check "
+        "EnvConfig ranges against the field and camera"
+    )
+
+
+class EpisodeBatch:
+    """State and dynamics of N episodes at once (true pose, belief, head, ball, goal)."""
+
+    def __init__(
+        self, cfg: EnvConfig, num_envs: int, localisation: LocalisationConfig | None = None
+    ) -> None:
+        self.cfg = cfg
+        self.n = num_envs
+        self.localisation = localisation or LocalisationConfig()
+        self.landmarks = field_landmarks(cfg.field)
+        self.renderer = Renderer(cfg.field, cfg.camera)
+        self.actions = action_table(cfg.step_deg, cfg.action_set)
+        k = len(self.landmarks)
+        self.pose = np.zeros((num_envs, 3))
+        self.believed_pose = np.zeros((num_envs, 3))
+        self.pan = np.zeros(num_envs)
+        self.tilt = np.zeros(num_envs)
+        self.ball = np.zeros((num_envs, 2))
+        self.goal_pan = np.zeros(num_envs)
+        self.goal_tilt = np.zeros(num_envs)
+        self.goal_entropy = np.zeros(num_envs)
+        self.desired = np.zeros((num_envs, k), dtype=bool)
+        self.observed = np.zeros((num_envs, k), dtype=bool)
+        self.step_count = np.zeros(num_envs, dtype=np.int64)
+        self.success_step = np.full(num_envs, -1, dtype=np.int64)
+        self.ball_lost_step = np.full(num_envs, -1, dtype=np.int64)
+        self.episode_reward = np.zeros(num_envs)
+
+    # ------------------------------------------------------------------ starts
+    def reset(self, indices: np.ndarray, rngs: list[np.random.Generator]) -> None:
+        """Start new episodes in slots ``indices``, slot ``indices[j]`` drawing from
+        ``rngs[j]``. Starts are redrawn while no viewpoint shows the ball, the goal view shows
+        no landmark, or the start already counts as success."""
+        todo = np.asarray(indices, dtype=np.int64)
+        pending = list(range(len(todo)))
+        for _ in range(self.cfg.max_start_draws):
+            if not pending:
+                return
+            starts = [draw_start_candidate(rngs[j], self.cfg) for j in pending]
+            slots = todo[pending]
+            self.pose[slots] = [s.pose for s in starts]
+            self.believed_pose[slots] = [s.believed_pose for s in starts]
+            self.pan[slots] = [s.pan for s in starts]
+            self.tilt[slots] = [s.tilt for s in starts]
+            self.ball[slots] = [s.ball for s in starts]
+            ok = self._search_goals(slots)
+            pending = [j for j, good in zip(pending, ok, strict=True) if not good]
+        raise StartGenerationError(f"no valid episode start after {self.cfg.max_start_draws} tries")
+
+    def _search_goals(self, slots: np.ndarray) -> np.ndarray:
+        cfg, loc = self.cfg, self.localisation
+        cov0 = np.broadcast_to(loc.ukf.initial_cov, (len(slots), 3, 3))
+        result = best_viewpoints(
+            self.believed_pose[slots],
+            cov0,
+            self.ball[slots],
+            self.landmarks,
+            cfg.camera,
+            grid=loc.grid,
+            ukf=loc.ukf,
+            ball_radius=cfg.field.ball_radius,
+        )
+        found = result.ok
+        self.goal_pan[slots] = np.where(found, result.pan, 0.0)
+        self.goal_tilt[slots] = np.where(found, result.tilt, cfg.camera.tilt_min)
+        self.goal_entropy[slots] = np.where(found, result.entropy, np.nan)
+        # What the goal view really shows: the true pose at the goal head angles.
+        self.desired[slots] = visible_mask(
+            self.landmarks,
+            self.pose[slots],
+            self.goal_pan[slots],
+            self.goal_tilt[slots],
+            cfg.camera,
+        )
+        self._observe(slots)
+        self.step_count[slots] = 0
+        self.success_step[slots] = -1
+        self.ball_lost_step[slots] = -1
+        self.episode_reward[slots] = 0.0
+        already = self._succeeded(slots)
+        return found & self.desired[slots].any(axis=1) & ~already
+
+    # ------------------------------------------------------------------ dynamics
+    def step(self, actions: np.ndarray, active: np.ndarray | None = None):
+        """Apply one discrete action per slot (only where ``active``).
+
+        Returns:
+            ``(reward, terminated, success, ball_lost)``, each (N,).
+        """
+        idx = np.arange(self.n) if active is None else np.flatnonzero(active)
+        actions = np.asarray(actions)
+        n_actions = len(self.actions)
+        bad = (actions[idx] < 0) | (actions[idx] >= n_actions)
+        if bad.any():
+            raise ValueError(
+                f"invalid action {actions[idx][bad][0]!r}: expected 0..{n_actions - 1}"
+            )
+        move = self.actions[actions[idx]]
+        return self.move_head(idx, self.pan[idx] + move[:, 0], self.tilt[idx] + move[:, 1])
+
+    def move_head(self, idx: np.ndarray, pan, tilt):
+        """Move the heads of slots ``idx`` to ``(pan, tilt)`` (clipped to the limits) as one
+        step: discrete actions use it, and so do baselines that jump the head to a target.
+
+        Returns:
+            ``(reward, terminated, success, ball_lost)``, each (N,).
+        """
+        reward = np.zeros(self.n)
+        success = np.zeros(self.n, dtype=bool)
+        lost = np.zeros(self.n, dtype=bool)
+        if len(idx) == 0:
+            return reward, success.copy(), success, lost
+        cam = self.cfg.camera
+        before = viewpoint_distance_deg(
+            self.pan[idx], self.tilt[idx], self.goal_pan[idx], self.goal_tilt[idx]
+        )
+        self.pan[idx], self.tilt[idx] = clip_head(pan, tilt, cam)
+        after = viewpoint_distance_deg(
+            self.pan[idx], self.tilt[idx], self.goal_pan[idx], self.goal_tilt[idx]
+        )
+        self.step_count[idx] += 1
+        self._observe(idx)
+        lost[idx] = ~ball_visible_mask(
+            self.ball[idx],
+            self.pose[idx],
+            self.pan[idx],
+            self.tilt[idx],
+            cam,
+            self.cfg.field.ball_radius,
+        )
+        success[idx] = self._succeeded(idx) & ~lost[idx]
+        reward[idx] = approach_reward(before, after, self.cfg.reward_resolution_deg)
+        reward[lost] = self.cfg.ball_lost_reward
+        self.success_step[success] = self.step_count[success]
+        self.ball_lost_step[lost] = self.step_count[lost]
+        self.episode_reward += reward
+        return reward, lost | success, success, lost
+
+    def _observe(self, idx: np.ndarray) -> None:
+        self.observed[idx] = visible_mask(
+            self.landmarks, self.pose[idx], self.pan[idx], self.tilt[idx], self.cfg.camera
+        )
+
+    def _succeeded(self, idx: np.ndarray) -> np.ndarray:
+        if self.cfg.success_mode == "landmarks":
+            # The release: every landmark of the goal view is in view now.
+            return ~(self.desired[idx] & ~self.observed[idx]).any(axis=1)
+        dist = viewpoint_distance_deg(
+            self.pan[idx], self.tilt[idx], self.goal_pan[idx], self.goal_tilt[idx]
+        )
+        return dist <= self.cfg.success_tolerance_deg + 1e-9  # float slack at the boundary
+
+    # ------------------------------------------------------------------ outputs
+    def render(self, idx: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
+        """Camera images (len(idx), H, W) uint8 of the true pose and head."""
+        idx = np.arange(self.n) if idx is None else idx
+        return self.renderer.render(
+            self.pose[idx], self.pan[idx], self.tilt[idx], self.ball[idx], out=out
+        )
+
+    def info_arrays(self, max_episode_steps: int) -> dict[str, np.ndarray]:
+        """Per-slot episode facts as arrays over all N slots (see the env's Info section)."""
+        success = self.success_step >= 0
+        lost = self.ball_lost_step >= 0
+        rate = (self.desired & self.observed).sum(1) / np.maximum(self.desired.sum(1), 1)
+        return {
+            "goal_viewpoint": np.stack([self.goal_pan, self.goal_tilt], axis=1),
+            "goal_entropy": self.goal_entropy.copy(),
+            "success_rate": rate,
+            "success": success,
+            "ball_lost": lost,
+            "steps_to_success": np.where(success, self.success_step, max_episode_steps),
+            "ball_lost_step": np.where(lost, self.ball_lost_step, max_episode_steps),
+            "episode_score": np.where(success, 1.0, np.where(lost, 0.0, rate)),
+            "head": np.stack([self.pan, self.tilt], axis=1),
+            "pose": self.pose.copy(),
+            "believed_pose": self.believed_pose.copy(),
+            "ball": self.ball.copy(),
+            "step": self.step_count.copy(),
+        }
+
+    def info(self, i: int, max_episode_steps: int) -> dict:
+        """The single-environment ``info`` dict of slot ``i``: Python scalars, and the
+        desired and observed landmarks as id arrays."""
+        arrays = self.info_arrays(max_episode_steps)
+        info = {k: (v[i].item() if v[i].ndim == 0 else v[i]) for k, v in arrays.items()}
+        info["desired_landmarks"] = np.flatnonzero(self.desired[i])
+        info["observed_landmarks"] = np.flatnonzero(self.observed[i])
+        return info

@@ -1,0 +1,106 @@
+"""A native batched ``VectorEnv`` for ``ActiveVision-v0``: every sub-environment is a slot
+of one :class:`EpisodeBatch`, rendered, stepped and searched in batched calls."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from activevision.envs.active_vision import observation_space
+from activevision.envs.config import EnvConfig
+from activevision.envs.simulation import EpisodeBatch
+from activevision.localisation import LocalisationConfig
+
+
+class ActiveVisionVectorEnv(VectorEnv):
+    """N ActiveVision episodes in lock-step (see :class:`ActiveVisionEnv` for the task).
+
+    Sub-environment ``i`` reset with ``seed=s`` is seeded with ``s + i`` and draws from its own
+    generator, so its trajectory equals a single ``ActiveVision-v0`` reset with ``seed=s + i``.
+    Autoreset follows Gymnasium's default (``NEXT_STEP``): the step after an episode ends
+    resets that sub-environment and ignores its action. Infos are arrays over sub-environments
+    (landmark sets as (N, K) boolean masks ``desired_mask`` and ``observed_mask``).
+    """
+
+    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        config: EnvConfig | None = None,
+        localisation: LocalisationConfig | None = None,
+        max_episode_steps: int = 20,
+        **config_overrides: Any,
+    ) -> None:
+        if not isinstance(num_envs, int | np.integer) or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        config = config or EnvConfig()
+        if config_overrides:
+            config = config.replace(**config_overrides)
+        self.config = config
+        self.num_envs = int(num_envs)
+        self.max_episode_steps = max_episode_steps
+        self.sim = EpisodeBatch(config, self.num_envs, localisation)
+        self.single_observation_space = observation_space(config)
+        self.single_action_space = spaces.Discrete(len(self.sim.actions))
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._rngs = [seeding.np_random()[0] for _ in range(self.num_envs)]
+        self._frames = np.zeros(self.observation_space.shape, dtype=np.uint8)
+        self._needs_reset = np.zeros(self.num_envs, dtype=bool)
+        self._all = np.arange(self.num_envs)
+
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        if seed is None:
+            seeds = [None] * self.num_envs
+        elif isinstance(seed, int | np.integer):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"expected {self.num_envs} seeds, got {len(seeds)}")
+        for i, s in enumerate(seeds):
+            if s is not None or seed is None:
+                self._rngs[i] = seeding.np_random(s)[0]
+        self._start(self._all)
+        self._needs_reset[:] = False
+        return self._frames.copy(), self._infos()
+
+    def _start(self, idx: np.ndarray) -> None:
+        self.sim.reset(idx, [self._rngs[i] for i in idx])
+        frames = self.sim.render(idx)
+        self._frames[idx] = frames[:, None]
+
+    def step(self, actions):
+        actions = np.asarray(actions)
+        if actions.shape != (self.num_envs,):
+            raise ValueError(f"actions must have shape ({self.num_envs},), got {actions.shape}")
+        resetting = self._needs_reset.copy()
+        stepping = ~resetting
+        reward, terminated, _, _ = self.sim.step(actions, active=stepping)
+        truncated = stepping & ~terminated & (self.sim.step_count >= self.max_episode_steps)
+        stepped = np.flatnonzero(stepping)
+        if self.config.frame_stack > 1:
+            self._frames[stepped, :-1] = self._frames[stepped, 1:]
+        if len(stepped) == self.num_envs and self.config.frame_stack == 1:
+            self.sim.render(out=self._frames[:, 0])  # straight into the observation buffer
+        elif len(stepped):
+            self._frames[stepped, -1] = self.sim.render(stepped)
+        if resetting.any():
+            self._start(np.flatnonzero(resetting))
+        infos = self._infos()
+        self._needs_reset = terminated | truncated
+        return self._frames.copy(), reward, terminated, truncated, infos
+
+    def _infos(self) -> dict[str, Any]:
+        infos: dict[str, Any] = self.sim.info_arrays(self.max_episode_steps)
+        infos["desired_mask"] = self.sim.desired.copy()
+        infos["observed_mask"] = self.sim.observed.copy()
+        for key in list(infos):
+            infos[f"_{key}"] = np.ones(self.num_envs, dtype=bool)
+        return infos

@@ -1,0 +1,163 @@
+"""Score head-control methods on identical episodes, with 95% confidence intervals."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from activevision.envs import ActiveVisionEnv, EnvConfig
+from activevision.experiments.policies import HeadPolicy, HeadTarget
+
+Z95 = 1.959963984540054  #: two-sided 95% quantile of the standard normal
+
+#: Per-episode metrics: name -> (info key or None, kind). "proportion" gets a Wilson
+#: interval, "mean" a normal-approximation interval (n >= 30 in every default use).
+METRICS = {
+    "success": "proportion",  #: episode ended in success
+    "success_rate": "mean",  #: the paper's |observed ∩ desired| / |desired| at the end
+    "success_duration": "mean",  #: steps to success, 20 if never (paper)
+    "ball_loss_duration": "mean",  #: steps until the ball was lost, 20 if never (paper)
+    "reward": "mean",  #: total episode reward
+    "score": "mean",  #: the release's score: 1 success, 0 ball lost, else success rate
+}
+
+
+@dataclass(frozen=True)
+class Interval:
+    mean: float
+    low: float
+    high: float
+
+
+def wilson_interval(successes: int, n: int, z: float = Z95) -> Interval:
+    """Wilson score interval of a binomial proportion (good also near 0 and 1)."""
+    if n == 0:
+        return Interval(math.nan, math.nan, math.nan)
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return Interval(p, max(0.0, centre - half), min(1.0, centre + half))
+
+
+def mean_interval(values: Sequence[float], z: float = Z95) -> Interval:
+    """Mean +- z standard errors (sample standard deviation, ddof=1)."""
+    x = np.asarray(values, float)
+    if len(x) == 0:
+        return Interval(math.nan, math.nan, math.nan)
+    if len(x) == 1:
+        return Interval(float(x[0]), float(x[0]), float(x[0]))
+    half = z * x.std(ddof=1) / math.sqrt(len(x))
+    return Interval(float(x.mean()), float(x.mean() - half), float(x.mean() + half))
+
+
+def summarise(episodes: Sequence[dict]) -> dict[str, Interval]:
+    """Mean and 95% interval of every metric over ``episodes``."""
+    out = {}
+    for name, kind in METRICS.items():
+        values = [e[name] for e in episodes]
+        if kind == "proportion":
+            out[name] = wilson_interval(int(sum(values)), len(values))
+        else:
+            out[name] = mean_interval(values)
+    return out
+
+
+def episode_seed(base_seed: int, episode: int) -> int:
+    """Seed of episode ``episode``: every method sees the same start for the same seed."""
+    return base_seed * 1_000_003 + episode
+
+
+def run_episode(
+    env: ActiveVisionEnv,
+    policy: HeadPolicy,
+    seed: int,
+    max_steps: int = 20,
+    latencies: list[float] | None = None,
+) -> dict:
+    """One episode from ``seed``; the policy's own draws come from a generator derived
+    from the same seed, so results do not depend on what ran before."""
+    obs, info = env.reset(seed=seed)
+    policy.reset(info, np.random.default_rng([seed, 7]))
+    total = 0.0
+    for _ in range(max_steps):
+        t0 = time.perf_counter()
+        action = policy.act(obs, info)
+        if latencies is not None:
+            latencies.append(time.perf_counter() - t0)
+        if isinstance(action, HeadTarget):
+            obs, reward, terminated, _, info = env.jump_head(action.pan, action.tilt)
+        else:
+            obs, reward, terminated, _, info = env.step(action)
+        total += reward
+        if terminated:
+            break
+    return {
+        "seed": seed,
+        "success": bool(info["success"]),
+        "success_rate": float(info["success_rate"]),
+        "success_duration": int(info["steps_to_success"]),
+        "ball_loss_duration": int(info["ball_lost_step"]),
+        "reward": total,
+        "score": float(info["episode_score"]),
+        "steps": int(info["step"]),
+    }
+
+
+def evaluate_policy(
+    policy: HeadPolicy,
+    episodes: int = 100,
+    seed: int = 0,
+    config: EnvConfig | None = None,
+    env: ActiveVisionEnv | None = None,
+    measure_latency: bool = False,
+):
+    """Run ``episodes`` fixed-seed episodes.
+
+    Returns:
+        ``(records, summary, latencies_s)``: one dict per episode, the :func:`summarise`
+        intervals, and per-decision latencies (empty unless ``measure_latency``).
+    """
+    env = env or ActiveVisionEnv(config or EnvConfig())
+    latencies: list[float] = [] if measure_latency else None
+    records = [
+        run_episode(env, policy, episode_seed(seed, i), env.max_episode_steps, latencies)
+        for i in range(episodes)
+    ]
+    return records, summarise(records), latencies or []
+
+
+def latency_summary(latencies_s: Sequence[float]) -> dict[str, float]:
+    """p50 / p99 per-decision latency in milliseconds."""
+    ms = np.asarray(latencies_s) * 1e3
+    if len(ms) == 0:
+        return {}
+    return {"p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99))}
+
+
+def format_table(rows: dict[str, dict[str, Interval]]) -> str:
+    """A plain-text table: one row per method, ``mean [low, high]`` per metric."""
+    header = f"{'method':<14}" + "".join(f"{m:>26}" for m in METRICS)
+    lines = [header, "-" * len(header)]
+    for method, summary in rows.items():
+        cells = "".join(
+            f"{summary[m].mean:>10.3f} [{summary[m].low:6.3f},{summary[m].high:6.3f}]"
+            for m in METRICS
+        )
+        lines.append(f"{method:<14}{cells}")
+    return "\n".join(lines)
+
+
+def summary_rows(rows: dict[str, dict[str, Interval]], **extra) -> list[dict]:
+    """Flat CSV/JSON rows: method, then ``<metric>``, ``<metric>_low``, ``<metric>_high``."""
+    out = []
+    for method, summary in rows.items():
+        row = {**extra, "method": method}
+        for m, iv in summary.items():
+            row.update({m: iv.mean, f"{m}_low": iv.low, f"{m}_high": iv.high})
+        out.append(row)
+    return out

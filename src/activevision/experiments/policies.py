@@ -1,0 +1,189 @@
+"""Head-control methods behind one small interface, so one evaluator scores them all.
+
+A policy sees what the method it models would see: the learned policy only the camera image;
+the entropy-based head control the robot's *believed* pose (the true pose corrupted by the
+localisation error) and the ball; the oracle the true goal (an upper bound, not a method).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from activevision.envs.actions import action_table
+from activevision.envs.config import EnvConfig
+from activevision.geometry import field_landmarks
+from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
+
+
+@dataclass(frozen=True)
+class HeadTarget:
+    """Jump the head straight to ``(pan, tilt)`` rad in one step."""
+
+    pan: float
+    tilt: float
+
+
+@runtime_checkable
+class HeadPolicy(Protocol):
+    """What the evaluator needs of a method."""
+
+    name: str
+
+    def reset(self, info: dict, rng: np.random.Generator) -> None:
+        """A new episode starts; ``rng`` is this episode's own generator."""
+
+    def act(self, obs: np.ndarray, info: dict) -> int | HeadTarget:
+        """The next discrete action, or a head target to jump to."""
+
+
+def greedy_action(head, target, table: np.ndarray) -> int:
+    """The action whose move ends closest to ``target`` (pan, tilt rad)."""
+    after = np.asarray(head)[None] + table
+    return int(np.argmin(np.hypot(*(after - np.asarray(target)[None]).T)))
+
+
+def corrupt_pose(pose, error: float, rng: np.random.Generator) -> np.ndarray:
+    """The release's localisation error: the position moved ``error`` m in a random
+    direction, the heading by ``+-error`` rad."""
+    direction = rng.uniform(-np.pi, np.pi)
+    sign = rng.choice([-1.0, 1.0])
+    out = np.asarray(pose, float) + np.array(
+        [error * np.cos(direction), error * np.sin(direction), sign * error]
+    )
+    out[2] = (out[2] + np.pi) % (2 * np.pi) - np.pi
+    return out
+
+
+class RandomPolicy:
+    """Uniformly random actions."""
+
+    name = "random"
+
+    def __init__(self, n_actions: int = 9) -> None:
+        self.n_actions = n_actions
+        self._rng = np.random.default_rng(0)
+
+    def reset(self, info: dict, rng: np.random.Generator) -> None:
+        self._rng = rng
+
+    def act(self, obs: np.ndarray, info: dict) -> int:
+        return int(self._rng.integers(self.n_actions))
+
+
+class OraclePolicy:
+    """Moves greedily to the true goal viewpoint with the same 3 degree moves (upper bound)."""
+
+    name = "oracle"
+
+    def __init__(self, config: EnvConfig | None = None) -> None:
+        cfg = config or EnvConfig()
+        self.table = action_table(cfg.step_deg, cfg.action_set)
+
+    def reset(self, info: dict, rng: np.random.Generator) -> None:
+        pass
+
+    def act(self, obs: np.ndarray, info: dict) -> int:
+        return greedy_action(info["head"], info["goal_viewpoint"], self.table)
+
+
+class EntropyPolicy:
+    """Entropy-based head control (Seekircher et al. 2010; Czarnetzki et al. 2010): run the
+    best-viewpoint search (Algorithm 1) from the believed pose, then either jump the head
+    there (``jump=True``, the paper's comparison) or walk there with the 3 degree moves."""
+
+    def __init__(
+        self,
+        localisation_error: float = 0.0,
+        jump: bool = True,
+        config: EnvConfig | None = None,
+        localisation: LocalisationConfig | None = None,
+    ) -> None:
+        self.cfg = config or EnvConfig()
+        self.loc = localisation or LocalisationConfig()
+        self.error = localisation_error
+        self.jump = jump
+        self.name = "entropy_jump" if jump else "entropy_steps"
+        self.landmarks = field_landmarks(self.cfg.field)
+        self.table = action_table(self.cfg.step_deg, self.cfg.action_set)
+        self.target: np.ndarray | None = None
+
+    def reset(self, info: dict, rng: np.random.Generator) -> None:
+        believed = corrupt_pose(info["pose"], self.error, rng)
+        result = best_viewpoint(
+            believed,
+            self.loc.ukf.initial_cov,
+            info["ball"],
+            self.landmarks,
+            self.cfg.camera,
+            grid=self.loc.grid,
+            ukf=self.loc.ukf,
+            ball_radius=self.cfg.field.ball_radius,
+        )
+        # With no viewpoint showing the ball (a bad belief), the head stays where it is.
+        ok = result.status == ViewpointStatus.OK
+        self.target = np.array([result.pan, result.tilt]) if ok else None
+
+    def act(self, obs: np.ndarray, info: dict) -> int | HeadTarget:
+        if self.target is None:
+            return 0
+        if self.jump:
+            return HeadTarget(*self.target)
+        return greedy_action(info["head"], self.target, self.table)
+
+
+class ScanPolicy:
+    """A classic RoboCup head motion (B-Human, NUbots): keep the tilt on the ball and sweep
+    the pan back and forth around the ball's direction, with the same 3 degree moves."""
+
+    name = "scan"
+
+    def __init__(
+        self, amplitude_deg: float = 25.0, period_steps: int = 12, config: EnvConfig | None = None
+    ) -> None:
+        self.cfg = config or EnvConfig()
+        self.amplitude = np.radians(amplitude_deg)
+        self.period = period_steps
+        self.table = action_table(self.cfg.step_deg, self.cfg.action_set)
+        self._t = 0
+
+    def reset(self, info: dict, rng: np.random.Generator) -> None:
+        self._t = 0
+
+    def act(self, obs: np.ndarray, info: dict) -> int:
+        x, y, theta = info["pose"]
+        dx, dy = np.asarray(info["ball"]) - (x, y)
+        bearing = (np.arctan2(dy, dx) - theta + np.pi) % (2 * np.pi) - np.pi
+        ball_tilt = np.arctan2(self.cfg.camera.camera_height, np.hypot(dx, dy))
+        pan = bearing + self.amplitude * np.sin(2 * np.pi * self._t / self.period)
+        self._t += 1
+        return greedy_action(info["head"], (pan, ball_tilt), self.table)
+
+
+class LearnedPolicy:
+    """A trained Q-network: the greedy action on the camera image."""
+
+    name = "learned"
+
+    def __init__(self, q_network, device: str = "cpu") -> None:
+        import torch
+
+        self.torch = torch
+        self.net = q_network.to(device).eval()
+        self.device = device
+
+    @classmethod
+    def from_run(cls, run_dir, device: str = "cpu") -> LearnedPolicy:
+        from activevision.training import load_policy
+
+        return cls(load_policy(run_dir), device)
+
+    def reset(self, info: dict, rng: np.random.Generator) -> None:
+        pass
+
+    def act(self, obs: np.ndarray, info: dict) -> int:
+        with self.torch.inference_mode():
+            x = self.torch.from_numpy(np.ascontiguousarray(obs)[None]).to(self.device)
+            return int(self.net(x).argmax(dim=1).item())

@@ -1,0 +1,272 @@
+"""Export a trained :class:`~activevision.agents.q_network.QNetwork` to ONNX for the robot.
+
+Writes two files side by side, each atomically (temporary file + ``os.replace``):
+
+* ``policy.onnx`` — the network with a **uint8** ``(1, stack, H, W)`` input named ``frames``
+  and float32 ``(1, n_actions)`` output ``q_values``. The ``/ 255`` scaling of the network is
+  inside the graph, folded into the first convolution's weights (``conv(x / 255) ==
+  conv'(x)`` with ``w' = w / 255``; identical up to float rounding), so the graph is
+  ``Cast -> Conv -> MaxPool -> Relu -> Conv -> Relu -> Conv -> Relu -> Flatten -> Gemm ->
+  Relu -> Gemm``.
+* ``policy.json`` — what the runtime needs besides the graph (see
+  :mod:`activevision.runtime.metadata`): input size and stack, the action table in degrees,
+  head limits, SHA-256 of the model and of the run's ``config.json``, package version, opset.
+
+Needs torch and onnx (``pip install activevision[export]``); onnxruntime, when installed, is
+used to check the exported graph against PyTorch.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import io
+import json
+import math
+import os
+import tempfile
+import warnings
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+import torch
+from torch import nn
+
+import activevision
+from activevision.agents.q_network import QNetwork
+from activevision.runtime.metadata import (
+    METADATA_FORMAT,
+    METADATA_FORMAT_VERSION,
+    MODEL_FILENAME,
+    PolicyMetadata,
+    metadata_path_for,
+)
+
+#: ONNX opset of exported policies (onnxruntime >= 1.14 runs it).
+DEFAULT_OPSET = 17
+INPUT_NAME = "frames"
+OUTPUT_NAME = "q_values"
+#: Largest |Q_onnx - Q_torch| accepted by the post-export check.
+VERIFY_ATOL = 1e-4
+
+#: Keys export_onnx derives from the network itself (a caller's value must agree).
+_DERIVED_KEYS = ("image_height", "image_width", "stack", "n_actions")
+
+
+class ExportedPolicy(NamedTuple):
+    """Paths written by an export."""
+
+    model_path: Path
+    metadata_path: Path
+
+
+class _Uint8Policy(nn.Module):
+    """uint8 frames -> Q-values, with the input scaling folded into conv1 (or kept as a Mul)."""
+
+    def __init__(self, network: QNetwork, fold_scaling: bool) -> None:
+        super().__init__()
+        self.network = copy.deepcopy(network).cpu().float().eval()
+        for parameter in self.network.parameters():  # drop channels-last strides
+            parameter.data = parameter.data.contiguous()
+        self.fold_scaling = fold_scaling
+        if fold_scaling:
+            with torch.no_grad():
+                self.network.conv1.weight.mul_(1.0 / 255.0)
+
+    def forward(self, frames: torch.Tensor) -> torch.Tensor:
+        x = frames.float()  # a float input skips QNetwork's own / 255
+        if not self.fold_scaling:
+            x = x * (1.0 / 255.0)
+        return self.network(x)
+
+
+def policy_metadata(
+    action_table: np.ndarray,
+    head_limits: Mapping[str, float] | Any,
+    training_config_sha256: str | None = None,
+    action_names: Sequence[str] | None = None,
+) -> dict[str, Any]:
+    """The caller's part of policy.json, from radians.
+
+    Args:
+        action_table: (A, 2) head moves ``(d_pan, d_tilt)`` in radians, as
+            :func:`activevision.envs.actions.action_table` returns.
+        head_limits: a :class:`activevision.geometry.CameraConfig` (or anything with
+            ``pan_min``, ``pan_max``, ``tilt_min``, ``tilt_max`` attributes or keys), radians.
+        training_config_sha256: SHA-256 of the training run's ``config.json``, if any.
+        action_names: optional name per action (e.g. ``ACTION_NAMES_8WAY``).
+    """
+    table = np.asarray(action_table, dtype=np.float64)
+    if table.ndim != 2 or table.shape[1] != 2:
+        raise ValueError(f"action_table must have shape (A, 2), got {table.shape}")
+
+    def limit(key: str) -> float:
+        value = head_limits[key] if isinstance(head_limits, Mapping) else getattr(head_limits, key)
+        return math.degrees(float(value))
+
+    return {
+        "action_table_deg": np.degrees(table).tolist(),
+        "head_limits_deg": {k: limit(k) for k in ("pan_min", "pan_max", "tilt_min", "tilt_max")},
+        "training_config_sha256": training_config_sha256,
+        "action_names": list(action_names[: len(table)]) if action_names is not None else None,
+    }
+
+
+def export_onnx(
+    q_network: QNetwork,
+    out_path: str | os.PathLike[str],
+    metadata: Mapping[str, Any],
+    *,
+    opset: int = DEFAULT_OPSET,
+    dynamic_batch: bool = False,
+    fold_scaling: bool = True,
+    verify: bool = True,
+) -> ExportedPolicy:
+    """Write ``q_network`` as ONNX to ``out_path`` and its metadata JSON beside it.
+
+    Args:
+        q_network: the policy network (any device; exported from a CPU copy).
+        out_path: the ``.onnx`` file to write, or a directory to write ``policy.onnx`` into.
+            The metadata goes to the same path with a ``.json`` suffix.
+        metadata: at least ``action_table_deg`` and ``head_limits_deg`` (build it with
+            :func:`policy_metadata`); extra JSON keys are kept. Keys derived from the network
+            (image size, stack, number of actions) may be given but must agree.
+        opset: ONNX opset version.
+        dynamic_batch: give the input a symbolic batch dimension instead of a fixed 1 (the
+            robot decides one frame at a time; fixed 1 is as fast and simpler to check).
+        fold_scaling: fold the ``/ 255`` input scaling into conv1's weights (default) instead
+            of exporting a Mul node.
+        verify: check the written graph with ``onnx.checker`` and, when onnxruntime is
+            installed, its Q-values against PyTorch on random frames (``VERIFY_ATOL``).
+
+    Returns:
+        The paths written. Raises ValueError if the metadata does not fit the network.
+    """
+    model_path = Path(out_path)
+    if model_path.is_dir() or model_path.suffix.lower() != ".onnx":
+        model_path = model_path / MODEL_FILENAME
+    model_path.parent.mkdir(parents=True, exist_ok=True)
+    stack, (height, width) = q_network.stack, q_network.image_shape
+
+    model_bytes = _onnx_bytes(
+        _Uint8Policy(q_network, fold_scaling), (1, stack, height, width), opset, dynamic_batch
+    )
+    document = _metadata_document(q_network, metadata, model_path.name, model_bytes, opset)
+    PolicyMetadata.from_dict(document, source="exported metadata")  # the runtime must accept it
+    if verify:
+        _verify(q_network, model_bytes, (stack, height, width))
+
+    metadata_path = metadata_path_for(model_path)
+    text = json.dumps(document, indent=2) + "\n"
+    _atomic_write(model_path, model_bytes)
+    _atomic_write(metadata_path, text.encode("utf-8"))
+    return ExportedPolicy(model_path, metadata_path)
+
+
+# ---------------------------------------------------------------------- helpers
+def _onnx_bytes(
+    module: nn.Module, input_shape: tuple[int, ...], opset: int, dynamic_batch: bool
+) -> bytes:
+    example = torch.zeros(input_shape, dtype=torch.uint8)
+    buffer = io.BytesIO()
+    dynamic_axes = {INPUT_NAME: {0: "batch"}, OUTPUT_NAME: {0: "batch"}} if dynamic_batch else None
+    with warnings.catch_warnings(), torch.inference_mode(False), torch.no_grad():
+        # The TorchScript exporter is deprecated in favour of torch.export + onnxscript, which
+        # is a heavier dependency; for this plain CNN both write the same graph.
+        warnings.simplefilter("ignore", category=DeprecationWarning)
+        warnings.simplefilter("ignore", category=FutureWarning)
+        torch.onnx.export(
+            module,
+            (example,),
+            buffer,
+            input_names=[INPUT_NAME],
+            output_names=[OUTPUT_NAME],
+            dynamic_axes=dynamic_axes,
+            opset_version=opset,
+            do_constant_folding=True,
+            dynamo=False,
+        )
+    return buffer.getvalue()
+
+
+def _metadata_document(
+    network: QNetwork,
+    metadata: Mapping[str, Any],
+    model_file: str,
+    model_bytes: bytes,
+    opset: int,
+) -> dict[str, Any]:
+    derived = {
+        "image_height": int(network.image_shape[0]),
+        "image_width": int(network.image_shape[1]),
+        "stack": int(network.stack),
+        "n_actions": int(network.n_actions),
+    }
+    for key in _DERIVED_KEYS:
+        if key in metadata and metadata[key] != derived[key]:
+            raise ValueError(
+                f"metadata[{key!r}] = {metadata[key]!r} but the network has {derived[key]!r}"
+            )
+    for key in ("action_table_deg", "head_limits_deg"):
+        if key not in metadata:
+            raise ValueError(f"metadata needs {key!r} (build it with policy_metadata())")
+    rows = len(metadata["action_table_deg"])
+    if rows != network.n_actions:
+        raise ValueError(
+            f"the action table has {rows} rows but the network has {network.n_actions} outputs"
+        )
+    document: dict[str, Any] = {
+        "format": METADATA_FORMAT,
+        "format_version": METADATA_FORMAT_VERSION,
+        "package_version": activevision.__version__,
+        "opset": int(opset),
+        "model_file": model_file,
+        "model_sha256": hashlib.sha256(model_bytes).hexdigest(),
+        "input_name": INPUT_NAME,
+        "input_dtype": "uint8",
+        "output_name": OUTPUT_NAME,
+        **derived,
+        "dueling": bool(network.dueling),
+        "preprocessing": "grey (ITU-R BT.601 luma), area-average resize to image_width x "
+        "image_height, round half up to uint8; the graph scales by 1/255 itself",
+    }
+    for key, value in metadata.items():
+        document.setdefault(key, value)
+    document.setdefault("training_config_sha256", None)
+    return document
+
+
+def _verify(network: QNetwork, model_bytes: bytes, input_shape: tuple[int, int, int]) -> None:
+    import onnx
+
+    onnx.checker.check_model(onnx.load_model_from_string(model_bytes))
+    try:
+        import onnxruntime as ort
+    except ImportError:
+        return
+    frames = np.random.default_rng(0).integers(0, 256, (1, *input_shape), dtype=np.uint8)
+    session = ort.InferenceSession(model_bytes, providers=["CPUExecutionProvider"])
+    got = session.run([OUTPUT_NAME], {INPUT_NAME: frames})[0]
+    reference = copy.deepcopy(network).cpu().eval()
+    with torch.inference_mode():
+        want = reference(torch.from_numpy(frames)).numpy()
+    error = float(np.abs(got - want).max())
+    if not error <= VERIFY_ATOL:
+        raise RuntimeError(f"exported ONNX differs from PyTorch by {error:.3g} > {VERIFY_ATOL}")
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    """Write ``data`` to a temporary file beside ``path``, fsync it, then rename it over."""
+    fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as file:
+            file.write(data)
+            file.flush()
+            os.fsync(file.fileno())
+        os.chmod(tmp_name, 0o644)
+        os.replace(tmp_name, path)
+    except BaseException:
+        Path(tmp_name).unlink(missing_ok=True)
+        raise

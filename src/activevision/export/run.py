@@ -1,0 +1,72 @@
+"""Export a training run directory (``config.json`` + policy weights) to ONNX."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from activevision.export.onnx_export import ExportedPolicy, export_onnx, policy_metadata
+from activevision.runtime.metadata import MODEL_FILENAME
+
+CONFIG_FILENAME = "config.json"
+
+
+def export_run(
+    run_dir: str | os.PathLike[str],
+    out_path: str | os.PathLike[str] | None = None,
+    **export_options: Any,
+) -> ExportedPolicy:
+    """Export the newest policy of a training run as ``policy.onnx`` + ``policy.json``.
+
+    Reads the weights with :func:`activevision.training.load_policy`, the action table and
+    head limits from the run's environment settings (``config.json`` ``env_kwargs`` over
+    :class:`activevision.envs.EnvConfig` defaults) and records the SHA-256 of
+    ``config.json`` in the metadata.
+
+    Args:
+        run_dir: a run directory written by :mod:`activevision.training`.
+        out_path: ``.onnx`` file or directory to write to; default ``run_dir/policy.onnx``.
+        **export_options: passed on to :func:`export_onnx` (``opset``, ``dynamic_batch``...).
+    """
+    from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
+    from activevision.training import load_policy
+
+    run_dir = Path(run_dir)
+    config_path = run_dir / CONFIG_FILENAME
+    try:
+        config_bytes = config_path.read_bytes()
+        config = json.loads(config_bytes)
+    except FileNotFoundError as error:
+        raise FileNotFoundError(f"{run_dir} is not a training run: no {CONFIG_FILENAME}") from error
+    except (OSError, json.JSONDecodeError) as error:
+        raise ValueError(f"cannot read {config_path}: {error}") from error
+
+    env = env_config_of(config.get("env_kwargs") or {})
+    network = load_policy(run_dir)
+    if network.stack != env.frame_stack:
+        raise ValueError(
+            f"{run_dir}: the network stacks {network.stack} frames but the environment "
+            f"{env.frame_stack}"
+        )
+    metadata = policy_metadata(
+        action_table(env.step_deg, env.action_set),
+        env.camera,
+        training_config_sha256=hashlib.sha256(config_bytes).hexdigest(),
+        action_names=ACTION_NAMES_8WAY,
+    )
+    metadata["step_deg"] = env.step_deg
+    metadata["action_set"] = env.action_set
+    return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)
+
+
+def env_config_of(env_kwargs: dict[str, Any]):  # -> activevision.envs.EnvConfig
+    """The :class:`EnvConfig` a run's ``env_kwargs`` describe (keys that are not EnvConfig
+    fields, such as ``render_mode``, are ignored)."""
+    from activevision.envs.config import EnvConfig
+
+    fields = {f.name for f in dataclasses.fields(EnvConfig)}
+    return EnvConfig().replace(**{k: v for k, v in env_kwargs.items() if k in fields})

@@ -1,0 +1,164 @@
+"""Compiled (numba) scalar versions of the camera and visibility maths, for hot loops (the
+environment's per-step visibility test, the best-viewpoint search).
+
+They re-implement :mod:`activevision.geometry.camera` and
+:mod:`activevision.geometry.visibility` operation for operation, so the visible masks agree
+exactly (tests/geometry/test_kernels.py checks it on random cameras).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def camera_rotation(yaw, tilt, rot):
+    """Rows: camera right, down, forward (as ``geometry.camera.world_to_camera_rotation``)."""
+    cy, sy, ct, st = math.cos(yaw), math.sin(yaw), math.cos(tilt), math.sin(tilt)
+    rot[0, 0], rot[0, 1], rot[0, 2] = sy, -cy, 0.0
+    rot[1, 0], rot[1, 1], rot[1, 2] = -cy * st, -sy * st, -ct
+    rot[2, 0], rot[2, 1], rot[2, 2] = cy * ct, sy * ct, -st
+
+
+@njit(cache=True)
+def image_halfplanes(x, y, rot, focal, width, height, cam_height, planes):
+    """The four image half-planes on the ground (as ``geometry.camera.image_halfplanes``)."""
+    # M has rows (r_i0, r_i1, t_i) with t = -R c; G = K M, K = [[f, 0, w/2], [0, f, h/2], [0, 0, 1]]
+    m = np.empty((3, 3))
+    for i in range(3):
+        m[i, 0], m[i, 1] = rot[i, 0], rot[i, 1]
+        m[i, 2] = -(rot[i, 0] * x + rot[i, 1] * y + rot[i, 2] * cam_height)
+    for k in range(3):
+        u = focal * m[0, k] + 0.5 * width * m[2, k]
+        v = focal * m[1, k] + 0.5 * height * m[2, k]
+        w = m[2, k]
+        planes[0, k] = u
+        planes[1, k] = width * w - u
+        planes[2, k] = v
+        planes[3, k] = height * w - v
+
+
+@njit(cache=True)
+def range_interval(ax, ay, bx, by, cx, cy, max_distance):
+    """``(in_range, r0, r1)``: the parameters ``t`` of segment ``a + t (b - a)`` within
+    ``max_distance`` of ``(cx, cy)`` (the range-disc part of
+    ``geometry.visibility.clip_segments``; it does not depend on the head angles)."""
+    dx, dy = bx - ax, by - ay
+    rx, ry = ax - cx, ay - cy
+    qa = dx * dx + dy * dy
+    qb = 2 * (rx * dx + ry * dy)
+    qc = rx * rx + ry * ry - max_distance**2
+    if qa < 1e-18:
+        return qc <= 0.0, 0.0, 1.0
+    disc = qb * qb - 4 * qa * qc
+    sq = math.sqrt(max(disc, 0.0))
+    return disc >= 0.0, (-qb - sq) / (2 * qa), (-qb + sq) / (2 * qa)
+
+
+@njit(cache=True)
+def clip_visible(ax, ay, bx, by, planes, r0, r1):
+    """Whether the part ``[r0, r1]`` of segment ``a b`` meets all image half-planes
+    (Cyrus-Beck, as ``geometry.visibility.clip_segments``, then ``t0 <= t1``)."""
+    t0, t1 = 0.0, 1.0
+    for p in range(planes.shape[0]):
+        fa = planes[p, 0] * ax + planes[p, 1] * ay + planes[p, 2]
+        fb = planes[p, 0] * bx + planes[p, 1] * by + planes[p, 2]
+        if fa < 0.0 and fb < 0.0:
+            return False
+        if fa < 0.0 and fb >= 0.0:
+            t0 = max(t0, fa / (fa - fb))
+        elif fb < 0.0 and fa >= 0.0:
+            t1 = min(t1, fa / (fa - fb))
+    return max(t0, r0) <= min(t1, r1)
+
+
+@njit(cache=True)
+def ball_in_image(bx, by, radius, x, y, rot, focal, width, height, cam_height):
+    """Whether the ball centre projects into the image (as ``geometry.visibility.ball_visible``)."""
+    r0, r1, r2 = bx - x, by - y, radius - cam_height
+    p0 = rot[0, 0] * r0 + rot[0, 1] * r1 + rot[0, 2] * r2
+    p1 = rot[1, 0] * r0 + rot[1, 1] * r1 + rot[1, 2] * r2
+    depth = rot[2, 0] * r0 + rot[2, 1] * r1 + rot[2, 2] * r2
+    if not depth > 0.0:
+        return False
+    u = focal * p0 / depth + width / 2
+    v = focal * p1 / depth + height / 2
+    return u >= 0.0 and u <= width and v >= 0.0 and v <= height
+
+
+@njit(cache=True)
+def visibility_kernel(segments, max_distance, poses, pans, tilts, focal, width, height, cam_height):
+    """Visible mask (N, K) of the landmarks for N cameras (for the consistency test)."""
+    n, n_lm = poses.shape[0], segments.shape[0]
+    out = np.zeros((n, n_lm), dtype=np.bool_)
+    rot = np.empty((3, 3))
+    planes = np.empty((4, 3))
+    for i in range(n):
+        camera_rotation(poses[i, 2] + pans[i], tilts[i], rot)
+        image_halfplanes(poses[i, 0], poses[i, 1], rot, focal, width, height, cam_height, planes)
+        for k in range(n_lm):
+            ax, ay = segments[k, 0, 0], segments[k, 0, 1]
+            bx, by = segments[k, 1, 0], segments[k, 1, 1]
+            ok, r0, r1 = range_interval(ax, ay, bx, by, poses[i, 0], poses[i, 1], max_distance[k])
+            out[i, k] = ok and clip_visible(ax, ay, bx, by, planes, r0, r1)
+    return out
+
+
+@njit(cache=True)
+def ball_kernel(balls, poses, pans, tilts, focal, width, height, cam_height, radius):
+    """Ball-visible flags (N,) for N cameras (for the consistency test)."""
+    out = np.zeros(poses.shape[0], dtype=np.bool_)
+    rot = np.empty((3, 3))
+    for i in range(poses.shape[0]):
+        camera_rotation(poses[i, 2] + pans[i], tilts[i], rot)
+        out[i] = ball_in_image(
+            balls[i, 0],
+            balls[i, 1],
+            radius,
+            poses[i, 0],
+            poses[i, 1],
+            rot,
+            focal,
+            width,
+            height,
+            cam_height,
+        )
+    return out
+
+
+def visible_mask(landmarks, pose, pan, tilt, cam) -> np.ndarray:
+    """Compiled :func:`~activevision.geometry.visibility.visible_landmarks` ``.visible``:
+    (N, K) bool for N cameras (no measured points; use the NumPy version for those)."""
+    pose = np.ascontiguousarray(np.atleast_2d(pose), dtype=np.float64)
+    n = len(pose)
+    return visibility_kernel(
+        landmarks.segments,
+        landmarks.max_distance,
+        pose,
+        np.ascontiguousarray(np.broadcast_to(pan, n), dtype=np.float64),
+        np.ascontiguousarray(np.broadcast_to(tilt, n), dtype=np.float64),
+        cam.focal,
+        float(cam.width),
+        float(cam.height),
+        cam.camera_height,
+    )
+
+
+def ball_visible_mask(ball_xy, pose, pan, tilt, cam, ball_radius: float) -> np.ndarray:
+    """Compiled :func:`~activevision.geometry.visibility.ball_visible`: (N,) bool."""
+    pose = np.ascontiguousarray(np.atleast_2d(pose), dtype=np.float64)
+    n = len(pose)
+    return ball_kernel(
+        np.ascontiguousarray(np.broadcast_to(ball_xy, (n, 2)), dtype=np.float64),
+        pose,
+        np.ascontiguousarray(np.broadcast_to(pan, n), dtype=np.float64),
+        np.ascontiguousarray(np.broadcast_to(tilt, n), dtype=np.float64),
+        cam.focal,
+        float(cam.width),
+        float(cam.height),
+        cam.camera_height,
+        ball_radius,
+    )

@@ -1,0 +1,55 @@
+"""Heading arithmetic: angle wrapping, residuals and circular means (FilterPy's
+``residual_x`` / ``residual_z`` / ``x_mean_fn`` / ``z_mean_fn`` for the pose UKF).
+
+Every heading difference is wrapped to ``(-pi, pi]`` and every mean of headings is a circular
+mean (``atan2`` of the weighted sine and cosine sums): averaging 179 deg and -179 deg must give
+180 deg, not 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+TWO_PI = 2.0 * np.pi
+
+
+def wrap_angle(angle):
+    """Angle(s) wrapped to ``(-pi, pi]``."""
+    wrapped = np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), TWO_PI)
+    # np.mod can round up to exactly 2 pi for tiny negative inputs; keep the interval half-open.
+    return np.where(wrapped <= -np.pi, wrapped + TWO_PI, wrapped)
+
+
+def circular_mean(angles, weights) -> float:
+    """Weighted circular mean of ``angles`` (rad), in ``(-pi, pi]``."""
+    s = np.dot(weights, np.sin(angles))
+    c = np.dot(weights, np.cos(angles))
+    return float(wrap_angle(np.arctan2(s, c)))
+
+
+def residual_x(a, b) -> np.ndarray:
+    """State difference ``a - b`` for poses ``(x, y, theta)``, heading wrapped."""
+    y = np.asarray(a, dtype=np.float64) - b
+    y[..., 2] = wrap_angle(y[..., 2])
+    return y
+
+
+def residual_z(a, b) -> np.ndarray:
+    """Measurement difference ``a - b`` for ``(range, bearing)``, bearing wrapped."""
+    y = np.asarray(a, dtype=np.float64) - b
+    y[..., 1] = wrap_angle(y[..., 1])
+    return y
+
+
+def state_mean(sigmas, Wm) -> np.ndarray:
+    """Weighted mean of pose sigma points (M, 3): arithmetic in x, y, circular in theta."""
+    sigmas = np.asarray(sigmas, dtype=np.float64)
+    x = np.dot(Wm, sigmas[:, :2])
+    return np.array([x[0], x[1], circular_mean(sigmas[:, 2], Wm)])
+
+
+def measurement_mean(sigmas, Wm) -> np.ndarray:
+    """Weighted mean of range-bearing sigma points (M, 2): arithmetic range, circular
+    bearing."""
+    sigmas = np.asarray(sigmas, dtype=np.float64)
+    return np.array([np.dot(Wm, sigmas[:, 0]), circular_mean(sigmas[:, 1], Wm)])

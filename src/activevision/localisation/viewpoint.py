@@ -1,0 +1,378 @@
+"""The best viewpoint: Algorithm 1 of the paper ("viewpoint exploration").
+
+For every candidate head position ``(pan, tilt)`` of a :class:`ViewpointGrid`: take the
+landmarks visible from the *believed* mean pose, update the belief with the UKF as if each
+were detected exactly where expected (``z = h(mu)``: the covariance update does not depend
+on the measured value, so this is the expected posterior), and score the posterior by its
+entropy. The goal is the least-entropy candidate from which the ball (also judged from the
+believed pose) is in view; ties go to the first candidate in grid order.
+
+Detections are applied sequentially, as in Algorithm 1 (lines 5-7), with fresh sigma points
+for each. The paper leaves the order open; we take the closest landmark first (ties by id),
+which makes the result independent of how the landmarks are numbered -- in particular,
+mirrored poses on the symmetric field give exactly mirrored entropies. (A joint update with
+all detections stacked would differ slightly for a UKF; it is not used.)
+
+:func:`best_viewpoint_loop` is the plain NumPy reference (a Python loop over candidates and
+landmarks); :func:`best_viewpoint` / :func:`best_viewpoints` run the same computation
+compiled with numba (:mod:`activevision.localisation.kernels`) and agree with it to rounding.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from activevision.geometry.camera import CameraConfig, footprint_polygon
+from activevision.geometry.field import LandmarkType
+from activevision.geometry.landmarks import LandmarkSet
+from activevision.geometry.visibility import ball_visible, visible_landmarks
+from activevision.localisation import kernels
+from activevision.localisation.config import DEFAULT_UKF, UKFConfig
+from activevision.localisation.entropy import entropy
+from activevision.localisation.sigma_points import (
+    NotPositiveDefiniteError,
+    merwe_weights,
+)
+from activevision.localisation.ukf import hx_range_bearing, ukf_update_sequential
+
+
+@dataclass(frozen=True)
+class ViewpointGrid:
+    """Candidate head positions: ``n_pan`` x ``n_tilt`` evenly spaced angles (rad).
+
+    Defaults are the paper's: pan in (-90, 90) deg at 10 points and tilt in (5, 65) deg at 4
+    points. The paper writes open intervals, but its code release uses the endpoints
+    (-90, -70, ..., 90 and 5, 25, 45, 65 deg), and so do we. The 10-point pan grid is
+    symmetric about 0 (and contains no 0). Grid order is pan-major: candidate
+    ``i = i_pan * n_tilt + i_tilt``.
+    """
+
+    pan_min: float = -math.pi / 2  #: rad (paper)
+    pan_max: float = math.pi / 2  #: rad (paper)
+    n_pan: int = 10  #: paper
+    tilt_min: float = math.radians(5.0)  #: rad, positive down (paper)
+    tilt_max: float = math.radians(65.0)  #: rad (paper)
+    n_tilt: int = 4  #: paper
+
+    def __post_init__(self) -> None:
+        for name in ("n_pan", "n_tilt"):
+            value = getattr(self, name)
+            if not isinstance(value, int | np.integer) or value < 1:
+                raise ValueError(f"ViewpointGrid.{name} must be a positive integer, got {value!r}")
+        if not (self.pan_min <= self.pan_max and self.tilt_min <= self.tilt_max):
+            raise ValueError("ViewpointGrid needs pan_min <= pan_max and tilt_min <= tilt_max")
+
+    def __len__(self) -> int:
+        return self.n_pan * self.n_tilt
+
+    @cached_property
+    def pan_values(self) -> np.ndarray:
+        """The distinct pan angles (n_pan,), from ``pan_min`` to ``pan_max``."""
+        return _readonly(_even(self.pan_min, self.pan_max, self.n_pan))
+
+    @cached_property
+    def tilt_values(self) -> np.ndarray:
+        """The distinct tilt angles (n_tilt,), from ``tilt_min`` to ``tilt_max``."""
+        return _readonly(_even(self.tilt_min, self.tilt_max, self.n_tilt))
+
+    @cached_property
+    def pans(self) -> np.ndarray:
+        """Pan of every candidate (V,), grid order."""
+        return _readonly(np.repeat(self.pan_values, self.n_tilt))
+
+    @cached_property
+    def tilts(self) -> np.ndarray:
+        """Tilt of every candidate (V,), grid order."""
+        return _readonly(np.tile(self.tilt_values, self.n_pan))
+
+    def index(self, i_pan: int, i_tilt: int) -> int:
+        return i_pan * self.n_tilt + i_tilt
+
+
+DEFAULT_GRID = ViewpointGrid()
+
+
+class ViewpointStatus(enum.Enum):
+    OK = "ok"  #: a candidate shows the ball; it is the goal
+    NO_VIEWPOINT_SHOWS_BALL = "no_viewpoint_shows_ball"  #: no goal (e.g. ball behind the robot)
+
+
+@dataclass(frozen=True)
+class ViewpointResult:
+    """Outcome of Algorithm 1 for one belief. Without a goal, ``index`` is -1, ``pan``,
+    ``tilt`` and ``entropy`` are NaN and ``landmark_ids`` is empty."""
+
+    status: ViewpointStatus
+    index: int  #: goal candidate in grid order
+    pan: float  #: rad
+    tilt: float  #: rad
+    entropy: float  #: nats, of the expected posterior at the goal
+    landmark_ids: tuple[int, ...]  #: landmarks the goal view shows
+    entropies: np.ndarray  #: (V,) expected posterior entropy of every candidate, grid order
+    ball_visible: np.ndarray  #: (V,) bool
+    visible: np.ndarray  #: (V, K) bool, landmarks each candidate shows
+    covariances: np.ndarray  #: (V, 3, 3) expected posterior covariances
+    grid: ViewpointGrid
+
+    @property
+    def ok(self) -> bool:
+        return self.status is ViewpointStatus.OK
+
+    @property
+    def entropy_grid(self) -> np.ndarray:
+        """Entropies as (n_pan, n_tilt)."""
+        return self.entropies.reshape(self.grid.n_pan, self.grid.n_tilt)
+
+
+@dataclass(frozen=True)
+class ViewpointBatch:
+    """Outcome of Algorithm 1 for N beliefs; ``batch[i]`` is the :class:`ViewpointResult`
+    of start ``i``. ``ok`` is False (and ``index`` -1, angles NaN) where no candidate shows
+    the ball."""
+
+    ok: np.ndarray  #: (N,) bool
+    index: np.ndarray  #: (N,) int
+    pan: np.ndarray  #: (N,) rad
+    tilt: np.ndarray  #: (N,) rad
+    entropy: np.ndarray  #: (N,)
+    entropies: np.ndarray  #: (N, V)
+    ball_visible: np.ndarray  #: (N, V) bool
+    visible: np.ndarray  #: (N, V, K) bool
+    covariances: np.ndarray  #: (N, V, 3, 3)
+    grid: ViewpointGrid
+
+    def __len__(self) -> int:
+        return len(self.ok)
+
+    def __getitem__(self, i: int) -> ViewpointResult:
+        return _result(
+            self.entropies[i],
+            self.ball_visible[i],
+            self.visible[i],
+            self.covariances[i],
+            self.grid,
+        )
+
+
+def _even(lo: float, hi: float, n: int) -> np.ndarray:
+    """``n`` evenly spaced values from ``lo`` to ``hi`` (one value: the midpoint), exactly
+    mirror-symmetric about the midpoint (``np.linspace`` is not: -50 deg and 50 deg would
+    differ in the last bit, breaking the pan -> -pan symmetry)."""
+    mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    if n == 1:
+        return np.array([mid])
+    k = 2.0 * np.arange(n) - (n - 1)  # exact integers, symmetric about 0
+    return mid + half * (k / (n - 1))
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+def choose_goal(entropies, ball_visible):
+    """Least-entropy candidate showing the ball, first in grid order on ties (Algorithm 1,
+    lines 9-12). ``entropies``, ``ball_visible``: (N, V). Returns ``(ok (N,), index (N,))``
+    with ``index`` -1 where no candidate shows the ball."""
+    masked = np.where(ball_visible, entropies, np.inf)
+    ok = ball_visible.any(axis=-1)
+    return ok, np.where(ok, np.argmin(masked, axis=-1), -1)
+
+
+def _noise_table(ukf: UKFConfig) -> np.ndarray:
+    """(T, 3) rows ``(range_base, range_fraction, bearing)`` indexed by LandmarkType value."""
+    table = np.zeros((max(LandmarkType) + 1, 3))
+    for t, nz in ukf.noise.items():
+        table[int(t)] = (nz.range_base, nz.range_fraction, nz.bearing)
+    return table
+
+
+def _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius):
+    """Validate and run the compiled search: ``(entropies, ball_visible, visible, post)``."""
+    means = np.ascontiguousarray(np.atleast_2d(means), dtype=np.float64)
+    n = len(means)
+    covs = np.ascontiguousarray(np.broadcast_to(covs, (n, 3, 3)), dtype=np.float64)
+    balls = np.ascontiguousarray(np.broadcast_to(balls, (n, 2)), dtype=np.float64)
+    if np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
+        raise ValueError("best viewpoint search: belief covariances must be symmetric")
+    Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
+    H, ball_vis, visible, post, errors = kernels.search_kernel(
+        means,
+        covs,
+        balls,
+        landmarks.segments,
+        landmarks.max_distance,
+        landmarks.types,
+        _noise_table(ukf),
+        grid.pans,
+        grid.tilts,
+        cam.focal,
+        float(cam.width),
+        float(cam.height),
+        cam.camera_height,
+        float(ball_radius),
+        Wm,
+        Wc,
+        ukf.n + ukf.lambda_,
+    )
+    if errors.any():
+        s, v = np.argwhere(errors)[0]
+        raise NotPositiveDefiniteError(
+            f"belief covariance of start {s}, or its expected posterior for candidate {v}, "
+            f"is not positive definite; prior covariance:\n{covs[s]}"
+        )
+    return H, ball_vis, visible, post
+
+
+def best_viewpoints(
+    means,
+    covs,
+    balls,
+    landmarks: LandmarkSet,
+    cam: CameraConfig,
+    grid: ViewpointGrid = DEFAULT_GRID,
+    ukf: UKFConfig = DEFAULT_UKF,
+    ball_radius: float = 0.07,
+) -> ViewpointBatch:
+    """Algorithm 1 for N beliefs at once (compiled), e.g. every episode start of a
+    vectorised environment.
+
+    Args:
+        means: (N, 3) believed poses ``(x, y, theta)``; covs: (N, 3, 3), or (3, 3) shared;
+        balls: (N, 2) ball positions on the ground (or (2,) shared).
+    """
+    H, ball_vis, visible, post = _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius)
+    ok, index = choose_goal(H, ball_vis)
+    pick = np.maximum(index, 0)
+    return ViewpointBatch(
+        ok=ok,
+        index=index,
+        pan=np.where(ok, grid.pans[pick], np.nan),
+        tilt=np.where(ok, grid.tilts[pick], np.nan),
+        entropy=np.where(ok, H[np.arange(len(H)), pick], np.nan),
+        entropies=H,
+        ball_visible=ball_vis,
+        visible=visible,
+        covariances=post,
+        grid=grid,
+    )
+
+
+def best_viewpoint(
+    belief_mean,
+    belief_cov,
+    ball_xy,
+    landmarks: LandmarkSet,
+    cam: CameraConfig,
+    grid: ViewpointGrid = DEFAULT_GRID,
+    ukf: UKFConfig = DEFAULT_UKF,
+    ball_radius: float = 0.07,
+) -> ViewpointResult:
+    """Algorithm 1: the goal viewpoint for the belief ``N(belief_mean, belief_cov)`` and the
+    ball at ``ball_xy`` (compiled; :func:`best_viewpoint_loop` is the reference)."""
+    H, ball_vis, visible, post = _search(
+        np.asarray(belief_mean, dtype=np.float64).reshape(1, 3),
+        np.asarray(belief_cov, dtype=np.float64).reshape(1, 3, 3),
+        np.asarray(ball_xy, dtype=np.float64).reshape(1, 2),
+        landmarks,
+        cam,
+        grid,
+        ukf,
+        ball_radius,
+    )
+    return _result(H[0], ball_vis[0], visible[0], post[0], grid)
+
+
+def _result(entropies, ball_vis, visible, post, grid) -> ViewpointResult:
+    ok, index = choose_goal(entropies, ball_vis)
+    i = int(index)
+    found = bool(ok)
+    return ViewpointResult(
+        status=ViewpointStatus.OK if found else ViewpointStatus.NO_VIEWPOINT_SHOWS_BALL,
+        index=i,
+        pan=float(grid.pans[i]) if found else math.nan,
+        tilt=float(grid.tilts[i]) if found else math.nan,
+        entropy=float(entropies[i]) if found else math.nan,
+        landmark_ids=tuple(np.flatnonzero(visible[i]).tolist()) if found else (),
+        entropies=entropies,
+        ball_visible=ball_vis,
+        visible=visible,
+        covariances=post,
+        grid=grid,
+    )
+
+
+def best_viewpoint_loop(
+    belief_mean,
+    belief_cov,
+    ball_xy,
+    landmarks: LandmarkSet,
+    cam: CameraConfig,
+    grid: ViewpointGrid = DEFAULT_GRID,
+    ukf: UKFConfig = DEFAULT_UKF,
+    ball_radius: float = 0.07,
+) -> ViewpointResult:
+    """Algorithm 1 written out plainly: a Python loop over candidates and landmarks, using
+    the geometry package's visibility and :func:`ukf_update`. The reference for tests and
+    the benchmark baseline."""
+    mean = np.asarray(belief_mean, dtype=np.float64)
+    cov = np.asarray(belief_cov, dtype=np.float64)
+    # z = h(mu) for every landmark; closest first, ties by id
+    zs = np.array([hx_range_bearing(mean, seg)[0] for seg in landmarks.segments])
+    order = np.argsort(zs[:, 0], kind="stable")
+    V, K = len(grid), len(landmarks)
+    entropies = np.empty(V)
+    ball_vis = np.zeros(V, dtype=bool)
+    visible = np.zeros((V, K), dtype=bool)
+    post = np.empty((V, 3, 3))
+    for v, (pan, tilt) in enumerate(zip(grid.pans, grid.tilts, strict=True)):
+        visible[v] = visible_landmarks(landmarks, mean, pan, tilt, cam).visible[0]
+        ball_vis[v] = ball_visible(ball_xy, mean, pan, tilt, cam, ball_radius)[0]
+        seen = [k for k in order if visible[v, k]]
+        _, post[v] = ukf_update_sequential(
+            mean, cov, zs[seen], landmarks.segments[seen], landmarks.types[seen], ukf
+        )
+        entropies[v] = entropy(post[v])
+    return _result(entropies, ball_vis, visible, post, grid)
+
+
+def candidate_footprints(
+    pose,
+    grid: ViewpointGrid,
+    cam: CameraConfig,
+    max_distance: float = 4.0,
+    points_per_side: int = 16,
+) -> np.ndarray:
+    """Ground polygon each candidate's image covers from ``pose``, cut at ``max_distance``:
+    (V, 4 * points_per_side, 2), grid order (for plotting the candidates)."""
+    poses = np.broadcast_to(np.asarray(pose, dtype=np.float64), (len(grid), 3))
+    return footprint_polygon(poses, grid.pans, grid.tilts, cam, max_distance, points_per_side)
+
+
+__all__ = [
+    "DEFAULT_GRID",
+    "NotPositiveDefiniteError",
+    "ViewpointBatch",
+    "ViewpointGrid",
+    "ViewpointResult",
+    "ViewpointStatus",
+    "best_viewpoint",
+    "best_viewpoint_loop",
+    "best_viewpoints",
+    "candidate_footprints",
+    "choose_goal",
+]
+
+
+@dataclass(frozen=True)
+class LocalisationConfig:
+    """What the environment's goal search and the entropy baseline share: the candidate grid
+    and the UKF (whose ``initial_cov`` is the belief at an episode start)."""
+
+    grid: ViewpointGrid = DEFAULT_GRID  #: 10 x 4 candidates (paper)
+    ukf: UKFConfig = DEFAULT_UKF  #: sensor model and start belief

@@ -1,0 +1,176 @@
+"""The fast batched renderer of the robot's head camera (see ``_kernel`` for the method)."""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from activevision.geometry.camera import CameraConfig
+from activevision.geometry.field import FieldSpec
+from activevision.rendering import _kernel
+from activevision.rendering.config import RenderConfig
+from activevision.rendering.scene import SceneArrays, build_scene
+
+_DEFAULT_FIELD = FieldSpec()
+_DEFAULT_CAMERA = CameraConfig()
+_DEFAULT_CONFIG = RenderConfig()
+
+
+def _float_array(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a C-contiguous float64 array of exactly ``shape``, or a ValueError."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a numeric array of shape {shape}") from None
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} must be finite")
+    return np.ascontiguousarray(arr)
+
+
+def _per_camera(name: str, value, n: int) -> np.ndarray:
+    """A per-camera scalar: accepts shape (n,), or a scalar / shape (1,) when n == 1."""
+    arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
+    if n == 1 and np.ndim(arr) == 0:
+        arr = np.reshape(arr, (1,))
+    return _float_array(name, arr, (n,))
+
+
+def scene_params(scene: SceneArrays, camera: CameraConfig, config: RenderConfig) -> np.ndarray:
+    """The kernel's float64 parameter vector (indices ``_kernel.P_*``)."""
+    params = np.zeros(_kernel.N_PARAMS)
+    params[_kernel.P_FOCAL] = camera.focal
+    params[_kernel.P_CX] = camera.width / 2
+    params[_kernel.P_CY] = camera.height / 2
+    params[_kernel.P_CAM_H] = camera.camera_height
+    params[_kernel.P_RING_X], params[_kernel.P_RING_Y] = scene.ring[0], scene.ring[1]
+    params[_kernel.P_RING_IN], params[_kernel.P_RING_OUT] = scene.ring[2], scene.ring[3]
+    params[_kernel.P_BALL_R] = scene.ball_radius
+    params[_kernel.P_GRASS] = config.grass
+    params[_kernel.P_LINE] = config.line
+    params[_kernel.P_BACKGROUND] = config.background
+    params[_kernel.P_POST] = config.post
+    params[_kernel.P_BALL_LIT] = config.ball_lit
+    params[_kernel.P_BALL_SHADOW] = config.ball_shadow
+    return params
+
+
+class Renderer:
+    """Renders what the robot's head camera sees, for many cameras per call.
+
+    The image (``camera.height`` x ``camera.width``, uint8 grey) shows the carpet, every
+    painted line at its true width, the centre circle, the penalty marks and a short centre
+    mark, both goals (posts and crossbars) and the ball, anti-aliased by exact box-filter
+    coverage of each pixel (see :mod:`activevision.rendering._kernel`). Greys and optional
+    noise come from :class:`RenderConfig`.
+
+    Example::
+
+        r = Renderer()
+        imgs = r.render(pose, pan, tilt, ball_xy)  # (N, 3), (N,), (N,), (N, 2) -> (N, H, W)
+    """
+
+    def __init__(
+        self,
+        field: FieldSpec = _DEFAULT_FIELD,
+        camera: CameraConfig = _DEFAULT_CAMERA,
+        config: RenderConfig = _DEFAULT_CONFIG,
+    ) -> None:
+        self.field = field
+        self.camera = camera
+        self.config = config
+        self.scene = build_scene(field)
+        self._params = scene_params(self.scene, camera, config)
+
+    @property
+    def image_shape(self) -> tuple[int, int]:
+        """``(height, width)`` of one image."""
+        return (self.camera.height, self.camera.width)
+
+    def render(
+        self,
+        pose,
+        pan,
+        tilt,
+        ball_xy,
+        out: np.ndarray | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> np.ndarray:
+        """Render N cameras.
+
+        Args:
+            pose: (N, 3) robot poses ``(x, y, theta)``, or one pose (3,) for N = 1.
+            pan, tilt: (N,) head angles (rad; scalars allowed for N = 1).
+            ball_xy: (N, 2) ball positions on the ground (or (2,) for N = 1); ``None``: no
+                ball in any image.
+            out: optional preallocated C-contiguous (N, H, W) uint8 array to render into.
+            rng: numpy Generator for the noise/jitter of ``config``; required when they are
+                on, unused otherwise.
+
+        Returns:
+            (N, H, W) uint8 images (``out`` when given).
+        """
+        pose_arr = np.asarray(pose, dtype=np.float64) if not isinstance(pose, np.ndarray) else pose
+        if pose_arr.ndim == 1:
+            pose_arr = _float_array("pose", pose_arr, (3,))[None]
+        n = pose_arr.shape[0] if pose_arr.ndim == 2 else -1
+        if n < 1:
+            raise ValueError(f"pose must have shape (N, 3) or (3,), got {pose_arr.shape}")
+        pose_arr = _float_array("pose", pose_arr, (n, 3))
+        pan_arr = _per_camera("pan", pan, n)
+        tilt_arr = _per_camera("tilt", tilt, n)
+        if ball_xy is None:
+            ball_arr = np.zeros((n, 2))
+            has_ball = False
+        else:
+            ball_arr = np.asarray(ball_xy, dtype=np.float64)
+            if n == 1 and ball_arr.shape == (2,):
+                ball_arr = ball_arr[None]
+            ball_arr = _float_array("ball_xy", ball_arr, (n, 2))
+            has_ball = True
+        height, width = self.image_shape
+        if out is None:
+            out = np.empty((n, height, width), dtype=np.uint8)
+        elif not isinstance(out, np.ndarray):
+            raise ValueError("out must be a numpy uint8 array")
+        elif out.shape != (n, height, width) or out.dtype != np.uint8:
+            raise ValueError(
+                f"out must be a uint8 array of shape {(n, height, width)}, got {out.dtype} "
+                f"{out.shape}"
+            )
+        elif not out.flags.c_contiguous or not out.flags.writeable:
+            raise ValueError("out must be C-contiguous and writeable")
+        if self.config.has_noise and not isinstance(rng, np.random.Generator):
+            raise ValueError("rng must be a numpy.random.Generator when noise/jitter is on")
+
+        # Enough interleaved row sets per camera that every thread gets a share of one image.
+        row_blocks = max(1, math.ceil(4 * numba.get_num_threads() / n))
+        scene = self.scene
+        _kernel.render_kernel(
+            pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params, scene.paint_quads,
+            scene.carpet_quad, scene.ring_octagons, scene.posts, scene.crossbars, row_blocks,
+            out,
+        )
+        if self.config.has_noise:
+            apply_noise(out, self.config, rng)
+        return out
+
+
+def apply_noise(images: np.ndarray, config: RenderConfig, rng: np.random.Generator) -> None:
+    """Apply ``config``'s contrast jitter, brightness jitter and pixel noise in place (drawn
+    from ``rng`` in that order, one contrast and brightness per image)."""
+    n = images.shape[0]
+    value = images.astype(np.float32)
+    if config.contrast_jitter > 0:
+        gain = rng.uniform(1 - config.contrast_jitter, 1 + config.contrast_jitter, (n, 1, 1))
+        value = (value - 128.0) * gain.astype(np.float32) + 128.0
+    if config.brightness_jitter > 0:
+        value += rng.uniform(-config.brightness_jitter, config.brightness_jitter,
+                             (n, 1, 1)).astype(np.float32)
+    if config.noise_std > 0:
+        value += rng.normal(0.0, config.noise_std, value.shape).astype(np.float32)
+    np.clip(np.rint(value), 0, 255, out=value)
+    images[...] = value

@@ -1,0 +1,241 @@
+"""Real-time head control on a robot: camera frame + head angles in, head command out.
+
+Needs only NumPy and onnxruntime (``pip install activevision[runtime]``); nothing here
+imports torch or gymnasium.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from activevision.runtime.metadata import (
+    PolicyFileError,
+    PolicyMetadata,
+    load_metadata,
+    metadata_path_for,
+)
+from activevision.runtime.preprocess import ColorOrder, FramePreprocessor, luma_weights
+
+
+class HeadCommand(NamedTuple):
+    """One decision of the policy. Angles in radians; pan positive left, tilt positive down."""
+
+    action: int  #: index of the chosen discrete action (row of the action table)
+    d_pan: float  #: the action's pan step
+    d_tilt: float  #: the action's tilt step
+    target_pan: float  #: current pan + d_pan, clipped to the head limits
+    target_tilt: float  #: current tilt + d_tilt, clipped to the head limits
+
+
+def robot_session_options(num_threads: int = 1):  # -> onnxruntime.SessionOptions
+    """onnxruntime settings for a small robot CPU that also runs vision, walking and so on.
+
+    * ``intra_op_num_threads = num_threads`` (default 1) and ``inter_op_num_threads = 1``: a
+      1.8 M-parameter CNN is too small to gain from splitting across cores, and one thread
+      leaves the other cores to the rest of the robot.
+    * ``session.intra_op.allow_spinning = "0"``: idle worker threads sleep instead of
+      busy-waiting for the next request (spinning burns a core between decisions).
+    * ``execution_mode = ORT_SEQUENTIAL``: the graph is a chain; parallel branches buy nothing.
+    * ``graph_optimization_level = ORT_ENABLE_ALL``: constant folding, Conv+ReLU fusion and
+      the CPU-specific layout optimisations.
+    """
+    import onnxruntime as ort
+
+    if num_threads < 1:
+        raise ValueError(f"num_threads must be >= 1, got {num_threads}")
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = int(num_threads)
+    options.inter_op_num_threads = 1
+    options.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+    options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    return options
+
+
+class HeadController:
+    """Greedy head control with an exported Q-network (``policy.onnx`` + ``policy.json``).
+
+    Each :meth:`act` converts the camera frame to grey (ITU-R BT.601), resizes it to the
+    policy's input size by area averaging (:mod:`activevision.runtime.preprocess`), pushes it
+    onto the frame stack, runs the network and returns the head move with the highest
+    Q-value, plus the resulting joint targets clipped to the head limits.
+
+    Args:
+        model_path: the exported ``policy.onnx``; its metadata is read from the ``.json``
+            file of the same name beside it.
+        num_threads: onnxruntime intra-op threads (1 suits a small robot CPU; see
+            :func:`robot_session_options` for all session settings).
+        color_order: channel order of 3-channel frames, ``"rgb"`` or ``"bgr"`` (OpenCV).
+        verify_checksum: check the model file against the SHA-256 in the metadata, so a
+            model and a metadata file from different exports are caught at load time.
+
+    Raises:
+        PolicyFileError: (a ValueError) the model or metadata is missing, unreadable,
+            corrupt or the two do not match.
+        ImportError: onnxruntime is not installed.
+
+    Not thread-safe: use one controller per thread (each holds its own frame stack).
+    """
+
+    def __init__(
+        self,
+        model_path: str | os.PathLike[str],
+        num_threads: int = 1,
+        color_order: ColorOrder = "rgb",
+        verify_checksum: bool = True,
+    ) -> None:
+        luma_weights(color_order)  # validates color_order
+        if isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 1:
+            raise ValueError(f"num_threads must be a positive integer, got {num_threads!r}")
+        self.color_order: ColorOrder = color_order
+        self.model_path = Path(model_path)
+        self.metadata_path = metadata_path_for(self.model_path)
+        if not self.model_path.is_file():
+            raise PolicyFileError(f"policy model {self.model_path} not found")
+        self.metadata: PolicyMetadata = load_metadata(self.metadata_path)
+        model_bytes = _read_model(self.model_path)
+        if verify_checksum and self.metadata.model_sha256 is not None:
+            digest = hashlib.sha256(model_bytes).hexdigest()
+            if digest != self.metadata.model_sha256:
+                raise PolicyFileError(
+                    f"policy model {self.model_path} does not match its metadata "
+                    f"{self.metadata_path} (SHA-256 {digest[:12]}... != "
+                    f"{self.metadata.model_sha256[:12]}...): the files come from different "
+                    "exports or the model is corrupt"
+                )
+        self._session = _open_session(self.model_path, model_bytes, num_threads)
+        self._check_signature()
+
+        meta = self.metadata
+        self._preprocess = FramePreprocessor(meta.image_height, meta.image_width)
+        self._frames = np.zeros((1, *meta.input_shape), dtype=np.uint8)
+        self._stack_empty = True
+        self._feed: dict[str, np.ndarray] = {meta.input_name: self._frames}
+        self._outputs = [meta.output_name]
+        self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
+        self.last_q_values: np.ndarray | None = None
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def n_actions(self) -> int:
+        """Number of discrete head actions."""
+        return self.metadata.n_actions
+
+    def reset(self) -> None:
+        """Forget the frame stack (call when the head was moved by something else, or at the
+        start of a new search). The next frame fills every slot of the stack."""
+        self._stack_empty = True
+
+    def observe(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
+        """Preprocess ``frame`` and push it onto the frame stack; returns the (stack, H, W)
+        uint8 network input (a view, valid until the next call)."""
+        frames = self._frames[0]
+        order = self.color_order if color_order is None else color_order
+        if self._stack_empty:
+            self._preprocess(frame, order, out=frames[-1])
+            frames[:-1] = frames[-1]
+            self._stack_empty = False
+        else:
+            newest = self._preprocess(frame, order)  # validate before shifting the stack
+            frames[:-1] = frames[1:]
+            frames[-1] = newest
+        return frames
+
+    def q_values(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
+        """Push ``frame`` onto the stack and return the policy's Q-values, shape (A,)."""
+        self.observe(frame, color_order)
+        q = self._session.run(self._outputs, self._feed)[0][0]
+        self.last_q_values = q
+        return q
+
+    def act(
+        self, frame: np.ndarray, pan: float, tilt: float, color_order: ColorOrder | None = None
+    ) -> HeadCommand:
+        """The greedy head command for a camera ``frame`` taken at head angles ``(pan, tilt)``.
+
+        Args:
+            frame: camera image, uint8, (H, W) or (H, W, 1) grey or (H, W, 3) colour, any size.
+            pan, tilt: current head joint angles, radians (pan positive left, tilt positive
+                down).
+            color_order: overrides the controller's ``color_order`` for this frame.
+        """
+        pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
+        action = int(np.argmax(self.q_values(frame, color_order)))
+        d_pan, d_tilt = self._table[action]
+        target_pan, target_tilt = self.metadata.head_limits.clip(pan + d_pan, tilt + d_tilt)
+        return HeadCommand(action, d_pan, d_tilt, target_pan, target_tilt)
+
+    # ------------------------------------------------------------------ internals
+    def _check_signature(self) -> None:
+        """The ONNX graph's input and output must agree with the metadata."""
+        meta = self.metadata
+        inputs = {i.name: i for i in self._session.get_inputs()}
+        outputs = {o.name: o for o in self._session.get_outputs()}
+
+        def mismatch(why: str) -> PolicyFileError:
+            return PolicyFileError(
+                f"policy model {self.model_path} does not match its metadata "
+                f"{self.metadata_path}: {why}"
+            )
+
+        if meta.input_name not in inputs:
+            raise mismatch(f"no input {meta.input_name!r} (model inputs: {list(inputs)})")
+        if meta.output_name not in outputs:
+            raise mismatch(f"no output {meta.output_name!r} (model outputs: {list(outputs)})")
+        graph_input = inputs[meta.input_name]
+        if graph_input.type != "tensor(uint8)":
+            raise mismatch(f"input {meta.input_name!r} is {graph_input.type}, need tensor(uint8)")
+        shape = list(graph_input.shape)
+        batch_ok = len(shape) == 4 and (shape[0] in (1, None) or isinstance(shape[0], str))
+        if not batch_ok or tuple(shape[1:]) != meta.input_shape:
+            raise mismatch(
+                f"input shape {shape} but metadata says (batch, stack, H, W) = "
+                f"(1, {meta.stack}, {meta.image_height}, {meta.image_width})"
+            )
+        out_shape = list(outputs[meta.output_name].shape)
+        if len(out_shape) != 2 or out_shape[1] != meta.n_actions:
+            raise mismatch(
+                f"output shape {out_shape} but metadata lists {meta.n_actions} actions"
+            )
+
+
+def _finite_angle(name: str, value: float) -> float:
+    try:
+        angle = float(value)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name} must be a number of radians, got {value!r}") from error
+    if not math.isfinite(angle):
+        raise ValueError(f"{name} must be finite, got {angle}")
+    return angle
+
+
+def _read_model(path: Path) -> bytes:
+    try:
+        return path.read_bytes()
+    except OSError as error:
+        raise PolicyFileError(f"cannot read policy model {path}: {error}") from error
+
+
+def _open_session(path: Path, model_bytes: bytes, num_threads: int):
+    """An onnxruntime CPU session for the model; PolicyFileError if onnxruntime rejects it."""
+    try:
+        import onnxruntime as ort
+    except ImportError as error:
+        raise ImportError(
+            "HeadController needs onnxruntime: pip install 'activevision[runtime]'"
+        ) from error
+    try:
+        return ort.InferenceSession(
+            model_bytes, sess_options=robot_session_options(num_threads),
+            providers=["CPUExecutionProvider"],
+        )
+    except Exception as error:  # onnxruntime raises its own Fail/InvalidProtobuf types
+        raise PolicyFileError(
+            f"policy model {path} is not a valid ONNX model: {error}"
+        ) from error

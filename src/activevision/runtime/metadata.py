@@ -1,0 +1,216 @@
+"""The ``policy.json`` file that travels beside an exported ``policy.onnx``.
+
+It tells the runtime everything the ONNX graph does not: which head move each output means,
+the head limits to clip to, the frame size and stack depth, and where the model came from.
+Reading it needs only the standard library and NumPy (no torch).
+
+Example ``policy.json`` (abridged)::
+
+    {
+      "format": "activevision-policy",
+      "format_version": 1,
+      "package_version": "0.1.0",
+      "opset": 17,
+      "model_file": "policy.onnx",
+      "model_sha256": "3f1c...",
+      "input_name": "frames",
+      "output_name": "q_values",
+      "image_height": 120,
+      "image_width": 160,
+      "stack": 1,
+      "n_actions": 9,
+      "action_names": ["stay", "pan_left", ...],
+      "action_table_deg": [[0.0, 0.0], [3.0, 0.0], ...],
+      "head_limits_deg": {"pan_min": -90.0, "pan_max": 90.0, "tilt_min": 5.0, "tilt_max": 65.0},
+      "training_config_sha256": "9a0b..."
+    }
+
+Angles are stored in degrees for people to read; :class:`PolicyMetadata` hands them out in
+radians. ``action_table_deg[a] = (d_pan, d_tilt)``: pan positive to the left, tilt positive
+*down* (the conventions of :mod:`activevision.geometry.camera`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: Value of the ``format`` key of every policy.json.
+METADATA_FORMAT = "activevision-policy"
+#: Version of the policy.json layout this code reads and writes.
+METADATA_FORMAT_VERSION = 1
+#: Default file names of an exported policy.
+MODEL_FILENAME = "policy.onnx"
+METADATA_FILENAME = "policy.json"
+
+_HEAD_LIMIT_KEYS = ("pan_min", "pan_max", "tilt_min", "tilt_max")
+
+
+class PolicyFileError(ValueError):
+    """An exported policy (``policy.onnx`` or ``policy.json``) is missing, unreadable, corrupt
+    or inconsistent. The message names the file and the problem."""
+
+
+def metadata_path_for(model_path: str | os.PathLike[str]) -> Path:
+    """Where the metadata of ``model_path`` lives: the same name with a ``.json`` suffix."""
+    return Path(model_path).with_suffix(".json")
+
+
+@dataclass(frozen=True)
+class HeadLimits:
+    """Joint limits of the neck, radians (pan positive left, tilt positive down)."""
+
+    pan_min: float
+    pan_max: float
+    tilt_min: float
+    tilt_max: float
+
+    def clip(self, pan: float, tilt: float) -> tuple[float, float]:
+        """``(pan, tilt)`` clipped into the limits."""
+        return (
+            min(max(pan, self.pan_min), self.pan_max),
+            min(max(tilt, self.tilt_min), self.tilt_max),
+        )
+
+    def to_degrees_dict(self) -> dict[str, float]:
+        """The limits in degrees, as stored in policy.json."""
+        return {key: math.degrees(getattr(self, key)) for key in _HEAD_LIMIT_KEYS}
+
+
+@dataclass(frozen=True)
+class PolicyMetadata:
+    """Parsed and validated ``policy.json`` (see the module docstring for the file layout)."""
+
+    image_height: int
+    image_width: int
+    stack: int
+    action_table: np.ndarray = field(repr=False)  #: (A, 2) (d_pan, d_tilt), radians
+    head_limits: HeadLimits
+    input_name: str = "frames"
+    output_name: str = "q_values"
+    opset: int | None = None
+    package_version: str | None = None
+    model_file: str | None = None
+    model_sha256: str | None = None
+    training_config_sha256: str | None = None
+    action_names: tuple[str, ...] | None = None
+    raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def n_actions(self) -> int:
+        """Number of discrete head actions (rows of the action table)."""
+        return int(self.action_table.shape[0])
+
+    @property
+    def input_shape(self) -> tuple[int, int, int]:
+        """``(stack, height, width)`` of one network input."""
+        return (self.stack, self.image_height, self.image_width)
+
+    @classmethod
+    def from_dict(
+        cls, values: Mapping[str, Any], source: str = "policy metadata"
+    ) -> PolicyMetadata:
+        """Validate a decoded policy.json; :class:`PolicyFileError` names the bad key."""
+
+        def fail(why: str) -> PolicyFileError:
+            return PolicyFileError(f"{source}: {why}")
+
+        if not isinstance(values, Mapping):
+            raise fail(f"expected a JSON object, got {type(values).__name__}")
+        if values.get("format") != METADATA_FORMAT:
+            raise fail(f"'format' must be {METADATA_FORMAT!r}, got {values.get('format')!r}")
+        version = values.get("format_version")
+        if version != METADATA_FORMAT_VERSION:
+            raise fail(
+                f"unsupported 'format_version' {version!r} (this activevision reads "
+                f"{METADATA_FORMAT_VERSION})"
+            )
+
+        def positive_int(key: str) -> int:
+            value = values.get(key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise fail(f"{key!r} must be a positive integer, got {value!r}")
+            return value
+
+        height, width, stack = (positive_int(k) for k in ("image_height", "image_width", "stack"))
+
+        try:
+            table_deg = np.asarray(values.get("action_table_deg"), dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise fail(f"'action_table_deg' is not a numeric table: {error}") from error
+        if table_deg.ndim != 2 or table_deg.shape[1] != 2 or table_deg.shape[0] < 1:
+            raise fail(f"'action_table_deg' must be a list of [d_pan, d_tilt] pairs, got shape "
+                       f"{table_deg.shape}")
+        if not np.all(np.isfinite(table_deg)):
+            raise fail("'action_table_deg' holds non-finite values")
+        n_actions = values.get("n_actions", table_deg.shape[0])
+        if n_actions != table_deg.shape[0]:
+            raise fail(f"'n_actions' is {n_actions!r} but 'action_table_deg' has "
+                       f"{table_deg.shape[0]} rows")
+
+        limits_deg = values.get("head_limits_deg")
+        if not isinstance(limits_deg, Mapping) or set(limits_deg) < set(_HEAD_LIMIT_KEYS):
+            raise fail(f"'head_limits_deg' must be an object with keys {list(_HEAD_LIMIT_KEYS)}")
+        try:
+            limits = HeadLimits(*(math.radians(float(limits_deg[k])) for k in _HEAD_LIMIT_KEYS))
+        except (TypeError, ValueError) as error:
+            raise fail(f"'head_limits_deg' holds a non-numeric value: {error}") from error
+        if not (limits.pan_min <= limits.pan_max and limits.tilt_min <= limits.tilt_max):
+            raise fail(f"'head_limits_deg' are not ordered (min <= max): {dict(limits_deg)}")
+
+        names = values.get("action_names")
+        if names is not None:
+            if not isinstance(names, list) or len(names) != table_deg.shape[0]:
+                raise fail("'action_names' must list one name per action")
+            names = tuple(str(n) for n in names)
+
+        def optional_str(key: str) -> str | None:
+            value = values.get(key)
+            if value is not None and not isinstance(value, str):
+                raise fail(f"{key!r} must be a string, got {value!r}")
+            return value
+
+        opset = values.get("opset")
+        if opset is not None and (isinstance(opset, bool) or not isinstance(opset, int)):
+            raise fail(f"'opset' must be an integer, got {opset!r}")
+        return cls(
+            image_height=height,
+            image_width=width,
+            stack=stack,
+            action_table=np.radians(table_deg),
+            head_limits=limits,
+            input_name=optional_str("input_name") or "frames",
+            output_name=optional_str("output_name") or "q_values",
+            opset=opset,
+            package_version=optional_str("package_version"),
+            model_file=optional_str("model_file"),
+            model_sha256=optional_str("model_sha256"),
+            training_config_sha256=optional_str("training_config_sha256"),
+            action_names=names,
+            raw=dict(values),
+        )
+
+
+def load_metadata(path: str | os.PathLike[str]) -> PolicyMetadata:
+    """Read and validate a policy.json; :class:`PolicyFileError` if missing or invalid."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError as error:
+        raise PolicyFileError(
+            f"policy metadata {path} not found (export writes it beside the .onnx model)"
+        ) from error
+    except (OSError, UnicodeDecodeError) as error:
+        raise PolicyFileError(f"cannot read policy metadata {path}: {error}") from error
+    try:
+        values = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise PolicyFileError(f"policy metadata {path} is not valid JSON: {error}") from error
+    return PolicyMetadata.from_dict(values, source=str(path))

@@ -1,0 +1,240 @@
+"""Training configuration: one frozen dataclass, paper defaults, JSON round trip, CLI overrides.
+
+Sources: "paper" = the paper's hyperparameter table; "SB2" = Stable-Baselines v2 ``DQN``
+defaults, which the paper used for everything the table leaves out; "release" = the authors'
+code release (see ``/work/shared/REFERENCE.md``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import tempfile
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything a training run depends on; saved as ``config.json`` beside each run."""
+
+    seed: int = 0
+    """Seed of every generator of the run (network init, exploration, env resets, replay)."""
+    env_id: str = "ActiveVision-v0"
+    """Gymnasium id of the environment."""
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    """Keyword arguments for ``gymnasium.make(env_id, **env_kwargs)`` (JSON values)."""
+    total_timesteps: int = 30_000
+    """Environment steps of the whole run (release: 30,000)."""
+    epoch_steps: int = 300
+    """Environment steps per metrics epoch (the paper's training curves)."""
+    batch_size: int = 32
+    """Minibatch size (paper)."""
+    buffer_size: int = 1_000_000
+    """Replay capacity in transitions (paper)."""
+    learning_rate: float = 5e-4
+    """Adam learning rate, constant (paper)."""
+    gamma: float = 0.99
+    """Discount factor (paper)."""
+    target_update_interval: int = 10_000
+    """Environment steps between target-network syncs (paper)."""
+    exploration_initial: float = 1.0
+    """Initial epsilon of epsilon-greedy (paper)."""
+    exploration_final: float = 0.02
+    """Final epsilon (paper)."""
+    exploration_fraction: float = 0.1
+    """Fraction of total_timesteps over which epsilon decays linearly (SB2; release: 0.85)."""
+    learning_starts: int = 1000
+    """Environment steps collected before the first update (SB2; release: 500)."""
+    train_freq: int = 1
+    """Environment steps per gradient update (SB2)."""
+    per_alpha: float = 0.6
+    """Prioritisation exponent alpha (paper)."""
+    per_beta0: float = 0.4
+    """Initial importance-sampling exponent beta, annealed to 1 over the run (paper; SB2)."""
+    per_eps: float = 1e-6
+    """Added to |td error| to form priorities (SB2)."""
+    max_grad_norm: float = 10.0
+    """Per-tensor gradient-norm clip (SB2 grad_norm_clipping)."""
+    dueling: bool = False
+    """Dueling Q-network head (not in the paper)."""
+    checkpoint_interval: int = 3000
+    """Environment steps between checkpoints; a multiple of epoch_steps (0: only at the end)."""
+    keep_checkpoints: int = 2
+    """How many of the newest checkpoints to keep."""
+    num_threads: int = 0
+    """Torch CPU threads (0: one per core, os.cpu_count())."""
+    device: str = "auto"
+    """Torch device: "auto" (cuda if available, else cpu), "cpu", "cuda", "cuda:1", ..."""
+    tensorboard: bool = True
+    """Also write TensorBoard events to the run directory."""
+    progress_bar: bool = True
+    """Show a tqdm progress bar (only when stderr is a terminal)."""
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):  # type check first, so range checks can compare
+            object.__setattr__(self, f.name, _check_type(f.name, f.type, getattr(self, f.name)))
+        validate(self)
+
+    def replace(self, **changes: Any) -> TrainConfig:
+        """A copy with some fields changed (validated)."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-serialisable dict."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> TrainConfig:
+        """Build from a dict; unknown keys or wrong types raise ValueError naming the key."""
+        known = {f.name: f for f in dataclasses.fields(cls)}
+        for key in values:
+            if key not in known:
+                raise ValueError(f"unknown TrainConfig key {key!r}")
+        return cls(**values)
+
+
+_POSITIVE_INTS = (
+    "total_timesteps",
+    "epoch_steps",
+    "batch_size",
+    "buffer_size",
+    "target_update_interval",
+    "train_freq",
+    "keep_checkpoints",
+)
+_NON_NEGATIVE_INTS = ("learning_starts", "checkpoint_interval", "num_threads")
+_FRACTIONS = ("gamma", "exploration_initial", "exploration_final", "exploration_fraction")
+_FRACTIONS += ("per_alpha", "per_beta0")
+_POSITIVE_FLOATS = ("learning_rate", "per_eps", "max_grad_norm")
+
+
+def validate(config: TrainConfig) -> None:
+    """Raise ValueError naming the first invalid field."""
+    for name in _POSITIVE_INTS:
+        if getattr(config, name) < 1:
+            raise ValueError(f"{name} must be >= 1, got {getattr(config, name)}")
+    for name in _NON_NEGATIVE_INTS:
+        if getattr(config, name) < 0:
+            raise ValueError(f"{name} must be >= 0, got {getattr(config, name)}")
+    for name in _FRACTIONS:
+        value = getattr(config, name)
+        if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+            raise ValueError(f"{name} must be in [0, 1], got {value}")
+    for name in _POSITIVE_FLOATS:
+        value = getattr(config, name)
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name} must be a positive number, got {value}")
+    if config.checkpoint_interval % config.epoch_steps:
+        raise ValueError(
+            f"checkpoint_interval must be a multiple of epoch_steps ({config.epoch_steps}),"
+            f" got {config.checkpoint_interval}"
+        )
+    if not isinstance(config.env_kwargs, dict) or not all(
+        isinstance(k, str) for k in config.env_kwargs
+    ):
+        raise ValueError("env_kwargs must be a dict with string keys")
+    if not (config.device == "auto" or config.device.split(":")[0] in ("cpu", "cuda", "mps")):
+        raise ValueError(
+            f"device must be 'auto', 'cpu', 'cuda[:n]' or 'mps', got {config.device!r}"
+        )
+    if not config.env_id:
+        raise ValueError("env_id must not be empty")
+
+
+def _check_type(key: str, annotation: Any, value: Any) -> Any:
+    """Check (and, for int -> float, convert) one value against its field's annotation."""
+    expected = str(annotation)
+    if expected == "bool":
+        ok = isinstance(value, bool)
+    elif expected == "int":
+        ok = isinstance(value, int) and not isinstance(value, bool)
+    elif expected == "float":
+        ok = isinstance(value, int | float) and not isinstance(value, bool)
+        value = float(value) if ok else value
+    elif expected == "str":
+        ok = isinstance(value, str)
+    else:  # dict[str, Any]
+        ok = isinstance(value, dict)
+    if not ok:
+        raise ValueError(f"TrainConfig key {key!r} expects {expected}, got {value!r}")
+    return value
+
+
+def preset(name: str) -> TrainConfig:
+    """A named configuration: "paper" (the default) or "release" (the authors' code)."""
+    presets = {
+        "paper": TrainConfig(),
+        "release": TrainConfig(learning_starts=500, exploration_fraction=0.85),
+    }
+    if name not in presets:
+        raise ValueError(f"unknown preset {name!r}; choose from {sorted(presets)}")
+    return presets[name]
+
+
+def save_config(config: TrainConfig, path: str | os.PathLike[str]) -> None:
+    """Write the config as JSON atomically (a temporary file, then ``os.replace``)."""
+    atomic_write_text(Path(path), json.dumps(config.to_dict(), indent=2, sort_keys=True) + "\n")
+
+
+def load_config(path: str | os.PathLike[str]) -> TrainConfig:
+    """Read a config written by :func:`save_config` (ValueError on unknown or invalid keys)."""
+    try:
+        values = json.loads(Path(path).read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path} is not valid JSON: {error}") from error
+    if not isinstance(values, dict):
+        raise ValueError(f"{path} must hold a JSON object")
+    return TrainConfig.from_dict(values)
+
+
+def apply_overrides(config: TrainConfig, overrides: Iterable[str]) -> TrainConfig:
+    """Apply ``key=value`` strings from a command line, e.g. ``["learning_rate=1e-3"]``.
+
+    Values are parsed as JSON where they can be (``true``, ``3``, ``{"a": 1}``), else taken as
+    strings; ``env_kwargs.NAME=VALUE`` sets one environment argument.
+    """
+    values = config.to_dict()
+    env_kwargs = dict(config.env_kwargs)
+    for item in overrides:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep:
+            raise ValueError(f"override {item!r} must look like key=value")
+        value = _parse_value(text)
+        if key.startswith("env_kwargs."):
+            env_kwargs[key.removeprefix("env_kwargs.")] = value
+            continue
+        if key not in values:
+            raise ValueError(f"unknown TrainConfig key {key!r}")
+        if key == "env_kwargs":
+            env_kwargs = value
+        values[key] = value
+    values["env_kwargs"] = env_kwargs
+    return TrainConfig.from_dict(values)
+
+
+def _parse_value(text: str) -> Any:
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write text so that readers see the old file or the new one, never half of one."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as file:
+            file.write(text)
+            file.flush()
+            os.fsync(file.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

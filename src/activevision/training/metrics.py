@@ -1,0 +1,163 @@
+"""Training metrics: what an episode and an epoch report, and the CSV logs they go to.
+
+Episode metrics come from the environment's final ``info`` dict, read with defaults so any
+Gymnasium environment works:
+
+| info key           | meaning (ActiveVision-v0)                             | default       |
+|--------------------|-------------------------------------------------------|---------------|
+| ``success``        | the goal viewpoint was reached                        | False         |
+| ``success_rate``   | fraction of the goal view's landmarks observed        | success (0/1) |
+| ``steps_to_success`` | steps until success (20 if never)                   | NaN           |
+| ``ball_lost_step`` | step the ball left the view (20 if never)             | NaN           |
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+EPISODE_FIELDS = (
+    "episode",
+    "step",
+    "reward",
+    "length",
+    "success",
+    "success_rate",
+    "steps_to_success",
+    "ball_lost_step",
+)
+EPOCH_FIELDS = (
+    "epoch",
+    "step",
+    "episodes",
+    "success_rate",
+    "success_duration",
+    "ball_loss_duration",
+    "episode_reward",
+    "loss",
+    "updates",
+    "epsilon",
+    "beta",
+    "steps_per_s",
+)
+#: epoch columns measured with a clock, so they differ between otherwise identical runs
+TIMING_FIELDS = ("steps_per_s",)
+
+#: TensorBoard tag of each epoch column
+TENSORBOARD_TAGS = {
+    "success_rate": "charts/success_rate",
+    "success_duration": "charts/success_duration",
+    "ball_loss_duration": "charts/ball_loss_duration",
+    "episode_reward": "charts/episodic_return",
+    "episodes": "charts/episodes",
+    "loss": "losses/td_loss",
+    "epsilon": "charts/epsilon",
+    "beta": "charts/per_beta",
+    "steps_per_s": "charts/SPS",
+}
+
+
+def episode_record(
+    episode: int, step: int, reward: float, length: int, info: Mapping[str, Any]
+) -> dict[str, float]:
+    """One row of ``episodes.csv`` from an episode's totals and its final info dict."""
+    success = bool(info.get("success", False))
+    return {
+        "episode": episode,
+        "step": step,
+        "reward": float(reward),
+        "length": length,
+        "success": float(success),
+        "success_rate": float(info.get("success_rate", float(success))),
+        "steps_to_success": float(info.get("steps_to_success", math.nan)),
+        "ball_lost_step": float(info.get("ball_lost_step", math.nan)),
+    }
+
+
+def nan_mean(values: Sequence[float]) -> float:
+    """Mean of the finite values; NaN when there are none (e.g. no episode ended)."""
+    finite = [v for v in values if math.isfinite(v)]
+    return sum(finite) / len(finite) if finite else math.nan
+
+
+@dataclass
+class EpochAccumulator:
+    """Episodes and losses collected since the current epoch began (checkpointable)."""
+
+    episodes: list[dict[str, float]] = field(default_factory=list)
+    losses: list[float] = field(default_factory=list)
+
+    def summary(
+        self, epoch: int, step: int, epsilon: float, beta: float, steps_per_s: float
+    ) -> dict[str, float]:
+        """The epoch's row of ``metrics.csv``."""
+
+        def mean_of(key: str) -> float:
+            return nan_mean([e[key] for e in self.episodes])
+
+        return {
+            "epoch": epoch,
+            "step": step,
+            "episodes": len(self.episodes),
+            "success_rate": mean_of("success_rate"),
+            "success_duration": mean_of("steps_to_success"),
+            "ball_loss_duration": mean_of("ball_lost_step"),
+            "episode_reward": mean_of("reward"),
+            "loss": nan_mean(self.losses),
+            "updates": len(self.losses),
+            "epsilon": epsilon,
+            "beta": beta,
+            "steps_per_s": steps_per_s,
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> EpochAccumulator:
+        return cls(episodes=list(values["episodes"]), losses=list(values["losses"]))
+
+
+class CsvLog:
+    """An append-only CSV file with a fixed header, one flushed row at a time.
+
+    Args:
+        path: the file; created with a header if missing.
+        fieldnames: the columns.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], fieldnames: Sequence[str]) -> None:
+        self.path = Path(path)
+        self.fieldnames = list(fieldnames)
+        if not self.path.exists():
+            with open(self.path, "w", newline="") as file:
+                csv.writer(file).writerow(self.fieldnames)
+
+    def append(self, row: Mapping[str, Any]) -> None:
+        with open(self.path, "a", newline="") as file:
+            csv.DictWriter(file, self.fieldnames).writerow({k: row[k] for k in self.fieldnames})
+
+    def rows(self) -> list[dict[str, str]]:
+        with open(self.path, newline="") as file:
+            return list(csv.DictReader(file))
+
+    def truncate(self, n_rows: int) -> None:
+        """Keep the header and the first ``n_rows`` rows (rows written after a checkpoint)."""
+        with open(self.path, newline="") as file:
+            lines = file.readlines()
+        with open(self.path, "w", newline="") as file:
+            file.writelines(lines[: 1 + n_rows])
+
+
+def read_csv_columns(path: str | os.PathLike[str]) -> dict[str, list[float]]:
+    """A CSV written by :class:`CsvLog` as float columns (empty cells become NaN)."""
+    with open(path, newline="") as file:
+        rows = list(csv.DictReader(file))
+    if not rows:
+        return {}
+    return {key: [float(r[key]) if r[key] != "" else math.nan for r in rows] for key in rows[0]}

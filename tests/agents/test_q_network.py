@@ -1,0 +1,48 @@
+import torch
+from torch import nn
+
+from activevision.agents.q_network import QNetwork, count_parameters, feature_shape
+
+
+def test_paper_network_shapes_and_parameter_count():
+    network = QNetwork(n_actions=9)
+    assert feature_shape(120, 160) == (64, 6, 9)
+    assert network.n_features == 3456
+    assert network.fc.in_features == 3456 and network.fc.out_features == 512
+    assert count_parameters(network) == 1_830_857  # ~1.83 M as in the paper's CNN
+    q = network(torch.zeros(4, 1, 120, 160, dtype=torch.uint8))
+    assert q.shape == (4, 9) and q.dtype == torch.float32
+
+
+def test_pool_before_relu_and_channels_last_change_nothing():
+    torch.manual_seed(0)
+    network = QNetwork(n_actions=9, stack=2)
+    # the straightforward order of the paper: conv, ReLU, pool, ...
+    reference = nn.Sequential(
+        network.conv1,
+        nn.ReLU(),
+        nn.MaxPool2d(2, 2),
+        network.conv2,
+        nn.ReLU(),
+        network.conv3,
+        nn.ReLU(),
+        nn.Flatten(),
+        network.fc,
+        nn.ReLU(),
+        network.q,
+    )
+    obs = torch.randint(0, 256, (3, 2, 120, 160), dtype=torch.uint8)
+    expected = reference(obs.float() / 255.0)
+    torch.testing.assert_close(network(obs), expected, rtol=1e-5, atol=1e-5)
+    network.to_channels_last()
+    fast = network(obs.contiguous(memory_format=torch.channels_last))
+    torch.testing.assert_close(fast, expected, rtol=1e-4, atol=1e-5)
+
+
+def test_dueling_head_is_mean_centred():
+    network = QNetwork(n_actions=5, image_shape=(60, 80), dueling=True)
+    obs = torch.randint(0, 256, (2, 1, 60, 80), dtype=torch.uint8)
+    hidden = network.features(obs)
+    q = network(obs)
+    torch.testing.assert_close(q.mean(dim=1, keepdim=True), network.value(hidden))
+    assert q.shape == (2, 5)

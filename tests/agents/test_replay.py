@@ -1,0 +1,126 @@
+import numpy as np
+import pytest
+
+from activevision.agents.replay.prioritized import PrioritizedReplayBuffer
+
+SHAPE = (1, 12, 16)
+
+
+def episode_frames(rng, length, shape=SHAPE):
+    return [rng.integers(0, 256, size=shape, dtype=np.uint8) for _ in range(length + 1)]
+
+
+def fill(buffer, rng, lengths, shape=SHAPE, truncate_last=True):
+    """Add episodes of the given lengths; returns the transitions as tuples."""
+    added = []
+    for length in lengths:
+        frames = episode_frames(rng, length, shape)
+        for t in range(length):
+            last = t == length - 1
+            transition = (
+                frames[t],
+                t % 3,
+                float(t),
+                frames[t + 1],
+                last and not truncate_last,
+                last and truncate_last,
+            )
+            buffer.add(*transition)
+            added.append(transition)
+    return added
+
+
+def test_each_frame_is_stored_once():
+    buffer = PrioritizedReplayBuffer(100, SHAPE, seed=0, chunk_frames=8)
+    fill(buffer, np.random.default_rng(0), [5, 3, 7])
+    assert len(buffer) == 15
+    assert len(buffer.frames) == 15 + 3  # one frame per step plus one per episode start
+
+
+def test_large_capacity_does_not_preallocate_frames():
+    buffer = PrioritizedReplayBuffer(1_000_000, (1, 120, 160), seed=0, chunk_frames=64)
+    assert buffer.frames.allocated_frames == 0
+    fill(buffer, np.random.default_rng(0), [10], shape=(1, 120, 160))
+    assert buffer.frames.allocated_frames == 64
+
+
+def test_samples_return_exactly_what_was_stored():
+    buffer = PrioritizedReplayBuffer(1000, SHAPE, seed=1, chunk_frames=4)
+    added = fill(buffer, np.random.default_rng(1), [4, 6, 1, 5], truncate_last=False)
+    batch = buffer.sample(64, beta=0.4)
+    for i, slot in enumerate(batch.indices):
+        obs, action, reward, next_obs, terminated, _ = added[slot]
+        np.testing.assert_array_equal(batch.obs[i], obs)
+        np.testing.assert_array_equal(batch.next_obs[i], next_obs)
+        assert batch.actions[i] == action and batch.rewards[i] == reward
+        assert batch.terminated[i] == float(terminated)
+    assert batch.obs.dtype == np.uint8 and batch.obs.shape == (64, *SHAPE)
+
+
+def test_frame_stacks_are_exact_and_not_duplicated():
+    stack, rng = 3, np.random.default_rng(2)
+    buffer = PrioritizedReplayBuffer(1000, (stack, 4, 5), seed=2, chunk_frames=5)
+    added = []
+    for length in (6, 4):
+        frames = [rng.integers(0, 256, (4, 5), dtype=np.uint8) for _ in range(length + 1)]
+        history = [frames[0]] * (stack - 1) + frames  # "repeat the reset frame" padding
+        observations = [np.stack(history[t : t + stack]) for t in range(length + 1)]
+        for t in range(length):
+            transition = (observations[t], 0, 0.0, observations[t + 1], False, t == length - 1)
+            buffer.add(*transition)
+            added.append(transition)
+    assert len(buffer.frames) == 10 + 2 * stack  # a new episode stores its whole first stack
+    batch = buffer.sample(32, beta=1.0)
+    for i, slot in enumerate(batch.indices):
+        np.testing.assert_array_equal(batch.obs[i], added[slot][0])
+        np.testing.assert_array_equal(batch.next_obs[i], added[slot][3])
+
+
+def test_wraparound_frees_old_frames_and_stays_exact():
+    buffer = PrioritizedReplayBuffer(10, SHAPE, seed=3, chunk_frames=4)
+    added = fill(buffer, np.random.default_rng(3), [7] * 10)
+    assert len(buffer) == 10
+    assert buffer.frames.allocated_frames <= 10 + 2 + 2 * 4  # live frames + partial chunks
+    live = added[-10:]
+    batch = buffer.sample(16, beta=0.4)
+    for i, slot in enumerate(batch.indices):
+        age = (slot - buffer.cursor) % 10  # 0 = oldest live transition
+        np.testing.assert_array_equal(batch.obs[i], live[age][0])
+        np.testing.assert_array_equal(batch.next_obs[i], live[age][3])
+
+
+def test_priorities_new_at_max_and_updated_from_td_errors():
+    buffer = PrioritizedReplayBuffer(10, SHAPE, alpha=0.5, eps=1e-6, seed=4)
+    fill(buffer, np.random.default_rng(4), [3])
+    np.testing.assert_allclose(buffer.tree.leaves(3), 1.0)
+    buffer.update_priorities(np.array([0, 1]), np.array([-3.0, 0.0]))
+    np.testing.assert_allclose(buffer.tree.leaves(3), [np.sqrt(3.0 + 1e-6), np.sqrt(1e-6), 1.0])
+    fill(buffer, np.random.default_rng(5), [1])
+    assert buffer.tree.get(np.array([3]))[0] == pytest.approx(np.sqrt(3.0 + 1e-6))
+    batch = buffer.sample(4, beta=0.4)
+    assert batch.weights.max() == pytest.approx(1.0) and np.all(batch.weights > 0)
+
+
+def test_state_dict_round_trip_is_exact():
+    buffer = PrioritizedReplayBuffer(20, SHAPE, seed=6, chunk_frames=4)
+    rng = np.random.default_rng(6)
+    fill(buffer, rng, [9, 9, 9])  # wraps around
+    buffer.update_priorities(np.array([1, 5]), np.array([2.0, 0.1]))
+    state = buffer.state_dict()
+    assert all(isinstance(v, np.ndarray) and v.dtype != object for v in state.values())
+    restored = PrioritizedReplayBuffer.from_state_dict(state)
+    for a, b in zip(buffer.sample(8, 0.5), restored.sample(8, 0.5), strict=True):
+        np.testing.assert_array_equal(a, b)
+    more = episode_frames(np.random.default_rng(7), 2)
+    for b in (buffer, restored):
+        b.add(more[0], 1, 1.0, more[1], False, False)
+    np.testing.assert_array_equal(buffer.tree.leaves(), restored.tree.leaves())
+    assert len(buffer.frames) == len(restored.frames)
+
+
+def test_rejects_wrong_observations():
+    buffer = PrioritizedReplayBuffer(10, SHAPE)
+    with pytest.raises(ValueError):
+        buffer.add(np.zeros(SHAPE, np.float32), 0, 0.0, np.zeros(SHAPE, np.uint8), False, False)
+    with pytest.raises(ValueError):
+        buffer.sample(4, 0.4)

@@ -1,0 +1,130 @@
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import activevision.envs  # noqa: F401  (registers ActiveVision-v0)
+from activevision.envs import ActiveVisionEnv, EnvConfig
+from activevision.envs.actions import action_table
+from activevision.envs.reward import approach_reward
+
+
+def rollout(env, seed, actions):
+    obs, info = env.reset(seed=seed)
+    out = [(obs, 0.0, False, False, info)]
+    for a in actions:
+        step = env.step(a)
+        out.append(step)
+        if step[2] or step[3]:
+            break
+    return out
+
+
+def test_spaces_and_registration():
+    env = gym.make("ActiveVision-v0")
+    assert env.observation_space == gym.spaces.Box(0, 255, (1, 120, 160), np.uint8)
+    assert env.action_space == gym.spaces.Discrete(9)
+    assert env.spec.max_episode_steps == 20
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (1, 120, 160) and obs.dtype == np.uint8
+    assert env.observation_space.contains(obs)
+    assert gym.make("ActiveVision-v0", action_set="4way").action_space.n == 5
+
+
+def test_env_checker_passes():
+    from gymnasium.utils.env_checker import check_env
+
+    check_env(gym.make("ActiveVision-v0").unwrapped, skip_render_check=True)
+
+
+def test_same_seed_same_episode_different_seed_differs():
+    acts = np.random.default_rng(0).integers(0, 9, 20)
+    a = rollout(ActiveVisionEnv(), 7, acts)
+    b = rollout(ActiveVisionEnv(), 7, acts)
+    assert len(a) == len(b)
+    for (oa, ra, ta, ua, ia), (ob, rb, tb, ub, ib) in zip(a, b, strict=True):
+        assert oa.tobytes() == ob.tobytes() and ra == rb and ta == tb and ua == ub
+        assert ia.keys() == ib.keys()
+        for k in ia:
+            np.testing.assert_array_equal(ia[k], ib[k])
+    c = rollout(ActiveVisionEnv(), 8, acts)
+    assert c[0][0].tobytes() != a[0][0].tobytes()
+
+
+def test_start_state_is_valid():
+    env = ActiveVisionEnv()
+    for seed in range(10):
+        _, info = env.reset(seed=seed)
+        assert len(info["desired_landmarks"]) > 0
+        assert not info["success"]
+        d = np.linalg.norm(info["ball"] - info["pose"][:2])
+        assert 1.0 - 1e-9 <= d <= 3.0 + 1e-9
+        np.testing.assert_array_equal(info["pose"], info["believed_pose"])
+
+
+def test_reward_is_plus_one_for_moving_closer():
+    # The paper's text, not its printed sign(D' - D).
+    assert approach_reward(10.0, 7.0) == 1.0
+    assert approach_reward(7.0, 10.0) == -1.0
+    assert approach_reward(7.0, 7.0) == 0.0
+    assert approach_reward(7.0, 6.5, resolution_deg=1.0) == 0.0  # the release: sign(int(D-D'))
+
+
+def test_greedy_moves_reach_the_goal_with_positive_rewards():
+    env = ActiveVisionEnv()
+    table = np.degrees(action_table(3.0))
+    successes = 0
+    for seed in range(10):
+        _, info = env.reset(seed=seed)
+        for _ in range(20):
+            delta = np.degrees(info["goal_viewpoint"] - info["head"])
+            a = int(np.argmin(np.linalg.norm(delta - table, axis=1)))
+            _, r, term, _, info = env.step(a)
+            if term:
+                break
+            assert r == 1.0
+        successes += info["success"]
+    assert successes >= 7  # only ball loss or the 20-step limit stop the greedy path
+
+
+def test_invalid_action_is_a_clear_error():
+    env = ActiveVisionEnv()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="invalid action"):
+        env.step(9)
+
+
+def test_invalid_config_is_a_clear_error():
+    with pytest.raises(ValueError, match="frame_stack"):
+        EnvConfig(frame_stack=0)
+    with pytest.raises(ValueError, match="success_mode"):
+        ActiveVisionEnv(success_mode="nearby")
+
+
+def test_frame_stack_keeps_the_latest_frames():
+    env = ActiveVisionEnv(frame_stack=3)
+    obs, _ = env.reset(seed=1)
+    assert obs.shape == (3, 120, 160)
+    assert (obs[0] == obs[2]).all()
+    obs2, *_ = env.step(1)
+    np.testing.assert_array_equal(obs2[:2], obs[1:])
+
+
+def test_ball_loss_terminates_with_minus_two():
+    env = ActiveVisionEnv()
+    for seed in range(20):
+        env.reset(seed=seed)
+        for _ in range(20):
+            _, r, term, _, info = env.step(1)  # keep panning left
+            if term:
+                break
+        if info["ball_lost"]:
+            assert r == -2.0 and info["ball_lost_step"] == info["step"]
+            return
+    pytest.fail("panning one way never lost the ball")
+
+
+def test_rgb_render_shows_image_and_top_view():
+    env = ActiveVisionEnv(render_mode="rgb_array")
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.shape[1] > frame.shape[0]

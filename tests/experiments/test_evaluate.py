@@ -1,0 +1,121 @@
+import math
+
+import numpy as np
+import pytest
+
+from activevision.envs import ActiveVisionEnv
+from activevision.envs.actions import action_table
+from activevision.experiments.compare import compare, plot_compare
+from activevision.experiments.evaluate import (
+    episode_seed,
+    evaluate_policy,
+    mean_interval,
+    run_episode,
+    wilson_interval,
+)
+from activevision.experiments.policies import (
+    EntropyPolicy,
+    HeadPolicy,
+    OraclePolicy,
+    RandomPolicy,
+    ScanPolicy,
+    greedy_action,
+)
+
+
+class Recorder:
+    """Stays put and remembers the start it saw."""
+
+    name = "recorder"
+
+    def __init__(self):
+        self.starts = []
+
+    def reset(self, info, rng):
+        self.starts.append((info["pose"].copy(), info["ball"].copy(), info["head"].copy()))
+
+    def act(self, obs, info):
+        return 0
+
+
+def test_every_method_sees_identical_start_states():
+    env = ActiveVisionEnv()
+    a, b = Recorder(), Recorder()
+    for policy in (a, RandomPolicy(), b, OraclePolicy()):
+        for i in range(5):
+            run_episode(env, policy, episode_seed(3, i))
+    for (pa, ba, ha), (pb, bb, hb) in zip(a.starts, b.starts, strict=True):
+        np.testing.assert_array_equal(pa, pb)
+        np.testing.assert_array_equal(ba, bb)
+        np.testing.assert_array_equal(ha, hb)
+    assert isinstance(OraclePolicy(), HeadPolicy)
+
+
+@pytest.mark.parametrize("goal_deg", [(10.0, 0.0), (0.0, -14.0), (9.0, 9.0), (-15.0, 15.0)])
+def test_oracle_takes_the_minimum_number_of_steps_on_hand_made_cases(goal_deg):
+    # No sequence of 3 degree moves can get within 3 degrees of a goal D degrees away in
+    # fewer than ceil((D - 3) / 3) steps; the oracle's greedy moves need exactly that many.
+    table = action_table(3.0)
+    head, goal = np.zeros(2), np.radians(goal_deg)
+    steps = 0
+    while np.degrees(np.hypot(*(goal - head))) > 3.0:
+        head = head + table[greedy_action(head, goal, table)]
+        steps += 1
+    assert steps == math.ceil((np.hypot(*goal_deg) - 3.0) / 3.0)
+
+
+def test_oracle_is_near_perfect_and_random_far_below():
+    _, oracle, _ = evaluate_policy(OraclePolicy(), episodes=30, seed=1)
+    _, rand, _ = evaluate_policy(RandomPolicy(), episodes=30, seed=1)
+    assert oracle["success"].mean >= 0.8
+    assert rand["success"].mean < oracle["success"].mean - 0.4
+
+
+def test_entropy_method_with_zero_error_targets_the_true_goal():
+    env = ActiveVisionEnv()
+    for i in range(5):
+        _, info = env.reset(seed=i)
+        policy = EntropyPolicy(0.0, jump=True)
+        policy.reset(info, np.random.default_rng(i))
+        np.testing.assert_allclose(policy.target, info["goal_viewpoint"])
+
+
+def test_large_localisation_error_hurts_the_entropy_method():
+    _, exact, _ = evaluate_policy(EntropyPolicy(0.0), episodes=40, seed=2)
+    _, wrong, _ = evaluate_policy(EntropyPolicy(2.0), episodes=40, seed=2)
+    assert exact["success"].mean > 0.9
+    assert wrong["success"].high < exact["success"].low
+
+
+def test_scan_policy_keeps_the_ball_mostly():
+    _, scan, _ = evaluate_policy(ScanPolicy(), episodes=20, seed=4)
+    _, rand, _ = evaluate_policy(RandomPolicy(), episodes=20, seed=4)
+    assert scan["ball_loss_duration"].mean > rand["ball_loss_duration"].mean
+
+
+def test_wilson_interval_on_known_data():
+    # Wilson 95% interval for 8/10, computed by hand: centre 0.7167, half-width 0.2266.
+    iv = wilson_interval(8, 10)
+    assert iv.mean == 0.8
+    assert iv.low == pytest.approx(0.4902, abs=1e-4)
+    assert iv.high == pytest.approx(0.9433, abs=1e-4)
+    assert wilson_interval(0, 10).low == 0.0
+
+
+def test_mean_interval_on_known_data():
+    iv = mean_interval([1.0, 2.0, 3.0, 4.0])
+    half = 1.959963984540054 * math.sqrt(5 / 3) / 2
+    assert iv.mean == 2.5
+    assert iv.low == pytest.approx(2.5 - half) and iv.high == pytest.approx(2.5 + half)
+
+
+def test_compare_is_incremental(tmp_path):
+    methods = {"oracle": lambda e: OraclePolicy(), "entropy_jump": lambda e: EntropyPolicy(e)}
+    rows = compare(tmp_path, methods, errors=[0.0, 1.0], episodes=5, progress=False)
+    assert len(rows) == 4
+    csv_text = (tmp_path / "compare.csv").read_text()
+    # A second call finds every level done and runs nothing new.
+    rows2 = compare(tmp_path, methods, errors=[0.0, 1.0], episodes=5, progress=False)
+    assert len(rows2) == 4 and (tmp_path / "compare.csv").read_text() == csv_text
+    plot_compare(tmp_path / "compare.csv", tmp_path / "compare.png")
+    assert (tmp_path / "compare.png").stat().st_size > 10_000

@@ -1,0 +1,208 @@
+"""HeadController: same decisions as PyTorch, clipped targets, frame stack, clear errors."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+import torch
+
+from activevision.runtime import HeadCommand, HeadController, PolicyFileError
+from activevision.runtime import pretrained as pretrained_module
+
+
+def torch_q(network, stacked: np.ndarray) -> np.ndarray:
+    with torch.inference_mode():
+        return network(torch.from_numpy(stacked[None]))[0].numpy()
+
+
+def same_decision(action: int, q_torch: np.ndarray) -> bool:
+    """Equal to torch's argmax, or a tie within float noise."""
+    return action == int(np.argmax(q_torch)) or q_torch.max() - q_torch[action] < 1e-4
+
+
+@pytest.mark.parametrize(("width", "height"), [(160, 120), (640, 480), (320, 240), (333, 250)])
+def test_decisions_match_torch_for_grey_rgb_bgr(policy, frames, helpers, width, height):
+    controller = HeadController(policy.model_path)
+    bgr_controller = HeadController(policy.model_path, color_order="bgr")
+    for i, grey in enumerate(frames(width, height)):
+        rgb = helpers.colourise(grey, seed=i)
+        cases = [(controller, grey, "rgb"), (controller, grey[:, :, None], "rgb"),
+                 (controller, rgb, "rgb"), (bgr_controller, rgb[:, :, ::-1], "bgr")]
+        for ctrl, frame, order in cases:
+            q_torch = torch_q(policy.network, helpers.reference_preprocess(frame, order)[None])
+            command = ctrl.act(frame, 0.0, 0.5)
+            assert same_decision(command.action, q_torch)
+            assert np.abs(ctrl.last_q_values - q_torch).max() < 0.05  # ±1 grey level at most
+
+
+def test_q_values_match_torch_exactly_preprocessed(policy, frames):
+    controller = HeadController(policy.model_path)
+    for frame in frames(640, 480):
+        q = controller.q_values(frame)
+        expected = torch_q(policy.network, controller.observe(frame).copy())
+        assert np.abs(q - expected).max() <= 1e-4
+
+
+def biased_policy(tmp_path, helpers, action: int, stack: int = 1):
+    """A network that always picks ``action`` (output weights zero, one-hot bias)."""
+    network = helpers.make_network(stack=stack)
+    with torch.no_grad():
+        network.q.weight.zero_()
+        network.q.bias.zero_()
+        network.q.bias[action] = 1.0
+    return helpers.export(network, tmp_path).model_path
+
+
+def test_command_and_clipping_to_head_limits(tmp_path, helpers):
+    pan_left_tilt_down = 6  # (+d, +d): pan left, tilt down
+    controller = HeadController(biased_policy(tmp_path, helpers, pan_left_tilt_down))
+    frame = np.zeros((480, 640, 3), dtype=np.uint8)
+    d = math.radians(3.0) * math.sqrt(2) / 2
+
+    command = controller.act(frame, 0.1, 0.4)
+    assert isinstance(command, HeadCommand) and command.action == pan_left_tilt_down
+    assert command.d_pan == pytest.approx(d) and command.d_tilt == pytest.approx(d)
+    assert command.target_pan == pytest.approx(0.1 + d)
+    assert command.target_tilt == pytest.approx(0.4 + d)
+
+    command = controller.act(frame, math.radians(89.5), math.radians(64.0))
+    assert command.target_pan == pytest.approx(math.pi / 2)
+    assert command.target_tilt == pytest.approx(math.radians(65.0))
+    command = controller.act(frame, 3.0, -1.0)  # outside the limits already: clipped in
+    assert command.target_pan == pytest.approx(math.pi / 2)
+    assert command.target_tilt == pytest.approx(math.radians(5.0))
+
+
+def test_frame_stack_and_reset(tmp_path, frames, helpers):
+    network = helpers.make_network(stack=3, seed=3)
+    controller = HeadController(helpers.export(network, tmp_path).model_path)
+    images = frames(160, 120)
+    stacked = controller.observe(images[0]).copy()
+    assert all(np.array_equal(s, images[0]) for s in stacked)  # first frame fills the stack
+    controller.observe(images[1])
+    q = controller.q_values(images[2])
+    assert np.abs(q - torch_q(network, images[:3].copy())).max() <= 1e-4  # oldest first
+    np.testing.assert_array_equal(controller.observe(images[3]), images[1:4])
+    controller.reset()
+    assert all(np.array_equal(s, images[1]) for s in controller.observe(images[1]))
+
+
+def test_bad_frame_leaves_stack_untouched(tmp_path, frames, helpers):
+    controller = HeadController(helpers.export(helpers.make_network(stack=2), tmp_path).model_path)
+    images = frames(160, 120)
+    before = controller.observe(images[0]).copy()
+    with pytest.raises(ValueError, match="dtype uint8"):
+        controller.act(images[1].astype(np.float32), 0.0, 0.3)
+    np.testing.assert_array_equal(controller.observe(images[0]), before)
+
+
+@pytest.mark.parametrize(
+    "frame",
+    [np.zeros((480, 640, 3), dtype=np.float32), np.zeros((480, 640, 4), dtype=np.uint8),
+     np.zeros(640, dtype=np.uint8)],
+    ids=["float", "4-channel", "1-D"],
+)
+def test_bad_frames(policy, frame):
+    with pytest.raises(ValueError, match="frame"):
+        HeadController(policy.model_path).act(frame, 0.0, 0.3)
+
+
+def test_bad_arguments(policy):
+    controller = HeadController(policy.model_path)
+    frame = np.zeros((120, 160), dtype=np.uint8)
+    with pytest.raises(ValueError, match="pan"):
+        controller.act(frame, float("nan"), 0.3)
+    with pytest.raises(ValueError, match="tilt"):
+        controller.act(frame, 0.0, "up")
+    with pytest.raises(ValueError, match="num_threads"):
+        HeadController(policy.model_path, num_threads=0)
+    with pytest.raises(ValueError, match="color_order"):
+        HeadController(policy.model_path, color_order="rgba")
+
+
+@pytest.fixture
+def policy_copy(policy, tmp_path):
+    model = tmp_path / "policy.onnx"
+    shutil.copy(policy.model_path, model)
+    shutil.copy(policy.metadata_path, tmp_path / "policy.json")
+    return model
+
+
+def test_missing_files(policy_copy):
+    with pytest.raises(PolicyFileError, match="not found"):
+        HeadController(policy_copy.with_name("nope.onnx"))
+    policy_copy.with_suffix(".json").unlink()
+    with pytest.raises(PolicyFileError, match=r"policy\.json not found"):
+        HeadController(policy_copy)
+
+
+def test_corrupt_model(policy_copy):
+    policy_copy.write_bytes(policy_copy.read_bytes()[:5000])  # truncated
+    with pytest.raises(PolicyFileError, match="does not match its metadata"):
+        HeadController(policy_copy)
+    with pytest.raises(PolicyFileError, match="not a valid ONNX model"):
+        HeadController(policy_copy, verify_checksum=False)
+
+
+def test_corrupt_metadata(policy_copy):
+    meta_path = policy_copy.with_suffix(".json")
+    meta_path.write_text(meta_path.read_text()[:100])
+    with pytest.raises(PolicyFileError, match="not valid JSON"):
+        HeadController(policy_copy)
+    meta_path.write_text("[1, 2]")
+    with pytest.raises(PolicyFileError, match="JSON object"):
+        HeadController(policy_copy)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"stack": 2}, "input shape"),
+        ({"image_width": 320}, "input shape"),
+        ({"n_actions": 5}, "n_actions"),
+        ({"action_table_deg": [[0, 0]] * 5, "n_actions": 5}, "5 actions"),
+        ({"input_name": "image"}, "no input 'image'"),
+        ({"format_version": 99}, "format_version"),
+        ({"head_limits_deg": {"pan_min": 0}}, "head_limits_deg"),
+        ({"model_sha256": "0" * 64}, "SHA-256"),
+    ],
+)
+def test_metadata_mismatch(policy_copy, change, message):
+    meta_path = policy_copy.with_suffix(".json")
+    meta_path.write_text(json.dumps({**json.loads(meta_path.read_text()), **change}))
+    with pytest.raises(PolicyFileError, match=message):
+        HeadController(policy_copy)
+
+
+def test_pretrained_policy_path(tmp_path, monkeypatch, policy_copy):
+    monkeypatch.setattr(pretrained_module, "PRETRAINED_DIR", tmp_path / "absent")
+    with pytest.raises(PolicyFileError, match="no pretrained policy"):
+        pretrained_module.pretrained_policy_path()
+    monkeypatch.setattr(pretrained_module, "PRETRAINED_DIR", policy_copy.parent)
+    assert pretrained_module.pretrained_policy_path() == policy_copy
+
+
+def test_runtime_imports_and_runs_without_torch(policy):
+    script = textwrap.dedent(f"""
+        import sys
+        for blocked in ("torch", "gymnasium", "activevision.envs", "activevision.training"):
+            sys.modules[blocked] = None  # any import of these now raises ImportError
+        import numpy as np
+        from activevision.runtime import HeadController
+        controller = HeadController({str(policy.model_path)!r})
+        command = controller.act(np.zeros((480, 640, 3), np.uint8), 0.0, 0.3)
+        loaded = [m for m in ("numba", "onnx", "scipy") if m in sys.modules]
+        print(command.action, loaded)
+    """)
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                            timeout=60)
+    assert result.returncode == 0, result.stderr
+    action, loaded = result.stdout.split(maxsplit=1)
+    assert 0 <= int(action) < 9 and loaded.strip() == "[]"
