@@ -39,6 +39,248 @@ def cmd_viewpoints(args: argparse.Namespace) -> None:
     print(f"wrote {args.out}")
 
 
+def _env_config(run_dir: Path | None):
+    """The EnvConfig a run trained on (its config.json's env_kwargs), else the default."""
+    from activevision.envs import EnvConfig
+
+    if run_dir is None:
+        return EnvConfig()
+    from activevision.export import env_config_of
+    from activevision.training import load_config
+
+    return env_config_of(load_config(run_dir / "config.json").env_kwargs)
+
+
+def cmd_train(args: argparse.Namespace) -> None:
+    """Train (or resume) a DDQN + PER run."""
+    from activevision.training import (
+        apply_overrides,
+        load_config,
+        plot_run,
+        preset,
+        resume,
+        train,
+    )
+
+    if args.resume is not None:
+        resume(args.resume, steps=args.steps)
+        run_dir = args.resume
+    else:
+        if args.out is None:
+            raise ValueError("--out runs/NAME is required (or --resume runs/NAME)")
+        config = load_config(args.config) if args.config else preset(args.preset)
+        overrides = list(args.set or [])
+        if args.steps is not None:
+            overrides.append(f"total_timesteps={args.steps}")
+        if args.seed is not None:
+            overrides.append(f"seed={args.seed}")
+        train(apply_overrides(config, overrides), args.out)
+        run_dir = args.out
+    print(f"figures: {plot_run(run_dir)}")
+
+
+def cmd_plot(args: argparse.Namespace) -> None:
+    from activevision.training import plot_run
+
+    print(f"wrote {plot_run(args.run)}")
+
+
+def _methods(names: list[str], run: Path | None, env_config, error: float = 0.0):
+    from activevision.experiments.policies import (
+        EntropyPolicy,
+        LearnedPolicy,
+        OraclePolicy,
+        RandomPolicy,
+        ScanPolicy,
+    )
+
+    factories = {
+        "learned": lambda: LearnedPolicy.from_run(run),
+        "random": lambda: RandomPolicy(),
+        "oracle": lambda: OraclePolicy(env_config),
+        "entropy_jump": lambda: EntropyPolicy(error, jump=True, config=env_config),
+        "entropy_steps": lambda: EntropyPolicy(error, jump=False, config=env_config),
+        "scan": lambda: ScanPolicy(config=env_config),
+    }
+    if "learned" in names and run is None:
+        raise ValueError("the learned policy needs --run runs/NAME")
+    unknown = sorted(set(names) - set(factories))
+    if unknown:
+        raise ValueError(f"unknown methods {unknown}; choose from {sorted(factories)}")
+    return {name: factories[name]() for name in names}
+
+
+def cmd_evaluate(args: argparse.Namespace) -> None:
+    """Fixed-seed evaluation of every method: table, CSV and JSON."""
+    from activevision.envs import ActiveVisionEnv
+    from activevision.experiments.evaluate import (
+        evaluate_policy,
+        format_table,
+        latency_summary,
+        summary_rows,
+    )
+    from activevision.io import write_csv, write_json
+
+    env_config = _env_config(args.run)
+    names = args.methods or (["learned"] if args.run else []) + [
+        "entropy_jump",
+        "entropy_steps",
+        "oracle",
+        "scan",
+        "random",
+    ]
+    policies = _methods(names, args.run, env_config, args.error)
+    env = ActiveVisionEnv(env_config)
+    summaries, episodes, latency = {}, [], {}
+    for name, policy in policies.items():
+        records, summary, lat = evaluate_policy(
+            policy, args.episodes, args.seed, env=env, measure_latency=name == "learned"
+        )
+        summaries[name] = summary
+        episodes += [{"method": name, **r} for r in records]
+        if lat:
+            latency = latency_summary(lat)
+    print(format_table(summaries))
+    if latency:
+        print(
+            f"learned policy per-decision latency (batch 1, CPU): "
+            f"p50 {latency['p50_ms']:.2f} ms, p99 {latency['p99_ms']:.2f} ms "
+            f"(paper: 2.3 ms on a GTX 1060)"
+        )
+    out = args.out or (args.run / "evaluation" if args.run else Path("evaluation"))
+    rows = summary_rows(summaries, episodes=args.episodes, seed=args.seed, error=args.error)
+    write_csv(out / "evaluation.csv", rows)
+    write_csv(out / "episodes.csv", episodes)
+    write_json(
+        out / "evaluation.json",
+        {"methods": rows, "latency": latency, "episodes": args.episodes, "seed": args.seed},
+    )
+    print(f"wrote {out}/evaluation.csv, evaluation.json, episodes.csv")
+
+
+def _parse_errors(text: str) -> list[float]:
+    """``0:2:0.25`` (start:stop:step, stop included) or ``0,0.5,1``."""
+    if ":" in text:
+        start, stop, step = (float(v) for v in text.split(":"))
+        if step <= 0:
+            raise ValueError(f"--errors step must be positive, got {step}")
+        return [round(v, 6) for v in np.arange(start, stop + step / 2, step)]
+    return [float(v) for v in text.split(",")]
+
+
+def cmd_compare(args: argparse.Namespace) -> None:
+    """The localisation-error experiment and its figure."""
+    from activevision.experiments.compare import compare, default_methods, plot_compare
+    from activevision.experiments.policies import LearnedPolicy
+
+    env_config = _env_config(args.run)
+    learned = LearnedPolicy.from_run(args.run) if args.run else None
+    methods = default_methods(env_config, learned)
+    if args.methods:
+        methods = {k: v for k, v in methods.items() if k in args.methods}
+    out = args.out or (args.run / "compare" if args.run else Path("compare"))
+    compare(out, methods, _parse_errors(args.errors), args.episodes, args.seed, env_config)
+    plot_compare(out / "compare.csv", out / "compare.png")
+    print(f"wrote {out}/compare.csv and compare.png")
+
+
+def cmd_episode(args: argparse.Namespace) -> None:
+    """The paper's qualitative episode figure (and a GIF) for two methods."""
+    from activevision.experiments.episode_figure import (
+        animate_episode,
+        plot_episodes,
+        trace_episode,
+    )
+
+    env_config = _env_config(args.run)
+    names = args.policies or (["learned", "random"] if args.run else ["oracle", "random"])
+    policies = _methods(names, args.run, env_config)
+    traces = [trace_episode(p, args.seed, env_config) for p in policies.values()]
+    plot_episodes(traces, args.out, config=env_config)
+    gif = args.out.with_suffix(".gif")
+    animate_episode(traces[0], gif, env_config)
+    print(f"wrote {args.out} and {gif}")
+
+
+def cmd_report(args: argparse.Namespace) -> None:
+    from activevision.experiments.report import write_report
+
+    print(f"wrote {write_report(args.run)}")
+
+
+def cmd_export(args: argparse.Namespace) -> None:
+    """ONNX model + metadata for the torch-free HeadController."""
+    from activevision.export import export_run
+
+    exported = export_run(args.run, args.out, opset=args.opset)
+    print(f"wrote {exported.model_path} and {exported.metadata_path}")
+
+
+def cmd_demo(args: argparse.Namespace) -> None:
+    """Episode figure and GIF of the shipped (or a given) ONNX policy against random."""
+    from activevision.experiments.episode_figure import (
+        animate_episode,
+        plot_episodes,
+        trace_episode,
+    )
+    from activevision.experiments.policies import OnnxPolicy, RandomPolicy
+    from activevision.runtime import pretrained_policy_path
+
+    policy = OnnxPolicy(args.policy or pretrained_policy_path())
+    traces = [trace_episode(p, args.seed) for p in (policy, RandomPolicy())]
+    plot_episodes(traces, args.out)
+    gif = args.out.with_suffix(".gif")
+    animate_episode(traces[0], gif)
+    print(f"wrote {args.out} and {gif}")
+
+
+#: The quickstart's training: the paper's learner with its schedule compressed to a few
+#: thousand steps (the paper's 10,000-step target sync and 1,000 learning starts would leave
+#: a short run with no target update at all).
+QUICKSTART_OVERRIDES = {
+    "total_timesteps": 6000,
+    "learning_starts": 500,
+    "exploration_fraction": 0.3,
+    "target_update_interval": 500,
+    "checkpoint_interval": 3000,
+}
+
+
+def cmd_quickstart(args: argparse.Namespace) -> None:
+    """The README's main job: short training (resumed if interrupted), evaluation of every
+    method, a coarse localisation-error comparison, the episode figure and the report."""
+    out, seed = args.out, str(args.seed)
+    overrides = dict(QUICKSTART_OVERRIDES, seed=args.seed)
+    if args.steps is not None:
+        overrides["total_timesteps"] = args.steps
+    if (out / "checkpoints").exists():
+        steps = [["train", "--resume", str(out)]]
+    else:
+        sets = [a for k, v in overrides.items() for a in ("--set", f"{k}={v}")]
+        steps = [["train", "--out", str(out), *sets]]
+    episodes = str(args.episodes)
+    steps += [
+        ["evaluate", "--run", str(out), "--episodes", episodes, "--seed", seed],
+        [
+            "compare",
+            "--run",
+            str(out),
+            "--errors",
+            "0:2:0.5",
+            "--episodes",
+            episodes,
+            "--seed",
+            seed,
+        ],
+        ["episode", "--run", str(out), "--seed", seed, "--out", str(out / "episode.png")],
+        ["report", str(out)],
+    ]
+    for argv in steps:
+        print(f"\n$ activevision {' '.join(argv)}", flush=True)
+        if main(argv):
+            raise RuntimeError(f"activevision {argv[0]} failed")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="activevision",
@@ -50,6 +292,63 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_text, description=help_text)
         p.set_defaults(func=func)
         return p
+
+    p = add("train", cmd_train, "train a DDQN + PER head controller")
+    p.add_argument("--config", type=Path, help="TrainConfig JSON file")
+    p.add_argument("--preset", default="paper", help="paper | release")
+    p.add_argument("--steps", type=int, help="total environment steps (resume: steps to add)")
+    p.add_argument("--seed", type=int)
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a config key")
+    p.add_argument("--out", type=Path, help="run directory, e.g. runs/NAME")
+    p.add_argument("--resume", type=Path, metavar="RUN", help="continue runs/NAME")
+
+    p = add("plot", cmd_plot, "draw a run's training figures")
+    p.add_argument("run", type=Path)
+
+    p = add("evaluate", cmd_evaluate, "score methods on fixed-seed episodes")
+    p.add_argument("--run", type=Path, help="a training run: adds the learned policy")
+    p.add_argument(
+        "--methods", nargs="+", help="learned entropy_jump entropy_steps oracle scan random"
+    )
+    p.add_argument("--episodes", type=int, default=100)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--error", type=float, default=0.0, help="localisation error of the entropy methods"
+    )
+    p.add_argument("--out", type=Path)
+
+    p = add("compare", cmd_compare, "success vs localisation error, every method")
+    p.add_argument("--run", type=Path, help="a training run: adds the learned policy")
+    p.add_argument("--methods", nargs="+")
+    p.add_argument("--errors", default="0:2:0.25", help="start:stop:step or a,b,c")
+    p.add_argument("--episodes", type=int, default=100)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path)
+
+    p = add("episode", cmd_episode, "episode figure (and GIF) of two methods from one start")
+    p.add_argument("--run", type=Path, help="a training run (for the learned policy)")
+    p.add_argument("--policies", nargs="+", help="default: learned random (oracle random)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, required=True)
+
+    p = add("report", cmd_report, "one Markdown page with a run's figures and tables")
+    p.add_argument("run", type=Path)
+
+    p = add("export", cmd_export, "export a run's policy to ONNX (+ policy.json)")
+    p.add_argument("run", type=Path)
+    p.add_argument("--out", "-o", type=Path, help="default: RUN/policy.onnx")
+    p.add_argument("--opset", type=int, default=17)
+
+    p = add("demo", cmd_demo, "episode figure + GIF of the shipped policy (no training needed)")
+    p.add_argument("--policy", type=Path, help="an exported policy.onnx (default: the shipped one)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, default=Path("demo/episode.png"))
+
+    p = add("quickstart", cmd_quickstart, "short training + evaluation + figures + report")
+    p.add_argument("--out", type=Path, default=Path("runs/quickstart"))
+    p.add_argument("--steps", type=int, default=None, help="default: the quickstart preset")
+    p.add_argument("--episodes", type=int, default=100)
+    p.add_argument("--seed", type=int, default=0)
 
     for name, func, text in [
         ("render", cmd_render, "render a random view: camera image beside the top view"),
@@ -67,7 +366,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         args.func(args)
-    except (ValueError, FileNotFoundError) as err:
+    except Exception as err:
+        # Our own errors and bad input get one clear line; anything else is a bug: traceback.
+        if not isinstance(err, ValueError | OSError) and not type(err).__module__.startswith(
+            "activevision"
+        ):
+            raise
         print(f"activevision {args.command}: error: {err}", file=sys.stderr)
         return 2
     return 0

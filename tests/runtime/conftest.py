@@ -47,9 +47,9 @@ def render_frames(width: int, height: int, count: int) -> np.ndarray:
     or structured synthetic frames (lines and a ball on a gradient) when it cannot be used."""
     rng = np.random.default_rng(width * 1000 + height)
     try:
-        from activevision.rendering import Renderer
-
         import numba
+
+        from activevision.rendering import Renderer
 
         renderer = Renderer(camera=CameraConfig(width=width, height=height))
         pose = np.column_stack([rng.uniform(-3, 3, count), rng.uniform(-2, 2, count),
@@ -86,26 +86,36 @@ def colourise(grey: np.ndarray, seed: int = 0) -> np.ndarray:
     return np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def area_matrix(n_in: int, n_out: int) -> np.ndarray:
     """Dense (n_out, n_in) exact area-averaging matrix, float64 (the test's reference)."""
     scale = n_in / n_out
     matrix = np.zeros((n_out, n_in))
     for i in range(n_out):
         lo, hi = i * scale, (i + 1) * scale
-        for j in range(int(math.floor(lo)), min(int(math.ceil(hi)), n_in)):
+        for j in range(math.floor(lo), min(math.ceil(hi), n_in)):
             matrix[i, j] = max(0.0, min(j + 1, hi) - max(j, lo)) / scale
     return matrix
+
+
+def apply_along_rows(matrix: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``matrix @ x`` using only each row's nonzero taps (plain NumPy, no BLAS threads)."""
+    out = np.empty((matrix.shape[0], x.shape[1]))
+    for i, row in enumerate(matrix):
+        taps = np.flatnonzero(row)
+        out[i] = (row[taps, None] * x[taps]).sum(axis=0)
+    return out
 
 
 def reference_preprocess(frame: np.ndarray, color_order: str = "rgb") -> np.ndarray:
     """Slow float64 reference: BT.601 grey, exact area average to 160 x 120, round half up."""
     if frame.ndim == 3 and frame.shape[2] == 3:
         weights = LUMA if color_order == "rgb" else LUMA[::-1]
-        grey = frame.astype(np.float64) @ weights
+        grey = (frame.astype(np.float64) * weights).sum(axis=2)
     else:
         grey = frame.reshape(frame.shape[0], frame.shape[1]).astype(np.float64)
-    small = area_matrix(grey.shape[0], 120) @ grey @ area_matrix(grey.shape[1], 160).T
+    rows = apply_along_rows(area_matrix(grey.shape[0], 120), grey)
+    small = apply_along_rows(area_matrix(grey.shape[1], 160), rows.T).T
     return np.clip(np.floor(small + 0.5), 0, 255).astype(np.uint8)
 
 

@@ -35,11 +35,13 @@ def test_decisions_match_torch_for_grey_rgb_bgr(policy, frames, helpers, width, 
         rgb = helpers.colourise(grey, seed=i)
         cases = [(controller, grey, "rgb"), (controller, grey[:, :, None], "rgb"),
                  (controller, rgb, "rgb"), (bgr_controller, rgb[:, :, ::-1], "bgr")]
-        for ctrl, frame, order in cases:
-            q_torch = torch_q(policy.network, helpers.reference_preprocess(frame, order)[None])
+        references = np.stack([helpers.reference_preprocess(f, o)[None] for _, f, o in cases])
+        with torch.inference_mode():
+            q_torch = policy.network(torch.from_numpy(references)).numpy()
+        for (ctrl, frame, _), q_expected in zip(cases, q_torch, strict=True):
             command = ctrl.act(frame, 0.0, 0.5)
-            assert same_decision(command.action, q_torch)
-            assert np.abs(ctrl.last_q_values - q_torch).max() < 0.05  # ±1 grey level at most
+            assert same_decision(command.action, q_expected)
+            assert np.abs(ctrl.last_q_values - q_expected).max() < 0.05  # ±1 grey level at most
 
 
 def test_q_values_match_torch_exactly_preprocessed(policy, frames):
@@ -206,3 +208,19 @@ def test_runtime_imports_and_runs_without_torch(policy):
     assert result.returncode == 0, result.stderr
     action, loaded = result.stdout.split(maxsplit=1)
     assert 0 <= int(action) < 9 and loaded.strip() == "[]"
+
+
+def test_missing_onnxruntime_names_the_extra(policy):
+    script = textwrap.dedent(f"""
+        import sys
+        sys.modules["onnxruntime"] = None
+        from activevision.runtime import HeadController
+        try:
+            HeadController({str(policy.model_path)!r})
+        except ImportError as error:
+            print(error)
+    """)
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                            timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert "activevision[runtime]" in result.stdout

@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from activevision.geometry import CameraConfig, FieldSpec
+from activevision.geometry import CameraConfig, FieldSpec, field_preset
 
 SuccessMode = Literal["tolerance", "landmarks"]
 ActionSet = Literal["8way", "4way"]
@@ -17,12 +17,10 @@ ActionSet = Literal["8way", "4way"]
 class EnvConfig:
     """Everything that defines an episode. Sources: the paper (P), the authors' release (R)."""
 
-    field: FieldSpec = dataclasses.field(
-        default_factory=FieldSpec
-    )  #: KidSize field (current rules)
-    camera: CameraConfig = dataclasses.field(
-        default_factory=CameraConfig
-    )  #: MRL-HSL head camera (P, R)
+    #: KidSize field (current rules); a preset name ("kidsize", "paper2019") is accepted
+    field: FieldSpec = dataclasses.field(default_factory=FieldSpec)
+    #: the MRL-HSL head camera (P, R)
+    camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)
     step_deg: float = 3.0  #: head move per action (P: "3 degrees")
     action_set: ActionSet = "8way"  #: stay + 8 directions (R); "4way": stay + 4 directions
     frame_stack: int = 1  #: images per observation (P: one 160x120x1 frame)
@@ -41,6 +39,9 @@ class EnvConfig:
     max_start_draws: int = 1000  #: rejection-sampling guard for episode starts
 
     def __post_init__(self) -> None:
+        if isinstance(self.field, str):  # a preset name, e.g. from a JSON run config
+            object.__setattr__(self, "field", field_preset(self.field))
+
         def bad(name: str, why: str) -> ValueError:
             return ValueError(f"EnvConfig.{name}: {why}, got {getattr(self, name)!r}")
 

@@ -187,3 +187,22 @@ class LearnedPolicy:
         with self.torch.inference_mode():
             x = self.torch.from_numpy(np.ascontiguousarray(obs)[None]).to(self.device)
             return int(self.net(x).argmax(dim=1).item())
+
+
+class OnnxPolicy:
+    """An exported policy run by :class:`activevision.runtime.HeadController` (no torch),
+    fed the newest camera frame, as on a robot."""
+
+    name = "learned"
+
+    def __init__(self, model_path) -> None:
+        from activevision.runtime import HeadController
+
+        self.controller = HeadController(model_path, color_order="rgb")
+
+    def reset(self, info: dict, rng: np.random.Generator) -> None:
+        self.controller.reset()
+
+    def act(self, obs: np.ndarray, info: dict) -> int:
+        pan, tilt = info["head"]
+        return self.controller.act(obs[-1], pan, tilt).action

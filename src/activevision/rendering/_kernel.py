@@ -22,12 +22,22 @@ ring and the ball use the same formula with the signed distance to their image c
 to first order (``q / |grad q|``).
 
 Work per frame: a setup pass computes, per camera, every shape's edge lines and the range of
-image rows it can touch (its polygon clipped to depth > ``Z_NEAR`` and projected). Then each
-row is filled with background/grass in runs and only the columns each shape's edges allow
-(four linear inequalities per row) are shaded. Row work is handed to the threads in
-interleaved sets (rows ``b, b + B, b + 2B, ...``) so sky-only rows do not pile up on one
-thread. The painted coverages of one row combine with ``max``; posts, crossbars and the ball
-are composited over the ground far-to-near with their coverage as alpha.
+image rows it touches (its polygon clipped to the view frustum and projected; shapes out of
+view are dropped). Then each row is filled with background/grass in runs, and each shape in
+range shades only the columns its edges allow (linear inequalities per row, ``_span``):
+pixels fully inside are filled directly, per-pixel coverage is computed only for the
+partly covered ones. The ring is bounded by a 16-gon around it and one inside its hole. Row
+work is handed to the threads in interleaved sets (rows ``b, b + B, b + 2B, ...``) so
+sky-only rows do not pile up on one thread; single frames skip the threads altogether
+(``render_kernel_serial``). The painted coverages of one row combine with ``max``; posts,
+crossbars and the ball are composited over the ground far-to-near (painter's order by
+distance) with their coverage as alpha. Values are rounded to uint8 once per pixel.
+
+Goal posts are drawn as their silhouette: the quad between the two vertical generators
+tangent to the sight lines from the camera (exact side edges); the bottom and top edges,
+really arcs of the end circles, are straight lines moved 2/3 of the arc's sagitta towards
+the camera (equal area). Crossbars likewise, around their horizontal axis. Their ends lie
+inside the posts.
 """
 
 from __future__ import annotations
@@ -114,9 +124,81 @@ def _store_edge(a, b, ix, iy, iz, focal, cx, cy, out):
 
 
 @njit(**_JIT)
-def _polygon_edges_and_rows(pts, n_pts, focal, cx, cy, width, height, edges, rows):
+def _clip_plane(src, n_src, dst, a, b, c, e):
+    """Sutherland-Hodgman: clip polygon ``src[:n_src]`` to ``a x + b y + c z + e >= 0``
+    into ``dst``; returns the new vertex count."""
+    n_dst = 0
+    for k in range(n_src):
+        p = src[k]
+        q = src[(k + 1) % n_src]
+        dp = a * p[0] + b * p[1] + c * p[2] + e
+        dq = a * q[0] + b * q[1] + c * q[2] + e
+        if dp >= 0.0:
+            dst[n_dst, 0] = p[0]
+            dst[n_dst, 1] = p[1]
+            dst[n_dst, 2] = p[2]
+            n_dst += 1
+        if (dp >= 0.0) != (dq >= 0.0):
+            t = dp / (dp - dq)
+            dst[n_dst, 0] = p[0] + t * (q[0] - p[0])
+            dst[n_dst, 1] = p[1] + t * (q[1] - p[1])
+            dst[n_dst, 2] = p[2] + t * (q[2] - p[2])
+            n_dst += 1
+    return n_dst
+
+
+@njit(**_JIT)
+def _polygon_edges_and_rows(pts, n_pts, focal, cx, cy, width, height, edges, rows, clip):
     """Edge lines of the convex 3D polygon ``pts[:n_pts]`` (camera frame) into ``edges`` and
-    the image rows ``[rows[0], rows[1])`` its projection can touch (empty when off-image)."""
+    the image rows ``[rows[0], rows[1])`` its projection touches (empty when off-image):
+    the polygon is clipped to the view frustum (image borders and depth >= Z_NEAR) and the
+    clipped vertices projected. ``clip``: (2, >= n_pts + 5, 3) scratch."""
+    # Trivial rejection: every vertex outside the same frustum plane.
+    out_near = True
+    out_left = True
+    out_right = True
+    out_top = True
+    out_bottom = True
+    for k in range(n_pts):
+        x = pts[k, 0]
+        y = pts[k, 1]
+        z = pts[k, 2]
+        out_near &= z < Z_NEAR
+        out_left &= focal * x + cx * z < 0.0
+        out_right &= (width - cx) * z - focal * x < 0.0
+        out_top &= focal * y + cy * z < 0.0
+        out_bottom &= (height - cy) * z - focal * y < 0.0
+    if out_near or out_left or out_right or out_top or out_bottom:
+        rows[0] = 0
+        rows[1] = 0
+        return
+    src = clip[0]
+    dst = clip[1]
+    for k in range(n_pts):
+        src[k, 0] = pts[k, 0]
+        src[k, 1] = pts[k, 1]
+        src[k, 2] = pts[k, 2]
+    m = _clip_plane(src, n_pts, dst, 0.0, 0.0, 1.0, -Z_NEAR)
+    m = _clip_plane(dst, m, src, focal, 0.0, cx, 0.0)  # u >= 0
+    m = _clip_plane(src, m, dst, -focal, 0.0, width - cx, 0.0)  # u <= width
+    m = _clip_plane(dst, m, src, 0.0, focal, cy, 0.0)  # v >= 0
+    m = _clip_plane(src, m, dst, 0.0, -focal, height - cy, 0.0)  # v <= height
+    if m < 3:
+        rows[0] = 0
+        rows[1] = 0
+        return
+    v_min = 1e300
+    v_max = -1e300
+    for k in range(m):
+        v = cy + focal * dst[k, 1] / dst[k, 2]
+        v_min = min(v_min, v)
+        v_max = max(v_max, v)
+    rows[0] = max(math.floor(v_min), 0)
+    rows[1] = min(math.ceil(v_max), height)
+    if rows[1] <= rows[0]:
+        rows[0] = 0
+        rows[1] = 0
+        return
     gx = 0.0
     gy = 0.0
     gz = 0.0
@@ -127,38 +209,6 @@ def _polygon_edges_and_rows(pts, n_pts, focal, cx, cy, width, height, edges, row
     gx /= n_pts
     gy /= n_pts
     gz /= n_pts
-    u_min = 1e300
-    u_max = -1e300
-    v_min = 1e300
-    v_max = -1e300
-    for k in range(n_pts):
-        a = pts[k]
-        b = pts[(k + 1) % n_pts]
-        # Vertices of the polygon clipped to depth >= Z_NEAR: in-front corners and the
-        # points where edges cross the near plane.
-        if a[2] >= Z_NEAR:
-            u = cx + focal * a[0] / a[2]
-            v = cy + focal * a[1] / a[2]
-            u_min = min(u_min, u)
-            u_max = max(u_max, u)
-            v_min = min(v_min, v)
-            v_max = max(v_max, v)
-        if (a[2] - Z_NEAR) * (b[2] - Z_NEAR) < 0.0:
-            t = (Z_NEAR - a[2]) / (b[2] - a[2])
-            px = a[0] + t * (b[0] - a[0])
-            py = a[1] + t * (b[1] - a[1])
-            u = cx + focal * px / Z_NEAR
-            v = cy + focal * py / Z_NEAR
-            u_min = min(u_min, u)
-            u_max = max(u_max, u)
-            v_min = min(v_min, v)
-            v_max = max(v_max, v)
-    if u_max <= 0.0 or u_min >= width or v_max <= 0.0 or v_min >= height or v_min > v_max:
-        rows[0] = 0
-        rows[1] = 0
-        return
-    rows[0] = int(math.floor(max(v_min, 0.0)))
-    rows[1] = int(math.ceil(min(v_max, float(height))))
     for k in range(n_pts):
         _store_edge(pts[k], pts[(k + 1) % n_pts], gx, gy, gz, focal, cx, cy, edges[k])
 
@@ -193,8 +243,8 @@ def _span(edges, n_edges, v, threshold, width):
             return 0, 0
     lo = min(max(lo, -1.0), width + 1.0)
     hi = min(max(hi, -1.0), width + 1.0)
-    i0 = max(int(math.floor(lo)) + 1, 0)
-    i1 = min(int(math.ceil(hi)), width)
+    i0 = max(math.floor(lo) + 1, 0)
+    i1 = min(math.ceil(hi), width)
     if i1 < i0:
         i1 = i0
     return i0, i1
@@ -220,6 +270,16 @@ def _quad_coverage(edges, u, v):
 
 
 @njit(**_JIT)
+def _paint_quad_pixels(edges, v, i_start, i_end, paint):
+    """Max-combine a quad's coverage of columns ``[i_start, i_end)`` of row ``v`` into
+    ``paint``."""
+    for i in range(i_start, i_end):
+        c = _quad_coverage(edges, i + 0.5, v)
+        if c > paint[i]:
+            paint[i] = c
+
+
+@njit(**_JIT)
 def _ring_pixels(i_start, i_end, gx0, gy0, gz0, dxu, dxv, dyu, dyv, dzu, dzv, k_out, k_in, paint):
     """The per-pixel part of :func:`_ring_row` for columns ``[i_start, i_end)``."""
     for i in range(i_start, i_end):
@@ -242,8 +302,12 @@ def _ring_pixels(i_start, i_end, gx0, gy0, gz0, dxu, dxv, dyu, dyv, dzu, dzv, k_
         qu_in = common_u - k_in * gz * dzu
         qv_in = common_v - k_in * gz * dzv
         n2_in = qu_in * qu_in + qv_in * qv_in
-        if q_in < 0.0 and q_in * q_in > 2.001 * n2_in:
-            continue
+        if q_in * q_in > 2.001 * n2_in:
+            if q_in < 0.0:
+                continue
+            if q_out < 0.0 and q_out * q_out > 2.001 * n2_out:
+                paint[i] = 1.0  # fully inside the ring
+                continue
         inv_out = 1.0 / (math.sqrt(n2_out) + 1e-300)
         f_out = _coverage_at(-0.5 * q_out * inv_out, qu_out * inv_out, qv_out * inv_out)
         inv_in = 1.0 / (math.sqrt(n2_in) + 1e-300)
@@ -287,9 +351,10 @@ def _ball_shade(ball, u, v, cx, cy, focal, lit, shadow):
     """``(coverage, grey)`` of the ball at pixel centre ``(u, v)``.
 
     ``ball``: centre ``c`` in camera coordinates, ``|c|^2 - r^2``, the world up axis in camera
-    coordinates, ``c . up`` and ``1 / r``. With the pixel ray ``e = (u - cx, v - cy, f)`` the silhouette is the conic
-    ``q = (e.c)^2 - (|c|^2 - r^2) |e|^2 = 0`` (``q > 0`` inside). Grey: half-Lambert lighting
-    from straight above at the surface point hit by the ray (or nearest to it at the rim)."""
+    coordinates, ``c . up`` and ``1 / r``. With the pixel ray ``e = (u - cx, v - cy, f)`` the
+    silhouette is the conic ``q = (e.c)^2 - (|c|^2 - r^2) |e|^2 = 0`` (``q > 0`` inside).
+    Grey: half-Lambert lighting from straight above, ``shadow + (lit - shadow) (1 + n_z) / 2``,
+    at the surface point hit by the ray (or nearest to it, for rim pixels the centre misses)."""
     ex = u - cx
     ey = v - cy
     ez = focal
@@ -347,7 +412,7 @@ def _angular_extent(a, z, r, focal, centre, size):
     hi = centre + focal * math.tan(alpha + beta)
     lo = min(max(lo, -1.0), size + 1.0)
     hi = min(max(hi, -1.0), size + 1.0)
-    return max(int(math.floor(lo)), 0), min(int(math.ceil(hi)), size)
+    return max(math.floor(lo), 0), min(math.ceil(hi), size)
 
 
 @njit(**_JIT)
@@ -362,9 +427,10 @@ def _to_camera(rot, cam, x, y, z, out):
 
 @njit(**_JIT)
 def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,
-                  octagons, posts, bars, width, height,
+                  ring_polygons, posts, bars, width, height,
                   quad_edges, quad_rows, ring_edges, ring_rows, homography, ball_info,
-                  ball_box, object_order, first_row):
+                  ball_box, object_order, first_row, visible_paint, visible_count, scratch_rot,
+                  scratch_cam, scratch_pts, scratch_clip, scratch_keys):
     """Per-camera precomputation (see the module docstring) for camera ``n``."""
     focal = params[P_FOCAL]
     cx = params[P_CX]
@@ -376,7 +442,7 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
     ct = math.cos(tilt[n])
     st = math.sin(tilt[n])
     # rows: the camera's right, down and forward axes in world coordinates (camera.py)
-    rot = np.empty((3, 3))
+    rot = scratch_rot[n]
     rot[0, 0] = syaw
     rot[0, 1] = -cyaw
     rot[0, 2] = 0.0
@@ -386,7 +452,7 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
     rot[2, 0] = cyaw * ct
     rot[2, 1] = syaw * ct
     rot[2, 2] = -st
-    cam = np.empty(3)
+    cam = scratch_cam[n]
     cam[0] = pose[n, 0]
     cam[1] = pose[n, 1]
     cam[2] = cam_h
@@ -394,14 +460,15 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
     n_paint = paint_quads.shape[0]
     n_posts = posts.shape[0]
     n_bars = bars.shape[0]
-    pts = np.empty((8, 3))
+    pts = scratch_pts[n]
+    clip = scratch_clip[n]
     # painted quads, then the carpet
     for q in range(n_paint + 1):
         src = paint_quads[q] if q < n_paint else carpet
         for k in range(4):
             _to_camera(rot, cam, src[k, 0], src[k, 1], 0.0, pts[k])
         _polygon_edges_and_rows(pts, 4, focal, cx, cy, width, height, quad_edges[n, q],
-                                quad_rows[n, q])
+                                quad_rows[n, q], clip)
 
     # Posts: silhouette quad through the two vertical generators tangent to the sight lines.
     base = n_paint + 1
@@ -433,7 +500,7 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
         _to_camera(rot, cam, t1x + sx, t1y + sy, ph, pts[3])
         edges = quad_edges[n, base + p]
         _polygon_edges_and_rows(pts, 4, focal, cx, cy, width, height, edges,
-                                quad_rows[n, base + p])
+                                quad_rows[n, base + p], clip)
         # The sides are the exact tangent generators (the shifted corners are not on them).
         ix = 0.25 * (pts[0, 0] + pts[1, 0] + pts[2, 0] + pts[3, 0])
         iy = 0.25 * (pts[0, 1] + pts[1, 1] + pts[2, 1] + pts[3, 1])
@@ -468,16 +535,17 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
         _to_camera(rot, cam, t2x, y1, t2z, pts[2])
         _to_camera(rot, cam, t1x, y1, t1z, pts[3])
         _polygon_edges_and_rows(pts, 4, focal, cx, cy, width, height, quad_edges[n, base + b],
-                                quad_rows[n, base + b])
+                                quad_rows[n, base + b], clip)
 
-    # Centre circle: outer octagon bounds the rows and columns to shade, inner octagon marks
+    # Centre circle: outer polygon bounds the rows and columns to shade, inner polygon marks
     # pixels certainly inside the hole.
+    n_sides = ring_polygons.shape[1]
     for o in range(2):
-        for k in range(8):
-            _to_camera(rot, cam, params[P_RING_X] + octagons[o, k, 0],
-                       params[P_RING_Y] + octagons[o, k, 1], 0.0, pts[k])
-        _polygon_edges_and_rows(pts, 8, focal, cx, cy, width, height, ring_edges[n, o],
-                                ring_rows[n, o])
+        for k in range(n_sides):
+            _to_camera(rot, cam, params[P_RING_X] + ring_polygons[o, k, 0],
+                       params[P_RING_Y] + ring_polygons[o, k, 1], 0.0, pts[k])
+        _polygon_edges_and_rows(pts, n_sides, focal, cx, cy, width, height, ring_edges[n, o],
+                                ring_rows[n, o], clip)
     # Pixel -> ground homography: ground point (gx, gy) / gz of the ray through (u, v),
     # with gz = -(ray's world z) > 0 below the horizon.
     for r in range(3):
@@ -520,7 +588,7 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
 
     # Objects far to near (painter's order): posts, crossbars, ball.
     n_objects = n_posts + n_bars + 1
-    keys = np.empty(n_objects)
+    keys = scratch_keys[n]
     for p in range(n_posts):
         dx = posts[p, 0] - cam[0]
         dy = posts[p, 1] - cam[1]
@@ -541,6 +609,13 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
             object_order[n, m] = tmp
             m -= 1
 
+    n_visible = 0
+    for q in range(n_paint):
+        if quad_rows[n, q, 1] > quad_rows[n, q, 0]:
+            visible_paint[n, n_visible] = q
+            n_visible += 1
+    visible_count[n] = n_visible
+
     first = height
     for q in range(n_paint, n_paint + 1 + n_posts + n_bars):
         if quad_rows[n, q, 1] > quad_rows[n, q, 0]:
@@ -553,7 +628,7 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
 @njit(**_JIT)
 def _render_rows(n, row0, row_step, out, params, n_paint, n_posts, n_bars,
                  quad_edges, quad_rows, ring_edges, ring_rows, homography, ball_info,
-                 ball_box, object_order, first_row, value, paint):
+                 ball_box, object_order, first_row, visible_paint, visible_count, value, paint):
     """Rows ``row0, row0 + row_step, ...`` of image ``n``. ``value`` (W,) float32 scratch;
     ``paint`` (W,) float32 scratch that is all zero on entry and on exit."""
     height = out.shape[1]
@@ -602,20 +677,27 @@ def _render_rows(n, row0, row_step, out, params, n_paint, n_posts, n_bars,
         # --- paint: lines, marks, centre circle (coverages combine with max)
         touched_lo = width
         touched_hi = 0
-        for q in range(n_paint):
+        for vq in range(visible_count[n]):
+            q = visible_paint[n, vq]
             if quad_rows[n, q, 0] <= j < quad_rows[n, q, 1]:
                 edges = quad_edges[n, q]
                 s0, s1 = _span(edges, 4, v, -1.0, width)
-                for i in range(s0, s1):
-                    c = _quad_coverage(edges, i + 0.5, v)
-                    if c > paint[i]:
-                        paint[i] = c
+                i0, i1 = s1, s1
+                if s1 - s0 > 4:
+                    # pixels fully inside the quad: coverage 1 without per-pixel work
+                    i0, i1 = _span(edges, 4, v, 1.0, width)
+                    if i1 > i0:
+                        paint[i0:i1] = 1.0
+                    else:
+                        i0, i1 = s1, s1
+                _paint_quad_pixels(edges, v, s0, i0, paint)
+                _paint_quad_pixels(edges, v, i1, s1, paint)
                 if s1 > s0:
                     touched_lo = min(touched_lo, s0)
                     touched_hi = max(touched_hi, s1)
         if ring_rows[n, 0, 0] <= j < ring_rows[n, 0, 1]:
-            s0, s1 = _span(ring_edges[n, 0], 8, v, -1.0, width)
-            h0, h1 = _span(ring_edges[n, 1], 8, v, 1.0, width)
+            s0, s1 = _span(ring_edges[n, 0], ring_edges.shape[2], v, -1.0, width)
+            h0, h1 = _span(ring_edges[n, 1], ring_edges.shape[2], v, 1.0, width)
             _ring_row(homography[n], v, s0, s1, h0, h1, params[P_RING_X], params[P_RING_Y],
                       params[P_RING_IN], params[P_RING_OUT], paint)
             if s1 > s0:
@@ -632,7 +714,17 @@ def _render_rows(n, row0, row_step, out, params, n_paint, n_posts, n_bars,
                 if quad_rows[n, q, 0] <= j < quad_rows[n, q, 1]:
                     edges = quad_edges[n, q]
                     s0, s1 = _span(edges, 4, v, -1.0, width)
-                    for i in range(s0, s1):
+                    i0, i1 = s1, s1
+                    if s1 - s0 > 4:
+                        i0, i1 = _span(edges, 4, v, 1.0, width)
+                        if i1 > i0:
+                            value[i0:i1] = post
+                        else:
+                            i0, i1 = s1, s1
+                    for i in range(s0, i0):
+                        a = _quad_coverage(edges, i + 0.5, v)
+                        value[i] += a * (post - value[i])
+                    for i in range(i1, s1):
                         a = _quad_coverage(edges, i + 0.5, v)
                         value[i] += a * (post - value[i])
             elif ball_box[n, 2] <= j < ball_box[n, 3]:
@@ -646,37 +738,66 @@ def _render_rows(n, row0, row_step, out, params, n_paint, n_posts, n_bars,
                                         np.float32(255.0)))
 
 
+@njit(**_JIT)
+def _allocate(n_cams, n_paint, n_posts, n_bars, n_ring_sides):
+    """Per-call work arrays of the setup pass."""
+    n_quads = n_paint + 1 + n_posts + n_bars
+    return (
+        np.empty((n_cams, n_quads, 4, EDGE_PARAMS)),  # quad_edges
+        np.empty((n_cams, n_quads, 2), dtype=np.int64),  # quad_rows
+        np.empty((n_cams, 2, n_ring_sides, EDGE_PARAMS)),  # ring_edges
+        np.empty((n_cams, 2, 2), dtype=np.int64),  # ring_rows
+        np.empty((n_cams, 3, 3)),  # homography
+        np.empty((n_cams, 9)),  # ball_info
+        np.empty((n_cams, 4), dtype=np.int64),  # ball_box
+        np.empty((n_cams, n_posts + n_bars + 1), dtype=np.int64),  # object_order
+        np.empty(n_cams, dtype=np.int64),  # first_row
+        np.empty((n_cams, n_paint), dtype=np.int64),  # visible_paint
+        np.empty(n_cams, dtype=np.int64),  # visible_count
+        np.empty((n_cams, 3, 3)),  # scratch_rot
+        np.empty((n_cams, 3)),  # scratch_cam
+        np.empty((n_cams, max(8, n_ring_sides), 3)),  # scratch_pts
+        np.empty((n_cams, 2, n_ring_sides + 8, 3)),  # scratch_clip
+        np.empty((n_cams, n_posts + n_bars + 1)),  # scratch_keys
+    )
+
+
 @njit(cache=True, fastmath=True, nogil=True, parallel=True)
 def render_kernel(pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,
-                  octagons, posts, bars, row_blocks, out):
-    """Render ``len(pose)`` cameras into ``out`` (N, H, W) uint8."""
+                  ring_polygons, posts, bars, row_blocks, out):
+    """Render ``len(pose)`` cameras into ``out`` (N, H, W) uint8, on all numba threads.
+    Each camera's rows are split into ``row_blocks`` interleaved sets of work."""
     n_cams = pose.shape[0]
-    height = out.shape[1]
     width = out.shape[2]
     n_paint = paint_quads.shape[0]
     n_posts = posts.shape[0]
     n_bars = bars.shape[0]
-    n_quads = n_paint + 1 + n_posts + n_bars
-    quad_edges = np.empty((n_cams, n_quads, 4, EDGE_PARAMS))
-    quad_rows = np.empty((n_cams, n_quads, 2), dtype=np.int64)
-    ring_edges = np.empty((n_cams, 2, 8, EDGE_PARAMS))
-    ring_rows = np.empty((n_cams, 2, 2), dtype=np.int64)
-    homography = np.empty((n_cams, 3, 3))
-    ball_info = np.empty((n_cams, 9))
-    ball_box = np.empty((n_cams, 4), dtype=np.int64)
-    object_order = np.empty((n_cams, n_posts + n_bars + 1), dtype=np.int64)
-    first_row = np.empty(n_cams, dtype=np.int64)
+    work = _allocate(n_cams, n_paint, n_posts, n_bars, ring_polygons.shape[1])
     for n in prange(n_cams):
         _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,
-                      octagons, posts, bars, width, height, quad_edges, quad_rows,
-                      ring_edges, ring_rows, homography, ball_info, ball_box, object_order,
-                      first_row)
-    n_items = n_cams * row_blocks
-    for item in prange(n_items):
+                      ring_polygons, posts, bars, out.shape[2], out.shape[1], *work)
+    for item in prange(n_cams * row_blocks):
         n = item // row_blocks
-        block = item - n * row_blocks
         value = np.empty(width, dtype=np.float32)
         paint = np.zeros(width, dtype=np.float32)
-        _render_rows(n, block, row_blocks, out, params, n_paint, n_posts, n_bars,
-                     quad_edges, quad_rows, ring_edges, ring_rows, homography, ball_info,
-                     ball_box, object_order, first_row, value, paint)
+        _render_rows(n, item - n * row_blocks, row_blocks, out, params, n_paint, n_posts,
+                     n_bars, *work[:11], value, paint)
+
+
+@njit(cache=True, fastmath=True, nogil=True)
+def render_kernel_serial(pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,
+                         ring_polygons, posts, bars, out):
+    """:func:`render_kernel` on the calling thread only: no thread hand-off, which matters
+    for single frames (and on machines whose cores are busy with other work)."""
+    n_cams = pose.shape[0]
+    width = out.shape[2]
+    n_paint = paint_quads.shape[0]
+    n_posts = posts.shape[0]
+    n_bars = bars.shape[0]
+    work = _allocate(n_cams, n_paint, n_posts, n_bars, ring_polygons.shape[1])
+    value = np.empty(width, dtype=np.float32)
+    paint = np.zeros(width, dtype=np.float32)
+    for n in range(n_cams):
+        _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,
+                      ring_polygons, posts, bars, out.shape[2], out.shape[1], *work)
+        _render_rows(n, 0, 1, out, params, n_paint, n_posts, n_bars, *work[:11], value, paint)

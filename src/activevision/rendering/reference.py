@@ -82,13 +82,27 @@ def render_reference(
     return images
 
 
-def _inside_quads(p: np.ndarray, quads: np.ndarray) -> np.ndarray:
-    """Whether each point (K, 2) lies in any of the convex quads (Q, 4, 2)."""
-    edge = np.roll(quads, -1, axis=1) - quads  # (Q, 4, 2)
-    rel = p[:, None, None, :] - quads[None]  # (K, Q, 4, 2)
-    cross = edge[None, ..., 0] * rel[..., 1] - edge[None, ..., 1] * rel[..., 0]
-    inside = (cross >= 0).all(axis=2) | (cross <= 0).all(axis=2)
-    return inside.any(axis=1)
+def _rect_frames(quads: np.ndarray):
+    """Centres (Q, 2), unit axes (Q, 2, 2) and half-extents (Q, 2) of rectangles given by
+    their corners (Q, 4, 2) in order (every scene quad is a rectangle)."""
+    centre = quads.mean(axis=1)
+    side_a = quads[:, 1] - quads[:, 0]
+    side_b = quads[:, 2] - quads[:, 1]
+    len_a = np.linalg.norm(side_a, axis=1)
+    len_b = np.linalg.norm(side_b, axis=1)
+    axes = np.stack([side_a / len_a[:, None], side_b / len_b[:, None]], axis=1)
+    return centre, axes, np.stack([len_a / 2, len_b / 2], axis=1)
+
+
+def _inside_rects(p: np.ndarray, quads: np.ndarray) -> np.ndarray:
+    """Whether each point (K, 2) lies in any of the rectangles (Q, 4, 2) (boundary
+    included)."""
+    centre, axes, half = _rect_frames(quads)
+    inside = np.zeros(len(p), dtype=bool)
+    for c, (a, b), (ha, hb) in zip(centre, axes, half, strict=True):
+        rel = p - c
+        inside |= (np.abs(rel @ a) <= ha) & (np.abs(rel @ b) <= hb)
+    return inside
 
 
 def _trace(origin, rays, scene: SceneArrays, ball, config: RenderConfig) -> np.ndarray:
@@ -100,8 +114,8 @@ def _trace(origin, rays, scene: SceneArrays, ball, config: RenderConfig) -> np.n
     with np.errstate(divide="ignore", invalid="ignore"):
         t_ground = np.where(going_down, -origin[2] / rays[:, 2], np.inf)
     p = origin[:2] + np.where(going_down, t_ground, 0.0)[:, None] * rays[:, :2]
-    on_carpet = going_down & _inside_quads(p, scene.carpet_quad[None])
-    paint = _inside_quads(p, scene.paint_quads)
+    on_carpet = going_down & _inside_rects(p, scene.carpet_quad[None])
+    paint = _inside_rects(p, scene.paint_quads)
     r = np.hypot(p[:, 0] - scene.ring[0], p[:, 1] - scene.ring[1])
     paint |= (r >= scene.ring[2]) & (r <= scene.ring[3])
     grey = np.where(on_carpet, np.where(paint, config.line, config.grass), grey)

@@ -17,6 +17,10 @@ _DEFAULT_FIELD = FieldSpec()
 _DEFAULT_CAMERA = CameraConfig()
 _DEFAULT_CONFIG = RenderConfig()
 
+#: Batches smaller than this render on the calling thread: a frame takes tens of
+#: microseconds, comparable to waking the worker threads (far more when the cores are busy).
+PARALLEL_MIN_BATCH = 4
+
 
 def _float_array(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as a C-contiguous float64 array of exactly ``shape``, or a ValueError."""
@@ -146,14 +150,21 @@ class Renderer:
         if self.config.has_noise and not isinstance(rng, np.random.Generator):
             raise ValueError("rng must be a numpy.random.Generator when noise/jitter is on")
 
-        # Enough interleaved row sets per camera that every thread gets a share of one image.
-        row_blocks = max(1, math.ceil(4 * numba.get_num_threads() / n))
         scene = self.scene
-        _kernel.render_kernel(
-            pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params, scene.paint_quads,
-            scene.carpet_quad, scene.ring_octagons, scene.posts, scene.crossbars, row_blocks,
-            out,
-        )
+        if n < PARALLEL_MIN_BATCH:
+            _kernel.render_kernel_serial(
+                pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
+                scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
+                scene.crossbars, out,
+            )
+        else:
+            # Enough interleaved row sets per camera that every thread gets a fair share.
+            row_blocks = max(1, math.ceil(4 * numba.get_num_threads() / n))
+            _kernel.render_kernel(
+                pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
+                scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
+                scene.crossbars, row_blocks, out,
+            )
         if self.config.has_noise:
             apply_noise(out, self.config, rng)
         return out

@@ -42,9 +42,13 @@ def _square_quad(centre: tuple[float, float], side: float) -> np.ndarray:
     return np.array([[x - h, y - h], [x + h, y - h], [x + h, y + h], [x - h, y + h]])
 
 
-def _octagon(radius: float) -> np.ndarray:
-    """Regular octagon (8, 2) with circumradius ``radius``, counter-clockwise."""
-    angles = np.arange(8) * (np.pi / 4) + np.pi / 8
+#: Sides of the polygons bounding the centre-circle ring.
+RING_POLYGON_SIDES = 16
+
+
+def _regular_polygon(radius: float, sides: int = RING_POLYGON_SIDES) -> np.ndarray:
+    """Regular polygon (sides, 2) with circumradius ``radius``, counter-clockwise."""
+    angles = (np.arange(sides) + 0.5) * (2 * np.pi / sides)
     return radius * np.stack([np.cos(angles), np.sin(angles)], axis=1)
 
 
@@ -55,7 +59,7 @@ class SceneArrays:
     paint_quads: np.ndarray  #: (Q, 4, 2) painted lines, penalty marks, centre mark
     carpet_quad: np.ndarray  #: (4, 2) the green carpet (field plus border strip)
     ring: np.ndarray  #: (4,) centre x, centre y, inner radius, outer radius
-    ring_octagons: np.ndarray  #: (2, 8, 2) octagon around the outer and inside the inner edge
+    ring_polygons: np.ndarray  #: (2, S, 2) polygons around the outer and inside the inner edge
     posts: np.ndarray  #: (P, 4) axis x, axis y, radius, height
     crossbars: np.ndarray  #: (B, 5) axis x, y start, y end, axis height z, radius
     ball_radius: float
@@ -78,8 +82,11 @@ def build_scene(spec: FieldSpec) -> SceneArrays:
 
     radius = spec.centre_circle_diameter / 2
     r_in, r_out = radius - w / 2, radius + w / 2
-    # The outer octagon contains the ring; the inner one lies inside its hole.
-    octagons = np.stack([_octagon(r_out / math.cos(math.pi / 8)), _octagon(r_in)])
+    # The outer polygon contains the ring; the inner one lies inside its hole.
+    polygons = np.stack([
+        _regular_polygon(r_out / math.cos(math.pi / RING_POLYGON_SIDES)),
+        _regular_polygon(r_in),
+    ])
 
     post_y = (spec.goal_width + spec.post_diameter) / 2
     post_r = spec.post_diameter / 2
@@ -93,7 +100,7 @@ def build_scene(spec: FieldSpec) -> SceneArrays:
         paint_quads=np.ascontiguousarray(np.asarray(quads, dtype=np.float64)),
         carpet_quad=carpet,
         ring=np.array([0.0, 0.0, r_in, r_out]),
-        ring_octagons=np.ascontiguousarray(octagons),
+        ring_polygons=np.ascontiguousarray(polygons),
         posts=np.asarray(posts, dtype=np.float64),
         crossbars=np.asarray(bars, dtype=np.float64),
         ball_radius=float(spec.ball_radius),

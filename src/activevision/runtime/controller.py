@@ -137,8 +137,8 @@ class HeadController:
         uint8 network input (a view, valid until the next call)."""
         frames = self._frames[0]
         order = self.color_order if color_order is None else color_order
-        if self._stack_empty:
-            self._preprocess(frame, order, out=frames[-1])
+        if self._stack_empty or frames.shape[0] == 1:
+            self._preprocess(frame, order, out=frames[-1])  # validates before writing
             frames[:-1] = frames[-1]
             self._stack_empty = False
         else:

@@ -20,6 +20,8 @@ into the network's size, with no OpenCV and no per-pixel Python loops:
 
 * Colour conversion and averaging are both linear, so for colour frames the block sums are
   taken first, on integers, and the luma weights applied to the 160 x 120 sums.
+* Everything is plain single-threaded NumPy (no BLAS calls, which could start OpenBLAS
+  worker threads on the robot).
 * The result is rounded half up, ``floor(mean + 0.5)``, to uint8. For grey frames of an
   integer-multiple size this is computed in integer arithmetic and is exact.
 """
@@ -199,7 +201,8 @@ class FramePreprocessor:
         fy, fx = plan.factor_y, plan.factor_x
         sums = self._block_sums(frame, plan).reshape(self.height * self.width, fx * 3)
         tap_weights = np.tile(weights, fx) / np.float32(fy * fx)
-        return round_to_uint8(sums.astype(np.float32) @ tap_weights, out)
+        # einsum's own loop, not a BLAS gemv, which may wake OpenBLAS worker threads
+        return round_to_uint8(np.einsum("ij,j->i", sums.astype(np.float32), tap_weights), out)
 
     def _resample(self, grey: np.ndarray, plan: _ResizePlan) -> np.ndarray:
         assert plan.rows is not None and plan.cols is not None
@@ -215,5 +218,7 @@ class FramePreprocessor:
 
 def _luma(frame: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """(H, W) float32 BT.601 luma of an (H, W, 3) uint8 frame."""
-    flat = frame.reshape(-1, 3).astype(np.float32)
-    return (flat @ weights).reshape(frame.shape[0], frame.shape[1])
+    grey = frame[:, :, 0] * weights[0]  # float32 (H, W); no BLAS call (see above)
+    grey += frame[:, :, 1] * weights[1]
+    grey += frame[:, :, 2] * weights[2]
+    return grey

@@ -53,7 +53,7 @@ TENSORBOARD_TAGS = {
     "success_rate": "charts/success_rate",
     "success_duration": "charts/success_duration",
     "ball_loss_duration": "charts/ball_loss_duration",
-    "episode_reward": "charts/episodic_return",
+    "episode_reward": "charts/mean_episodic_return",
     "episodes": "charts/episodes",
     "loss": "losses/td_loss",
     "epsilon": "charts/epsilon",

@@ -170,6 +170,7 @@ class Trainer:
         epochs: list[dict[str, float]] = []
         progress = _progress_bar(c, self.step, end)
         epoch_start = (self.step, time.perf_counter())
+        start_step = self.step
         try:
             while self.step < end:
                 self._env_step()
@@ -183,7 +184,8 @@ class Trainer:
                     epoch_start = (self.step, time.perf_counter())
                 if c.checkpoint_interval and self.step % c.checkpoint_interval == 0:
                     self.save_checkpoint()
-            if not (c.checkpoint_interval and self.step % c.checkpoint_interval == 0):
+            saved_last_step = c.checkpoint_interval and self.step % c.checkpoint_interval == 0
+            if self.step > start_step and not saved_last_step:
                 self.save_checkpoint()
         finally:
             progress.close()
@@ -226,6 +228,10 @@ class Trainer:
             )
             self.episodes_log.append(record)
             self.epoch_log.episodes.append(record)
+            writer = self._tensorboard()
+            if writer is not None:
+                writer.add_scalar("charts/episodic_return", record["reward"], self.step)
+                writer.add_scalar("charts/episodic_length", record["length"], self.step)
             self._obs = None
         else:
             self._obs = next_obs

@@ -1,0 +1,120 @@
+"""One self-contained page per run, and the README's main job (``activevision quickstart``).
+
+Layout of a run directory after the quickstart::
+
+    runs/NAME/config.json, metrics.csv, ...   the training run (activevision.training)
+    runs/NAME/plots/training.png              training curves
+    runs/NAME/evaluation/evaluation.{csv,json} fixed-seed evaluation of every method
+    runs/NAME/compare/compare.{csv,png}       success vs localisation error
+    runs/NAME/episode.png, episode.gif        learned vs random from one start
+    runs/NAME/report.md                       this page
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import platform
+from pathlib import Path
+
+import activevision
+from activevision.io import write_text
+
+
+def _csv_rows(path: Path) -> list[dict]:
+    if not path.exists():
+        return []
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+def _table(rows: list[dict], metrics: list[str]) -> str:
+    head = "| method | " + " | ".join(metrics) + " |"
+    lines = [head, "|" + "---|" * (len(metrics) + 1)]
+    for r in rows:
+        cells = [
+            f"{float(r[m]):.3f} [{float(r[m + '_low']):.3f}, {float(r[m + '_high']):.3f}]"
+            for m in metrics
+        ]
+        lines.append(f"| {r['method']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def write_report(run_dir: str | Path) -> Path:
+    """Write ``run_dir/report.md``: configuration, training curves, evaluation table,
+    comparison figure and episode figure (whichever of them the run has)."""
+    run = Path(run_dir)
+    if not (run / "config.json").exists():
+        raise FileNotFoundError(f"{run} is not a training run (no config.json)")
+    config = json.loads((run / "config.json").read_text())
+    parts = [
+        f"# activevision report: `{run.name}`",
+        "",
+        f"activevision {activevision.__version__}, Python {platform.python_version()}, "
+        f"training seed {config.get('seed')}, {config.get('total_timesteps')} steps.",
+        "",
+        "## Training",
+    ]
+    if (run / "plots" / "training.png").exists():
+        parts += ["", "![training curves](plots/training.png)"]
+    metrics = _csv_rows(run / "metrics.csv")
+    if metrics:
+        last = metrics[-1]
+        parts += [
+            "",
+            "Last epoch: "
+            + ", ".join(f"{k} {float(v):.3f}" for k, v in last.items() if _is_number(v)),
+        ]
+    evaluation = run / "evaluation" / "evaluation.json"
+    if evaluation.exists():
+        data = json.loads(evaluation.read_text())
+        rows = [{k: str(v) for k, v in r.items()} for r in data["methods"]]
+        parts += [
+            "",
+            "## Evaluation",
+            "",
+            f"{data['episodes']} episodes, seed {data['seed']}, identical starts for every "
+            "method; mean [95% confidence interval].",
+            "",
+            _table(rows, ["success", "success_rate", "success_duration", "ball_loss_duration"]),
+            "",
+            _table(rows, ["reward", "score"]),
+        ]
+        if data.get("latency"):
+            lat = data["latency"]
+            parts += [
+                "",
+                f"Learned policy, batch 1 on CPU (PyTorch): p50 {lat['p50_ms']:.2f} ms, "
+                f"p99 {lat['p99_ms']:.2f} ms; the paper: 2.3 ms on a GTX 1060.",
+            ]
+    if (run / "compare" / "compare.png").exists():
+        parts += ["", "## Success vs localisation error", "", "![comparison](compare/compare.png)"]
+    if (run / "episode.png").exists():
+        parts += [
+            "",
+            "## One episode",
+            "",
+            "![episode](episode.png)",
+            "",
+            "Animated: [episode.gif](episode.gif)",
+        ]
+    parts += [
+        "",
+        "## Configuration",
+        "",
+        "```json",
+        json.dumps(config, indent=2),
+        "```",
+        "",
+    ]
+    out = run / "report.md"
+    write_text(out, "\n".join(parts))
+    return out
+
+
+def _is_number(value: str) -> bool:
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        return False
+    return True
