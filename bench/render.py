@@ -119,6 +119,20 @@ def main() -> None:
         print(f"fast renderer, batch N={n:<4d}: {batched[n]:9.0f} frames/s "
               f"({1e6 / batched[n]:6.2f} us/frame; median {batched_median[n]:9.0f} frames/s)")
 
+    # The same batches on the calling thread only (Renderer(parallel=False)).
+    serial = Renderer(camera=camera, parallel=False)
+    serial_out = np.empty((64, camera.height, camera.width), dtype=np.uint8)
+    serial_start = [0]
+
+    def serial_batch() -> None:
+        s = serial_start[0] = (serial_start[0] + 64) % (pool - 64)
+        serial.render(pose[s : s + 64], pan[s : s + 64], tilt[s : s + 64], ball[s : s + 64],
+                      out=serial_out)
+
+    serial_best = min(time_calls(serial_batch, args.seconds)[0] for _ in range(args.rounds))
+    serial_fps = 64 / serial_best
+    print(f"fast renderer, batch N=64 on one thread (parallel=False): {serial_fps:9.0f} frames/s")
+
     m = args.reference_frames
     render_reference(pose[:1], pan[:1], tilt[:1])
     ref_best = np.inf
@@ -138,6 +152,7 @@ def main() -> None:
         batched_frames_per_s=batched[64],
         batched_frames_per_s_by_n={str(k): v for k, v in batched.items()},
         batched_frames_per_s_median={str(k): v for k, v in batched_median.items()},
+        batched_frames_per_s_one_thread=serial_fps,
         reference_frames_per_s=reference_fps,
         speedup_vs_reference=speedup,
         speedup_vs_paper_simulator=paper,

@@ -1,5 +1,7 @@
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from activevision.agents.replay.sum_tree import ProportionalSampler, SumTree
 
@@ -62,3 +64,26 @@ def test_sampler_is_reproducible_from_its_state():
     first = sampler.sample(8)[0]
     sampler.set_state(state)
     np.testing.assert_array_equal(sampler.sample(8)[0], first)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.floats(0.0, 100.0, allow_nan=False), min_size=1, max_size=40),
+    st.lists(st.floats(0.0, 1.0, exclude_max=True), min_size=1, max_size=20),
+)
+def test_prefix_search_matches_numpy_cumsum(values, fractions):
+    values = np.array(values)
+    tree = SumTree(len(values))
+    tree.set(np.arange(len(values)), values)
+    assert tree.total == pytest.approx(values.sum())
+    if values.sum() == 0.0:
+        return
+    targets = np.array(fractions) * tree.total
+    found = tree.find_prefix_sums(targets)
+    assert np.all(values[found] > 0.0)  # never an empty leaf
+    expected = np.searchsorted(np.cumsum(values), targets, side="right")
+    # equal up to rounding at the boundaries between leaves
+    cumulative = np.concatenate([[0.0], np.cumsum(values)])
+    for target, leaf, want in zip(targets, found, expected, strict=True):
+        if leaf != want:
+            assert cumulative[leaf] - 1e-9 <= target <= cumulative[leaf + 1] + 1e-9

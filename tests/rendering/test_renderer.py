@@ -106,6 +106,12 @@ def test_batched_equals_single(renderer):
         np.testing.assert_array_equal(single[0], batch[k])
 
 
+def test_one_thread_equals_parallel(renderer):
+    pose, pan, tilt, ball = random_states(9, seed=6)
+    serial = Renderer(parallel=False).render(pose, pan, tilt, ball)
+    np.testing.assert_array_equal(serial, renderer.render(pose, pan, tilt, ball))
+
+
 def test_out_buffer_is_filled_and_returned(renderer):
     pose, pan, tilt, ball = random_states(5, seed=4)
     out = np.zeros((5, H, W), dtype=np.uint8)
@@ -214,6 +220,8 @@ def test_noise_off_by_default_and_reproducible_when_on():
         ({"out": np.zeros((2, H, W), dtype=np.float32)}, "out"),
         ({"out": np.zeros((3, H, W), dtype=np.uint8)}, "out"),
         ({"pan": np.array([0.0, np.nan])}, "pan"),
+        ({"pose": "robot"}, "pose"),
+        ({"ball_xy": [["a", "b"], ["c", "d"]]}, "ball_xy"),
     ],
 )
 def test_bad_inputs_raise_value_error_naming_the_argument(renderer, kwargs, name):

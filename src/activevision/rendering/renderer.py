@@ -37,8 +37,11 @@ def _float_array(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
 
 def _per_camera(name: str, value, n: int) -> np.ndarray:
     """A per-camera scalar: accepts shape (n,), or a scalar / shape (1,) when n == 1."""
-    arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
-    if n == 1 and np.ndim(arr) == 0:
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a numeric array of shape ({n},)") from None
+    if n == 1 and arr.ndim == 0:
         arr = np.reshape(arr, (1,))
     return _float_array(name, arr, (n,))
 
@@ -71,6 +74,10 @@ class Renderer:
     coverage of each pixel (see :mod:`activevision.rendering._kernel`). Greys and optional
     noise come from :class:`RenderConfig`.
 
+    Batches of ``PARALLEL_MIN_BATCH`` or more frames are split over the numba threads
+    (``numba.set_num_threads``); smaller ones, or all with ``parallel=False``, render on the
+    calling thread. Both give identical images. A Renderer holds no mutable state.
+
     Example::
 
         r = Renderer()
@@ -82,10 +89,18 @@ class Renderer:
         field: FieldSpec = _DEFAULT_FIELD,
         camera: CameraConfig = _DEFAULT_CAMERA,
         config: RenderConfig = _DEFAULT_CONFIG,
+        *,
+        parallel: bool = True,
     ) -> None:
         self.field = field
         self.camera = camera
         self.config = config
+        #: Whether batches of PARALLEL_MIN_BATCH or more frames use all numba threads. Turn
+        #: off when the cores are busy with other work (e.g. a trainer's own threads): a
+        #: parallel call waits for every thread to be scheduled, which on an oversubscribed
+        #: machine can cost milliseconds, while the calling thread alone renders a frame in
+        #: tens of microseconds.
+        self.parallel = bool(parallel)
         self.scene = build_scene(field)
         self._params = scene_params(self.scene, camera, config)
 
@@ -117,7 +132,10 @@ class Renderer:
         Returns:
             (N, H, W) uint8 images (``out`` when given).
         """
-        pose_arr = np.asarray(pose, dtype=np.float64) if not isinstance(pose, np.ndarray) else pose
+        try:
+            pose_arr = np.asarray(pose, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError("pose must be a numeric array of shape (N, 3) or (3,)") from None
         if pose_arr.ndim == 1:
             pose_arr = _float_array("pose", pose_arr, (3,))[None]
         n = pose_arr.shape[0] if pose_arr.ndim == 2 else -1
@@ -130,7 +148,10 @@ class Renderer:
             ball_arr = np.zeros((n, 2))
             has_ball = False
         else:
-            ball_arr = np.asarray(ball_xy, dtype=np.float64)
+            try:
+                ball_arr = np.asarray(ball_xy, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ValueError(f"ball_xy must be a numeric array of shape ({n}, 2)") from None
             if n == 1 and ball_arr.shape == (2,):
                 ball_arr = ball_arr[None]
             ball_arr = _float_array("ball_xy", ball_arr, (n, 2))
@@ -151,7 +172,7 @@ class Renderer:
             raise ValueError("rng must be a numpy.random.Generator when noise/jitter is on")
 
         scene = self.scene
-        if n < PARALLEL_MIN_BATCH:
+        if not self.parallel or n < PARALLEL_MIN_BATCH or numba.get_num_threads() == 1:
             _kernel.render_kernel_serial(
                 pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
                 scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
