@@ -1,5 +1,6 @@
-"""Crash-safe file writing: write a temporary file beside the target, then rename it over
-the target (atomic on POSIX), so a crash never leaves a half-written result."""
+"""Crash-safe file writing: write a temporary file beside the target, flush it to disk, then
+rename it over the target (atomic on POSIX), so a crash never leaves a half-written file and
+never destroys the previous version."""
 
 from __future__ import annotations
 
@@ -7,30 +8,48 @@ import contextlib
 import csv
 import json
 import os
+import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 
+def _fsync(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Yield a temporary path to write; on success it replaces ``path``."""
+    """Yield a temporary path beside ``path`` to write; when the block succeeds it is
+    flushed and renamed over ``path``, when it fails it is removed."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    tmp = Path(name)
     try:
         yield tmp
+        _fsync(tmp)
+        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
 
 
-def write_text(path: str | os.PathLike, text: str) -> None:
+def write_bytes(path: str | os.PathLike, data: bytes) -> None:
     with atomic_path(path) as tmp:
-        tmp.write_text(text)
+        tmp.write_bytes(data)
+
+
+def write_text(path: str | os.PathLike, text: str) -> None:
+    write_bytes(path, text.encode("utf-8"))
 
 
 def write_json(path: str | os.PathLike, data) -> None:
-    write_text(path, json.dumps(data, indent=2, sort_keys=False) + "\n")
+    write_text(path, json.dumps(data, indent=2) + "\n")
 
 
 def write_csv(path: str | os.PathLike, rows: Sequence[dict]) -> None:

@@ -24,7 +24,6 @@ import io
 import json
 import math
 import os
-import tempfile
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -36,6 +35,7 @@ from torch import nn
 
 import activevision
 from activevision.agents.q_network import QNetwork
+from activevision.io import write_bytes, write_text
 from activevision.runtime.metadata import (
     METADATA_FORMAT,
     METADATA_FORMAT_VERSION,
@@ -160,8 +160,8 @@ def export_onnx(
 
     metadata_path = metadata_path_for(model_path)
     text = json.dumps(document, indent=2) + "\n"
-    _atomic_write(model_path, model_bytes)
-    _atomic_write(metadata_path, text.encode("utf-8"))
+    write_bytes(model_path, model_bytes)
+    write_text(metadata_path, text)
     return ExportedPolicy(model_path, metadata_path)
 
 
@@ -255,18 +255,3 @@ def _verify(network: QNetwork, model_bytes: bytes, input_shape: tuple[int, int, 
     error = float(np.abs(got - want).max())
     if not error <= VERIFY_ATOL:
         raise RuntimeError(f"exported ONNX differs from PyTorch by {error:.3g} > {VERIFY_ATOL}")
-
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    """Write ``data`` to a temporary file beside ``path``, fsync it, then rename it over."""
-    fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as file:
-            file.write(data)
-            file.flush()
-            os.fsync(file.fileno())
-        os.chmod(tmp_name, 0o644)
-        os.replace(tmp_name, path)
-    except BaseException:
-        Path(tmp_name).unlink(missing_ok=True)
-        raise

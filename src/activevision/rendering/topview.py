@@ -162,12 +162,8 @@ def episode_panel(sim, i: int, image: np.ndarray) -> np.ndarray:
 
 
 def save_rgb(rgb: np.ndarray, path) -> None:
-    """Write an RGB array as PNG atomically (temporary file, then rename)."""
-    import os
-    from pathlib import Path
+    """Write an RGB array as PNG atomically."""
+    from activevision.io import atomic_path
 
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    plt.imsave(tmp, rgb, format="png")
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        plt.imsave(tmp, rgb, format="png")

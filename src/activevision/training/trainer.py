@@ -45,6 +45,7 @@ from activevision.agents.ddqn import DDQNLearner
 from activevision.agents.dqn_math import epsilon_greedy, linear_schedule
 from activevision.agents.q_network import QNetwork
 from activevision.agents.replay.prioritized import PrioritizedReplayBuffer
+from activevision.io import atomic_path
 from activevision.training import checkpoint as ckpt
 from activevision.training.config import TrainConfig, load_config, save_config
 from activevision.training.cpu import configure_torch_cpu, resolve_device
@@ -311,9 +312,8 @@ class Trainer:
         path = ckpt.write_checkpoint(
             self.run_dir, self.step, write_files, self.config.keep_checkpoints
         )
-        policy_tmp = self.run_dir / f".{POLICY_FILE}.tmp"
-        ckpt.save_tensors(policy_tmp, online, metadata)
-        os.replace(policy_tmp, self.run_dir / POLICY_FILE)
+        with atomic_path(self.run_dir / POLICY_FILE) as tmp:
+            ckpt.save_tensors(tmp, online, metadata)
         return path
 
     @classmethod
