@@ -10,7 +10,7 @@ from activevision.geometry import (
     project_points,
     visible_landmarks,
 )
-from activevision.rendering import Renderer, RenderConfig
+from activevision.rendering import RenderConfig, Renderer
 
 PAINTED = [
     LandmarkType.L_CORNER,
