@@ -91,11 +91,12 @@ class EpisodeBatch:
         k = len(self.landmarks)
         self.pose = np.zeros((num_envs, 3))
         self.believed_pose = np.zeros((num_envs, 3))
-        self.pan = np.zeros(num_envs)
-        self.tilt = np.zeros(num_envs)
+        # (pan, tilt) pairs; pan/tilt are views of the columns (no copies when reporting).
+        self.head = np.zeros((num_envs, 2))
+        self.pan, self.tilt = self.head[:, 0], self.head[:, 1]
         self.ball = np.zeros((num_envs, 2))
-        self.goal_pan = np.zeros(num_envs)
-        self.goal_tilt = np.zeros(num_envs)
+        self.goal = np.zeros((num_envs, 2))
+        self.goal_pan, self.goal_tilt = self.goal[:, 0], self.goal[:, 1]
         self.goal_entropy = np.zeros(num_envs)
         self.desired = np.zeros((num_envs, k), dtype=bool)
         self.observed = np.zeros((num_envs, k), dtype=bool)
@@ -242,7 +243,7 @@ class EpisodeBatch:
         lost = self.ball_lost_step >= 0
         rate = (self.desired & self.observed).sum(1) / np.maximum(self.desired.sum(1), 1)
         return {
-            "goal_viewpoint": np.stack([self.goal_pan, self.goal_tilt], axis=1),
+            "goal_viewpoint": self.goal.copy(),
             "goal_entropy": self.goal_entropy.copy(),
             "success_rate": rate,
             "success": success,
@@ -250,7 +251,7 @@ class EpisodeBatch:
             "steps_to_success": np.where(success, self.success_step, max_episode_steps),
             "ball_lost_step": np.where(lost, self.ball_lost_step, max_episode_steps),
             "episode_score": np.where(success, 1.0, np.where(lost, 0.0, rate)),
-            "head": np.stack([self.pan, self.tilt], axis=1),
+            "head": self.head.copy(),
             "pose": self.pose.copy(),
             "believed_pose": self.believed_pose.copy(),
             "ball": self.ball.copy(),
@@ -258,10 +259,25 @@ class EpisodeBatch:
         }
 
     def info(self, i: int, max_episode_steps: int) -> dict:
-        """The single-environment ``info`` dict of slot ``i``: Python scalars, and the
-        desired and observed landmarks as id arrays."""
-        arrays = self.info_arrays(max_episode_steps)
-        info = {k: (v[i].item() if v[i].ndim == 0 else v[i]) for k, v in arrays.items()}
-        info["desired_landmarks"] = np.flatnonzero(self.desired[i])
-        info["observed_landmarks"] = np.flatnonzero(self.observed[i])
-        return info
+        """The single-environment ``info`` dict of slot ``i``: the entries of
+        :meth:`info_arrays` for that slot, and the landmark sets as id arrays."""
+        desired, observed = self.desired[i], self.observed[i]
+        success, lost = bool(self.success_step[i] >= 0), bool(self.ball_lost_step[i] >= 0)
+        rate = float((desired & observed).sum() / max(desired.sum(), 1))
+        return {
+            "goal_viewpoint": self.goal[i].copy(),
+            "goal_entropy": float(self.goal_entropy[i]),
+            "success_rate": rate,
+            "success": success,
+            "ball_lost": lost,
+            "steps_to_success": int(self.success_step[i]) if success else max_episode_steps,
+            "ball_lost_step": int(self.ball_lost_step[i]) if lost else max_episode_steps,
+            "episode_score": 1.0 if success else (0.0 if lost else rate),
+            "head": self.head[i].copy(),
+            "pose": self.pose[i].copy(),
+            "believed_pose": self.believed_pose[i].copy(),
+            "ball": self.ball[i].copy(),
+            "step": int(self.step_count[i]),
+            "desired_landmarks": np.flatnonzero(desired),
+            "observed_landmarks": np.flatnonzero(observed),
+        }

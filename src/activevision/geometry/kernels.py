@@ -129,6 +129,12 @@ def ball_kernel(balls, poses, pans, tilts, focal, width, height, cam_height, rad
     return out
 
 
+def _per_camera(values, n: int) -> np.ndarray:
+    """``values`` as a contiguous float64 array of length ``n`` (scalars repeated)."""
+    out = np.ascontiguousarray(values, dtype=np.float64)
+    return out if out.shape == (n,) else np.ascontiguousarray(np.broadcast_to(out, n))
+
+
 def visible_mask(landmarks, pose, pan, tilt, cam) -> np.ndarray:
     """Compiled :func:`~activevision.geometry.visibility.visible_landmarks` ``.visible``:
     (N, K) bool for N cameras (no measured points; use the NumPy version for those)."""
@@ -138,8 +144,8 @@ def visible_mask(landmarks, pose, pan, tilt, cam) -> np.ndarray:
         landmarks.segments,
         landmarks.max_distance,
         pose,
-        np.ascontiguousarray(np.broadcast_to(pan, n), dtype=np.float64),
-        np.ascontiguousarray(np.broadcast_to(tilt, n), dtype=np.float64),
+        _per_camera(pan, n),
+        _per_camera(tilt, n),
         cam.focal,
         float(cam.width),
         float(cam.height),
@@ -151,11 +157,14 @@ def ball_visible_mask(ball_xy, pose, pan, tilt, cam, ball_radius: float) -> np.n
     """Compiled :func:`~activevision.geometry.visibility.ball_visible`: (N,) bool."""
     pose = np.ascontiguousarray(np.atleast_2d(pose), dtype=np.float64)
     n = len(pose)
+    balls = np.ascontiguousarray(ball_xy, dtype=np.float64)
+    if balls.shape != (n, 2):
+        balls = np.ascontiguousarray(np.broadcast_to(balls, (n, 2)))
     return ball_kernel(
-        np.ascontiguousarray(np.broadcast_to(ball_xy, (n, 2)), dtype=np.float64),
+        balls,
         pose,
-        np.ascontiguousarray(np.broadcast_to(pan, n), dtype=np.float64),
-        np.ascontiguousarray(np.broadcast_to(tilt, n), dtype=np.float64),
+        _per_camera(pan, n),
+        _per_camera(tilt, n),
         cam.focal,
         float(cam.width),
         float(cam.height),
