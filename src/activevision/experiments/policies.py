@@ -167,18 +167,23 @@ class LearnedPolicy:
 
     name = "learned"
 
-    def __init__(self, q_network, device: str = "cpu") -> None:
+    def __init__(self, q_network, device: str = "cpu", num_threads: int | None = 1) -> None:
         import torch
 
+        # Batch-1 inference of this small CNN is fastest on one thread, and a second busy
+        # OpenMP team (training or rendering beside it) slows multi-threaded torch tenfold.
+        # This sets torch's process-wide thread count; None leaves it alone.
+        if num_threads is not None and device == "cpu":
+            torch.set_num_threads(num_threads)
         self.torch = torch
         self.net = q_network.to(device).eval()
         self.device = device
 
     @classmethod
-    def from_run(cls, run_dir, device: str = "cpu") -> LearnedPolicy:
+    def from_run(cls, run_dir, device: str = "cpu", num_threads: int | None = 1) -> LearnedPolicy:
         from activevision.training import load_policy
 
-        return cls(load_policy(run_dir), device)
+        return cls(load_policy(run_dir), device, num_threads)
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         pass
