@@ -234,30 +234,17 @@ def cmd_demo(args: argparse.Namespace) -> None:
     print(f"wrote {args.out} and {gif}")
 
 
-#: The quickstart's training: the paper's learner with its schedule compressed to a few
-#: thousand steps (the paper's 10,000-step target sync and 1,000 learning starts would leave
-#: a short run with no target update at all).
-QUICKSTART_OVERRIDES = {
-    "total_timesteps": 6000,
-    "learning_starts": 500,
-    "exploration_fraction": 0.3,
-    "target_update_interval": 500,
-    "checkpoint_interval": 3000,
-}
-
-
 def cmd_quickstart(args: argparse.Namespace) -> None:
     """The README's main job: short training (resumed if interrupted), evaluation of every
     method, a coarse localisation-error comparison, the episode figure and the report."""
+    from activevision.training.checkpoint import list_checkpoints
+
     out, seed = args.out, str(args.seed)
-    overrides = dict(QUICKSTART_OVERRIDES, seed=args.seed)
-    if args.steps is not None:
-        overrides["total_timesteps"] = args.steps
-    if (out / "checkpoints").exists():
+    if list_checkpoints(out):
         steps = [["train", "--resume", str(out)]]
     else:
-        sets = [a for k, v in overrides.items() for a in ("--set", f"{k}={v}")]
-        steps = [["train", "--out", str(out), *sets]]
+        extra = ["--steps", str(args.steps)] if args.steps is not None else []
+        steps = [["train", "--preset", "quickstart", "--seed", seed, "--out", str(out), *extra]]
     episodes = str(args.episodes)
     steps += [
         ["evaluate", "--run", str(out), "--episodes", episodes, "--seed", seed],
@@ -295,7 +282,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("train", cmd_train, "train a DDQN + PER head controller")
     p.add_argument("--config", type=Path, help="TrainConfig JSON file")
-    p.add_argument("--preset", default="paper", help="paper | release")
+    p.add_argument("--preset", default="paper", help="paper | release | quickstart")
     p.add_argument("--steps", type=int, help="total environment steps (resume: steps to add)")
     p.add_argument("--seed", type=int)
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a config key")

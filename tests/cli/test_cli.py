@@ -1,0 +1,55 @@
+"""The command line as a user runs it: pictures, the main job end to end, clear errors."""
+
+import json
+
+import pytest
+
+from activevision.cli import main
+
+
+def test_render_and_viewpoints_write_pictures(tmp_path):
+    assert main(["render", "--seed", "3", "--out", str(tmp_path / "view.png")]) == 0
+    assert main(["viewpoints", "--seed", "3", "--out", str(tmp_path / "vp.png")]) == 0
+    assert (tmp_path / "view.png").stat().st_size > 20_000
+    assert (tmp_path / "vp.png").stat().st_size > 20_000
+
+
+def test_quickstart_trains_evaluates_and_reports(tmp_path):
+    out = tmp_path / "run"
+    argv = ["quickstart", "--out", str(out), "--steps", "600", "--episodes", "6"]
+    assert main(argv) == 0
+    for name in (
+        "config.json",
+        "metrics.csv",
+        "plots/training.png",
+        "evaluation/evaluation.json",
+        "compare/compare.csv",
+        "compare/compare.png",
+        "episode.png",
+        "episode.gif",
+        "report.md",
+    ):
+        assert (out / name).exists(), name
+    methods = {
+        row["method"]
+        for row in json.loads((out / "evaluation/evaluation.json").read_text())["methods"]
+    }
+    assert {"learned", "random", "oracle", "entropy_jump", "scan"} <= methods
+    report = (out / "report.md").read_text()
+    assert "compare/compare.png" in report and "| learned |" in report
+    # Running it again finds the finished run and only redoes evaluation and figures.
+    assert main(argv) == 0
+    # The trained run exports to ONNX for the robot runtime.
+    assert main(["export", str(out), "-o", str(tmp_path / "policy.onnx")]) == 0
+    assert (tmp_path / "policy.json").exists()
+
+
+def test_bad_input_is_one_clear_line(tmp_path, capsys):
+    assert main(["train", "--preset", "nope", "--out", str(tmp_path / "x")]) == 2
+    assert "unknown preset" in capsys.readouterr().err
+    assert main(["train", "--resume", str(tmp_path / "missing")]) == 2
+    assert "error" in capsys.readouterr().err
+    assert main(["evaluate", "--methods", "learned"]) == 2
+    assert "--run" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["render"])  # argparse: --out is required
