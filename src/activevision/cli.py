@@ -89,13 +89,16 @@ def _methods(names: list[str], run: Path | None, env_config, error: float = 0.0)
     from activevision.experiments.policies import (
         EntropyPolicy,
         LearnedPolicy,
+        OnnxPolicy,
         OraclePolicy,
         RandomPolicy,
         ScanPolicy,
     )
+    from activevision.runtime import pretrained_policy_path
 
     factories = {
         "learned": lambda: LearnedPolicy.from_run(run),
+        "shipped": lambda: OnnxPolicy(pretrained_policy_path()),
         "random": lambda: RandomPolicy(),
         "oracle": lambda: OraclePolicy(env_config),
         "entropy_jump": lambda: EntropyPolicy(error, jump=True, config=env_config),
@@ -295,7 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("evaluate", cmd_evaluate, "score methods on fixed-seed episodes")
     p.add_argument("--run", type=Path, help="a training run: adds the learned policy")
     p.add_argument(
-        "--methods", nargs="+", help="learned entropy_jump entropy_steps oracle scan random"
+        "--methods", nargs="+", help="learned shipped entropy_jump entropy_steps oracle scan random"
     )
     p.add_argument("--episodes", type=int, default=100)
     p.add_argument("--seed", type=int, default=0)

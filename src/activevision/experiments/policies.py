@@ -198,7 +198,7 @@ class OnnxPolicy:
     """An exported policy run by :class:`activevision.runtime.HeadController` (no torch),
     fed the newest camera frame, as on a robot."""
 
-    name = "learned"
+    name = "onnx"
 
     def __init__(self, model_path) -> None:
         from activevision.runtime import HeadController
