@@ -67,14 +67,20 @@ class ActiveVisionVectorEnv(VectorEnv):
         for i, s in enumerate(seeds):
             if s is not None or seed is None:
                 self._rngs[i] = seeding.np_random(s)[0]
-        self._start(self._all)
+        self.sim.reset(self._all, self._rngs)
+        self._render(started=self._all)
         self._needs_reset[:] = False
         return self._frames.copy(), self._infos()
 
-    def _start(self, idx: np.ndarray) -> None:
-        self.sim.reset(idx, [self._rngs[i] for i in idx])
-        frames = self.sim.render(idx)
-        self._frames[idx] = frames[:, None]
+    def _render(self, started: np.ndarray) -> None:
+        """Render every sub-environment in one batched call; sub-environments that just
+        started fill their whole frame stack with their first frame."""
+        if self.config.frame_stack == 1:
+            self.sim.render(out=self._frames[:, 0])  # straight into the observation buffer
+            return
+        self._frames[:, :-1] = self._frames[:, 1:]
+        self._frames[:, -1] = self.sim.render()
+        self._frames[started] = self._frames[started, -1:]
 
     def step(self, actions):
         actions = np.asarray(actions)
@@ -84,15 +90,10 @@ class ActiveVisionVectorEnv(VectorEnv):
         stepping = ~resetting
         reward, terminated, _, _ = self.sim.step(actions, active=stepping)
         truncated = stepping & ~terminated & (self.sim.step_count >= self.max_episode_steps)
-        stepped = np.flatnonzero(stepping)
-        if self.config.frame_stack > 1:
-            self._frames[stepped, :-1] = self._frames[stepped, 1:]
-        if len(stepped) == self.num_envs and self.config.frame_stack == 1:
-            self.sim.render(out=self._frames[:, 0])  # straight into the observation buffer
-        elif len(stepped):
-            self._frames[stepped, -1] = self.sim.render(stepped)
-        if resetting.any():
-            self._start(np.flatnonzero(resetting))
+        started = np.flatnonzero(resetting)
+        if len(started):
+            self.sim.reset(started, [self._rngs[i] for i in started])
+        self._render(started)
         infos = self._infos()
         self._needs_reset = terminated | truncated
         return self._frames.copy(), reward, terminated, truncated, infos

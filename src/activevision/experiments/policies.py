@@ -14,6 +14,7 @@ import numpy as np
 
 from activevision.envs.actions import action_table
 from activevision.envs.config import EnvConfig
+from activevision.envs.simulation import corrupt_pose
 from activevision.geometry import field_landmarks
 from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
 
@@ -43,18 +44,6 @@ def greedy_action(head, target, table: np.ndarray) -> int:
     """The action whose move ends closest to ``target`` (pan, tilt rad)."""
     after = np.asarray(head)[None] + table
     return int(np.argmin(np.hypot(*(after - np.asarray(target)[None]).T)))
-
-
-def corrupt_pose(pose, error: float, rng: np.random.Generator) -> np.ndarray:
-    """The release's localisation error: the position moved ``error`` m in a random
-    direction, the heading by ``+-error`` rad."""
-    direction = rng.uniform(-np.pi, np.pi)
-    sign = rng.choice([-1.0, 1.0])
-    out = np.asarray(pose, float) + np.array(
-        [error * np.cos(direction), error * np.sin(direction), sign * error]
-    )
-    out[2] = (out[2] + np.pi) % (2 * np.pi) - np.pi
-    return out
 
 
 class RandomPolicy:
