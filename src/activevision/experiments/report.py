@@ -63,7 +63,7 @@ def write_report(run_dir: str | Path) -> Path:
         parts += [
             "",
             "Last epoch: "
-            + ", ".join(f"{k} {float(v):.3f}" for k, v in last.items() if _is_number(v)),
+            + ", ".join(f"{k} {float(v):.4g}" for k, v in last.items() if _is_number(v)),
         ]
     evaluation = run / "evaluation" / "evaluation.json"
     if evaluation.exists():
