@@ -1,5 +1,6 @@
 import gymnasium as gym
 import numpy as np
+import pytest
 
 import activevision.envs  # noqa: F401
 from activevision.envs import ActiveVisionVectorEnv
@@ -13,12 +14,13 @@ def test_make_vec_returns_the_native_vector_env():
     assert infos["success_rate"].shape == (3,)
 
 
-def test_vector_env_equals_single_envs_with_the_same_seeds():
+@pytest.mark.parametrize("frame_stack", [1, 3])
+def test_vector_env_equals_single_envs_with_the_same_seeds(frame_stack):
     n, seed, steps = 4, 11, 45
     rng = np.random.default_rng(0)
     actions = rng.integers(0, 9, (steps, n))
-    venv = ActiveVisionVectorEnv(num_envs=n)
-    singles = [gym.make("ActiveVision-v0") for _ in range(n)]
+    venv = ActiveVisionVectorEnv(num_envs=n, frame_stack=frame_stack)
+    singles = [gym.make("ActiveVision-v0", frame_stack=frame_stack) for _ in range(n)]
     vobs, _ = venv.reset(seed=seed)
     sobs = [e.reset(seed=seed + i)[0] for i, e in enumerate(singles)]
     done = np.zeros(n, dtype=bool)
