@@ -173,8 +173,9 @@ def preset(name: str) -> TrainConfig:
         "paper": TrainConfig(),
         "release": TrainConfig(learning_starts=500, exploration_fraction=0.85),
         # The README's main job: the paper's learner with its schedule compressed to 6,000
-        # steps (under 3 minutes on a 2-core CPU; 12,000 steps measured no better). The paper's 10,000-step target sync and
-        # 1,000 learning starts would leave so short a run without a single target update.
+        # steps (under 3 minutes on a 2-core CPU; 12,000 steps measured no better). The
+        # paper's 10,000-step target sync and 1,000 learning starts would leave so short a
+        # run without a single target update.
         "quickstart": TrainConfig(
             total_timesteps=6000,
             learning_starts=500,
