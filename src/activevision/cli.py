@@ -172,7 +172,11 @@ def _parse_errors(text: str) -> list[float]:
 
 
 def cmd_compare(args: argparse.Namespace) -> None:
-    """The localisation-error experiment and its figure."""
+    """The localisation-error experiment and its figure (on Ray with ``--ray``)."""
+    if getattr(args, "ray", False):
+        from activevision.scaleout.cli import cmd_compare_ray
+
+        return cmd_compare_ray(args)
     from activevision.experiments.compare import compare, default_methods, plot_compare
     from activevision.experiments.policies import LearnedPolicy
 
@@ -314,6 +318,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--episodes", type=int, default=100)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path)
+    from activevision.scaleout.cli import add_compare_ray_arguments, add_sweep_parser
+
+    add_compare_ray_arguments(p)  # --ray, --address, --num-cpus, --chunk
+    add_sweep_parser(sub)  # `activevision sweep`
 
     p = add("episode", cmd_episode, "episode figure (and GIF) of two methods from one start")
     p.add_argument("--run", type=Path, help="a training run (for the learned policy)")
@@ -358,9 +366,9 @@ def main(argv: list[str] | None = None) -> int:
         args.func(args)
     except Exception as err:
         # Our own errors and bad input get one clear line; anything else is a bug: traceback.
-        if not isinstance(err, ValueError | OSError) and not type(err).__module__.startswith(
-            "activevision"
-        ):
+        if not isinstance(err, ValueError | OSError | ImportError) and not type(
+            err
+        ).__module__.startswith("activevision"):
             raise
         print(f"activevision {args.command}: error: {err}", file=sys.stderr)
         return 2

@@ -1,0 +1,147 @@
+"""The localisation-error experiment (:func:`activevision.experiments.compare.compare`) as
+Ray tasks: one task per (error level, method, chunk of episodes).
+
+Methods travel by name and every task builds its own environment and policy, so nothing
+that may not pickle (lambdas, torch modules) crosses process boundaries. The result is
+identical to the local run: :func:`~activevision.experiments.evaluate.run_episode` resets the
+environment with the episode's seed and gives the policy a generator derived from it, so an
+episode does not depend on what ran before it in the same process.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from activevision.envs import EnvConfig
+from activevision.experiments.policies import HeadPolicy
+
+#: Method names :func:`make_policy` knows (``learned`` needs a run directory).
+METHODS = ("learned", "shipped", "entropy_jump", "entropy_steps", "oracle", "scan", "random")
+#: Order of the local ``activevision compare`` (learned first when there is a run).
+DEFAULT_ORDER = ("learned", "entropy_jump", "entropy_steps", "oracle", "scan", "random")
+
+
+def make_policy(
+    name: str, error: float, config: EnvConfig, run_dir: str | Path | None = None
+) -> HeadPolicy:
+    """A fresh policy of method ``name`` at localisation error ``error`` (as the CLI's)."""
+    from activevision.experiments import policies as p
+
+    if name == "learned":
+        if run_dir is None:
+            raise ValueError("the learned policy needs a run directory (--run runs/NAME)")
+        return p.LearnedPolicy.from_run(run_dir)
+    if name == "shipped":
+        from activevision.runtime import pretrained_policy_path
+
+        return p.OnnxPolicy(pretrained_policy_path())
+    if name in ("entropy_jump", "entropy_steps"):
+        return p.EntropyPolicy(error, jump=name == "entropy_jump", config=config)
+    if name == "oracle":
+        return p.OraclePolicy(config)
+    if name == "scan":
+        return p.ScanPolicy(config=config)
+    if name == "random":
+        return p.RandomPolicy()
+    raise ValueError(f"unknown method {name!r}; choose from {sorted(METHODS)}")
+
+
+def evaluate_chunk(
+    method: str,
+    error: float,
+    base_seed: int,
+    episode_indices: Sequence[int],
+    config: EnvConfig,
+    run_dir: str | Path | None = None,
+) -> list[dict[str, Any]]:
+    """Episode records of ``method`` for ``episode_indices`` of the level seeded ``base_seed``
+    (what :func:`~activevision.experiments.evaluate.evaluate_policy` computes for them)."""
+    from activevision.envs import ActiveVisionEnv
+    from activevision.experiments.evaluate import episode_seed, run_episode
+
+    env = ActiveVisionEnv(config)
+    policy = make_policy(method, error, config, run_dir)
+    try:
+        return [
+            run_episode(env, policy, episode_seed(base_seed, i), env.max_episode_steps)
+            for i in episode_indices
+        ]
+    finally:
+        env.close()
+
+
+def compare_ray(
+    out_dir: str | Path,
+    method_names: Sequence[str],
+    errors: Sequence[float],
+    episodes: int = 100,
+    seed: int = 0,
+    config: EnvConfig | None = None,
+    run_dir: str | Path | None = None,
+    chunk: int = 25,
+    address: str | None = None,
+    num_cpus: int | None = None,
+) -> list[dict]:
+    """Run the experiment on Ray into ``out_dir/compare.csv`` (same file as the local run).
+
+    Every (level, method, ``chunk`` episodes) is one Ray task using one CPU. Levels and
+    methods already in the CSV are skipped, and the CSV is rewritten (atomically) as each
+    level completes, in level order, so an interrupted run loses only unfinished levels.
+    ``address``/``num_cpus``: see :func:`~activevision.scaleout.ray_session.ray_session`.
+    """
+    from activevision.experiments.compare import _done_levels
+    from activevision.experiments.evaluate import summarise, summary_rows
+    from activevision.io import write_csv
+    from activevision.scaleout.ray_session import ray_session
+
+    if chunk < 1:
+        raise ValueError(f"chunk must be positive, got {chunk}")
+    for name in method_names:
+        if name not in METHODS:
+            raise ValueError(f"unknown method {name!r}; choose from {sorted(METHODS)}")
+    if "learned" in method_names and run_dir is None:
+        raise ValueError("the learned policy needs --run runs/NAME")
+    config = config or EnvConfig()
+    csv_path = Path(out_dir) / "compare.csv"
+    rows = _done_levels(csv_path)
+    done = {(float(r["error"]), r["method"]) for r in rows}
+    run = str(run_dir) if run_dir is not None else None
+    starts = list(range(0, episodes, chunk))
+
+    with ray_session(address, num_cpus) as ray:
+        task = ray.remote(num_cpus=1)(evaluate_chunk)
+        config_ref = ray.put(config)
+        pending: list[tuple[float, dict[str, list[Any]]]] = []
+        for level, e in enumerate(errors):
+            refs = {
+                name: [
+                    task.remote(
+                        name,
+                        float(e),
+                        seed + level,
+                        range(s, min(s + chunk, episodes)),
+                        config_ref,
+                        run,
+                    )
+                    for s in starts
+                ]
+                for name in method_names
+                if (float(e), name) not in done
+            }
+            if refs:
+                pending.append((float(e), refs))
+        for e, refs in pending:  # in level order, so the CSV matches the local run's
+            for name, chunk_refs in refs.items():
+                records = [r for part in ray.get(chunk_refs) for r in part]
+                rows += summary_rows({name: summarise(records)}, error=e, episodes=episodes)
+            write_csv(csv_path, rows)
+    return rows
+
+
+def default_method_names(run_dir: str | Path | None, selected: Sequence[str] | None) -> list[str]:
+    """The methods ``activevision compare`` runs: its default order, filtered by ``selected``
+    (the local CLI ignores the order and unknown names of ``--methods``; so does this)."""
+    names = [m for m in DEFAULT_ORDER if m != "learned" or run_dir is not None]
+    return [m for m in names if not selected or m in selected]

@@ -1,0 +1,52 @@
+"""Lazy Ray import and a context manager that starts (or joins) a Ray instance."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from types import ModuleType
+from typing import Any
+
+RAY_INSTALL_HINT = "pip install activevision[ray]"
+
+
+def require_ray() -> ModuleType:
+    """Import and return :mod:`ray`, or raise ImportError saying how to install it."""
+    try:
+        import ray
+        import ray.tune  # the sweep needs Tune: fail here, not mid-run
+    except ImportError as error:
+        raise ImportError(
+            f"activevision.scaleout needs Ray with Tune: {RAY_INSTALL_HINT}"
+            f" (or pip install 'ray[tune]'); import failed: {error}"
+        ) from error
+    return ray
+
+
+@contextlib.contextmanager
+def ray_session(
+    address: str | None = None, num_cpus: int | None = None, **init_kwargs: Any
+) -> Iterator[ModuleType]:
+    """Yield :mod:`ray`, initialised.
+
+    If Ray is already initialised in this process it is used as is and left running.
+    Otherwise ``address=None`` starts a local instance (``num_cpus`` CPUs, default all,
+    no dashboard) and ``address="auto"`` or ``"ray://host:10001"`` connects to an existing
+    cluster; whatever this call started or connected is shut down on exit.
+    """
+    ray = require_ray()
+    if ray.is_initialized():
+        yield ray
+        return
+    init_kwargs.setdefault("include_dashboard", False)
+    if address is None:
+        ray.init(num_cpus=num_cpus, **init_kwargs)
+    else:
+        if num_cpus is not None:
+            raise ValueError("num_cpus applies to a local Ray instance, not to --address")
+        init_kwargs.pop("include_dashboard")  # a cluster's dashboard is the cluster's business
+        ray.init(address=address, **init_kwargs)
+    try:
+        yield ray
+    finally:
+        ray.shutdown()

@@ -1,0 +1,364 @@
+"""Seed x grid sweeps of training runs on Ray Tune, with per-epoch aggregation over seeds.
+
+Each trial is one :class:`~activevision.training.Trainer` run in a fixed directory
+``out_dir/trials/<name>`` (e.g. ``seed=3,learning_rate=0.001``). The trainable trains one
+``checkpoint_interval`` at a time and then reports each 300-step epoch of it to Tune, with a
+Tune checkpoint that records that directory (not the trainer's checkpoint files, which hold
+the replay buffer and would be copied on every report). When a trial's
+worker dies, Tune restarts it (up to ``max_failures`` times) and the trainable resumes from
+the run directory's newest trainer checkpoint with :meth:`Trainer.resume`, which also drops
+``metrics.csv`` rows written after that checkpoint, so every epoch appears exactly once.
+Re-running a sweep into the same ``out_dir`` likewise continues (or just re-reads) its trials.
+
+On a multi-node cluster ``out_dir`` must be a shared filesystem mounted at the same path on
+every node (NFS, etc.): trials write their run directories there, a restarted trial may land on
+another node, and the driver aggregates the trials' ``metrics.csv`` from there.
+
+Outputs in ``out_dir``: ``trials.csv`` (one row per trial: status, restarts, epochs, its own
+run time), ``sweep.csv`` (per grid point and epoch: mean, std, min, max over seeds of
+:data:`METRICS`) and ``sweep.png`` (success rate vs step, mean +- std per grid point).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import time
+import warnings
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from activevision.training.config import TrainConfig, apply_overrides
+
+#: Epoch metrics aggregated over seeds.
+METRICS = ("success_rate", "episode_reward", "success_duration", "ball_loss_duration")
+#: Trainable testing hook (param ``crash_after_epoch``): marker file of the injected crash.
+CRASH_MARKER = ".scaleout_crashed"
+#: Per-trial bookkeeping the trainable keeps in its run directory.
+STATE_FILE = "scaleout.json"
+
+
+# ---------------------------------------------------------------------- trial points
+def trial_name(seed: int, point: Mapping[str, Any]) -> str:
+    """Directory name of a trial: ``seed=0`` then ``,key=value`` per grid key (sorted)."""
+    return ",".join([f"seed={seed}", *(f"{k}={point[k]}" for k in sorted(point))])
+
+
+def grid_points(grid: Mapping[str, Sequence[Any]]) -> list[dict[str, Any]]:
+    """Every combination of the grid's values (one empty point for an empty grid)."""
+    points: list[dict[str, Any]] = [{}]
+    for key in sorted(grid):
+        values = list(grid[key])
+        if not values:
+            raise ValueError(f"grid key {key!r} has no values")
+        points = [{**p, key: v} for p in points for v in values]
+    return points
+
+
+def trial_config(base: TrainConfig, seed: int, point: Mapping[str, Any]) -> TrainConfig:
+    """``base`` with ``seed`` and the grid point applied (string values are parsed like
+    ``--set key=value``, other values used as is); validated."""
+    config = base.replace(seed=int(seed))
+    for key, value in point.items():
+        if isinstance(value, str):
+            config = apply_overrides(config, [f"{key}={value}"])
+        else:
+            config = config.replace(**{key: value})
+    return config
+
+
+# ---------------------------------------------------------------------- the trainable
+def _read_state(run_dir: Path) -> dict[str, Any]:
+    try:
+        return json.loads((run_dir / STATE_FILE).read_text())
+    except (OSError, json.JSONDecodeError):
+        return {"elapsed_s": 0.0, "sessions": 0}
+
+
+def _last_metrics_row(run_dir: Path) -> dict[str, float]:
+    import csv
+
+    path = run_dir / "metrics.csv"
+    if not path.exists():
+        return {}
+    with path.open() as f:
+        rows = list(csv.DictReader(f))
+    return {k: float(v) for k, v in rows[-1].items()} if rows else {}
+
+
+def train_trial(params: dict[str, Any]) -> None:
+    """Tune function trainable: train (or resume) one trial, reporting every epoch.
+
+    ``params["trial"]``: ``config`` (a TrainConfig dict), ``run_dir`` (absolute path), and the
+    testing hook ``crash_after_epoch`` (int or None): exit the worker process once, right after
+    reporting that epoch, leaving :data:`CRASH_MARKER` in the run directory.
+    """
+    started = time.perf_counter()  # the trial's own run time includes its imports
+    from ray import tune
+
+    from activevision.io import write_json
+    from activevision.training import Trainer
+    from activevision.training.checkpoint import list_checkpoints
+
+    params = params["trial"]
+    config = TrainConfig.from_dict(params["config"])
+    run_dir = Path(params["run_dir"])
+    restored = tune.get_checkpoint()
+    if restored is not None:  # the Tune checkpoint only records where the run lives
+        with restored.as_directory() as d:
+            run_dir = Path(json.loads((Path(d) / "trial.json").read_text())["run_dir"])
+    state = _read_state(run_dir)
+    state["sessions"] = int(state.get("sessions", 0)) + 1
+    prior_s = float(state.get("elapsed_s", 0.0))
+    resumed = bool(list_checkpoints(run_dir))
+    trainer = Trainer.resume(run_dir) if resumed else Trainer(config, run_dir)
+    crash_after = params.get("crash_after_epoch")
+
+    def report(row: Mapping[str, float]) -> None:
+        state["elapsed_s"] = prior_s + time.perf_counter() - started
+        write_json(run_dir / STATE_FILE, state)
+        metrics = {
+            **row,
+            "trial_elapsed_s": state["elapsed_s"],
+            "resumed": float(resumed),
+            "sessions": float(state["sessions"]),
+        }
+        with tempfile.TemporaryDirectory() as d:
+            (Path(d) / "trial.json").write_text(
+                json.dumps({"run_dir": str(run_dir), "step": trainer.step})
+            )
+            tune.report(metrics, checkpoint=tune.Checkpoint.from_directory(d))
+
+    try:
+        reported = False
+        # train() checkpoints when it returns, so train a checkpoint interval per call
+        # (an epoch when checkpoints are only taken at the end), then report its epochs
+        chunk = config.checkpoint_interval or config.epoch_steps
+        while trainer.step < config.total_timesteps:
+            for row in trainer.train(steps=chunk):
+                report(row)
+                reported = True
+                marker = run_dir / CRASH_MARKER
+                if crash_after is not None and row["epoch"] >= crash_after and not marker.exists():
+                    marker.write_text(f"crashed after epoch {int(row['epoch'])}\n")
+                    os._exit(1)  # the testing hook: a worker dying mid-run
+        if not reported:  # finished in an earlier sweep: report its final epoch once
+            report(_last_metrics_row(run_dir))
+    finally:
+        trainer.close()
+
+
+# ---------------------------------------------------------------------- the sweep
+def sweep(
+    base_config: TrainConfig,
+    seeds: Iterable[int],
+    grid: Mapping[str, Sequence[Any]] | None,
+    out_dir: str | Path,
+    address: str | None = None,
+    num_cpus: int | None = None,
+    max_failures: int = 2,
+    *,
+    cpus_per_trial: float = 1.0,
+    gpus_per_trial: float | None = None,
+    verbose: int = 1,
+    crash_after_epoch: int | None = None,
+) -> list[dict[str, Any]]:
+    """One Ray Tune trial per (seed x grid point); returns the aggregated ``sweep.csv`` rows.
+
+    Args:
+        base_config: configuration of every trial before its seed and grid point.
+        seeds: training seeds; grid: config key -> values (their product is swept).
+        out_dir: trial run directories, Tune's results, trials.csv, sweep.csv, sweep.png.
+        address: None starts a local Ray instance with ``num_cpus`` CPUs (default: all);
+            ``"auto"`` or ``"ray://head:10001"`` joins a running cluster.
+        max_failures: restarts of a failed trial (each resumes from its checkpoint).
+        cpus_per_trial: CPUs per trial; a config with ``num_threads=0`` gets that many
+            torch threads. gpus_per_trial: default 1 when the cluster has GPUs, else 0.
+        verbose: Tune's console verbosity (0 silent).
+        crash_after_epoch: testing hook, see :func:`train_trial`.
+    """
+    from activevision.io import write_csv
+    from activevision.scaleout.ray_session import ray_session
+
+    out_dir = Path(out_dir).resolve()
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("a sweep needs at least one seed")
+    if len(set(seeds)) != len(seeds):
+        raise ValueError(f"duplicate seeds: {seeds}")
+    points = grid_points(grid or {})
+    trials = []
+    for point in points:
+        for seed in seeds:
+            config = trial_config(base_config, seed, point)
+            if config.num_threads == 0:
+                config = config.replace(num_threads=max(1, math.floor(cpus_per_trial)))
+            name = trial_name(seed, point)
+            trials.append(
+                {
+                    "name": name,
+                    "seed": seed,
+                    "point": point,
+                    "config": config.to_dict(),
+                    "run_dir": str(out_dir / "trials" / name),
+                    "crash_after_epoch": crash_after_epoch,
+                }
+            )
+    statuses: dict[str, dict[str, Any]] = {t["name"]: {"restarts": 0} for t in trials}
+
+    with ray_session(address, num_cpus) as ray:
+        from ray import tune
+
+        class _Recorder(tune.Callback):
+            """Final status and restart count of every trial (runs in the driver)."""
+
+            def on_trial_recover(self, iteration, trials, trial, **info):
+                statuses[trial.config["trial"]["name"]]["restarts"] += 1
+
+            def on_trial_complete(self, iteration, trials, trial, **info):
+                statuses[trial.config["trial"]["name"]]["status"] = "TERMINATED"
+
+            def on_trial_error(self, iteration, trials, trial, **info):
+                statuses[trial.config["trial"]["name"]]["status"] = "ERROR"
+
+        if gpus_per_trial is None:
+            gpus_per_trial = 1.0 if ray.cluster_resources().get("GPU", 0) > 0 else 0.0
+        trainable = tune.with_resources(train_trial, {"cpu": cpus_per_trial, "gpu": gpus_per_trial})
+        tuner = tune.Tuner(
+            trainable,
+            param_space={"trial": tune.grid_search(trials)},
+            tune_config=tune.TuneConfig(num_samples=1, trial_dirname_creator=_tune_dirname),
+            run_config=tune.RunConfig(
+                name="tune",
+                storage_path=str(out_dir / "ray_results"),
+                failure_config=tune.FailureConfig(max_failures=max_failures),
+                checkpoint_config=tune.CheckpointConfig(num_to_keep=1),
+                callbacks=[_Recorder()],
+                verbose=verbose,
+            ),
+        )
+        tuner.fit()
+
+    trial_rows = [_trial_row(t, statuses[t["name"]]) for t in trials]
+    write_csv(out_dir / "trials.csv", trial_rows)
+    failed = [r["name"] for r in trial_rows if r["status"] != "TERMINATED"]
+    if failed:
+        warnings.warn(f"sweep trials did not finish: {failed}", RuntimeWarning, stacklevel=2)
+    rows = aggregate(trials, out_dir)
+    write_csv(out_dir / "sweep.csv", rows)
+    if rows:
+        plot_sweep(rows, out_dir / "sweep.png")
+    return rows
+
+
+def _tune_dirname(trial: Any) -> str:
+    """Tune's own directory of a trial: its id (our run directory carries the name)."""
+    return f"trial_{trial.trial_id}"
+
+
+def _metrics_rows(run_dir: Path) -> list[dict[str, str]]:
+    import csv
+
+    path = run_dir / "metrics.csv"
+    if not path.exists():
+        return []
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+def _trial_row(trial: Mapping[str, Any], status: Mapping[str, Any]) -> dict[str, Any]:
+    run_dir = Path(trial["run_dir"])
+    state = _read_state(run_dir)
+    return {
+        "name": trial["name"],
+        "seed": trial["seed"],
+        **trial["point"],
+        "status": status.get("status", "UNKNOWN"),
+        "restarts": status["restarts"],
+        "sessions": state.get("sessions", 0),
+        "epochs": len(_metrics_rows(run_dir)),
+        "elapsed_s": round(float(state.get("elapsed_s", 0.0)), 3),
+        "crashed": (run_dir / CRASH_MARKER).exists(),
+        "run_dir": str(run_dir),
+    }
+
+
+def _stats(values: Sequence[float]) -> tuple[float, float, float, float]:
+    """mean, std (sample, 0 for one value), min, max of the finite values (NaN if none)."""
+    import numpy as np
+
+    x = np.asarray([v for v in values if math.isfinite(v)], float)
+    if len(x) == 0:
+        return (math.nan,) * 4
+    std = float(x.std(ddof=1)) if len(x) > 1 else 0.0
+    return float(x.mean()), std, float(x.min()), float(x.max())
+
+
+def aggregate(trials: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[dict[str, Any]]:
+    """Per (grid point, epoch) statistics over seeds of :data:`METRICS`, read from every
+    trial's ``metrics.csv``; columns: grid keys, epoch, step, seeds, ``<metric>_mean``,
+    ``_std``, ``_min``, ``_max``. Epochs only some seeds reached use those seeds."""
+    del out_dir  # the trials carry absolute run directories
+    groups: dict[tuple, dict[int, list[dict[str, str]]]] = {}
+    keys: dict[tuple, dict[str, Any]] = {}
+    for trial in trials:
+        point_key = tuple(sorted((k, repr(v)) for k, v in trial["point"].items()))
+        keys[point_key] = dict(trial["point"])
+        by_epoch = groups.setdefault(point_key, {})
+        for row in _metrics_rows(Path(trial["run_dir"])):
+            by_epoch.setdefault(int(float(row["epoch"])), []).append(row)
+    rows = []
+    for point_key, by_epoch in groups.items():
+        for epoch in sorted(by_epoch):
+            sel = by_epoch[epoch]
+            row: dict[str, Any] = {
+                **keys[point_key],
+                "epoch": epoch,
+                "step": int(float(sel[0]["step"])),
+                "seeds": len(sel),
+            }
+            for m in METRICS:
+                mean, std, lo, hi = _stats([float(r[m]) for r in sel])
+                row.update({f"{m}_mean": mean, f"{m}_std": std, f"{m}_min": lo, f"{m}_max": hi})
+            rows.append(row)
+    return rows
+
+
+def plot_sweep(rows: Sequence[Mapping[str, Any]], out_png: str | Path) -> None:
+    """Success rate vs step, one mean curve with a +-std band per grid point."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from activevision.io import atomic_path
+
+    skip = {"epoch", "step", "seeds"} | {f"{m}_{s}" for m in METRICS for s in STATS}
+    curves: dict[str, list[Mapping[str, Any]]] = {}
+    for r in rows:
+        label = ", ".join(f"{k}={v}" for k, v in r.items() if k not in skip) or "base config"
+        curves.setdefault(label, []).append(r)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for label, sel in curves.items():
+        sel = sorted(sel, key=lambda r: r["step"])
+        step = np.array([r["step"] for r in sel], float)
+        mean = np.array([r["success_rate_mean"] for r in sel], float)
+        std = np.array([r["success_rate_std"] for r in sel], float)
+        ax.plot(step, mean, "o-", ms=3, label=f"{label} (n={max(r['seeds'] for r in sel)})")
+        ax.fill_between(step, mean - std, mean + std, alpha=0.2)
+    ax.set_xlabel("environment step")
+    ax.set_ylabel("success rate (mean ± std over seeds)")
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    with atomic_path(out_png) as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
+    plt.close(fig)
+
+
+STATS = ("mean", "std", "min", "max")

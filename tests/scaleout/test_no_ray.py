@@ -1,0 +1,94 @@
+"""Scale-out pieces that need no Ray: the optional import, grid points, aggregation."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from activevision.scaleout import RAY_INSTALL_HINT, aggregate, require_ray
+from activevision.scaleout.compare import default_method_names, make_policy
+from activevision.scaleout.sweep import grid_points, trial_config, trial_name
+from activevision.training import TrainConfig
+
+
+def test_nothing_imports_ray_eagerly():
+    code = (
+        "import sys, activevision, activevision.cli, activevision.training,"
+        " activevision.experiments.compare, activevision.scaleout, activevision.scaleout.cli;"
+        " assert 'ray' not in sys.modules, 'ray imported'"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_missing_ray_names_the_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray -> ImportError
+    with pytest.raises(ImportError, match=r"pip install activevision\[ray\]"):
+        require_ray()
+    assert RAY_INSTALL_HINT == "pip install activevision[ray]"
+
+
+def test_grid_points_and_trial_configs():
+    points = grid_points({"learning_rate": [1e-3, 5e-4], "batch_size": ["16"]})
+    assert points == [
+        {"batch_size": "16", "learning_rate": 1e-3},
+        {"batch_size": "16", "learning_rate": 5e-4},
+    ]
+    config = trial_config(TrainConfig(), 4, points[0])
+    assert (config.seed, config.batch_size, config.learning_rate) == (4, 16, 1e-3)
+    assert trial_name(4, points[0]) == "seed=4,batch_size=16,learning_rate=0.001"
+    assert grid_points({}) == [{}]
+    with pytest.raises(ValueError):
+        grid_points({"batch_size": []})
+
+
+def _metrics(run_dir: Path, success: list[float]) -> None:
+    run_dir.mkdir(parents=True)
+    with (run_dir / "metrics.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(
+            [
+                "epoch",
+                "step",
+                "success_rate",
+                "episode_reward",
+                "success_duration",
+                "ball_loss_duration",
+            ]
+        )
+        for i, s in enumerate(success, 1):
+            w.writerow([i, 300 * i, s, 2 * s, 10, "nan"])
+
+
+def test_aggregate_over_seeds(tmp_path):
+    trials = []
+    for seed, success in [(0, [0.2, 0.4]), (1, [0.4, 0.8]), (2, [0.6])]:
+        run_dir = tmp_path / f"seed={seed}"
+        _metrics(run_dir, success)
+        trials.append({"seed": seed, "point": {"lr": 1}, "run_dir": str(run_dir)})
+    rows = aggregate(trials, tmp_path)
+    assert [(r["epoch"], r["step"], r["seeds"]) for r in rows] == [(1, 300, 3), (2, 600, 2)]
+    assert rows[0]["success_rate_mean"] == pytest.approx(0.4)
+    assert rows[0]["success_rate_std"] == pytest.approx(0.2)
+    assert (rows[1]["success_rate_min"], rows[1]["success_rate_max"]) == (0.4, 0.8)
+    assert rows[1]["episode_reward_mean"] == pytest.approx(1.2)
+    assert rows[0]["lr"] == 1
+    assert rows[0]["ball_loss_duration_mean"] != rows[0]["ball_loss_duration_mean"]  # all NaN
+
+
+def test_method_names_and_policies():
+    assert default_method_names(None, None) == [
+        "entropy_jump",
+        "entropy_steps",
+        "oracle",
+        "scan",
+        "random",
+    ]
+    assert default_method_names("runs/x", ["random", "learned"]) == ["learned", "random"]
+    with pytest.raises(ValueError, match="unknown method"):
+        make_policy("nope", 0.0, None)
+    with pytest.raises(ValueError, match="run directory"):
+        make_policy("learned", 0.0, None)
