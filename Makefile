@@ -29,7 +29,7 @@ test: install-test
 	$(BIN)/ruff check src tests bench
 	NUMBA_CACHE_DIR=$(CURDIR)/.numba_cache $(BIN)/python -m pytest -q tests
 
-bench: install
+bench: install-test
 	for b in bench/*.py; do $(BIN)/python $$b || exit 1; done
 
 clean:
