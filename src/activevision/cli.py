@@ -86,31 +86,9 @@ def cmd_plot(args: argparse.Namespace) -> None:
 
 
 def _methods(names: list[str], run: Path | None, env_config, error: float = 0.0):
-    from activevision.experiments.policies import (
-        EntropyPolicy,
-        LearnedPolicy,
-        OnnxPolicy,
-        OraclePolicy,
-        RandomPolicy,
-        ScanPolicy,
-    )
-    from activevision.runtime import pretrained_policy_path
+    from activevision.experiments.policies import make_policy
 
-    factories = {
-        "learned": lambda: LearnedPolicy.from_run(run),
-        "shipped": lambda: OnnxPolicy(pretrained_policy_path()),
-        "random": lambda: RandomPolicy(),
-        "oracle": lambda: OraclePolicy(env_config),
-        "entropy_jump": lambda: EntropyPolicy(error, jump=True, config=env_config),
-        "entropy_steps": lambda: EntropyPolicy(error, jump=False, config=env_config),
-        "scan": lambda: ScanPolicy(config=env_config),
-    }
-    if "learned" in names and run is None:
-        raise ValueError("the learned policy needs --run runs/NAME")
-    unknown = sorted(set(names) - set(factories))
-    if unknown:
-        raise ValueError(f"unknown methods {unknown}; choose from {sorted(factories)}")
-    return {name: factories[name]() for name in names}
+    return {name: make_policy(name, error, env_config, run) for name in names}
 
 
 def cmd_evaluate(args: argparse.Namespace) -> None:
@@ -122,16 +100,11 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         latency_summary,
         summary_rows,
     )
+    from activevision.experiments.policies import DEFAULT_ORDER
     from activevision.io import write_csv, write_json
 
     env_config = _env_config(args.run)
-    names = args.methods or (["learned"] if args.run else []) + [
-        "entropy_jump",
-        "entropy_steps",
-        "oracle",
-        "scan",
-        "random",
-    ]
+    names = args.methods or [m for m in DEFAULT_ORDER if m != "learned" or args.run]
     policies = _methods(names, args.run, env_config, args.error)
     env = ActiveVisionEnv(env_config)
     summaries, episodes, latency = {}, [], {}

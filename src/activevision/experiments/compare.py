@@ -18,13 +18,7 @@ import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.experiments.evaluate import evaluate_policy, summary_rows
-from activevision.experiments.policies import (
-    EntropyPolicy,
-    HeadPolicy,
-    OraclePolicy,
-    RandomPolicy,
-    ScanPolicy,
-)
+from activevision.experiments.policies import DEFAULT_ORDER, HeadPolicy, make_policy
 from activevision.io import write_csv
 
 DEFAULT_ERRORS = tuple(np.round(np.arange(0.0, 2.01, 0.25), 2))
@@ -36,18 +30,10 @@ MethodFactory = Callable[[float], HeadPolicy]
 def default_methods(
     config: EnvConfig, learned: HeadPolicy | None = None
 ) -> dict[str, MethodFactory]:
-    methods: dict[str, MethodFactory] = {}
-    if learned is not None:
-        methods["learned"] = lambda e: learned
-    methods.update(
-        {
-            "entropy_jump": lambda e: EntropyPolicy(e, jump=True, config=config),
-            "entropy_steps": lambda e: EntropyPolicy(e, jump=False, config=config),
-            "oracle": lambda e: OraclePolicy(config),
-            "scan": lambda e: ScanPolicy(config=config),
-            "random": lambda e: RandomPolicy(),
-        }
-    )
+    """Every method as a factory of the error level; ``learned`` first when given."""
+    methods: dict[str, MethodFactory] = {"learned": lambda e: learned} if learned is not None else {}
+    for name in DEFAULT_ORDER[1:]:
+        methods[name] = lambda e, name=name: make_policy(name, e, config)
     return methods
 
 

@@ -8,6 +8,7 @@ localisation error) and the ball; the oracle the true goal (an upper bound, not 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -200,3 +201,33 @@ class OnnxPolicy:
     def act(self, obs: np.ndarray, info: dict) -> int:
         pan, tilt = info["head"]
         return self.controller.act(obs[-1], pan, tilt).action
+
+
+#: Method names :func:`make_policy` knows (``learned`` needs a run directory).
+METHODS = ("learned", "shipped", "entropy_jump", "entropy_steps", "oracle", "scan", "random")
+#: Order of the local ``activevision compare`` (learned first when there is a run).
+DEFAULT_ORDER = ("learned", "entropy_jump", "entropy_steps", "oracle", "scan", "random")
+
+
+def make_policy(
+    name: str, error: float, config: EnvConfig, run_dir: str | Path | None = None
+) -> HeadPolicy:
+    """A fresh policy of method ``name``; ``error`` is the localisation error the entropy
+    methods plan with, ``run_dir`` the training run of ``learned``."""
+    if name == "learned":
+        if run_dir is None:
+            raise ValueError("the learned policy needs a run directory (--run runs/NAME)")
+        return LearnedPolicy.from_run(run_dir)
+    if name == "shipped":
+        from activevision.runtime import pretrained_policy_path
+
+        return OnnxPolicy(pretrained_policy_path())
+    if name in ("entropy_jump", "entropy_steps"):
+        return EntropyPolicy(error, jump=name == "entropy_jump", config=config)
+    if name == "oracle":
+        return OraclePolicy(config)
+    if name == "scan":
+        return ScanPolicy(config=config)
+    if name == "random":
+        return RandomPolicy()
+    raise ValueError(f"unknown method {name!r}; choose from {sorted(METHODS)}")

@@ -14,7 +14,7 @@ Typical use::
     compare_ray("runs/compare", ["oracle", "random"], [0.0, 1.0], 100, 0, address="auto")
 """
 
-from activevision.scaleout.compare import compare_ray, make_policy
+from activevision.scaleout.compare import compare_ray
 from activevision.scaleout.ray_session import RAY_INSTALL_HINT, ray_session, require_ray
 from activevision.scaleout.sweep import aggregate, plot_sweep, sweep
 
@@ -22,7 +22,6 @@ __all__ = [
     "RAY_INSTALL_HINT",
     "aggregate",
     "compare_ray",
-    "make_policy",
     "plot_sweep",
     "ray_session",
     "require_ray",

@@ -15,37 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from activevision.envs import EnvConfig
-from activevision.experiments.policies import HeadPolicy
-
-#: Method names :func:`make_policy` knows (``learned`` needs a run directory).
-METHODS = ("learned", "shipped", "entropy_jump", "entropy_steps", "oracle", "scan", "random")
-#: Order of the local ``activevision compare`` (learned first when there is a run).
-DEFAULT_ORDER = ("learned", "entropy_jump", "entropy_steps", "oracle", "scan", "random")
-
-
-def make_policy(
-    name: str, error: float, config: EnvConfig, run_dir: str | Path | None = None
-) -> HeadPolicy:
-    """A fresh policy of method ``name`` at localisation error ``error`` (as the CLI's)."""
-    from activevision.experiments import policies as p
-
-    if name == "learned":
-        if run_dir is None:
-            raise ValueError("the learned policy needs a run directory (--run runs/NAME)")
-        return p.LearnedPolicy.from_run(run_dir)
-    if name == "shipped":
-        from activevision.runtime import pretrained_policy_path
-
-        return p.OnnxPolicy(pretrained_policy_path())
-    if name in ("entropy_jump", "entropy_steps"):
-        return p.EntropyPolicy(error, jump=name == "entropy_jump", config=config)
-    if name == "oracle":
-        return p.OraclePolicy(config)
-    if name == "scan":
-        return p.ScanPolicy(config=config)
-    if name == "random":
-        return p.RandomPolicy()
-    raise ValueError(f"unknown method {name!r}; choose from {sorted(METHODS)}")
+from activevision.experiments.policies import DEFAULT_ORDER, METHODS, make_policy
 
 
 def evaluate_chunk(
