@@ -31,7 +31,9 @@ def default_methods(
     config: EnvConfig, learned: HeadPolicy | None = None
 ) -> dict[str, MethodFactory]:
     """Every method as a factory of the error level; ``learned`` first when given."""
-    methods: dict[str, MethodFactory] = {"learned": lambda e: learned} if learned is not None else {}
+    methods: dict[str, MethodFactory] = {}
+    if learned is not None:
+        methods["learned"] = lambda e: learned
     for name in DEFAULT_ORDER[1:]:
         methods[name] = lambda e, name=name: make_policy(name, e, config)
     return methods
