@@ -354,8 +354,18 @@ def candidate_footprints(
     return footprint_polygon(poses, grid.pans, grid.tilts, cam, max_distance, points_per_side)
 
 
+@dataclass(frozen=True)
+class LocalisationConfig:
+    """What the environment's goal search and the entropy baseline share: the candidate grid
+    and the UKF (whose ``initial_cov`` is the belief at an episode start)."""
+
+    grid: ViewpointGrid = DEFAULT_GRID  #: 10 x 4 candidates (paper)
+    ukf: UKFConfig = DEFAULT_UKF  #: sensor model and start belief
+
+
 __all__ = [
     "DEFAULT_GRID",
+    "LocalisationConfig",
     "NotPositiveDefiniteError",
     "ViewpointBatch",
     "ViewpointGrid",
@@ -367,12 +377,3 @@ __all__ = [
     "candidate_footprints",
     "choose_goal",
 ]
-
-
-@dataclass(frozen=True)
-class LocalisationConfig:
-    """What the environment's goal search and the entropy baseline share: the candidate grid
-    and the UKF (whose ``initial_cov`` is the belief at an episode start)."""
-
-    grid: ViewpointGrid = DEFAULT_GRID  #: 10 x 4 candidates (paper)
-    ukf: UKFConfig = DEFAULT_UKF  #: sensor model and start belief

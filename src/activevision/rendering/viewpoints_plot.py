@@ -12,9 +12,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Polygon
 
-from activevision.geometry import footprint_polygon
 from activevision.io import atomic_path
-from activevision.localisation import ViewpointStatus, best_viewpoint
+from activevision.localisation import ViewpointStatus, best_viewpoint, candidate_footprints
 from activevision.rendering.topview import draw_field, draw_landmarks, draw_robot
 
 
@@ -32,12 +31,9 @@ def plot_viewpoint_search(sim, i: int, out_png: str | Path, max_distance: float 
         ukf=loc.ukf,
         ball_radius=cfg.field.ball_radius,
     )
-    pans, tilts = result.grid.pans, result.grid.tilts
     entropies = np.asarray(result.entropies).reshape(-1)
     shows_ball = np.asarray(result.ball_visible).reshape(-1)
-    polys = footprint_polygon(
-        np.repeat(pose[None], len(pans), 0), pans, tilts, cfg.camera, max_distance
-    )
+    polys = candidate_footprints(pose, loc.grid, cfg.camera, max_distance)
 
     fig, ax = plt.subplots(figsize=(8, 5.6))
     draw_field(ax, cfg.field)
@@ -73,7 +69,7 @@ def plot_viewpoint_search(sim, i: int, out_png: str | Path, max_distance: float 
         else "no viewpoint shows the ball"
     )
     ax.set_title(
-        f"{len(pans)} candidate viewpoints (hatched: ball not in view); {status}", fontsize=10
+        f"{len(polys)} candidate viewpoints (hatched: ball not in view); {status}", fontsize=10
     )
     fig.tight_layout()
     with atomic_path(out_png) as tmp:

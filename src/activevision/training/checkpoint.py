@@ -31,6 +31,8 @@ import torch
 from safetensors import SafetensorError
 from safetensors.torch import load_file, safe_open, save_file
 
+from activevision.io import fsync_path
+
 CHECKPOINTS_DIR = "checkpoints"
 MANIFEST = "manifest.json"
 _PREFIX = "step_"
@@ -84,7 +86,7 @@ def write_checkpoint(
         if final.exists():  # the same step saved again: replace it only now that tmp is whole
             shutil.rmtree(final)
         os.replace(tmp, final)
-        _fsync_path(directory)
+        fsync_path(directory)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -165,15 +167,7 @@ def _file_digest(path: Path) -> dict[str, Any]:
     return {"bytes": path.stat().st_size, "sha256": sha.hexdigest()}
 
 
-def _fsync_path(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
 def _fsync_dir_files(directory: Path) -> None:
     for file in directory.iterdir():
-        _fsync_path(file)
-    _fsync_path(directory)
+        fsync_path(file)
+    fsync_path(directory)
