@@ -6,6 +6,7 @@ import activevision.envs  # noqa: F401  (registers ActiveVision-v0)
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.envs.actions import action_table
 from activevision.envs.reward import approach_reward
+from activevision.envs.starts import draw_starts
 
 
 def rollout(env, seed, actions):
@@ -128,3 +129,19 @@ def test_rgb_render_shows_image_and_top_view():
     env.reset(seed=0)
     frame = env.render()
     assert frame.ndim == 3 and frame.shape[2] == 3 and frame.shape[1] > frame.shape[0]
+
+
+def test_batched_starts_use_each_generator_as_alone():
+    """Starts drawn for several episodes at once equal each episode's starts drawn alone:
+    the vector env's equivalence to single envs rests on it."""
+    cfg = EnvConfig(localisation_error=0.4)
+    together = draw_starts([np.random.default_rng(s) for s in range(20)], cfg)
+    for s in range(20):
+        alone = draw_starts([np.random.default_rng(s)], cfg)
+        for key, value in alone.items():
+            assert np.array_equal(value[0], together[key][s]), key
+    # every start has the ball 1-3 m away, on the field, and believed = true pose + error
+    dist = np.hypot(*(together["ball"] - together["pose"][:, :2]).T)
+    assert np.all((dist >= 1.0) & (dist <= 3.0))
+    shift = np.hypot(*(together["believed_pose"] - together["pose"])[:, :2].T)
+    assert np.allclose(shift, 0.4)

@@ -2,6 +2,7 @@
 
 import math
 
+import numba
 import numpy as np
 import pytest
 
@@ -15,8 +16,11 @@ from activevision.localisation import (
     candidate_footprints,
     entropy,
     hx_range_bearing,
+    kernels,
     ukf_update_sequential,
 )
+from activevision.localisation.sigma_points import merwe_weights
+from activevision.localisation.viewpoint import DEFAULT_GRID, _noise_table
 
 COV0 = DEFAULT_UKF.initial_cov
 
@@ -62,6 +66,31 @@ def test_batched_equals_single(landmarks, cam, random_start):
         assert np.array_equal(batch.entropies[i], single.entropies)
         assert batch[i].index == single.index == batch.index[i]
         assert batch[i].landmark_ids == single.landmark_ids
+
+
+def test_parallel_search_equals_serial(landmarks, cam, random_start):
+    """The threaded search splits (start, view) pairs into blocks; it must change nothing,
+    with any number of blocks (more blocks than pairs included)."""
+    rng = np.random.default_rng(3)
+    starts = [random_start(rng) for _ in range(5)]
+    means = np.array([m for m, _ in starts])
+    balls = np.array([b for _, b in starts])
+    serial = best_viewpoints(means, COV0, balls, landmarks, cam)
+    threaded = best_viewpoints(means, COV0, balls, landmarks, cam, parallel=True)
+    assert numba.get_num_threads() == 1 or np.array_equal(serial.entropies, threaded.entropies)
+    ukf = DEFAULT_UKF
+    args = (
+        means, np.broadcast_to(COV0, (5, 3, 3)).copy(), balls, landmarks.segments,
+        landmarks.max_distance, landmarks.types, _noise_table(ukf), DEFAULT_GRID.pans,
+        DEFAULT_GRID.tilts, cam.focal, float(cam.width), float(cam.height), cam.camera_height,
+        0.07, *merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa), ukf.n + ukf.lambda_,
+    )
+    reference = kernels.search_kernel(*args)
+    assert np.array_equal(reference[0], serial.entropies)
+    for n_blocks in (1, 3, 7, 1000):
+        got = kernels.search_kernel_parallel(*args, n_blocks)
+        for a, b in zip(reference, got, strict=True):
+            assert np.array_equal(a, b)
 
 
 def test_goal_shows_the_ball_and_has_least_entropy(landmarks, cam, random_start):

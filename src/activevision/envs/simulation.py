@@ -8,76 +8,16 @@ its own generator; nothing here touches global random state.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from activevision.envs.actions import action_table
 from activevision.envs.config import EnvConfig
 from activevision.envs.reward import approach_reward, viewpoint_distance_deg
+from activevision.envs.starts import StartGenerationError, draw_starts
 from activevision.geometry import clip_head, field_landmarks
 from activevision.geometry.kernels import ball_visible_mask, visible_mask
 from activevision.localisation import LocalisationConfig, best_viewpoints
 from activevision.rendering import Renderer
-
-
-@dataclass(frozen=True)
-class EpisodeStart:
-    """One episode's initial state."""
-
-    pose: np.ndarray  #: (3,) true robot pose
-    believed_pose: np.ndarray  #: (3,) pose the goal search believes
-    pan: float
-    tilt: float
-    ball: np.ndarray  #: (2,)
-
-
-class StartGenerationError(RuntimeError):
-    """No valid episode start was found within ``EnvConfig.max_start_draws`` draws."""
-
-
-def corrupt_pose(pose, error: float, rng: np.random.Generator) -> np.ndarray:
-    """The release's localisation error: the position moved ``error`` m in a random
-    direction, the heading turned by ``+-error`` rad (wrapped to [-pi, pi))."""
-    direction, flip = rng.random(2)
-    direction = np.pi * (2 * direction - 1)
-    sign = 1.0 if flip < 0.5 else -1.0
-    out = np.asarray(pose, float) + error * np.array([np.cos(direction), np.sin(direction), sign])
-    out[2] = (out[2] + np.pi) % (2 * np.pi) - np.pi
-    return out
-
-
-def draw_start_candidate(rng: np.random.Generator, cfg: EnvConfig) -> EpisodeStart:
-    """Robot pose, head pose and the ball, as in the release: the ball lies 1-3 m from the
-    robot, on the field and inside the current view. The believed pose is the true one
-    corrupted by ``localisation_error`` (:func:`corrupt_pose`)."""
-    cam, spec = cfg.camera, cfg.field
-    tilt_lo, tilt_hi = np.radians(cfg.start_tilt_range_deg)
-    # x, y, theta, pan, tilt drawn in one call (fewer generator round trips per start)
-    low = np.array([cfg.robot_x_range[0], cfg.robot_y_range[0], -np.pi, cam.pan_min, tilt_lo])
-    high = np.array([cfg.robot_x_range[1], cfg.robot_y_range[1], np.pi, cam.pan_max, tilt_hi])
-    d_lo, d_hi = cfg.ball_distance_range
-    r = spec.ball_radius
-    n = 16  # ball candidates per draw, checked at once; the first valid one wins
-    for _ in range(cfg.max_start_draws):
-        x, y, theta, pan, tilt = rng.uniform(low, high)
-        u = rng.random((2, n))
-        dist = d_lo + (d_hi - d_lo) * u[0]
-        bearing = theta + pan + cam.hfov * (u[1] - 0.5)
-        balls = np.stack([x + dist * np.cos(bearing), y + dist * np.sin(bearing)], 1)
-        on_field = (np.abs(balls[:, 0]) <= spec.half_length - r) & (
-            np.abs(balls[:, 1]) <= spec.half_width - r
-        )
-        pose = np.array([x, y, theta])
-        seen = ball_visible_mask(balls, np.repeat(pose[None], n, 0), pan, tilt, cam, r)
-        ok = np.flatnonzero(on_field & seen)
-        if len(ok):
-            believed = corrupt_pose(pose, cfg.localisation_error, rng)
-            return EpisodeStart(pose, believed, float(pan), float(tilt), balls[ok[0]])
-    raise StartGenerationError(
-        f"no start with the ball in view after {cfg.max_start_draws} draws; check "
-        "EnvConfig ranges against the field and camera"
-    )
 
 
 class EpisodeBatch:
@@ -115,19 +55,17 @@ class EpisodeBatch:
         ``rngs[j]``. Starts are redrawn while no viewpoint shows the ball, the goal view shows
         no landmark, or the start already counts as success."""
         todo = np.asarray(indices, dtype=np.int64)
-        pending = list(range(len(todo)))
+        pending = np.arange(len(todo))
         for _ in range(self.cfg.max_start_draws):
-            if not pending:
+            if not len(pending):
                 return
-            starts = [draw_start_candidate(rngs[j], self.cfg) for j in pending]
             slots = todo[pending]
-            self.pose[slots] = [s.pose for s in starts]
-            self.believed_pose[slots] = [s.believed_pose for s in starts]
-            self.pan[slots] = [s.pan for s in starts]
-            self.tilt[slots] = [s.tilt for s in starts]
-            self.ball[slots] = [s.ball for s in starts]
-            ok = self._search_goals(slots)
-            pending = [j for j, good in zip(pending, ok, strict=True) if not good]
+            starts = draw_starts([rngs[j] for j in pending], self.cfg)
+            self.pose[slots] = starts["pose"]
+            self.believed_pose[slots] = starts["believed_pose"]
+            self.head[slots] = starts["head"]
+            self.ball[slots] = starts["ball"]
+            pending = pending[~self._search_goals(slots)]
         raise StartGenerationError(f"no valid episode start after {self.cfg.max_start_draws} tries")
 
     def _search_goals(self, slots: np.ndarray) -> np.ndarray:
@@ -142,6 +80,7 @@ class EpisodeBatch:
             grid=loc.grid,
             ukf=loc.ukf,
             ball_radius=cfg.field.ball_radius,
+            parallel=self.renderer.parallel and self.n > 1,
         )
         found = result.ok
         self.goal_pan[slots] = np.where(found, result.pan, 0.0)

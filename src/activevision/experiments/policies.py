@@ -15,7 +15,7 @@ import numpy as np
 
 from activevision.envs.actions import action_table
 from activevision.envs.config import EnvConfig
-from activevision.envs.simulation import corrupt_pose
+from activevision.envs.starts import corrupt_pose
 from activevision.geometry import field_landmarks
 from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from activevision.geometry.kernels import (
     ball_in_image,
@@ -163,6 +163,185 @@ def ukf_update_rb(x, P, z0, z1, ax, ay, bx, by, var_r, var_b, Wm, Wc, n_lambda, 
 
 
 @njit(cache=True)
+def plan_start(mx, my, mth, segments, max_distance, types, noise_table, zs, var_r, var_b,
+               in_range, r_lo, r_hi):
+    """Planning for one believed pose: the expected detection ``z = h(mu)`` of every
+    landmark, its noise and range interval, written into the given rows; returns the
+    landmark order (closest first, ties by id)."""
+    for k in range(segments.shape[0]):
+        r, b = expected_rb(
+            mx,
+            my,
+            mth,
+            segments[k, 0, 0],
+            segments[k, 0, 1],
+            segments[k, 1, 0],
+            segments[k, 1, 1],
+        )
+        zs[k, 0], zs[k, 1] = r, b
+        in_range[k], r_lo[k], r_hi[k] = range_interval(
+            segments[k, 0, 0],
+            segments[k, 0, 1],
+            segments[k, 1, 0],
+            segments[k, 1, 1],
+            mx,
+            my,
+            max_distance[k],
+        )
+        t = types[k]
+        sr = noise_table[t, 0] + noise_table[t, 1] * r
+        var_r[k] = sr * sr
+        var_b[k] = noise_table[t, 2] * noise_table[t, 2]
+    return np.argsort(zs[:, 0], kind="mergesort")
+
+
+@njit(cache=True)
+def plan_starts(means, segments, max_distance, types, noise_table):
+    """:func:`plan_start` for every start: ``(zs (N, K, 2), var_r, var_b, in_range, r_lo,
+    r_hi, order)``, each (N, K) but ``zs``."""
+    n_starts, n_lm = means.shape[0], segments.shape[0]
+    zs = np.empty((n_starts, n_lm, 2))
+    var_r = np.empty((n_starts, n_lm))
+    var_b = np.empty((n_starts, n_lm))
+    in_range = np.empty((n_starts, n_lm), dtype=np.bool_)
+    r_lo = np.empty((n_starts, n_lm))
+    r_hi = np.empty((n_starts, n_lm))
+    order = np.empty((n_starts, n_lm), dtype=np.int64)
+    for s in range(n_starts):
+        order[s] = plan_start(
+            means[s, 0],
+            means[s, 1],
+            means[s, 2],
+            segments,
+            max_distance,
+            types,
+            noise_table,
+            zs[s],
+            var_r[s],
+            var_b[s],
+            in_range[s],
+            r_lo[s],
+            r_hi[s],
+        )
+    return zs, var_r, var_b, in_range, r_lo, r_hi, order
+
+
+@njit(cache=True)
+def search_block(
+    block,
+    n_blocks,
+    means,
+    covs,
+    balls,
+    segments,
+    pans,
+    tilts,
+    focal,
+    width,
+    height,
+    cam_height,
+    ball_radius,
+    Wm,
+    Wc,
+    n_lambda,
+    plan,
+    entropies,
+    ball_vis,
+    visible,
+    post,
+    errors,
+):
+    """Block ``block`` of ``n_blocks`` contiguous blocks of the N x V (start, view) pairs:
+    ball test, visible landmarks and the sequential UKF updates of each pair (Algorithm 1,
+    lines 3-8), written into the output arrays. Pairs are independent, so blocks can run on
+    different threads."""
+    zs, var_r, var_b, in_range, r_lo, r_hi, order = plan
+    n_views, n_lm = pans.shape[0], segments.shape[0]
+    n_items = means.shape[0] * n_views
+    rot = np.empty((3, 3))
+    planes = np.empty((4, 3))
+    L = np.empty((3, 3))
+    sig = np.empty((7, 3))
+    hz = np.empty((7, 2))
+    x = np.empty(3)
+    for item in range(block * n_items // n_blocks, (block + 1) * n_items // n_blocks):
+        s = item // n_views
+        v = item - s * n_views
+        mx, my, mth = means[s, 0], means[s, 1], means[s, 2]
+        camera_rotation(mth + pans[v], tilts[v], rot)
+        image_halfplanes(mx, my, rot, focal, width, height, cam_height, planes)
+        ball_vis[s, v] = ball_in_image(
+            balls[s, 0],
+            balls[s, 1],
+            ball_radius,
+            mx,
+            my,
+            rot,
+            focal,
+            width,
+            height,
+            cam_height,
+        )
+        P = post[s, v]
+        P[:, :] = covs[s]
+        x[0], x[1], x[2] = mx, my, mth
+        ok = chol3(P, L)
+        for j in range(n_lm):
+            k = order[s, j]
+            if not ok:
+                break
+            if not (
+                in_range[s, k]
+                and clip_visible(
+                    segments[k, 0, 0],
+                    segments[k, 0, 1],
+                    segments[k, 1, 0],
+                    segments[k, 1, 1],
+                    planes,
+                    r_lo[s, k],
+                    r_hi[s, k],
+                )
+            ):
+                continue
+            visible[s, v, k] = True
+            ok = ukf_update_rb(
+                x,
+                P,
+                zs[s, k, 0],
+                zs[s, k, 1],
+                segments[k, 0, 0],
+                segments[k, 0, 1],
+                segments[k, 1, 0],
+                segments[k, 1, 1],
+                var_r[s, k],
+                var_b[s, k],
+                Wm,
+                Wc,
+                n_lambda,
+                L,
+                sig,
+                hz,
+            )
+        if ok:
+            entropies[s, v] = 0.5 * (3 * LOG_2PIE) + math.log(L[0, 0] * L[1, 1] * L[2, 2])
+        else:
+            entropies[s, v] = np.nan
+            errors[s, v] = NOT_PD
+
+
+@njit(cache=True)
+def search_outputs(n_starts, n_views, n_lm):
+    """Empty ``(entropies, ball_visible, visible, posteriors, errors)`` of a search."""
+    return (
+        np.empty((n_starts, n_views)),
+        np.zeros((n_starts, n_views), dtype=np.bool_),
+        np.zeros((n_starts, n_views, n_lm), dtype=np.bool_),
+        np.empty((n_starts, n_views, 3, 3)),
+        np.zeros((n_starts, n_views), dtype=np.int8),
+    )
+
+
+@njit(cache=True)
 def search_kernel(
     means,
     covs,
@@ -182,116 +361,46 @@ def search_kernel(
     Wc,
     n_lambda,
 ):
-    """Algorithm 1 for N starts and V candidate views.
+    """Algorithm 1 for N starts and V candidate views, on the calling thread.
 
     Returns ``(entropies (N, V), ball_visible (N, V), visible (N, V, K), posterior covariances
     (N, V, 3, 3), errors (N, V))``; ``errors`` is :data:`NOT_PD` where a covariance lost
     positive definiteness (the caller raises).
     """
-    n_starts, n_views, n_lm = means.shape[0], pans.shape[0], segments.shape[0]
-    entropies = np.empty((n_starts, n_views))
-    ball_vis = np.zeros((n_starts, n_views), dtype=np.bool_)
-    visible = np.zeros((n_starts, n_views, n_lm), dtype=np.bool_)
-    post = np.empty((n_starts, n_views, 3, 3))
-    errors = np.zeros((n_starts, n_views), dtype=np.int8)
-    rot = np.empty((3, 3))
-    planes = np.empty((4, 3))
-    L = np.empty((3, 3))
-    sig = np.empty((7, 3))
-    hz = np.empty((7, 2))
-    x = np.empty(3)
-    zs = np.empty((n_lm, 2))
-    var_r = np.empty(n_lm)
-    var_b = np.empty(n_lm)
-    in_range = np.empty(n_lm, dtype=np.bool_)
-    r_lo = np.empty(n_lm)
-    r_hi = np.empty(n_lm)
-    for s in range(n_starts):
-        mx, my, mth = means[s, 0], means[s, 1], means[s, 2]
-        # Planning: the expected detection z = h(mu) and its noise, once per start.
-        for k in range(n_lm):
-            r, b = expected_rb(
-                mx,
-                my,
-                mth,
-                segments[k, 0, 0],
-                segments[k, 0, 1],
-                segments[k, 1, 0],
-                segments[k, 1, 1],
-            )
-            zs[k, 0], zs[k, 1] = r, b
-            in_range[k], r_lo[k], r_hi[k] = range_interval(
-                segments[k, 0, 0],
-                segments[k, 0, 1],
-                segments[k, 1, 0],
-                segments[k, 1, 1],
-                mx,
-                my,
-                max_distance[k],
-            )
-            t = types[k]
-            sr = noise_table[t, 0] + noise_table[t, 1] * r
-            var_r[k] = sr * sr
-            var_b[k] = noise_table[t, 2] * noise_table[t, 2]
-        order = np.argsort(zs[:, 0], kind="mergesort")  # closest first, ties by id
-        for v in range(n_views):
-            camera_rotation(mth + pans[v], tilts[v], rot)
-            image_halfplanes(mx, my, rot, focal, width, height, cam_height, planes)
-            ball_vis[s, v] = ball_in_image(
-                balls[s, 0],
-                balls[s, 1],
-                ball_radius,
-                mx,
-                my,
-                rot,
-                focal,
-                width,
-                height,
-                cam_height,
-            )
-            P = post[s, v]
-            P[:, :] = covs[s]
-            x[0], x[1], x[2] = mx, my, mth
-            ok = chol3(P, L)
-            for j in range(n_lm):
-                k = order[j]
-                if not ok:
-                    break
-                if not (
-                    in_range[k]
-                    and clip_visible(
-                        segments[k, 0, 0],
-                        segments[k, 0, 1],
-                        segments[k, 1, 0],
-                        segments[k, 1, 1],
-                        planes,
-                        r_lo[k],
-                        r_hi[k],
-                    )
-                ):
-                    continue
-                visible[s, v, k] = True
-                ok = ukf_update_rb(
-                    x,
-                    P,
-                    zs[k, 0],
-                    zs[k, 1],
-                    segments[k, 0, 0],
-                    segments[k, 0, 1],
-                    segments[k, 1, 0],
-                    segments[k, 1, 1],
-                    var_r[k],
-                    var_b[k],
-                    Wm,
-                    Wc,
-                    n_lambda,
-                    L,
-                    sig,
-                    hz,
-                )
-            if ok:
-                entropies[s, v] = 0.5 * (3 * LOG_2PIE) + math.log(L[0, 0] * L[1, 1] * L[2, 2])
-            else:
-                entropies[s, v] = np.nan
-                errors[s, v] = NOT_PD
-    return entropies, ball_vis, visible, post, errors
+    out = search_outputs(means.shape[0], pans.shape[0], segments.shape[0])
+    plan = plan_starts(means, segments, max_distance, types, noise_table)
+    search_block(0, 1, means, covs, balls, segments, pans, tilts, focal, width, height,
+                 cam_height, ball_radius, Wm, Wc, n_lambda, plan, *out)
+    return out
+
+
+@njit(cache=True, parallel=True)
+def search_kernel_parallel(
+    means,
+    covs,
+    balls,
+    segments,
+    max_distance,
+    types,
+    noise_table,
+    pans,
+    tilts,
+    focal,
+    width,
+    height,
+    cam_height,
+    ball_radius,
+    Wm,
+    Wc,
+    n_lambda,
+    n_blocks,
+):
+    """:func:`search_kernel` with the (start, view) pairs split into ``n_blocks`` blocks
+    spread over the numba threads (identical results)."""
+    out = search_outputs(means.shape[0], pans.shape[0], segments.shape[0])
+    plan = plan_starts(means, segments, max_distance, types, noise_table)
+    n_blocks = max(1, min(n_blocks, means.shape[0] * pans.shape[0]))
+    for block in prange(n_blocks):
+        search_block(block, n_blocks, means, covs, balls, segments, pans, tilts, focal, width,
+                     height, cam_height, ball_radius, Wm, Wc, n_lambda, plan, *out)
+    return out

@@ -21,10 +21,12 @@ compiled with numba (:mod:`activevision.localisation.kernels`) and agree with it
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from dataclasses import dataclass
 from functools import cached_property
 
+import numba
 import numpy as np
 
 from activevision.geometry.camera import CameraConfig, footprint_polygon
@@ -192,7 +194,7 @@ def _noise_table(ukf: UKFConfig) -> np.ndarray:
     return table
 
 
-def _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius):
+def _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel=False):
     """Validate and run the compiled search: ``(entropies, ball_visible, visible, post)``."""
     means = np.ascontiguousarray(np.atleast_2d(means), dtype=np.float64)
     n = len(means)
@@ -201,7 +203,13 @@ def _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius):
     if np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
         raise ValueError("best viewpoint search: belief covariances must be symmetric")
     Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
-    H, ball_vis, visible, post, errors = kernels.search_kernel(
+    threads = numba.get_num_threads()
+    if parallel and n > 1 and threads > 1:
+        # a few blocks per thread evens out views that see many landmarks
+        kernel = functools.partial(kernels.search_kernel_parallel, n_blocks=4 * threads)
+    else:
+        kernel = kernels.search_kernel
+    H, ball_vis, visible, post, errors = kernel(
         means,
         covs,
         balls,
@@ -238,6 +246,7 @@ def best_viewpoints(
     grid: ViewpointGrid = DEFAULT_GRID,
     ukf: UKFConfig = DEFAULT_UKF,
     ball_radius: float = 0.07,
+    parallel: bool = False,
 ) -> ViewpointBatch:
     """Algorithm 1 for N beliefs at once (compiled), e.g. every episode start of a
     vectorised environment.
@@ -245,8 +254,13 @@ def best_viewpoints(
     Args:
         means: (N, 3) believed poses ``(x, y, theta)``; covs: (N, 3, 3), or (3, 3) shared;
         balls: (N, 2) ball positions on the ground (or (2,) shared).
+        parallel: spread the N x V (start, view) pairs over the numba threads (same
+            results). Leave off when other busy threads share the cores (e.g. a trainer's):
+            a parallel call waits until every thread is scheduled.
     """
-    H, ball_vis, visible, post = _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius)
+    H, ball_vis, visible, post = _search(
+        means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel
+    )
     ok, index = choose_goal(H, ball_vis)
     pick = np.maximum(index, 0)
     return ViewpointBatch(

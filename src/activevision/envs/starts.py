@@ -1,0 +1,111 @@
+"""Episode starts, drawn for many episodes at once, each from its own generator.
+
+A start candidate is a robot pose, a head pose and 16 ball candidates 1-3 m away inside the
+horizontal field of view; the first ball candidate that lies on the field and projects into
+the image wins (the release's start, with fewer generator round trips). Per candidate,
+every episode draws :data:`CANDIDATE_UNIFORMS` uniforms from *its own* generator in one
+call, and one compiled kernel checks the candidates of all episodes together, so a batch
+of episodes consumes each generator exactly as one episode alone would.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit
+
+from activevision.envs.config import EnvConfig
+from activevision.geometry.kernels import ball_in_image, camera_rotation
+
+BALL_CANDIDATES = 16  #: ball positions tried per start candidate
+#: uniforms per start candidate: x, y, theta, pan, tilt, then distances and bearings
+CANDIDATE_UNIFORMS = 5 + 2 * BALL_CANDIDATES
+
+
+class StartGenerationError(RuntimeError):
+    """No valid episode start was found within ``EnvConfig.max_start_draws`` draws."""
+
+
+def corrupt_pose(pose, error: float, rng: np.random.Generator) -> np.ndarray:
+    """The release's localisation error: the position moved ``error`` m in a random
+    direction, the heading turned by ``+-error`` rad (wrapped to [-pi, pi))."""
+    direction, flip = rng.random(2)
+    direction = np.pi * (2 * direction - 1)
+    sign = 1.0 if flip < 0.5 else -1.0
+    out = np.asarray(pose, float) + error * np.array([np.cos(direction), np.sin(direction), sign])
+    out[2] = (out[2] + np.pi) % (2 * np.pi) - np.pi
+    return out
+
+
+@njit(cache=True)
+def candidate_kernel(
+    u, low, high, d_lo, d_hi, hfov, x_lim, y_lim, radius, focal, width, height, cam_height
+):
+    """Start candidates from uniforms ``u`` (P, CANDIDATE_UNIFORMS).
+
+    Returns ``(found (P,), starts (P, 7))``, rows ``(x, y, theta, pan, tilt, ball_x,
+    ball_y)``: the pose and head are ``low + (high - low) * u[:5]``; ball candidate ``j``
+    lies ``d_lo + (d_hi - d_lo) * u[5 + j]`` away at bearing ``theta + pan + hfov *
+    (u[5 + n + j] - 0.5)``; the first one with ``|x| <= x_lim``, ``|y| <= y_lim`` and its
+    centre in the image is kept.
+    """
+    p, n = u.shape[0], (u.shape[1] - 5) // 2
+    found = np.zeros(p, dtype=np.bool_)
+    starts = np.zeros((p, 7))
+    rot = np.empty((3, 3))
+    for i in range(p):
+        for k in range(5):
+            starts[i, k] = low[k] + (high[k] - low[k]) * u[i, k]
+        x, y, theta, pan, tilt = starts[i, :5]
+        camera_rotation(theta + pan, tilt, rot)
+        for j in range(n):
+            dist = d_lo + (d_hi - d_lo) * u[i, 5 + j]
+            bearing = (theta + pan) + hfov * (u[i, 5 + n + j] - 0.5)
+            bx = x + dist * math.cos(bearing)
+            by = y + dist * math.sin(bearing)
+            if abs(bx) <= x_lim and abs(by) <= y_lim and ball_in_image(
+                bx, by, radius, x, y, rot, focal, width, height, cam_height
+            ):
+                found[i] = True
+                starts[i, 5], starts[i, 6] = bx, by
+                break
+    return found, starts
+
+
+def draw_starts(rngs: Sequence[np.random.Generator], cfg: EnvConfig) -> dict[str, np.ndarray]:
+    """One start per generator: ``{"pose", "believed_pose", "head", "ball"}`` arrays
+    ((P, 3), (P, 3), (P, 2) pan/tilt, (P, 2)). Generator ``j`` is used for start ``j`` only:
+    candidates until one has the ball in view, then the localisation error of the
+    believed pose (:func:`corrupt_pose`)."""
+    cam, spec = cfg.camera, cfg.field
+    tilt_lo, tilt_hi = np.radians(cfg.start_tilt_range_deg)
+    low = np.array([cfg.robot_x_range[0], cfg.robot_y_range[0], -np.pi, cam.pan_min, tilt_lo])
+    high = np.array([cfg.robot_x_range[1], cfg.robot_y_range[1], np.pi, cam.pan_max, tilt_hi])
+    r = spec.ball_radius
+    starts = np.zeros((len(rngs), 7))
+    believed = np.zeros((len(rngs), 3))
+    pending = np.arange(len(rngs))
+    for _ in range(cfg.max_start_draws):
+        if not len(pending):
+            return {
+                "pose": starts[:, :3],
+                "believed_pose": believed,
+                "head": starts[:, 3:5],
+                "ball": starts[:, 5:],
+            }
+        u = np.stack([rngs[j].random(CANDIDATE_UNIFORMS) for j in pending])
+        found, candidates = candidate_kernel(
+            u, low, high, *cfg.ball_distance_range, cam.hfov, spec.half_length - r,
+            spec.half_width - r, r, cam.focal, float(cam.width), float(cam.height),
+            cam.camera_height,
+        )
+        for j, row in zip(pending[found], candidates[found], strict=True):
+            starts[j] = row
+            believed[j] = corrupt_pose(row[:3], cfg.localisation_error, rngs[j])
+        pending = pending[~found]
+    raise StartGenerationError(
+        f"no start with the ball in view after {cfg.max_start_draws} draws; check "
+        "EnvConfig ranges against the field and camera"
+    )
