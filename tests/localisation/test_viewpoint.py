@@ -83,7 +83,7 @@ def test_parallel_search_equals_serial(landmarks, cam, random_start):
         means, np.broadcast_to(COV0, (5, 3, 3)).copy(), balls, landmarks.segments,
         landmarks.max_distance, landmarks.types, _noise_table(ukf), DEFAULT_GRID.pans,
         DEFAULT_GRID.tilts, cam.focal, float(cam.width), float(cam.height), cam.camera_height,
-        0.07, *merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa), ukf.n + ukf.lambda_,
+        0.07, *merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa), ukf.n + ukf.lambda_, False,
     )
     reference = kernels.search_kernel(*args)
     assert np.array_equal(reference[0], serial.entropies)
@@ -91,6 +91,22 @@ def test_parallel_search_equals_serial(landmarks, cam, random_start):
         got = kernels.search_kernel_parallel(*args, n_blocks)
         for a, b in zip(reference, got, strict=True):
             assert np.array_equal(a, b)
+
+
+def test_ball_views_only_gives_the_same_goal(landmarks, cam, random_start):
+    rng = np.random.default_rng(4)
+    starts = [random_start(rng) for _ in range(30)]
+    means = np.array([m for m, _ in starts])
+    balls = np.array([b for _, b in starts])
+    full = best_viewpoints(means, COV0, balls, landmarks, cam)
+    fast = best_viewpoints(means, COV0, balls, landmarks, cam, ball_views_only=True)
+    assert np.array_equal(full.index, fast.index)
+    assert np.array_equal(full.entropy, fast.entropy, equal_nan=True)
+    shown = full.ball_visible
+    assert np.array_equal(fast.ball_visible, shown)
+    assert np.array_equal(full.entropies[shown], fast.entropies[shown])
+    assert np.isnan(fast.entropies[~shown]).all() and not fast.visible[~shown].any()
+    assert 0 < shown.mean() < 1  # the test sees both kinds of candidates
 
 
 def test_goal_shows_the_ball_and_has_least_entropy(landmarks, cam, random_start):

@@ -81,6 +81,7 @@ class EpisodeBatch:
             ukf=loc.ukf,
             ball_radius=cfg.field.ball_radius,
             parallel=self.renderer.parallel and self.n > 1,
+            ball_views_only=True,
         )
         found = result.ok
         self.goal_pan[slots] = np.where(found, result.pan, 0.0)

@@ -32,11 +32,15 @@ def corrupt_pose(pose, error: float, rng: np.random.Generator) -> np.ndarray:
     """The release's localisation error: the position moved ``error`` m in a random
     direction, the heading turned by ``+-error`` rad (wrapped to [-pi, pi))."""
     direction, flip = rng.random(2)
-    direction = np.pi * (2 * direction - 1)
+    direction = math.pi * (2 * direction - 1)
     sign = 1.0 if flip < 0.5 else -1.0
-    out = np.asarray(pose, float) + error * np.array([np.cos(direction), np.sin(direction), sign])
-    out[2] = (out[2] + np.pi) % (2 * np.pi) - np.pi
-    return out
+    x, y, theta = (float(v) for v in pose)
+    heading = theta + error * sign
+    return np.array([
+        x + error * math.cos(direction),
+        y + error * math.sin(direction),
+        (heading + math.pi) % (2 * math.pi) - math.pi,
+    ])
 
 
 @njit(cache=True)

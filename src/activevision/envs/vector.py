@@ -54,6 +54,9 @@ class ActiveVisionVectorEnv(VectorEnv):
         self._frames = np.zeros(self.observation_space.shape, dtype=np.uint8)
         self._needs_reset = np.zeros(self.num_envs, dtype=bool)
         self._all = np.arange(self.num_envs)
+        # Gymnasium's "_key" masks: every sub-environment reports every key, every step.
+        self._every_env = np.ones(self.num_envs, dtype=bool)
+        self._every_env.flags.writeable = False
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
         if seed is None:
@@ -102,6 +105,5 @@ class ActiveVisionVectorEnv(VectorEnv):
         infos: dict[str, Any] = self.sim.info_arrays(self.max_episode_steps)
         infos["desired_mask"] = self.sim.desired.copy()
         infos["observed_mask"] = self.sim.observed.copy()
-        for key in list(infos):
-            infos[f"_{key}"] = np.ones(self.num_envs, dtype=bool)
+        infos.update({f"_{key}": self._every_env for key in list(infos)})
         return infos

@@ -250,11 +250,13 @@ def search_block(
     visible,
     post,
     errors,
+    ball_views_only,
 ):
     """Block ``block`` of ``n_blocks`` contiguous blocks of the N x V (start, view) pairs:
     ball test, visible landmarks and the sequential UKF updates of each pair (Algorithm 1,
     lines 3-8), written into the output arrays. Pairs are independent, so blocks can run on
-    different threads."""
+    different threads. With ``ball_views_only``, pairs whose view misses the ball (never a
+    goal) skip the filter: entropy and posterior NaN, no visible landmarks."""
     zs, var_r, var_b, in_range, r_lo, r_hi, order = plan
     n_views, n_lm = pans.shape[0], segments.shape[0]
     n_items = means.shape[0] * n_views
@@ -283,6 +285,10 @@ def search_block(
             cam_height,
         )
         P = post[s, v]
+        if ball_views_only and not ball_vis[s, v]:
+            entropies[s, v] = np.nan
+            P[:, :] = np.nan
+            continue
         P[:, :] = covs[s]
         x[0], x[1], x[2] = mx, my, mth
         ok = chol3(P, L)
@@ -360,17 +366,18 @@ def search_kernel(
     Wm,
     Wc,
     n_lambda,
+    ball_views_only,
 ):
     """Algorithm 1 for N starts and V candidate views, on the calling thread.
 
     Returns ``(entropies (N, V), ball_visible (N, V), visible (N, V, K), posterior covariances
     (N, V, 3, 3), errors (N, V))``; ``errors`` is :data:`NOT_PD` where a covariance lost
-    positive definiteness (the caller raises).
+    positive definiteness (the caller raises). ``ball_views_only``: see :func:`search_block`.
     """
     out = search_outputs(means.shape[0], pans.shape[0], segments.shape[0])
     plan = plan_starts(means, segments, max_distance, types, noise_table)
     search_block(0, 1, means, covs, balls, segments, pans, tilts, focal, width, height,
-                 cam_height, ball_radius, Wm, Wc, n_lambda, plan, *out)
+                 cam_height, ball_radius, Wm, Wc, n_lambda, plan, *out, ball_views_only)
     return out
 
 
@@ -393,6 +400,7 @@ def search_kernel_parallel(
     Wm,
     Wc,
     n_lambda,
+    ball_views_only,
     n_blocks,
 ):
     """:func:`search_kernel` with the (start, view) pairs split into ``n_blocks`` blocks
@@ -402,5 +410,6 @@ def search_kernel_parallel(
     n_blocks = max(1, min(n_blocks, means.shape[0] * pans.shape[0]))
     for block in prange(n_blocks):
         search_block(block, n_blocks, means, covs, balls, segments, pans, tilts, focal, width,
-                     height, cam_height, ball_radius, Wm, Wc, n_lambda, plan, *out)
+                     height, cam_height, ball_radius, Wm, Wc, n_lambda, plan, *out,
+                     ball_views_only)
     return out

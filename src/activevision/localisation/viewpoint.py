@@ -21,7 +21,6 @@ compiled with numba (:mod:`activevision.localisation.kernels`) and agree with it
 from __future__ import annotations
 
 import enum
-import functools
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -194,7 +193,10 @@ def _noise_table(ukf: UKFConfig) -> np.ndarray:
     return table
 
 
-def _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel=False):
+def _search(
+    means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel=False,
+    ball_views_only=False,
+):
     """Validate and run the compiled search: ``(entropies, ball_visible, visible, post)``."""
     means = np.ascontiguousarray(np.atleast_2d(means), dtype=np.float64)
     n = len(means)
@@ -203,13 +205,7 @@ def _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel
     if np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
         raise ValueError("best viewpoint search: belief covariances must be symmetric")
     Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
-    threads = numba.get_num_threads()
-    if parallel and n > 1 and threads > 1:
-        # a few blocks per thread evens out views that see many landmarks
-        kernel = functools.partial(kernels.search_kernel_parallel, n_blocks=4 * threads)
-    else:
-        kernel = kernels.search_kernel
-    H, ball_vis, visible, post, errors = kernel(
+    args = (
         means,
         covs,
         balls,
@@ -227,7 +223,14 @@ def _search(means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel
         Wm,
         Wc,
         ukf.n + ukf.lambda_,
+        ball_views_only,
     )
+    threads = numba.get_num_threads()
+    if parallel and n > 1 and threads > 1:
+        # a few blocks per thread evens out views that see many landmarks
+        H, ball_vis, visible, post, errors = kernels.search_kernel_parallel(*args, 4 * threads)
+    else:
+        H, ball_vis, visible, post, errors = kernels.search_kernel(*args)
     if errors.any():
         s, v = np.argwhere(errors)[0]
         raise NotPositiveDefiniteError(
@@ -247,6 +250,7 @@ def best_viewpoints(
     ukf: UKFConfig = DEFAULT_UKF,
     ball_radius: float = 0.07,
     parallel: bool = False,
+    ball_views_only: bool = False,
 ) -> ViewpointBatch:
     """Algorithm 1 for N beliefs at once (compiled), e.g. every episode start of a
     vectorised environment.
@@ -257,9 +261,12 @@ def best_viewpoints(
         parallel: spread the N x V (start, view) pairs over the numba threads (same
             results). Leave off when other busy threads share the cores (e.g. a trainer's):
             a parallel call waits until every thread is scheduled.
+        ball_views_only: run the filter only for candidates that show the ball, the only
+            possible goals (the environment's episode starts); the others get NaN entropies
+            and posteriors and no visible landmarks. The goal is the same either way.
     """
     H, ball_vis, visible, post = _search(
-        means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel
+        means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel, ball_views_only
     )
     ok, index = choose_goal(H, ball_vis)
     pick = np.maximum(index, 0)
