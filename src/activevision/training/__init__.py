@@ -4,7 +4,7 @@ Typical use::
 
     from activevision.training import TrainConfig, Trainer, load_policy, plot_run
 
-    config = TrainConfig(env_kwargs={"stack": 1}, total_timesteps=30_000)
+    config = TrainConfig(env_kwargs={"frame_stack": 1}, total_timesteps=30_000)
     Trainer(config, "runs/paper").train()      # or train(config, "runs/paper")
     policy = load_policy("runs/paper")          # QNetwork, eval mode
     plot_run("runs/paper")                      # training.png and one PNG per curve
