@@ -13,8 +13,8 @@ from activevision.localisation import (
 
 
 @settings(max_examples=200, deadline=None)
-# No subnormals: the trainer turns on flush-to-zero for the whole process (training/cpu.py),
-# and an earlier test in the same process may have trained.
+# No subnormals: a trainer turns on flush-to-zero for the whole process while it trains
+# (training/cpu.py; Trainer.close turns it off), and a test may hold an unclosed trainer.
 @given(st.floats(-1e3, 1e3, allow_nan=False, allow_subnormal=False))
 def test_wrap_angle_interval_and_equivalence(a):
     w = float(wrap_angle(a))

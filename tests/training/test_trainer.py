@@ -68,6 +68,15 @@ def test_smoke_run_writes_metrics_checkpoint_and_plots(tmp_path, paper_image_env
         assert (tmp_path / "plots" / curve.file).stat().st_size > 5_000
 
 
+def test_gradient_steps_and_train_freq_set_the_update_count(tmp_path, fake_env_factory):
+    # updates happen at steps learning_starts+1 .. total whose index is a multiple of train_freq
+    config = tiny_config(total_timesteps=60, learning_starts=20, train_freq=2, gradient_steps=3)
+    train(config, tmp_path, fake_env_factory)
+    assert float(read_rows(tmp_path / "metrics.csv")[-1]["updates"]) == 3 * 20
+    with pytest.raises(ValueError, match="gradient_steps"):
+        tiny_config(gradient_steps=0)
+
+
 def comparable(rows):
     return [{k: v for k, v in row.items() if k not in TIMING_FIELDS} for row in rows]
 

@@ -53,6 +53,8 @@ class TrainConfig:
     """Environment steps collected before the first update (SB2; release: 500)."""
     train_freq: int = 1
     """Environment steps per gradient update (SB2)."""
+    gradient_steps: int = 1
+    """Gradient updates each ``train_freq`` steps (SB2: 1; SB3's name)."""
     per_alpha: float = 0.6
     """Prioritisation exponent alpha (paper)."""
     per_beta0: float = 0.4
@@ -106,6 +108,7 @@ _POSITIVE_INTS = (
     "buffer_size",
     "target_update_interval",
     "train_freq",
+    "gradient_steps",
     "keep_checkpoints",
 )
 _NON_NEGATIVE_INTS = ("learning_starts", "checkpoint_interval", "num_threads")

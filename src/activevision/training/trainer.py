@@ -1,8 +1,9 @@
 """The training loop: Double DQN with prioritised replay on a Gymnasium environment.
 
 The loop follows Stable-Baselines (v2) ``DQN.learn``, which the paper used: one environment
-step, then (after ``learning_starts`` steps) one gradient update per ``train_freq`` steps, a
-target-network sync every ``target_update_interval`` steps, epsilon and beta annealed linearly.
+step, then (after ``learning_starts`` steps) ``gradient_steps`` gradient updates (one in the
+paper) every ``train_freq`` steps, a target-network sync every ``target_update_interval``
+steps, epsilon and beta annealed linearly.
 
 Run directory::
 
@@ -215,10 +216,11 @@ class Trainer:
 
         if self.step > c.learning_starts and len(self.buffer) >= c.batch_size:
             if self.step % c.train_freq == 0:
-                batch = self.buffer.sample(c.batch_size, self.beta)
-                result = self.learner.update(batch)
-                self.buffer.update_priorities(batch.indices, result.td_errors)
-                self.epoch_log.losses.append(result.loss)
+                for _ in range(c.gradient_steps):
+                    batch = self.buffer.sample(c.batch_size, self.beta)
+                    result = self.learner.update(batch)
+                    self.buffer.update_priorities(batch.indices, result.td_errors)
+                    self.epoch_log.losses.append(result.loss)
             if self.step % c.target_update_interval == 0:
                 self.learner.sync_target()
 
@@ -267,11 +269,13 @@ class Trainer:
         return self._writer
 
     def close(self) -> None:
-        """Close the environment and the TensorBoard writer."""
+        """Close the environment and the TensorBoard writer, and turn flushing of denormals
+        (set for training speed, process-wide) back off."""
         if self._writer is not None:
             self._writer.close()
             self._writer = None
         self.env.close()
+        torch.set_flush_denormal(False)
 
     # ------------------------------------------------------------------ checkpoints
     def _network_metadata(self) -> dict[str, Any]:
