@@ -1,3 +1,7 @@
+import os
+import subprocess
+import sys
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -39,3 +43,28 @@ def test_vector_env_equals_single_envs_with_the_same_seeds(frame_stack):
                 assert (r, term, trunc) == (vr[i], vterm[i], vtrunc[i])
         done = vterm | vtrunc
     assert resets >= n  # 45 steps cross the 20-step limit: every sub-env was reset
+
+
+def test_environments_leave_torch_thread_count_alone():
+    """numba's OpenMP pool resets a shared libgomp's thread count when it starts; the envs
+    must not silently turn a one-thread PyTorch into a two-thread one (fresh process, so the
+    pool really starts here)."""
+    code = (
+        "import torch; torch.set_num_threads(1)\n"
+        "torch.get_num_threads(), (torch.ones(1000) * 2).sum()  # torch in use, as a trainer\n"
+        "import gymnasium as gym, numpy as np, activevision.envs\n"
+        "env = gym.make('ActiveVision-v0'); env.reset(seed=0)\n"
+        "for _ in range(30): env.step(1)\n"
+        "print(torch.get_num_threads())\n"
+        "v = gym.make_vec('ActiveVision-v0', num_envs=16,\n"
+        "                 vectorization_mode='vector_entry_point')\n"
+        "v.reset(seed=0)\n"
+        "for _ in range(5): v.step(np.zeros(16, int))\n"
+        "print(torch.get_num_threads())\n"
+    )
+    env = {**os.environ, "NUMBA_NUM_THREADS": "2"}
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=600
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["1", "1"]

@@ -25,7 +25,6 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 
-import numba
 import numpy as np
 
 from activevision.geometry.camera import CameraConfig, footprint_polygon
@@ -40,6 +39,7 @@ from activevision.localisation.sigma_points import (
     merwe_weights,
 )
 from activevision.localisation.ukf import hx_range_bearing, ukf_update_sequential
+from activevision.threads import numba_threads
 
 
 @dataclass(frozen=True)
@@ -225,10 +225,10 @@ def _search(
         ukf.n + ukf.lambda_,
         ball_views_only,
     )
-    threads = numba.get_num_threads()
-    if parallel and n > 1 and threads > 1:
+    if parallel and n > 1 and numba_threads() > 1:  # (short-circuit: no pool when serial)
         # a few blocks per thread evens out views that see many landmarks
-        H, ball_vis, visible, post, errors = kernels.search_kernel_parallel(*args, 4 * threads)
+        n_blocks = 4 * numba_threads()
+        H, ball_vis, visible, post, errors = kernels.search_kernel_parallel(*args, n_blocks)
     else:
         H, ball_vis, visible, post, errors = kernels.search_kernel(*args)
     if errors.any():

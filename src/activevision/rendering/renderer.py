@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from activevision.geometry.camera import CameraConfig
@@ -12,6 +11,7 @@ from activevision.geometry.field import FieldSpec
 from activevision.rendering import _kernel
 from activevision.rendering.config import RenderConfig
 from activevision.rendering.scene import SceneArrays, build_scene
+from activevision.threads import numba_threads
 
 _DEFAULT_FIELD = FieldSpec()
 _DEFAULT_CAMERA = CameraConfig()
@@ -172,7 +172,7 @@ class Renderer:
             raise ValueError("rng must be a numpy.random.Generator when noise/jitter is on")
 
         scene = self.scene
-        if not self.parallel or n < PARALLEL_MIN_BATCH or numba.get_num_threads() == 1:
+        if not self.parallel or n < PARALLEL_MIN_BATCH or numba_threads() == 1:
             _kernel.render_kernel_serial(
                 pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
                 scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
@@ -180,7 +180,7 @@ class Renderer:
             )
         else:
             # Enough interleaved row sets per camera that every thread gets a fair share.
-            row_blocks = max(1, math.ceil(4 * numba.get_num_threads() / n))
+            row_blocks = max(1, math.ceil(4 * numba_threads() / n))
             _kernel.render_kernel(
                 pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
                 scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
