@@ -68,13 +68,17 @@ def test_batched_equals_single(landmarks, cam, random_start):
         assert batch[i].landmark_ids == single.landmark_ids
 
 
+def start_arrays(random_start, rng, n):
+    """``(means (n, 3), balls (n, 2))`` of ``n`` random episode-like starts."""
+    starts = [random_start(rng) for _ in range(n)]
+    return np.array([m for m, _ in starts]), np.array([b for _, b in starts])
+
+
 def test_parallel_search_equals_serial(landmarks, cam, random_start):
     """The threaded search splits (start, view) pairs into blocks; it must change nothing,
     with any number of blocks (more blocks than pairs included)."""
     rng = np.random.default_rng(3)
-    starts = [random_start(rng) for _ in range(5)]
-    means = np.array([m for m, _ in starts])
-    balls = np.array([b for _, b in starts])
+    means, balls = start_arrays(random_start, rng, 5)
     serial = best_viewpoints(means, COV0, balls, landmarks, cam)
     threaded = best_viewpoints(means, COV0, balls, landmarks, cam, parallel=True)
     assert numba.get_num_threads() == 1 or np.array_equal(serial.entropies, threaded.entropies)
@@ -95,9 +99,7 @@ def test_parallel_search_equals_serial(landmarks, cam, random_start):
 
 def test_ball_views_only_gives_the_same_goal(landmarks, cam, random_start):
     rng = np.random.default_rng(4)
-    starts = [random_start(rng) for _ in range(30)]
-    means = np.array([m for m, _ in starts])
-    balls = np.array([b for _, b in starts])
+    means, balls = start_arrays(random_start, rng, 30)
     full = best_viewpoints(means, COV0, balls, landmarks, cam)
     fast = best_viewpoints(means, COV0, balls, landmarks, cam, ball_views_only=True)
     assert np.array_equal(full.index, fast.index)
