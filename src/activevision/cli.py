@@ -85,10 +85,10 @@ def cmd_plot(args: argparse.Namespace) -> None:
     print(f"wrote {plot_run(args.run)}")
 
 
-def _methods(names: list[str], run: Path | None, env_config, error: float = 0.0):
+def _methods(names: list[str], args: argparse.Namespace, env_config, error: float = 0.0):
     from activevision.experiments.policies import make_policy
 
-    return {name: make_policy(name, error, env_config, run) for name in names}
+    return {name: make_policy(name, error, env_config, args.run, args.weights) for name in names}
 
 
 def cmd_evaluate(args: argparse.Namespace) -> None:
@@ -105,7 +105,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
 
     env_config = _env_config(args.run)
     names = args.methods or [m for m in DEFAULT_ORDER if m != "learned" or args.run]
-    policies = _methods(names, args.run, env_config, args.error)
+    policies = _methods(names, args, env_config, args.error)
     env = ActiveVisionEnv(env_config)
     summaries, episodes, latency = {}, [], {}
     for name, policy in policies.items():
@@ -154,7 +154,7 @@ def cmd_compare(args: argparse.Namespace) -> None:
     from activevision.experiments.policies import LearnedPolicy
 
     env_config = _env_config(args.run)
-    learned = LearnedPolicy.from_run(args.run) if args.run else None
+    learned = LearnedPolicy.from_run(args.run, weights=args.weights) if args.run else None
     methods = default_methods(env_config, learned)
     if args.methods:
         methods = {k: v for k, v in methods.items() if k in args.methods}
@@ -174,7 +174,7 @@ def cmd_episode(args: argparse.Namespace) -> None:
 
     env_config = _env_config(args.run)
     names = args.policies or (["learned", "random"] if args.run else ["oracle", "random"])
-    policies = _methods(names, args.run, env_config)
+    policies = _methods(names, args, env_config)
     traces = [trace_episode(p, args.seed, env_config) for p in policies.values()]
     plot_episodes(traces, args.out, config=env_config)
     gif = args.out.with_suffix(".gif")
@@ -192,7 +192,7 @@ def cmd_export(args: argparse.Namespace) -> None:
     """ONNX model + metadata for the torch-free HeadController."""
     from activevision.export import export_run
 
-    exported = export_run(args.run, args.out, opset=args.opset)
+    exported = export_run(args.run, args.out, weights=args.weights, opset=args.opset)
     print(f"wrote {exported.model_path} and {exported.metadata_path}")
 
 
@@ -260,6 +260,14 @@ def build_parser() -> argparse.ArgumentParser:
         p.set_defaults(func=func)
         return p
 
+    def add_weights(p: argparse.ArgumentParser) -> None:
+        p.add_argument(
+            "--weights",
+            choices=("final", "best"),
+            default="final",
+            help="the run's final weights or its best validated ones (eval_interval)",
+        )
+
     p = add("train", cmd_train, "train a DDQN + PER head controller")
     p.add_argument("--config", type=Path, help="TrainConfig JSON file")
     p.add_argument("--preset", default="paper", help="paper | release | quickstart")
@@ -274,6 +282,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("evaluate", cmd_evaluate, "score methods on fixed-seed episodes")
     p.add_argument("--run", type=Path, help="a training run: adds the learned policy")
+    add_weights(p)
     p.add_argument(
         "--methods", nargs="+", help="learned shipped entropy_jump entropy_steps oracle scan random"
     )
@@ -286,6 +295,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("compare", cmd_compare, "success vs localisation error, every method")
     p.add_argument("--run", type=Path, help="a training run: adds the learned policy")
+    add_weights(p)
     p.add_argument("--methods", nargs="+")
     p.add_argument("--errors", default="0:2:0.25", help="start:stop:step or a,b,c")
     p.add_argument("--episodes", type=int, default=100)
@@ -298,6 +308,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("episode", cmd_episode, "episode figure (and GIF) of two methods from one start")
     p.add_argument("--run", type=Path, help="a training run (for the learned policy)")
+    add_weights(p)
     p.add_argument("--policies", nargs="+", help="default: learned random (oracle random)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, required=True)
@@ -308,6 +319,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("export", cmd_export, "export a run's policy to ONNX (+ policy.json)")
     p.add_argument("run", type=Path)
     p.add_argument("--out", "-o", type=Path, help="default: RUN/policy.onnx")
+    add_weights(p)
     p.add_argument("--opset", type=int, default=17)
 
     p = add("demo", cmd_demo, "episode figure + GIF of the shipped policy (no training needed)")

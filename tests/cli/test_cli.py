@@ -42,6 +42,8 @@ def test_quickstart_trains_evaluates_and_reports(tmp_path):
     # The trained run exports to ONNX for the robot runtime.
     assert main(["export", str(out), "-o", str(tmp_path / "policy.onnx")]) == 0
     assert (tmp_path / "policy.json").exists()
+    # Best weights exist only for runs trained with validation: a clear error otherwise.
+    assert main(["evaluate", "--run", str(out), "--methods", "learned", "--weights", "best"]) == 2
 
 
 def test_bad_input_is_one_clear_line(tmp_path, capsys):

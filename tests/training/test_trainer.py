@@ -1,8 +1,10 @@
 import csv
+import json
 
 import numpy as np
 import pytest
 import torch
+from safetensors import safe_open
 
 from activevision.agents.q_network import QNetwork
 from activevision.training import checkpoint as ckpt
@@ -10,6 +12,11 @@ from activevision.training.config import TrainConfig
 from activevision.training.metrics import EPOCH_FIELDS, TIMING_FIELDS
 from activevision.training.plots import CURVES, plot_run
 from activevision.training.trainer import Trainer, load_policy, resume, train
+from activevision.training.validation import (
+    greedy_episodes,
+    summarise_validation,
+    validation_seed,
+)
 
 
 def tiny_config(**changes) -> TrainConfig:
@@ -148,3 +155,111 @@ def test_missing_checkpoint_and_existing_run(tmp_path, fake_env_factory):
     trainer.close()
     with pytest.raises(ValueError, match="resume"):
         Trainer(tiny_config(), tmp_path, fake_env_factory)
+
+
+# ---------------------------------------------------------------------- validation
+def test_greedy_episodes_play_each_seed_to_the_end(fake_env_factory):
+    env = fake_env_factory()
+    seeds = [validation_seed(3, i) for i in range(5)]
+    assert seeds == [3_000_009 + i for i in range(5)]  # the seeds of `evaluate --seed 3`
+
+    def toward_goal(obs):  # an oracle reading the env's hidden state: always succeeds
+        q = np.zeros(9)
+        q[0 if env.goal < env.pan else 1] = 1.0
+        return q
+
+    records = greedy_episodes(toward_goal, env, seeds, (1, 60, 80))
+    assert len(records) == 5
+    for seed, record in zip(seeds, records, strict=True):
+        env.reset(seed=seed)
+        assert record["success_rate"] == 1.0
+        assert record["length"] == abs(env.pan - env.goal)  # straight there
+        assert record["reward"] == record["length"]
+
+    def stay(obs):  # action 2 does nothing: truncated after 20 steps, partial credit
+        q = np.zeros(9)
+        q[2] = 1.0
+        return q
+
+    for seed, record in zip(seeds, greedy_episodes(stay, env, seeds, (1, 60, 80)), strict=True):
+        env.reset(seed=seed)
+        assert record["length"] == 20 and record["reward"] == 0
+        assert record["success_rate"] == pytest.approx(1 - abs(env.pan - env.goal) / 10)
+
+
+def test_summary_marks_improvements_only():
+    records = [{"success_rate": r, "success": 0.0, "reward": 1.0} for r in (0.5, 0.7)]
+    row = summarise_validation(600, records, best_before=0.5)
+    assert row["success_rate"] == pytest.approx(0.6) and row["best"] == 1
+    assert summarise_validation(600, records, best_before=0.6)["best"] == 0
+
+
+def best_metadata(run_dir):
+    with safe_open(str(run_dir / "best_policy.safetensors"), "pt") as file:
+        return {k: json.loads(v) for k, v in file.metadata().items()}
+
+
+def test_validation_keeps_the_best_weights_and_leaves_training_alone(tmp_path, fake_env_factory):
+    plain, validated = tmp_path / "plain", tmp_path / "validated"
+    train(tiny_config(), plain, fake_env_factory)
+    train(tiny_config(eval_interval=30, eval_episodes=4), validated, fake_env_factory)
+
+    # same training: validation plays on an environment of its own
+    for name in ("metrics.csv", "episodes.csv"):
+        assert comparable(read_rows(plain / name)) == comparable(read_rows(validated / name))
+
+    rows = read_rows(validated / "evaluations.csv")
+    assert [int(r["step"]) for r in rows] == [30, 60, 90, 120]
+    rates = [float(r["success_rate"]) for r in rows]
+    best_index = int(np.argmax(rates))  # first of the best: later ties do not replace it
+    assert [int(r["best"]) for r in rows][best_index] == 1
+    meta = best_metadata(validated)
+    assert meta["step"] == int(rows[best_index]["step"])
+    assert meta["validation_success_rate"] == pytest.approx(rates[best_index])
+
+    # the kept weights score what was logged when replayed on the same seeds
+    best = load_policy(validated, weights="best")
+    env = fake_env_factory()
+    seeds = [validation_seed(1000, i) for i in range(4)]
+
+    def q_values(obs):
+        with torch.no_grad():
+            return best(torch.from_numpy(obs[None])).numpy()[0]
+
+    replay = greedy_episodes(q_values, env, seeds, (1, 60, 80))
+    assert np.mean([r["success_rate"] for r in replay]) == pytest.approx(rates[best_index])
+    assert plot_run(validated).stat().st_size > 10_000  # validation drawn with the success rate
+
+
+def test_resume_restores_validation_state(tmp_path, fake_env_factory):
+    config = tiny_config(eval_interval=30, eval_episodes=4)
+    straight, interrupted = tmp_path / "straight", tmp_path / "interrupted"
+    train(config, straight, fake_env_factory)
+
+    first = Trainer(config, interrupted, fake_env_factory)
+    first.train(steps=60)  # checkpoint at 60 after validations at 30 and 60
+    for _ in range(35):  # lost progress, including a validation at step 90
+        first._env_step()
+        if first.step % 30 == 0:
+            first.validate()
+    first.close()
+    resume(interrupted, fake_env_factory)
+
+    assert read_rows(straight / "evaluations.csv") == read_rows(interrupted / "evaluations.csv")
+    assert best_metadata(straight) == best_metadata(interrupted)
+    a = load_policy(straight, weights="best").state_dict()
+    b = load_policy(interrupted, weights="best").state_dict()
+    for key in a:
+        assert torch.equal(a[key], b[key]), key
+
+
+def test_best_weights_need_validation(tmp_path, fake_env_factory):
+    train(tiny_config(total_timesteps=60), tmp_path, fake_env_factory)
+    with pytest.raises(ckpt.CheckpointError, match="eval_interval"):
+        load_policy(tmp_path, weights="best")
+    with pytest.raises(ValueError, match="weights"):
+        load_policy(tmp_path, weights="newest")
+    with pytest.raises(ValueError, match="eval_interval"):
+        tiny_config(eval_interval=-1)
+    with pytest.raises(ValueError, match="eval_episodes"):
+        tiny_config(eval_episodes=0)

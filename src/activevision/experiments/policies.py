@@ -170,10 +170,13 @@ class LearnedPolicy:
         self.device = device
 
     @classmethod
-    def from_run(cls, run_dir, device: str = "cpu", num_threads: int | None = 1) -> LearnedPolicy:
+    def from_run(
+        cls, run_dir, device: str = "cpu", num_threads: int | None = 1, weights: str = "final"
+    ) -> LearnedPolicy:
+        """The run's final weights, or with ``weights="best"`` its best validated ones."""
         from activevision.training import load_policy
 
-        return cls(load_policy(run_dir), device, num_threads)
+        return cls(load_policy(run_dir, weights=weights), device, num_threads)
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         pass
@@ -210,14 +213,19 @@ DEFAULT_ORDER = ("learned", "entropy_jump", "entropy_steps", "oracle", "scan", "
 
 
 def make_policy(
-    name: str, error: float, config: EnvConfig, run_dir: str | Path | None = None
+    name: str,
+    error: float,
+    config: EnvConfig,
+    run_dir: str | Path | None = None,
+    weights: str = "final",
 ) -> HeadPolicy:
     """A fresh policy of method ``name``; ``error`` is the localisation error the entropy
-    methods plan with, ``run_dir`` the training run of ``learned``."""
+    methods plan with, ``run_dir`` the training run of ``learned`` and ``weights`` which of
+    its weights ("final" or "best")."""
     if name == "learned":
         if run_dir is None:
             raise ValueError("the learned policy needs a run directory (--run runs/NAME)")
-        return LearnedPolicy.from_run(run_dir)
+        return LearnedPolicy.from_run(run_dir, weights=weights)
     if name == "shipped":
         from activevision.runtime import pretrained_policy_path
 

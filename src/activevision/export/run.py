@@ -18,9 +18,11 @@ CONFIG_FILENAME = "config.json"
 def export_run(
     run_dir: str | os.PathLike[str],
     out_path: str | os.PathLike[str] | None = None,
+    weights: str = "final",
     **export_options: Any,
 ) -> ExportedPolicy:
-    """Export the newest policy of a training run as ``policy.onnx`` + ``policy.json``.
+    """Export a training run's policy as ``policy.onnx`` + ``policy.json``: its newest
+    weights, or with ``weights="best"`` those with the best validation score.
 
     Reads the weights with :func:`activevision.training.load_policy`, the action table and
     head limits from the run's environment settings (``config.json`` ``env_kwargs`` over
@@ -46,7 +48,7 @@ def export_run(
         raise ValueError(f"cannot read {config_path}: {error}") from error
 
     env = env_config_of(config.get("env_kwargs") or {})
-    network = load_policy(run_dir)
+    network = load_policy(run_dir, weights=weights)
     if network.stack != env.frame_stack:
         raise ValueError(
             f"{run_dir}: the network stacks {network.stack} frames but the environment "

@@ -103,6 +103,7 @@ def cmd_compare_ray(args: argparse.Namespace) -> None:
         args.seed,
         env_config,
         run_dir=args.run,
+        weights=args.weights,
         chunk=args.chunk,
         address=args.address,
         num_cpus=args.num_cpus,

@@ -25,6 +25,7 @@ def evaluate_chunk(
     episode_indices: Sequence[int],
     config: EnvConfig,
     run_dir: str | Path | None = None,
+    weights: str = "final",
 ) -> list[dict[str, Any]]:
     """Episode records of ``method`` for ``episode_indices`` of the level seeded ``base_seed``
     (what :func:`~activevision.experiments.evaluate.evaluate_policy` computes for them)."""
@@ -32,7 +33,7 @@ def evaluate_chunk(
     from activevision.experiments.evaluate import episode_seed, run_episode
 
     env = ActiveVisionEnv(config)
-    policy = make_policy(method, error, config, run_dir)
+    policy = make_policy(method, error, config, run_dir, weights)
     try:
         return [
             run_episode(env, policy, episode_seed(base_seed, i), env.max_episode_steps)
@@ -50,6 +51,7 @@ def compare_ray(
     seed: int = 0,
     config: EnvConfig | None = None,
     run_dir: str | Path | None = None,
+    weights: str = "final",
     chunk: int = 25,
     address: str | None = None,
     num_cpus: int | None = None,
@@ -59,6 +61,7 @@ def compare_ray(
     Every (level, method, ``chunk`` episodes) is one Ray task using one CPU. Levels and
     methods already in the CSV are skipped, and the CSV is rewritten (atomically) as each
     level completes, in level order, so an interrupted run loses only unfinished levels.
+    ``weights``: the run's "final" or "best" weights.
     ``address``/``num_cpus``: see :func:`~activevision.scaleout.ray_session.ray_session`.
     """
     from activevision.experiments.compare import _done_levels
@@ -94,6 +97,7 @@ def compare_ray(
                         range(s, min(s + chunk, episodes)),
                         config_ref,
                         run,
+                        weights,
                     )
                     for s in starts
                 ]

@@ -65,6 +65,14 @@ class TrainConfig:
     """Per-tensor gradient-norm clip (SB2 grad_norm_clipping)."""
     dueling: bool = False
     """Dueling Q-network head (not in the paper)."""
+    eval_interval: int = 0
+    """Environment steps between greedy validations that keep the best weights (0: none, as
+    in the paper; SB3 EvalCallback's eval_freq)."""
+    eval_episodes: int = 100
+    """Fixed-seed episodes per validation."""
+    eval_seed: int = 1000
+    """Validation episodes are those of ``activevision evaluate --seed eval_seed``; keep it
+    apart from the seed of the test figures (0)."""
     checkpoint_interval: int = 3000
     """Environment steps between checkpoints; a multiple of epoch_steps (0: only at the end)."""
     keep_checkpoints: int = 2
@@ -110,8 +118,15 @@ _POSITIVE_INTS = (
     "train_freq",
     "gradient_steps",
     "keep_checkpoints",
+    "eval_episodes",
 )
-_NON_NEGATIVE_INTS = ("learning_starts", "checkpoint_interval", "num_threads")
+_NON_NEGATIVE_INTS = (
+    "learning_starts",
+    "checkpoint_interval",
+    "eval_interval",
+    "eval_seed",
+    "num_threads",
+)
 _FRACTIONS = ("gamma", "exploration_initial", "exploration_final", "exploration_fraction")
 _FRACTIONS += ("per_alpha", "per_beta0")
 _POSITIVE_FLOATS = ("learning_rate", "per_eps", "max_grad_norm")

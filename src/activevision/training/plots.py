@@ -70,6 +70,8 @@ def plot_run(
         "episodes": read_csv_columns(run_dir / "episodes.csv"),
         "metrics": read_csv_columns(run_dir / "metrics.csv"),
     }
+    evaluations_csv = run_dir / "evaluations.csv"
+    validation = read_csv_columns(evaluations_csv) if evaluations_csv.exists() else {}
 
     def draw(ax: plt.Axes, curve: Curve) -> None:
         table = tables[curve.source]
@@ -84,6 +86,18 @@ def plot_run(
                 ax.legend(loc="lower right", fontsize=8)
             else:
                 ax.plot(x, y, color="tab:blue", marker="o", markersize=3, linewidth=1.2)
+            if curve.y == "success_rate" and validation:  # greedy validation, if logged
+                epochs_per_step = x[-1] / np.asarray(table["step"])[-1]
+                ax.plot(
+                    np.asarray(validation["step"]) * epochs_per_step,
+                    validation["success_rate"],
+                    color="tab:orange",
+                    marker="s",
+                    markersize=3,
+                    linewidth=1.2,
+                    label="greedy validation",
+                )
+                ax.legend(loc="lower right", fontsize=8)
         ax.set_title(curve.title)
         ax.set_xlabel(curve.x)
         ax.set_ylabel(curve.ylabel)

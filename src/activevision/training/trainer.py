@@ -12,6 +12,8 @@ Run directory::
     episodes.csv      one row per episode: total reward, length, final info
     tensorboard/      the same epoch metrics as TensorBoard scalars
     policy.safetensors  the newest online weights (see ``load_policy``)
+    evaluations.csv, best_policy.safetensors
+                      with ``eval_interval``: greedy validation scores, the best weights
     checkpoints/      the newest checkpoints (see ``training.checkpoint``)
 
 Reproducibility and resuming. Every random number comes from generators seeded by
@@ -58,9 +60,16 @@ from activevision.training.metrics import (
     EpochAccumulator,
     episode_record,
 )
+from activevision.training.validation import (
+    EVALUATION_FIELDS,
+    greedy_episodes,
+    summarise_validation,
+    validation_seed,
+)
 
 EnvFactory = Callable[[], gym.Env]
 POLICY_FILE = "policy.safetensors"
+BEST_POLICY_FILE = "best_policy.safetensors"  #: best greedy validation score (eval_interval)
 
 
 def make_env(config: TrainConfig) -> gym.Env:
@@ -100,7 +109,9 @@ class Trainer:
         configure_torch_cpu(config.num_threads)
         self.device = resolve_device(config.device)
 
-        self.env = env_factory() if env_factory is not None else make_env(config)
+        self.env_factory = env_factory or (lambda: make_env(config))
+        self.env = self.env_factory()
+        self._eval_env: gym.Env | None = None  # built at the first validation
         if not isinstance(self.env.action_space, gym.spaces.Discrete):
             raise ValueError(f"need a Discrete action space, got {self.env.action_space}")
         self.n_actions = int(self.env.action_space.n)
@@ -136,13 +147,18 @@ class Trainer:
         self._episode_seed = 0
         self._episode_actions: list[int] = []
         self._episode_reward = 0.0
+        self.best_eval = -math.inf  # best validation success rate so far ...
+        self._best_step = 0  # ... reached at this step by these weights
+        self._best_weights: dict[str, torch.Tensor] | None = None
 
         save_config(config, self.run_dir / "config.json")
         self.metrics_log = CsvLog(self.run_dir / "metrics.csv", EPOCH_FIELDS)
         self.episodes_log = CsvLog(self.run_dir / "episodes.csv", EPISODE_FIELDS)
+        self.evaluations_log = CsvLog(self.run_dir / "evaluations.csv", EVALUATION_FIELDS)
         if not _resuming:  # a fresh run starts fresh logs
             self.metrics_log.truncate(0)
             self.episodes_log.truncate(0)
+            self.evaluations_log.truncate(0)
         self._writer: Any = None
         self._writer_purge_step: int | None = None
 
@@ -184,6 +200,9 @@ class Trainer:
                     epochs.append(self._finish_epoch(steps_per_s))
                     progress.set_postfix(_postfix(epochs[-1]), refresh=False)
                     epoch_start = (self.step, time.perf_counter())
+                if c.eval_interval and self.step % c.eval_interval == 0:
+                    self.validate()
+                    epoch_start = (self.step, time.perf_counter())  # keep it out of steps/s
                 if c.checkpoint_interval and self.step % c.checkpoint_interval == 0:
                     self.save_checkpoint()
             saved_last_step = c.checkpoint_interval and self.step % c.checkpoint_interval == 0
@@ -239,6 +258,40 @@ class Trainer:
         else:
             self._obs = next_obs
 
+    def validate(self) -> dict[str, float]:
+        """Greedy episodes on the validation seeds; keeps the weights if they scored best.
+
+        Uses an environment of its own, so training's environment, generators and replay are
+        untouched (a run with validation trains exactly like one without).
+        """
+        c = self.config
+        if self._eval_env is None:
+            self._eval_env = self.env_factory()
+        seeds = [validation_seed(c.eval_seed, i) for i in range(c.eval_episodes)]
+        records = greedy_episodes(self.learner.q_values, self._eval_env, seeds, self.obs_shape)
+        row = summarise_validation(self.step, records, self.best_eval)
+        self.evaluations_log.append(row)
+        if row["best"]:
+            self.best_eval, self._best_step = row["success_rate"], self.step
+            online = self.learner.online.state_dict()
+            self._best_weights = {k: v.detach().clone() for k, v in online.items()}
+            self._write_best_policy()
+        writer = self._tensorboard()
+        if writer is not None:
+            writer.add_scalar("eval/success_rate", row["success_rate"], self.step)
+            writer.add_scalar("eval/mean_episodic_return", row["episode_reward"], self.step)
+        return row
+
+    def _write_best_policy(self) -> None:
+        assert self._best_weights is not None
+        metadata = {
+            **self._network_metadata(),
+            "step": self._best_step,
+            "validation_success_rate": self.best_eval,
+        }
+        with atomic_path(self.run_dir / BEST_POLICY_FILE) as tmp:
+            ckpt.save_tensors(tmp, self._best_weights, metadata)
+
     def _start_episode(self) -> None:
         """Reset with a seed from the trainer's generator (what makes resuming exact)."""
         self._episode_seed = int(self.rng.integers(2**31 - 1))
@@ -275,6 +328,8 @@ class Trainer:
             self._writer.close()
             self._writer = None
         self.env.close()
+        if self._eval_env is not None:
+            self._eval_env.close()
         torch.set_flush_denormal(False)
 
     # ------------------------------------------------------------------ checkpoints
@@ -292,6 +347,8 @@ class Trainer:
         online = self.learner.online.state_dict()
         tensors = {f"online.{k}": v for k, v in online.items()}
         tensors.update({f"target.{k}": v for k, v in self.learner.target.state_dict().items()})
+        if self._best_weights is not None:
+            tensors.update({f"best.{k}": v for k, v in self._best_weights.items()})
         metadata = self._network_metadata()
         state = {
             "step": self.step,
@@ -305,6 +362,9 @@ class Trainer:
             "obs_sha256": _digest(self._obs),
             "metrics_rows": len(self.metrics_log.rows()),
             "episodes_rows": self.episode,
+            "best_eval": self.best_eval if self._best_weights is not None else None,
+            "best_step": self._best_step,
+            "evaluations_rows": len(self.evaluations_log.rows()),
         }
 
         def write_files(directory: Path) -> None:
@@ -377,6 +437,11 @@ class Trainer:
         # drop log rows written after the checkpoint by the interrupted run
         self.metrics_log.truncate(int(state["metrics_rows"]))
         self.episodes_log.truncate(int(state["episodes_rows"]))
+        self.evaluations_log.truncate(int(state.get("evaluations_rows", 0)))
+        if state.get("best_eval") is not None:  # the best weights as of the checkpoint
+            self.best_eval, self._best_step = float(state["best_eval"]), int(state["best_step"])
+            self._best_weights = part("best.")
+            self._write_best_policy()
         self._writer_purge_step = self.step
 
     def _replay_open_episode(self) -> np.ndarray:
@@ -412,14 +477,25 @@ def resume(
         trainer.close()
 
 
-def load_policy(path: str | os.PathLike[str], device: str = "cpu") -> QNetwork:
+def load_policy(
+    path: str | os.PathLike[str], device: str = "cpu", weights: str = "final"
+) -> QNetwork:
     """A trained QNetwork in eval mode, from a run directory, a checkpoint, or a weights file.
 
     Reads safetensors only (no code is executed). A run directory's ``policy.safetensors``
-    holds its newest online weights.
+    holds its newest online weights (``weights="final"``), ``best_policy.safetensors`` those
+    with the best validation score (``weights="best"``, runs with ``eval_interval``).
     """
     path = Path(path)
-    if path.is_dir():
+    if weights not in ("final", "best"):
+        raise ValueError(f"weights must be 'final' or 'best', got {weights!r}")
+    if path.is_dir() and weights == "best":
+        path = path / BEST_POLICY_FILE
+        if not path.exists():
+            raise ckpt.CheckpointError(
+                f"no {path.name} in {path.parent}: train with eval_interval > 0 to keep one"
+            )
+    elif path.is_dir():
         path = path / POLICY_FILE if (path / POLICY_FILE).exists() else path / "model.safetensors"
     if not path.exists():
         raise ckpt.CheckpointError(f"no policy weights at {path}")
