@@ -25,6 +25,21 @@ def test_paper_defaults_and_release_preset():
         preset("nope")
 
 
+def test_data4x_keeps_the_papers_update_budget_over_4x_the_steps():
+    paper, data4x = preset("paper"), preset("data4x")
+
+    def updates(c):
+        return (c.total_timesteps - c.learning_starts) // c.train_freq
+
+    assert data4x.total_timesteps == 4 * paper.total_timesteps
+    assert abs(updates(data4x) - updates(paper)) <= 1  # ~29,000 gradient updates each
+    assert data4x.target_update_interval // data4x.train_freq == paper.target_update_interval
+    assert data4x.learning_starts // data4x.train_freq == paper.learning_starts
+    # exploration spans the same fraction of the run; the learner itself is the paper's
+    for key in ("learning_rate", "gamma", "batch_size", "exploration_fraction", "per_alpha"):
+        assert getattr(data4x, key) == getattr(paper, key)
+
+
 def test_json_round_trip(tmp_path):
     config = TrainConfig(seed=3, env_kwargs={"stack": 2, "max_steps": 20}, learning_rate=1e-3)
     save_config(config, tmp_path / "config.json")

@@ -185,11 +185,25 @@ def _check_type(key: str, annotation: Any, value: Any) -> Any:
 
 
 def preset(name: str) -> TrainConfig:
-    """A named configuration: "paper" (the default), "release" (the authors' code) or
-    "quickstart" (a short run that learns visibly in minutes)."""
+    """A named configuration: "paper" (the default), "release" (the authors' code),
+    "data4x" (the shipped policy's recipe) or "quickstart" (a short run that learns visibly
+    in minutes)."""
     presets = {
         "paper": TrainConfig(),
         "release": TrainConfig(learning_starts=500, exploration_fraction=0.85),
+        # The paper's learner and update budget (30,000 updates, a target sync every 10,000
+        # updates, 1,000 samples before learning) fed 4x the episodes: one update every 4
+        # environment steps (SB3's DQN default train_freq). Simulated steps cost ~0.1 ms,
+        # updates ~25 ms, so it takes about as long as the paper run; it scores ~2 points more.
+        "data4x": TrainConfig(
+            total_timesteps=120_000,
+            train_freq=4,
+            learning_starts=4000,
+            target_update_interval=40_000,
+            checkpoint_interval=12_000,
+            eval_interval=4000,
+            eval_episodes=200,
+        ),
         # The README's main job: the paper's learner with its schedule compressed to 6,000
         # steps (under 3 minutes on a 2-core CPU; 12,000 steps measured no better). The
         # paper's 10,000-step target sync and 1,000 learning starts would leave so short a
