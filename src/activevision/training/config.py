@@ -191,10 +191,11 @@ def preset(name: str) -> TrainConfig:
     presets = {
         "paper": TrainConfig(),
         "release": TrainConfig(learning_starts=500, exploration_fraction=0.85),
-        # The paper's learner and update budget (30,000 updates, a target sync every 10,000
-        # updates, 1,000 samples before learning) fed 4x the episodes: one update every 4
-        # environment steps (SB3's DQN default train_freq). Simulated steps cost ~0.1 ms,
-        # updates ~25 ms, so it takes about as long as the paper run; it scores ~2 points more.
+        # The paper's learner and update budget fed 4x the episodes: one update every 4
+        # environment steps (SB3's DQN default train_freq), so still ~30,000 updates, with
+        # learning start, target syncs and exploration at the same points of the run.
+        # Simulated steps cost ~0.1 ms, updates ~25 ms: it takes about as long as the paper
+        # run and scores ~2 points more (README).
         "data4x": TrainConfig(
             total_timesteps=120_000,
             train_freq=4,
