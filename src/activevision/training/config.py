@@ -212,7 +212,7 @@ def preset(name: str) -> TrainConfig:
     presets = {
         "paper": TrainConfig(),
         "release": TrainConfig(learning_starts=500, exploration_fraction=0.85),
-        # more data, same learner: 81-83% (4x) and 84% (8x) against the paper set-up's 79%
+        # more data, same learner: 81-83% (4x, 8x) against the paper set-up's 79% (README)
         "data4x": more_episodes(4),
         "data8x": more_episodes(8),
         # The README's main job: the paper's learner with its schedule compressed to 6,000
