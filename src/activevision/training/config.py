@@ -184,7 +184,7 @@ def _check_type(key: str, annotation: Any, value: Any) -> Any:
     return value
 
 
-def more_episodes(factor: int, **changes: Any) -> TrainConfig:
+def more_episodes(factor: int) -> TrainConfig:
     """The paper's learner and update budget fed ``factor`` times the episodes.
 
     One update every ``factor`` environment steps (SB3's DQN default is 4), so still
@@ -201,7 +201,6 @@ def more_episodes(factor: int, **changes: Any) -> TrainConfig:
         checkpoint_interval=factor * 3000,
         eval_interval=factor * 1000,
         eval_episodes=200,
-        **changes,
     )
 
 
