@@ -225,10 +225,10 @@ def _search(
         ukf.n + ukf.lambda_,
         ball_views_only,
     )
-    if parallel and n > 1 and numba_threads() > 1:  # (short-circuit: no pool when serial)
+    threads = numba_threads() if parallel and n > 1 else 1  # serial: never start the pool
+    if threads > 1:
         # a few blocks per thread evens out views that see many landmarks
-        n_blocks = 4 * numba_threads()
-        H, ball_vis, visible, post, errors = kernels.search_kernel_parallel(*args, n_blocks)
+        H, ball_vis, visible, post, errors = kernels.search_kernel_parallel(*args, 4 * threads)
     else:
         H, ball_vis, visible, post, errors = kernels.search_kernel(*args)
     if errors.any():

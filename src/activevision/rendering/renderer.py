@@ -172,7 +172,9 @@ class Renderer:
             raise ValueError("rng must be a numpy.random.Generator when noise/jitter is on")
 
         scene = self.scene
-        if not self.parallel or n < PARALLEL_MIN_BATCH or numba_threads() == 1:
+        # small batches run serially and never start numba's thread pool
+        threads = numba_threads() if self.parallel and n >= PARALLEL_MIN_BATCH else 1
+        if threads == 1:
             _kernel.render_kernel_serial(
                 pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
                 scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
@@ -180,7 +182,7 @@ class Renderer:
             )
         else:
             # Enough interleaved row sets per camera that every thread gets a fair share.
-            row_blocks = max(1, math.ceil(4 * numba_threads() / n))
+            row_blocks = max(1, math.ceil(4 * threads / n))
             _kernel.render_kernel(
                 pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
                 scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,

@@ -64,7 +64,6 @@ from activevision.training.validation import (
     EVALUATION_FIELDS,
     greedy_episodes,
     summarise_validation,
-    validation_seed,
 )
 
 EnvFactory = Callable[[], gym.Env]
@@ -264,10 +263,14 @@ class Trainer:
         Uses an environment of its own, so training's environment, generators and replay are
         untouched (a run with validation trains exactly like one without).
         """
+        # the seeds of `activevision evaluate --seed eval_seed` (imported here: the trainer
+        # itself works with any Gymnasium environment)
+        from activevision.experiments.evaluate import episode_seed
+
         c = self.config
         if self._eval_env is None:
             self._eval_env = self.env_factory()
-        seeds = [validation_seed(c.eval_seed, i) for i in range(c.eval_episodes)]
+        seeds = [episode_seed(c.eval_seed, i) for i in range(c.eval_episodes)]
         records = greedy_episodes(self.learner.q_values, self._eval_env, seeds, self.obs_shape)
         row = summarise_validation(self.step, records, self.best_eval)
         self.evaluations_log.append(row)

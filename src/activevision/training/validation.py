@@ -7,8 +7,8 @@ DQN's greedy policy changes with every update, so the last weights of a run are 
 its best ones; choosing by validation episodes that differ from the test episodes keeps the
 test score honest.
 
-The validation episodes are those of ``activevision evaluate --seed eval_seed`` (episode
-``i`` starts from seed ``eval_seed * 1_000_003 + i``); the README's test figures use seed 0.
+The validation episodes are those of ``activevision evaluate --seed eval_seed`` (seeds from
+:func:`activevision.experiments.evaluate.episode_seed`); the README's test figures use seed 0.
 """
 
 from __future__ import annotations
@@ -22,11 +22,6 @@ from activevision.training.metrics import episode_record, nan_mean
 
 #: columns of ``evaluations.csv``
 EVALUATION_FIELDS = ("step", "episodes", "success_rate", "success", "episode_reward", "best")
-
-
-def validation_seed(eval_seed: int, episode: int) -> int:
-    """Seed of validation episode ``episode`` (the seeds of ``activevision evaluate``)."""
-    return eval_seed * 1_000_003 + episode
 
 
 def greedy_episodes(
