@@ -62,8 +62,8 @@ def one_torch_thread():
 def test_ddqn_learns_optimal_q_values_of_a_chain(one_torch_thread):
     with torch.random.fork_rng():
         torch.manual_seed(0)
-        learner = DDQNLearner(TinyQ(), learning_rate=5e-3, gamma=GAMMA, max_grad_norm=10.0)
-    buffer = PrioritizedReplayBuffer(100, (1, 1, N_STATES), alpha=0.6, seed=0)
+        learner = DDQNLearner(TinyQ(), learning_rate=5e-3, max_grad_norm=10.0)
+    buffer = PrioritizedReplayBuffer(100, (1, 1, N_STATES), alpha=0.6, seed=0, gamma=GAMMA)
     for s, a, r, s_next, terminated, truncated in chain_transitions():
         buffer.add(one_hot_image(s), a, r, one_hot_image(s_next), terminated, truncated)
     for step in range(1, 1001):

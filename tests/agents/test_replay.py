@@ -124,3 +124,64 @@ def test_rejects_wrong_observations():
         buffer.add(np.zeros(SHAPE, np.float32), 0, 0.0, np.zeros(SHAPE, np.uint8), False, False)
     with pytest.raises(ValueError):
         buffer.sample(4, 0.4)
+
+
+def reference_n_step(added, live, j, n, gamma):
+    """Straight loop: discounted rewards from transition j along its episode, at most n."""
+    total, k = 0.0, 0
+    while True:
+        _, _, reward, next_obs, terminated, truncated = added[j + k]
+        total += gamma**k * reward
+        k += 1
+        if terminated or truncated or k == n or j + k == live.stop:
+            return total, next_obs, terminated, gamma**k
+
+
+@pytest.mark.parametrize(
+    ("capacity", "n"),
+    [(1000, 3), (1000, 1), (20, 4)],  # 20: the buffer has wrapped around
+)
+def test_n_step_returns_follow_episodes_to_their_ends(capacity, n):
+    gamma = 0.9
+    buffer = PrioritizedReplayBuffer(capacity, SHAPE, seed=8, n_step=n, gamma=gamma)
+    rng = np.random.default_rng(8)
+    added = fill(buffer, rng, [5, 2], truncate_last=True)  # truncated episodes
+    added += fill(buffer, rng, [4, 1, 6], truncate_last=False)  # terminated episodes
+    frames = episode_frames(rng, 3)  # an episode still running
+    for t in range(3):
+        added.append((frames[t], 2, 10.0 + t, frames[t + 1], False, False))
+        buffer.add(*added[-1])
+    live = range(max(0, len(added) - capacity), len(added))
+
+    batch = buffer.sample(256, beta=0.4)
+    assert set(batch.indices.tolist()) == {j % capacity for j in live}  # every slot checked
+    for i, slot in enumerate(batch.indices):
+        j = next(j for j in live if j % capacity == slot)
+        reward, next_obs, terminated, discount = reference_n_step(added, live, j, n, gamma)
+        np.testing.assert_array_equal(batch.obs[i], added[j][0])
+        assert batch.actions[i] == added[j][1]
+        assert batch.rewards[i] == pytest.approx(reward, rel=1e-6)
+        np.testing.assert_array_equal(batch.next_obs[i], next_obs)
+        assert batch.terminated[i] == float(terminated)
+        assert batch.discounts[i] == pytest.approx(discount, rel=1e-6)
+
+
+def test_n_step_hand_computed_case():
+    buffer = PrioritizedReplayBuffer(10, SHAPE, seed=9, n_step=3, gamma=0.5)
+    frames = episode_frames(np.random.default_rng(9), 4)
+    for t, reward in enumerate([1.0, -1.0, 2.0, 4.0]):
+        buffer.add(frames[t], 0, reward, frames[t + 1], t == 3, False)
+    batch = buffer.sample(64, beta=1.0)
+    by_slot = {int(s): i for i, s in enumerate(batch.indices)}
+    expected = {  # slot: (reward sum, discount, terminal, index of next frame)
+        0: (1 - 0.5 + 0.25 * 2, 0.125, 0.0, 3),
+        1: (-1 + 0.5 * 2 + 0.25 * 4, 0.125, 1.0, 4),
+        2: (2 + 0.5 * 4, 0.25, 1.0, 4),
+        3: (4.0, 0.5, 1.0, 4),
+    }
+    for slot, (reward, discount, terminal, frame) in expected.items():
+        i = by_slot[slot]
+        assert batch.rewards[i] == pytest.approx(reward)
+        assert batch.discounts[i] == pytest.approx(discount)
+        assert batch.terminated[i] == terminal
+        np.testing.assert_array_equal(batch.next_obs[i], frames[frame])

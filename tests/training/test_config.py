@@ -56,6 +56,7 @@ def test_json_round_trip(tmp_path):
         ("exploration_fraction", 1.5),
         ("gamma", -0.1),
         ("batch_size", 0),
+        ("n_step", 0),
         ("learning_starts", -1),
         ("per_eps", 0.0),
         ("checkpoint_interval", 250),  # not a multiple of epoch_steps

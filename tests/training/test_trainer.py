@@ -85,8 +85,9 @@ def comparable(rows):
     return [{k: v for k, v in row.items() if k not in TIMING_FIELDS} for row in rows]
 
 
-def test_resume_gives_exactly_the_uninterrupted_result(tmp_path, fake_env_factory):
-    config = tiny_config()
+@pytest.mark.parametrize("options", [{}, {"n_step": 3, "augment_shift": 2}])
+def test_resume_gives_exactly_the_uninterrupted_result(tmp_path, fake_env_factory, options):
+    config = tiny_config(**options)
     straight, interrupted = tmp_path / "straight", tmp_path / "interrupted"
     train(config, straight, fake_env_factory)
 

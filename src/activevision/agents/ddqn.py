@@ -27,6 +27,7 @@ class TorchBatch(NamedTuple):
     rewards: torch.Tensor  # (B,) float32
     next_obs: torch.Tensor  # (B, stack, H, W) uint8
     terminated: torch.Tensor  # (B,) float32
+    discounts: torch.Tensor  # (B,) float32
     weights: torch.Tensor  # (B,) float32
 
 
@@ -57,6 +58,7 @@ def to_torch_batch(
         rewards=vector(batch.rewards, torch.float32),
         next_obs=image(batch.next_obs),
         terminated=vector(batch.terminated, torch.float32),
+        discounts=vector(batch.discounts, torch.float32),
         weights=vector(batch.weights, torch.float32),
     )
 
@@ -80,16 +82,20 @@ def ddqn_update(
     target: nn.Module,
     optimizer: torch.optim.Optimizer,
     batch: TorchBatch,
-    gamma: float,
     max_grad_norm: float | None = 10.0,
 ) -> UpdateResult:
     """One Double-DQN gradient step on ``online``; ``target`` only evaluates.
 
-    Works with any module mapping a batch of observations to (B, n_actions) Q-values.
+    Works with any module mapping a batch of observations to (B, n_actions) Q-values; the
+    batch brings each target's discount (gamma, or gamma ** n for n-step returns).
     """
     with torch.inference_mode():  # cheaper than no_grad: no version counters
         targets = double_q_targets(
-            batch.rewards, batch.terminated, gamma, online(batch.next_obs), target(batch.next_obs)
+            batch.rewards,
+            batch.terminated,
+            batch.discounts,
+            online(batch.next_obs),
+            target(batch.next_obs),
         )
     targets = targets.clone()  # an ordinary tensor again, so autograd may save it
     q_taken = online(batch.obs).gather(1, batch.actions.unsqueeze(1)).squeeze(1)
@@ -110,7 +116,6 @@ class DDQNLearner:
     Args:
         q_network: the online network; the target network starts as a copy of it.
         learning_rate: Adam learning rate (the paper: 5e-4, constant).
-        gamma: discount factor (the paper: 0.99).
         max_grad_norm: per-tensor gradient-norm clip (SB2: 10), or None.
         device: where the networks live.
         channels_last: feed images channels-last (faster convolutions on x86 CPUs).
@@ -120,7 +125,6 @@ class DDQNLearner:
         self,
         q_network: nn.Module,
         learning_rate: float = 5e-4,
-        gamma: float = 0.99,
         max_grad_norm: float | None = 10.0,
         device: torch.device | str = "cpu",
         channels_last: bool = False,
@@ -131,7 +135,6 @@ class DDQNLearner:
         # the fused kernel updates all parameters in one pass (5x faster than foreach on a CPU)
         fused = self.device.type in ("cpu", "cuda")
         self.optimizer = torch.optim.Adam(self.online.parameters(), lr=learning_rate, fused=fused)
-        self.gamma = float(gamma)
         self.max_grad_norm = max_grad_norm
         self.channels_last = bool(channels_last)
 
@@ -146,9 +149,7 @@ class DDQNLearner:
     def update(self, batch: ReplayBatch) -> UpdateResult:
         """One gradient step on a replay batch."""
         tensors = to_torch_batch(batch, self.device, self.channels_last)
-        return ddqn_update(
-            self.online, self.target, self.optimizer, tensors, self.gamma, self.max_grad_norm
-        )
+        return ddqn_update(self.online, self.target, self.optimizer, tensors, self.max_grad_norm)
 
     def sync_target(self) -> None:
         """Copy the online weights into the target network."""

@@ -16,22 +16,23 @@ from torch.nn import functional as F
 def double_q_targets(
     rewards: torch.Tensor,
     terminated: torch.Tensor,
-    gamma: float,
+    discounts: float | torch.Tensor,
     next_q_online: torch.Tensor,
     next_q_target: torch.Tensor,
 ) -> torch.Tensor:
     """Double-DQN targets (van Hasselt et al. 2016; the paper's Eq. for Y^DoubleQ).
 
     ``Y = r + gamma * Q_target(s', argmax_a Q_online(s', a))``: the online network *selects* the
-    next action and the target network *evaluates* it.
+    next action and the target network *evaluates* it. For n-step returns ``r`` is the
+    discounted sum of n rewards, ``s'`` the state after them and the discount ``gamma ** n``.
 
     Only ``terminated`` stops bootstrapping: a terminal state has no future. An episode cut by
     the 20-step time limit (truncated) is not terminal, so its target still bootstraps from s'.
 
     Args:
-        rewards: (B,) rewards r_{t+1}.
+        rewards: (B,) rewards r_{t+1} (or n-step reward sums).
         terminated: (B,) 1.0 / True where s' is terminal.
-        gamma: discount factor.
+        discounts: the discount factor, or (B,) discounts of each bootstrap.
         next_q_online: (B, A) online-network Q-values of s'.
         next_q_target: (B, A) target-network Q-values of s'.
 
@@ -41,7 +42,7 @@ def double_q_targets(
     next_actions = next_q_online.argmax(dim=1, keepdim=True)
     next_values = next_q_target.gather(1, next_actions).squeeze(1)
     not_terminal = 1.0 - terminated.to(next_values.dtype)
-    return (rewards + gamma * not_terminal * next_values).detach()
+    return (rewards + discounts * not_terminal * next_values).detach()
 
 
 def weighted_huber_loss(

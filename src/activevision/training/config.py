@@ -41,6 +41,9 @@ class TrainConfig:
     """Adam learning rate, constant (paper)."""
     gamma: float = 0.99
     """Discount factor (paper)."""
+    n_step: int = 1
+    """Rewards summed per replay target: 1 is the paper's one-step DDQN, 3 Rainbow's n-step
+    returns (Hessel et al. 2018), which reach 80% in the paper's 30,000 steps (README)."""
     target_update_interval: int = 10_000
     """Environment steps between target-network syncs (paper)."""
     exploration_initial: float = 1.0
@@ -63,6 +66,8 @@ class TrainConfig:
     """Added to |td error| to form priorities (SB2)."""
     max_grad_norm: float = 10.0
     """Per-tensor gradient-norm clip (SB2 grad_norm_clipping)."""
+    augment_shift: int = 0
+    """DrQ random shift of replay images by up to this many pixels (0: none, the paper)."""
     dueling: bool = False
     """Dueling Q-network head (not in the paper)."""
     eval_interval: int = 0
@@ -117,12 +122,14 @@ _POSITIVE_INTS = (
     "target_update_interval",
     "train_freq",
     "gradient_steps",
+    "n_step",
     "keep_checkpoints",
     "eval_episodes",
 )
 _NON_NEGATIVE_INTS = (
     "learning_starts",
     "checkpoint_interval",
+    "augment_shift",
     "eval_interval",
     "eval_seed",
     "num_threads",

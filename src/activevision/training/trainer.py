@@ -44,6 +44,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 
+from activevision.agents.augment import random_shifts
 from activevision.agents.ddqn import DDQNLearner
 from activevision.agents.dqn_math import epsilon_greedy, linear_schedule
 from activevision.agents.q_network import QNetwork
@@ -129,13 +130,18 @@ class Trainer:
         self.learner = DDQNLearner(
             network,
             learning_rate=config.learning_rate,
-            gamma=config.gamma,
             max_grad_norm=config.max_grad_norm,
             device=self.device,
             channels_last=channels_last,
         )
         self.buffer = PrioritizedReplayBuffer(
-            config.buffer_size, self.obs_shape, config.per_alpha, config.per_eps, int(replay_seed)
+            config.buffer_size,
+            self.obs_shape,
+            config.per_alpha,
+            config.per_eps,
+            int(replay_seed),
+            n_step=config.n_step,
+            gamma=config.gamma,
         )
 
         # progress; everything below is saved in checkpoints
@@ -236,6 +242,11 @@ class Trainer:
             if self.step % c.train_freq == 0:
                 for _ in range(c.gradient_steps):
                     batch = self.buffer.sample(c.batch_size, self.beta)
+                    if c.augment_shift:
+                        batch = batch._replace(
+                            obs=random_shifts(batch.obs, c.augment_shift, self.rng),
+                            next_obs=random_shifts(batch.next_obs, c.augment_shift, self.rng),
+                        )
                     result = self.learner.update(batch)
                     self.buffer.update_priorities(batch.indices, result.td_errors)
                     self.epoch_log.losses.append(result.loss)

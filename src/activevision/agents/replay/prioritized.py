@@ -8,6 +8,11 @@ and with frame stacks (``stack > 1``) a step adds only the newest frame whenever
 
 Priorities follow Stable-Baselines (v2): new transitions get the largest priority seen so far,
 updates set ``p = |td error| + eps``, and sampling is proportional to ``p ** alpha``.
+
+With ``n_step > 1`` a sampled transition brings the discounted sum of up to ``n_step`` rewards
+along its episode and the observation after them (multi-step returns, Sutton 1988; Rainbow,
+Hessel et al. 2018). They are formed at sampling time from the stored one-step transitions, so
+nothing is stored twice, and the buffer's contents do not depend on ``n_step``.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ class ReplayBatch(NamedTuple):
     rewards: np.ndarray  # (B,) float32
     next_obs: np.ndarray  # (B, stack, H, W) uint8
     terminated: np.ndarray  # (B,) float32, 1.0 where next_obs is terminal (not merely truncated)
+    discounts: np.ndarray  # (B,) float32 gamma ** (rewards summed): the bootstrap's discount
     weights: np.ndarray  # (B,) float32 importance-sampling weights, max 1
     indices: np.ndarray  # (B,) int64 buffer slots, for update_priorities
 
@@ -44,6 +50,8 @@ class PrioritizedReplayBuffer:
         eps: added to |td error| so that no transition has zero priority (SB2: 1e-6).
         seed: seed of the sampler's own generator.
         chunk_frames: frames per storage chunk; storage grows one chunk at a time.
+        n_step: rewards summed per sampled transition (1: the paper's one-step targets).
+        gamma: discount of those sums and of the bootstrap.
     """
 
     def __init__(
@@ -54,9 +62,13 @@ class PrioritizedReplayBuffer:
         eps: float = 1e-6,
         seed: int | None = None,
         chunk_frames: int = 1024,
+        n_step: int = 1,
+        gamma: float = 0.99,
     ) -> None:
         if capacity < 1:
             raise ValueError(f"capacity must be >= 1, got {capacity}")
+        if n_step < 1:
+            raise ValueError(f"n_step must be >= 1, got {n_step}")
         if len(obs_shape) != 3:
             raise ValueError(f"obs_shape must be (stack, H, W), got {obs_shape}")
         self.capacity = int(capacity)
@@ -65,6 +77,8 @@ class PrioritizedReplayBuffer:
         self.alpha = float(alpha)
         self.eps = float(eps)
         self.chunk_frames = int(chunk_frames)
+        self.n_step = int(n_step)
+        self.gamma = float(gamma)
 
         self.frames = FrameStore(self.obs_shape[1:], chunk_frames)
         # per-transition scalars; np.zeros is lazily backed, so unused slots cost no memory
@@ -134,15 +148,39 @@ class PrioritizedReplayBuffer:
             raise ValueError("cannot sample from an empty replay buffer")
         indices, probs = self.sampler.sample(batch_size)
         weights = importance_weights(probs, self.size, beta)
+        last, rewards, discounts = self._n_step_returns(indices)
         return ReplayBatch(
             obs=self._stack_of(self._obs_ids[indices]),
             actions=self._actions[indices],
-            rewards=self._rewards[indices],
-            next_obs=self._stack_of(self._next_obs_ids[indices]),
-            terminated=self._terminated[indices].astype(np.float32),
+            rewards=rewards,
+            next_obs=self._stack_of(self._next_obs_ids[last]),
+            terminated=self._terminated[last].astype(np.float32),
+            discounts=discounts,
             weights=weights.astype(np.float32),
             indices=indices,
         )
+
+    def _n_step_returns(self, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(slot of the last transition used, discounted reward sum, gamma ** steps) per index.
+
+        From each sampled slot, transitions are followed while they continue its episode, for
+        ``n_step`` steps at most: near an episode's end (terminal or truncated) or its unfinished
+        present the return is shorter and bootstraps sooner, never through termination. A
+        transition continues the previous one exactly when it starts from that one's
+        ``next_obs`` frame; frame ids only grow and a new episode stores new frames, so this
+        also stops at episode ends and at the newest transition (the slot after it is empty or
+        holds the oldest).
+        """
+        offsets = np.arange(self.n_step)
+        slots = (indices[:, None] + offsets) % self.capacity  # (B, n_step)
+        continues = self._obs_ids[slots[:, 1:]] == self._next_obs_ids[slots[:, :-1]]
+        used = np.ones(slots.shape, dtype=np.bool_)
+        used[:, 1:] = np.logical_and.accumulate(continues, axis=1)
+        steps = used.sum(axis=1)
+        last = slots[np.arange(len(indices)), steps - 1]
+        powers = self.gamma ** offsets.astype(np.float64)
+        rewards = (used * self._rewards[slots] * powers).sum(axis=1)
+        return last, rewards.astype(np.float32), (self.gamma**steps).astype(np.float32)
 
     def _stack_of(self, newest_ids: np.ndarray | int) -> np.ndarray:
         """Observations (..., stack, H, W) whose newest frames have ids ``newest_ids``."""
@@ -165,6 +203,7 @@ class PrioritizedReplayBuffer:
         return {
             "shape": np.array([self.capacity, *self.obs_shape], dtype=np.int64),
             "alpha_eps": np.array([self.alpha, self.eps], dtype=np.float64),
+            "n_step_gamma": np.array([self.n_step, self.gamma], dtype=np.float64),
             "counters": np.array(
                 [
                     self.cursor,
@@ -194,7 +233,16 @@ class PrioritizedReplayBuffer:
         cursor, size, first_frame_id, open_obs_id, chunk_frames = (
             int(v) for v in state["counters"]
         )
-        buffer = cls(capacity, tuple(obs_shape), alpha, eps, chunk_frames=chunk_frames)
+        n_step, gamma = state["n_step_gamma"] if "n_step_gamma" in state else (1, 0.99)
+        buffer = cls(
+            capacity,
+            tuple(obs_shape),
+            alpha,
+            eps,
+            chunk_frames=chunk_frames,
+            n_step=int(n_step),
+            gamma=float(gamma),
+        )
         buffer.frames = FrameStore.restore(first_frame_id, state["frames"], chunk_frames)
         buffer._obs_ids[:size] = state["obs_ids"]
         buffer._next_obs_ids[:size] = state["next_obs_ids"]
