@@ -6,6 +6,7 @@ import torch
 from torch import nn
 
 from activevision.agents.ddqn import DDQNLearner
+from activevision.agents.q_network import QNetwork
 from activevision.agents.replay.prioritized import PrioritizedReplayBuffer
 
 GAMMA = 0.9
@@ -74,3 +75,29 @@ def test_ddqn_learns_optimal_q_values_of_a_chain(one_torch_thread):
             learner.sync_target()
     learned = np.stack([learner.q_values(one_hot_image(s)) for s in range(N_STATES)])
     np.testing.assert_allclose(learned, optimal_q(), atol=0.03)
+
+
+def test_auxiliary_loss_trains_the_auxiliary_head(one_torch_thread):
+    """With aux_weight the update also fits the aux head to the stored targets."""
+    with torch.random.fork_rng():
+        torch.manual_seed(1)
+        learner = DDQNLearner(
+            QNetwork(2, image_shape=(36, 36), aux_outputs=2), learning_rate=1e-3, aux_weight=1.0
+        )
+    rng = np.random.default_rng(1)
+    buffer = PrioritizedReplayBuffer(64, (1, 36, 36), alpha=0.0, seed=1, aux_dim=2)
+    for _ in range(32):  # target: the image's mean brightness and its left-right difference
+        image = rng.integers(0, 256, size=(1, 36, 36), dtype=np.uint8)
+        target = [image.mean() / 255, (image[..., :18].mean() - image[..., 18:].mean()) / 25]
+        buffer.add(image, 0, 0.0, image, True, False, aux=np.array(target))
+
+    def aux_error() -> float:
+        batch = buffer.sample(32, beta=1.0)
+        with torch.no_grad():
+            _, predicted = learner.online.forward_with_aux(torch.from_numpy(batch.obs))
+        return float(((predicted.numpy() - batch.aux) ** 2).mean())
+
+    before = aux_error()
+    for _ in range(150):
+        learner.update(buffer.sample(32, beta=1.0))
+    assert aux_error() < 0.1 * before

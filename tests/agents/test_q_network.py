@@ -1,3 +1,4 @@
+import pytest
 import torch
 from torch import nn
 
@@ -46,3 +47,15 @@ def test_dueling_head_is_mean_centred():
     q = network(obs)
     torch.testing.assert_close(q.mean(dim=1, keepdim=True), network.value(hidden))
     assert q.shape == (2, 5)
+
+
+def test_auxiliary_head_shares_the_features_and_leaves_q_alone():
+    torch.manual_seed(0)
+    network = QNetwork(n_actions=5, image_shape=(60, 80), aux_outputs=2)
+    obs = torch.randint(0, 256, (3, 1, 60, 80), dtype=torch.uint8)
+    q, aux = network.forward_with_aux(obs)
+    torch.testing.assert_close(q, network(obs))
+    torch.testing.assert_close(aux, network.aux(network.features(obs)))
+    assert aux.shape == (3, 2)
+    with pytest.raises(ValueError, match="auxiliary head"):
+        QNetwork(n_actions=5, image_shape=(60, 80)).forward_with_aux(obs)

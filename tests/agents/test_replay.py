@@ -185,3 +185,19 @@ def test_n_step_hand_computed_case():
         assert batch.discounts[i] == pytest.approx(discount)
         assert batch.terminated[i] == terminal
         np.testing.assert_array_equal(batch.next_obs[i], frames[frame])
+
+
+def test_auxiliary_targets_travel_with_their_transitions():
+    buffer = PrioritizedReplayBuffer(8, SHAPE, seed=10, aux_dim=2)
+    frames = episode_frames(np.random.default_rng(10), 12)
+    for t in range(12):  # wraps around: slots hold steps 4..11
+        buffer.add(frames[t], 0, 0.0, frames[t + 1], False, False, aux=np.array([t, -t]))
+    batch = buffer.sample(32, beta=1.0)
+    for i, slot in enumerate(batch.indices):
+        step = slot + 8 if slot < 4 else slot
+        np.testing.assert_array_equal(batch.obs[i], frames[step])
+        np.testing.assert_array_equal(batch.aux[i], [step, -step])
+    restored = PrioritizedReplayBuffer.from_state_dict(buffer.state_dict())
+    np.testing.assert_array_equal(restored.sample(32, 1.0).aux, buffer.sample(32, 1.0).aux)
+    with pytest.raises(ValueError, match="aux"):
+        buffer.add(frames[0], 0, 0.0, frames[1], False, False)  # aux missing

@@ -39,7 +39,14 @@ class FakeViewEnv(gym.Env):
         super().reset(seed=seed)
         self.pan, self.goal = (int(v) for v in self.np_random.choice(10, size=2, replace=False))
         self.steps = 0
-        return self._obs(), {}
+        return self._obs(), self._angles()
+
+    def _angles(self) -> dict[str, np.ndarray]:
+        """Head and goal as (pan, tilt), as ActiveVision-v0 reports them."""
+        return {
+            "head": np.array([0.1 * self.pan, 0.0]),
+            "goal_viewpoint": np.array([0.1 * self.goal, 0.0]),
+        }
 
     def step(self, action: int):
         before = abs(self.pan - self.goal)
@@ -49,9 +56,9 @@ class FakeViewEnv(gym.Env):
         reward = float(np.sign(before - after))
         terminated = after == 0
         truncated = not terminated and self.steps >= 20
-        info: dict[str, Any] = {}
+        info: dict[str, Any] = self._angles()
         if terminated or truncated:
-            info = {
+            info |= {
                 "success": terminated,
                 "success_rate": 1.0 if terminated else 1.0 - after / 10.0,
                 "steps_to_success": self.steps if terminated else 20,

@@ -12,7 +12,7 @@ from activevision.training import checkpoint as ckpt
 from activevision.training.config import TrainConfig
 from activevision.training.metrics import EPOCH_FIELDS, TIMING_FIELDS
 from activevision.training.plots import CURVES, plot_run
-from activevision.training.trainer import Trainer, load_policy, resume, train
+from activevision.training.trainer import Trainer, goal_offset, load_policy, resume, train
 from activevision.training.validation import greedy_episodes, summarise_validation
 
 
@@ -85,7 +85,7 @@ def comparable(rows):
     return [{k: v for k, v in row.items() if k not in TIMING_FIELDS} for row in rows]
 
 
-@pytest.mark.parametrize("options", [{}, {"n_step": 3, "augment_shift": 2}])
+@pytest.mark.parametrize("options", [{}, {"n_step": 3, "augment_shift": 2, "aux_goal_weight": 1.0}])
 def test_resume_gives_exactly_the_uninterrupted_result(tmp_path, fake_env_factory, options):
     config = tiny_config(**options)
     straight, interrupted = tmp_path / "straight", tmp_path / "interrupted"
@@ -260,3 +260,33 @@ def test_best_weights_need_validation(tmp_path, fake_env_factory):
         tiny_config(eval_interval=-1)
     with pytest.raises(ValueError, match="eval_episodes"):
         tiny_config(eval_episodes=0)
+
+
+def test_auxiliary_goal_targets_are_the_goal_offsets_of_each_stored_observation(
+    tmp_path, fake_env_factory
+):
+    config = tiny_config(aux_goal_weight=1.0, total_timesteps=60)
+    trainer = Trainer(config, tmp_path, fake_env_factory)
+    trainer.train()
+    buffer = trainer.buffer
+    batch = buffer.sample(64, beta=1.0)
+    for obs, aux in zip(batch.obs, batch.aux, strict=True):
+        columns = obs[0].max(axis=0)  # the fake image: pan column 255, goal column 128 (+1)
+        pan = np.flatnonzero(columns == 255)[0] * 10 // obs.shape[-1]
+        goal = (np.flatnonzero(columns == 128)[0] - 1) * 10 // obs.shape[-1]
+        np.testing.assert_allclose(aux, [0.1 * (goal - pan), 0.0], atol=1e-6)
+    network = load_policy(tmp_path)
+    assert network.aux_outputs == 2  # the policy file keeps the auxiliary head ...
+    obs = torch.from_numpy(batch.obs[:4])
+    q_values, _ = network.forward_with_aux(obs)
+    torch.testing.assert_close(network(obs), q_values)  # ... which never changes the Q-values
+    trainer.close()
+
+
+def test_auxiliary_goal_task_needs_head_and_goal_in_info():
+    with pytest.raises(ValueError, match="goal_viewpoint"):
+        goal_offset({"head": np.zeros(2)})
+    np.testing.assert_allclose(
+        goal_offset({"head": np.array([0.5, 0.2]), "goal_viewpoint": np.array([-0.1, 0.6])}),
+        [-0.6, 0.4],
+    )

@@ -14,6 +14,7 @@ from typing import NamedTuple
 import numpy as np
 import torch
 from torch import nn
+from torch.nn import functional as F
 
 from activevision.agents.dqn_math import double_q_targets, weighted_huber_loss
 from activevision.agents.replay.prioritized import ReplayBatch
@@ -28,13 +29,14 @@ class TorchBatch(NamedTuple):
     next_obs: torch.Tensor  # (B, stack, H, W) uint8
     terminated: torch.Tensor  # (B,) float32
     discounts: torch.Tensor  # (B,) float32
+    aux: torch.Tensor  # (B, aux_dim) float32
     weights: torch.Tensor  # (B,) float32
 
 
 class UpdateResult(NamedTuple):
     """What one gradient step reports."""
 
-    loss: float
+    loss: float  # the TD loss (without the auxiliary term)
     td_errors: np.ndarray  # (B,) q_taken - target, for new priorities
 
 
@@ -59,6 +61,7 @@ def to_torch_batch(
         next_obs=image(batch.next_obs),
         terminated=vector(batch.terminated, torch.float32),
         discounts=vector(batch.discounts, torch.float32),
+        aux=vector(batch.aux, torch.float32),
         weights=vector(batch.weights, torch.float32),
     )
 
@@ -83,11 +86,15 @@ def ddqn_update(
     optimizer: torch.optim.Optimizer,
     batch: TorchBatch,
     max_grad_norm: float | None = 10.0,
+    aux_weight: float = 0.0,
 ) -> UpdateResult:
     """One Double-DQN gradient step on ``online``; ``target`` only evaluates.
 
     Works with any module mapping a batch of observations to (B, n_actions) Q-values; the
-    batch brings each target's discount (gamma, or gamma ** n for n-step returns).
+    batch brings each target's discount (gamma, or gamma ** n for n-step returns). With
+    ``aux_weight > 0`` the network's auxiliary head (``forward_with_aux``) also regresses
+    ``batch.aux`` (mean squared error, added with that weight: an auxiliary task, Jaderberg et
+    al. 2017).
     """
     with torch.inference_mode():  # cheaper than no_grad: no version counters
         targets = double_q_targets(
@@ -98,11 +105,16 @@ def ddqn_update(
             target(batch.next_obs),
         )
     targets = targets.clone()  # an ordinary tensor again, so autograd may save it
-    q_taken = online(batch.obs).gather(1, batch.actions.unsqueeze(1)).squeeze(1)
+    if aux_weight:
+        q_values, aux_predictions = online.forward_with_aux(batch.obs)
+    else:
+        q_values = online(batch.obs)
+    q_taken = q_values.gather(1, batch.actions.unsqueeze(1)).squeeze(1)
     loss = weighted_huber_loss(q_taken, targets, batch.weights)
+    total = loss + aux_weight * F.mse_loss(aux_predictions, batch.aux) if aux_weight else loss
 
     optimizer.zero_grad(set_to_none=True)
-    loss.backward()
+    total.backward()
     if max_grad_norm is not None:
         clip_grad_norm_per_tensor(online.parameters(), max_grad_norm)
     optimizer.step()
@@ -119,6 +131,7 @@ class DDQNLearner:
         max_grad_norm: per-tensor gradient-norm clip (SB2: 10), or None.
         device: where the networks live.
         channels_last: feed images channels-last (faster convolutions on x86 CPUs).
+        aux_weight: weight of the auxiliary head's loss (0: none, the paper).
     """
 
     def __init__(
@@ -128,6 +141,7 @@ class DDQNLearner:
         max_grad_norm: float | None = 10.0,
         device: torch.device | str = "cpu",
         channels_last: bool = False,
+        aux_weight: float = 0.0,
     ) -> None:
         self.device = torch.device(device)
         self.online = q_network.to(self.device)
@@ -137,6 +151,7 @@ class DDQNLearner:
         self.optimizer = torch.optim.Adam(self.online.parameters(), lr=learning_rate, fused=fused)
         self.max_grad_norm = max_grad_norm
         self.channels_last = bool(channels_last)
+        self.aux_weight = float(aux_weight)
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
         """Online Q-values of one observation (shape (n_actions,))."""
@@ -149,7 +164,9 @@ class DDQNLearner:
     def update(self, batch: ReplayBatch) -> UpdateResult:
         """One gradient step on a replay batch."""
         tensors = to_torch_batch(batch, self.device, self.channels_last)
-        return ddqn_update(self.online, self.target, self.optimizer, tensors, self.max_grad_norm)
+        return ddqn_update(
+            self.online, self.target, self.optimizer, tensors, self.max_grad_norm, self.aux_weight
+        )
 
     def sync_target(self) -> None:
         """Copy the online weights into the target network."""

@@ -58,6 +58,9 @@ class QNetwork(nn.Module):
         image_shape: (height, width) of each frame; the paper uses (120, 160).
         dueling: if True, split the head into a state value and action advantages
             (Wang et al. 2016), Q = V + A - mean(A). Off in the paper.
+        aux_outputs: size of a second, linear head on the hidden units trained on an
+            auxiliary task (:meth:`forward_with_aux`); 0 (the paper) adds none. It never
+            changes the Q-values.
     """
 
     def __init__(
@@ -66,6 +69,7 @@ class QNetwork(nn.Module):
         stack: int = 1,
         image_shape: tuple[int, int] = PAPER_IMAGE_SHAPE,
         dueling: bool = False,
+        aux_outputs: int = 0,
     ) -> None:
         super().__init__()
         self.n_actions = int(n_actions)
@@ -84,6 +88,8 @@ class QNetwork(nn.Module):
             self.advantage = nn.Linear(512, self.n_actions)
         else:
             self.q = nn.Linear(512, self.n_actions)
+        self.aux_outputs = int(aux_outputs)
+        self.aux = nn.Linear(512, self.aux_outputs) if self.aux_outputs else None
 
     def features(self, obs: torch.Tensor) -> torch.Tensor:
         """The 512 hidden units for a batch of uint8 (or already [0, 1]-scaled float) images."""
@@ -97,7 +103,16 @@ class QNetwork(nn.Module):
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
         """Q-values, shape (B, n_actions)."""
+        return self._q_values(self.features(obs))
+
+    def forward_with_aux(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Q-values and the auxiliary head's outputs (B, aux_outputs) from one pass."""
+        if self.aux is None:
+            raise ValueError("this QNetwork has no auxiliary head (aux_outputs=0)")
         hidden = self.features(obs)
+        return self._q_values(hidden), self.aux(hidden)
+
+    def _q_values(self, hidden: torch.Tensor) -> torch.Tensor:
         if not self.dueling:
             return self.q(hidden)
         advantage = self.advantage(hidden)

@@ -43,7 +43,7 @@ class TrainConfig:
     """Discount factor (paper)."""
     n_step: int = 1
     """Rewards summed per replay target: 1 is the paper's one-step DDQN, 3 Rainbow's n-step
-    returns (Hessel et al. 2018), which reach 80% in the paper's 30,000 steps (README)."""
+    returns (Hessel et al. 2018; measured no better here, README)."""
     target_update_interval: int = 10_000
     """Environment steps between target-network syncs (paper)."""
     exploration_initial: float = 1.0
@@ -68,6 +68,10 @@ class TrainConfig:
     """Per-tensor gradient-norm clip (SB2 grad_norm_clipping)."""
     augment_shift: int = 0
     """DrQ random shift of replay images by up to this many pixels (0: none, the paper)."""
+    aux_goal_weight: float = 0.0
+    """Weight of an auxiliary loss in which a second head predicts, from the image, the goal
+    viewpoint's (pan, tilt) offset from the head (MSE, rad; 0: none, the paper). Training
+    only: the policy still acts on the image alone."""
     dueling: bool = False
     """Dueling Q-network head (not in the paper)."""
     eval_interval: int = 0
@@ -137,6 +141,7 @@ _NON_NEGATIVE_INTS = (
 _FRACTIONS = ("gamma", "exploration_initial", "exploration_final", "exploration_fraction")
 _FRACTIONS += ("per_alpha", "per_beta0")
 _POSITIVE_FLOATS = ("learning_rate", "per_eps", "max_grad_norm")
+_NON_NEGATIVE_FLOATS = ("aux_goal_weight",)
 
 
 def validate(config: TrainConfig) -> None:
@@ -155,6 +160,10 @@ def validate(config: TrainConfig) -> None:
         value = getattr(config, name)
         if not (math.isfinite(value) and value > 0.0):
             raise ValueError(f"{name} must be a positive number, got {value}")
+    for name in _NON_NEGATIVE_FLOATS:
+        value = getattr(config, name)
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ValueError(f"{name} must be a number >= 0, got {value}")
     if config.checkpoint_interval % config.epoch_steps:
         raise ValueError(
             f"checkpoint_interval must be a multiple of epoch_steps ({config.epoch_steps}),"

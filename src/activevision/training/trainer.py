@@ -122,7 +122,11 @@ class Trainer:
         with torch.random.fork_rng(devices=[]):  # seed network init without touching global RNG
             torch.manual_seed(int(init_seed))
             network = QNetwork(
-                self.n_actions, self.obs_shape[0], self.obs_shape[1:], dueling=config.dueling
+                self.n_actions,
+                self.obs_shape[0],
+                self.obs_shape[1:],
+                dueling=config.dueling,
+                aux_outputs=GOAL_OFFSET_DIM if config.aux_goal_weight else 0,
             )
         channels_last = self.device.type == "cpu"
         if channels_last:
@@ -133,6 +137,7 @@ class Trainer:
             max_grad_norm=config.max_grad_norm,
             device=self.device,
             channels_last=channels_last,
+            aux_weight=config.aux_goal_weight,
         )
         self.buffer = PrioritizedReplayBuffer(
             config.buffer_size,
@@ -142,6 +147,7 @@ class Trainer:
             int(replay_seed),
             n_step=config.n_step,
             gamma=config.gamma,
+            aux_dim=GOAL_OFFSET_DIM if config.aux_goal_weight else 0,
         )
 
         # progress; everything below is saved in checkpoints
@@ -149,6 +155,7 @@ class Trainer:
         self.episode = 0
         self.epoch_log = EpochAccumulator()
         self._obs: np.ndarray | None = None  # current observation, None between episodes
+        self._obs_aux: np.ndarray | None = None  # auxiliary target of _obs (aux_goal_weight)
         self._episode_seed = 0
         self._episode_actions: list[int] = []
         self._episode_reward = 0.0
@@ -233,7 +240,16 @@ class Trainer:
         )
         next_obs, reward, terminated, truncated, info = self.env.step(action)
         next_obs = np.asarray(next_obs, dtype=np.uint8).reshape(self.obs_shape)
-        self.buffer.add(obs, action, float(reward), next_obs, bool(terminated), bool(truncated))
+        self.buffer.add(
+            obs,
+            action,
+            float(reward),
+            next_obs,
+            bool(terminated),
+            bool(truncated),
+            aux=self._obs_aux,
+        )
+        self._obs_aux = self._aux_target(info)
         self._episode_actions.append(action)
         self._episode_reward += float(reward)
         self.step += 1
@@ -309,10 +325,14 @@ class Trainer:
     def _start_episode(self) -> None:
         """Reset with a seed from the trainer's generator (what makes resuming exact)."""
         self._episode_seed = int(self.rng.integers(2**31 - 1))
-        obs, _ = self.env.reset(seed=self._episode_seed)
+        obs, info = self.env.reset(seed=self._episode_seed)
         self._obs = np.asarray(obs, dtype=np.uint8).reshape(self.obs_shape)
+        self._obs_aux = self._aux_target(info)
         self._episode_actions = []
         self._episode_reward = 0.0
+
+    def _aux_target(self, info: dict[str, Any]) -> np.ndarray | None:
+        return goal_offset(info) if self.config.aux_goal_weight else None
 
     def _finish_epoch(self, steps_per_s: float) -> dict[str, float]:
         epoch = self.step // self.config.epoch_steps
@@ -353,6 +373,7 @@ class Trainer:
             "stack": self.obs_shape[0],
             "image_shape": list(self.obs_shape[1:]),
             "dueling": self.config.dueling,
+            "aux_outputs": self.learner.online.aux_outputs,
             "step": self.step,
         }
 
@@ -460,9 +481,10 @@ class Trainer:
 
     def _replay_open_episode(self) -> np.ndarray:
         """Bring the environment back to the checkpoint's state: same seed, same actions."""
-        obs, _ = self.env.reset(seed=self._episode_seed)
+        obs, info = self.env.reset(seed=self._episode_seed)
         for action in self._episode_actions:
-            obs, *_ = self.env.step(action)
+            obs, _, _, _, info = self.env.step(action)
+        self._obs_aux = self._aux_target(info)
         return np.asarray(obs, dtype=np.uint8).reshape(self.obs_shape)
 
 
@@ -520,7 +542,11 @@ def load_policy(
         }
     try:
         network = QNetwork(
-            meta["n_actions"], meta["stack"], tuple(meta["image_shape"]), meta["dueling"]
+            meta["n_actions"],
+            meta["stack"],
+            tuple(meta["image_shape"]),
+            meta["dueling"],
+            aux_outputs=meta.get("aux_outputs", 0),
         )
         network.load_state_dict(tensors)
     except (KeyError, RuntimeError) as error:
@@ -529,6 +555,21 @@ def load_policy(
 
 
 # ---------------------------------------------------------------------- helpers
+GOAL_OFFSET_DIM = 2
+
+
+def goal_offset(info: dict[str, Any]) -> np.ndarray:
+    """(pan, tilt) from the head to the goal viewpoint, rad: the auxiliary task's target."""
+    try:
+        offset = np.asarray(info["goal_viewpoint"], np.float32) - np.asarray(info["head"])
+    except KeyError as error:
+        raise ValueError(
+            "aux_goal_weight needs an environment whose info holds 'goal_viewpoint' and 'head'"
+            f" (as ActiveVision-v0's does); missing {error}"
+        ) from error
+    return offset.astype(np.float32).reshape(GOAL_OFFSET_DIM)
+
+
 def _chw_shape(space: gym.Space) -> tuple[int, int, int]:
     if not isinstance(space, gym.spaces.Box) or space.dtype != np.uint8:
         raise ValueError(f"need a uint8 Box observation space, got {space}")

@@ -36,6 +36,7 @@ class ReplayBatch(NamedTuple):
     next_obs: np.ndarray  # (B, stack, H, W) uint8
     terminated: np.ndarray  # (B,) float32, 1.0 where next_obs is terminal (not merely truncated)
     discounts: np.ndarray  # (B,) float32 gamma ** (rewards summed): the bootstrap's discount
+    aux: np.ndarray  # (B, aux_dim) float32 auxiliary targets of obs (aux_dim may be 0)
     weights: np.ndarray  # (B,) float32 importance-sampling weights, max 1
     indices: np.ndarray  # (B,) int64 buffer slots, for update_priorities
 
@@ -52,6 +53,8 @@ class PrioritizedReplayBuffer:
         chunk_frames: frames per storage chunk; storage grows one chunk at a time.
         n_step: rewards summed per sampled transition (1: the paper's one-step targets).
         gamma: discount of those sums and of the bootstrap.
+        aux_dim: length of a per-transition vector of auxiliary targets for ``obs`` (e.g. the
+            goal's direction, for an auxiliary loss); 0 stores none.
     """
 
     def __init__(
@@ -64,6 +67,7 @@ class PrioritizedReplayBuffer:
         chunk_frames: int = 1024,
         n_step: int = 1,
         gamma: float = 0.99,
+        aux_dim: int = 0,
     ) -> None:
         if capacity < 1:
             raise ValueError(f"capacity must be >= 1, got {capacity}")
@@ -79,6 +83,7 @@ class PrioritizedReplayBuffer:
         self.chunk_frames = int(chunk_frames)
         self.n_step = int(n_step)
         self.gamma = float(gamma)
+        self.aux_dim = int(aux_dim)
 
         self.frames = FrameStore(self.obs_shape[1:], chunk_frames)
         # per-transition scalars; np.zeros is lazily backed, so unused slots cost no memory
@@ -87,6 +92,7 @@ class PrioritizedReplayBuffer:
         self._actions = np.zeros(self.capacity, dtype=np.int64)
         self._rewards = np.zeros(self.capacity, dtype=np.float32)
         self._terminated = np.zeros(self.capacity, dtype=np.bool_)
+        self._aux = np.zeros((self.capacity, self.aux_dim), dtype=np.float32)
         self.tree = SumTree(self.capacity)
         self.sampler = ProportionalSampler(self.tree, seed)
 
@@ -107,9 +113,13 @@ class PrioritizedReplayBuffer:
         next_obs: np.ndarray,
         terminated: bool,
         truncated: bool,
+        aux: np.ndarray | None = None,
     ) -> int:
         """Store one transition at maximal priority; returns its slot."""
         obs = self._check_obs(obs)
+        aux = np.zeros(0, np.float32) if aux is None else np.asarray(aux, dtype=np.float32)
+        if aux.shape != (self.aux_dim,):
+            raise ValueError(f"aux must have shape ({self.aux_dim},), got {aux.shape}")
         next_obs = self._check_obs(next_obs)
         obs_id = self._open_episode_obs_id
         if obs_id < 0 or not np.array_equal(self._stack_of(obs_id), obs):
@@ -126,6 +136,7 @@ class PrioritizedReplayBuffer:
         self._actions[slot] = action
         self._rewards[slot] = reward
         self._terminated[slot] = terminated
+        self._aux[slot] = aux
         self.tree.set(np.array([slot]), np.array([self.max_priority**self.alpha]))
         self.cursor = (slot + 1) % self.capacity
         self.size = min(self.size + 1, self.capacity)
@@ -156,6 +167,7 @@ class PrioritizedReplayBuffer:
             next_obs=self._stack_of(self._next_obs_ids[last]),
             terminated=self._terminated[last].astype(np.float32),
             discounts=discounts,
+            aux=self._aux[indices],
             weights=weights.astype(np.float32),
             indices=indices,
         )
@@ -221,6 +233,7 @@ class PrioritizedReplayBuffer:
             "actions": self._actions[:n].copy(),
             "rewards": self._rewards[:n].copy(),
             "terminated": self._terminated[:n].copy(),
+            "aux": self._aux[:n].copy(),
             "priorities": self.tree.leaves(n),
             "sampler_rng": np.array(json.dumps(self.sampler.get_state())),
         }
@@ -242,6 +255,7 @@ class PrioritizedReplayBuffer:
             chunk_frames=chunk_frames,
             n_step=int(n_step),
             gamma=float(gamma),
+            aux_dim=state["aux"].shape[1] if "aux" in state else 0,
         )
         buffer.frames = FrameStore.restore(first_frame_id, state["frames"], chunk_frames)
         buffer._obs_ids[:size] = state["obs_ids"]
@@ -249,6 +263,8 @@ class PrioritizedReplayBuffer:
         buffer._actions[:size] = state["actions"]
         buffer._rewards[:size] = state["rewards"]
         buffer._terminated[:size] = state["terminated"]
+        if buffer.aux_dim:
+            buffer._aux[:size] = state["aux"]
         buffer.tree.set(np.arange(size), state["priorities"])
         buffer.sampler.set_state(json.loads(str(state["sampler_rng"])))
         buffer.cursor, buffer.size = cursor, size
