@@ -271,7 +271,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("train", cmd_train, "train a DDQN + PER head controller")
     p.add_argument("--config", type=Path, help="TrainConfig JSON file")
     p.add_argument(
-        "--preset", default="paper", help="paper | release | data4x | data8x | quickstart"
+        "--preset", default="paper", help="paper | release | drq_aux | data4x | data8x | quickstart"
     )
     p.add_argument("--steps", type=int, help="total environment steps (resume: steps to add)")
     p.add_argument("--seed", type=int)

@@ -42,6 +42,12 @@ def test_more_episodes_keep_the_papers_update_budget(name, factor):
         assert getattr(more, key) == getattr(paper, key)
 
 
+def test_drq_aux_is_the_paper_run_with_two_training_aids():
+    paper, drq_aux = preset("paper"), preset("drq_aux")
+    assert (drq_aux.augment_shift, drq_aux.aux_goal_weight) == (8, 1.0)
+    assert drq_aux.replace(augment_shift=0, aux_goal_weight=0.0) == paper
+
+
 def test_json_round_trip(tmp_path):
     config = TrainConfig(seed=3, env_kwargs={"stack": 2, "max_steps": 20}, learning_rate=1e-3)
     save_config(config, tmp_path / "config.json")
