@@ -17,8 +17,9 @@ Run directory::
     checkpoints/      the newest checkpoints (see ``training.checkpoint``)
 
 Reproducibility and resuming. Every random number comes from generators seeded by
-``config.seed``: the trainer's own numpy generator (exploration and environment seeds), the
-replay sampler's generator, and a forked torch generator used once to initialise the network.
+``config.seed``: the trainer's own numpy generator (exploration, environment seeds and image
+shifts), the replay sampler's generator, and a forked torch generator used once to initialise
+the network.
 The environment is re-seeded at *every* episode start with a seed drawn from the trainer's
 generator, so its state is a function of (episode seed, actions taken so far). A checkpoint
 therefore stores that seed and the episode's actions instead of the environment's internals;
