@@ -270,6 +270,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("train", cmd_train, "train a DDQN + PER head controller")
     p.add_argument("--config", type=Path, help="TrainConfig JSON file")
+    # spelled out: importing training.config here would load torch for every command
     p.add_argument(
         "--preset", default="paper", help="paper | release | drq_aux | data4x | data8x | quickstart"
     )

@@ -55,3 +55,12 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys):
     assert "--run" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["render"])  # argparse: --out is required
+
+
+def test_train_help_names_every_preset(capsys):
+    from activevision.training.config import PRESET_NAMES
+
+    with pytest.raises(SystemExit):
+        main(["train", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert all(name in help_text for name in PRESET_NAMES)

@@ -111,7 +111,9 @@ def ddqn_update(
         q_values = online(batch.obs)
     q_taken = q_values.gather(1, batch.actions.unsqueeze(1)).squeeze(1)
     loss = weighted_huber_loss(q_taken, targets, batch.weights)
-    total = loss + aux_weight * F.mse_loss(aux_predictions, batch.aux) if aux_weight else loss
+    total = loss
+    if aux_weight:
+        total = loss + aux_weight * F.mse_loss(aux_predictions, batch.aux)
 
     optimizer.zero_grad(set_to_none=True)
     total.backward()

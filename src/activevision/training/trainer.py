@@ -120,6 +120,7 @@ class Trainer:
 
         trainer_seed, replay_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(3)
         self.rng = np.random.default_rng(int(trainer_seed))
+        aux_dim = GOAL_OFFSET_DIM if config.aux_goal_weight else 0
         with torch.random.fork_rng(devices=[]):  # seed network init without touching global RNG
             torch.manual_seed(int(init_seed))
             network = QNetwork(
@@ -127,7 +128,7 @@ class Trainer:
                 self.obs_shape[0],
                 self.obs_shape[1:],
                 dueling=config.dueling,
-                aux_outputs=GOAL_OFFSET_DIM if config.aux_goal_weight else 0,
+                aux_outputs=aux_dim,
             )
         channels_last = self.device.type == "cpu"
         if channels_last:
@@ -148,7 +149,7 @@ class Trainer:
             int(replay_seed),
             n_step=config.n_step,
             gamma=config.gamma,
-            aux_dim=GOAL_OFFSET_DIM if config.aux_goal_weight else 0,
+            aux_dim=aux_dim,
         )
 
         # progress; everything below is saved in checkpoints
@@ -456,7 +457,12 @@ class Trainer:
         self.learner.online.load_state_dict(part("online."))
         self.learner.target.load_state_dict(part("target."))
         self.learner.optimizer.load_state_dict(optimizer_state)
-        self.buffer = PrioritizedReplayBuffer.from_state_dict(replay_state)
+        try:
+            self.buffer = PrioritizedReplayBuffer.from_state_dict(replay_state)
+        except KeyError as error:
+            raise ckpt.CheckpointError(
+                f"the checkpoint's replay buffer lacks {error} (written by an older activevision?)"
+            ) from error
         self.step = int(state["step"])
         self.episode = int(state["episode"])
         self.rng.bit_generator.state = state["rng"]
@@ -481,7 +487,9 @@ class Trainer:
         self._writer_purge_step = self.step
 
     def _replay_open_episode(self) -> np.ndarray:
-        """Bring the environment back to the checkpoint's state: same seed, same actions."""
+        """Bring the environment back to the checkpoint's state: same seed, same actions.
+
+        Returns the observation reached and sets its auxiliary target (``_obs_aux``)."""
         obs, info = self.env.reset(seed=self._episode_seed)
         for action in self._episode_actions:
             obs, _, _, _, info = self.env.step(action)

@@ -246,7 +246,7 @@ class PrioritizedReplayBuffer:
         cursor, size, first_frame_id, open_obs_id, chunk_frames = (
             int(v) for v in state["counters"]
         )
-        n_step, gamma = state["n_step_gamma"] if "n_step_gamma" in state else (1, 0.99)
+        n_step, gamma = state["n_step_gamma"]
         buffer = cls(
             capacity,
             tuple(obs_shape),
