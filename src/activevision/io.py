@@ -60,3 +60,19 @@ def write_csv(path: str | os.PathLike, rows: Sequence[dict]) -> None:
             writer = csv.DictWriter(f, fieldnames=list(rows[0]))
             writer.writeheader()
             writer.writerows(rows)
+
+
+#: Files and directories of a training run directory, written only by training (the CLI's
+#: output check refuses every other command's write to them).
+RUN_FILES = frozenset(
+    {
+        "config.json",
+        "metrics.csv",
+        "episodes.csv",
+        "evaluations.csv",
+        "policy.safetensors",
+        "best_policy.safetensors",
+        "tensorboard",
+        "checkpoints",
+    }
+)

@@ -49,7 +49,8 @@ def test_drq_aux_is_the_paper_run_with_two_training_aids():
 
 
 def test_json_round_trip(tmp_path):
-    config = TrainConfig(seed=3, env_kwargs={"stack": 2, "max_steps": 20}, learning_rate=1e-3)
+    env_kwargs = {"frame_stack": 2, "max_episode_steps": 20}
+    config = TrainConfig(seed=3, env_kwargs=env_kwargs, learning_rate=1e-3)
     save_config(config, tmp_path / "config.json")
     assert load_config(tmp_path / "config.json") == config
     assert not list(tmp_path.glob(".*tmp"))  # the temporary file is gone

@@ -46,6 +46,19 @@ from activevision.runtime.metadata import (
 
 #: ONNX opset of exported policies (onnxruntime >= 1.14 runs it).
 DEFAULT_OPSET = 17
+#: Opsets export accepts: from the first with the uint8 ops the graph uses in their current
+#: form (13) to the newest the TorchScript exporter writes (20).
+SUPPORTED_OPSETS = range(13, 21)
+
+
+def check_opset(opset: int) -> int:
+    """``opset`` if export can write it, else ValueError naming the supported range."""
+    if isinstance(opset, bool) or not isinstance(opset, int) or opset not in SUPPORTED_OPSETS:
+        raise ValueError(
+            f"ONNX opset must be an integer from {SUPPORTED_OPSETS.start} to"
+            f" {SUPPORTED_OPSETS.stop - 1}, got {opset!r}"
+        )
+    return opset
 INPUT_NAME = "frames"
 OUTPUT_NAME = "q_values"
 #: Largest |Q_onnx - Q_torch| accepted by the post-export check.
@@ -144,9 +157,8 @@ def export_onnx(
     Returns:
         The paths written. Raises ValueError if the metadata does not fit the network.
     """
-    model_path = Path(out_path)
-    if model_path.is_dir() or model_path.suffix.lower() != ".onnx":
-        model_path = model_path / MODEL_FILENAME
+    check_opset(opset)
+    model_path = model_path_of(out_path)
     model_path.parent.mkdir(parents=True, exist_ok=True)
     stack, (height, width) = q_network.stack, q_network.image_shape
 
@@ -163,6 +175,15 @@ def export_onnx(
     write_bytes(model_path, model_bytes)
     write_text(metadata_path, text)
     return ExportedPolicy(model_path, metadata_path)
+
+
+def model_path_of(out_path: str | os.PathLike[str]) -> Path:
+    """The model file export writes for ``out_path``: itself if it ends in ``.onnx``, else
+    ``out_path/policy.onnx`` (a directory)."""
+    path = Path(out_path)
+    if path.is_dir() or path.suffix.lower() != ".onnx":
+        return path / MODEL_FILENAME
+    return path
 
 
 # ---------------------------------------------------------------------- helpers

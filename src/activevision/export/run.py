@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import os
@@ -66,9 +65,8 @@ def export_run(
 
 
 def env_config_of(env_kwargs: dict[str, Any]):  # -> activevision.envs.EnvConfig
-    """The :class:`EnvConfig` a run's ``env_kwargs`` describe (keys that are not EnvConfig
-    fields, such as ``render_mode``, are ignored)."""
-    from activevision.envs.config import EnvConfig
+    """The :class:`EnvConfig` a run's ``env_kwargs`` describe (ValueError naming an unknown
+    keyword or a bad value)."""
+    from activevision.envs.kwargs import env_config_from_kwargs
 
-    fields = {f.name for f in dataclasses.fields(EnvConfig)}
-    return EnvConfig().replace(**{k: v for k, v in env_kwargs.items() if k in fields})
+    return env_config_from_kwargs(env_kwargs)

@@ -100,7 +100,7 @@ class HeadController:
             raise PolicyFileError(f"policy model {self.model_path} not found")
         self.metadata: PolicyMetadata = load_metadata(self.metadata_path)
         model_bytes = _read_model(self.model_path)
-        if verify_checksum and self.metadata.model_sha256 is not None:
+        if verify_checksum:
             digest = hashlib.sha256(model_bytes).hexdigest()
             if digest != self.metadata.model_sha256:
                 raise PolicyFileError(

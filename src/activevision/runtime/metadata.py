@@ -51,6 +51,27 @@ MODEL_FILENAME = "policy.onnx"
 METADATA_FILENAME = "policy.json"
 
 _HEAD_LIMIT_KEYS = ("pan_min", "pan_max", "tilt_min", "tilt_max")
+#: Physical bounds of the limits (a neck that turns past +-180 deg pan is a typo).
+_HEAD_LIMIT_BOUNDS_DEG = {"pan_min": 180.0, "pan_max": 180.0, "tilt_min": 90.0, "tilt_max": 90.0}
+#: Largest head move one action may make (the env's step_deg is at most 30).
+MAX_MOVE_DEG = 30.0
+#: Direction (sign of d_pan, sign of d_tilt) each named action must move: pan left +,
+#: tilt down + (activevision.geometry.camera).
+_ACTION_SIGNS = {
+    "stay": (0.0, 0.0),
+    "pan_left": (1.0, 0.0),
+    "pan_right": (-1.0, 0.0),
+    "tilt_up": (0.0, -1.0),
+    "tilt_down": (0.0, 1.0),
+    "pan_left_tilt_up": (1.0, -1.0),
+    "pan_left_tilt_down": (1.0, 1.0),
+    "pan_right_tilt_up": (-1.0, -1.0),
+    "pan_right_tilt_down": (-1.0, 1.0),
+}
+
+
+def _is_sha256(text: str) -> bool:
+    return len(text) == 64 and all(c in "0123456789abcdef" for c in text)
 
 
 class PolicyFileError(ValueError):
@@ -98,7 +119,7 @@ class PolicyMetadata:
     opset: int | None = None
     package_version: str | None = None
     model_file: str | None = None
-    model_sha256: str | None = None
+    model_sha256: str = ""
     training_config_sha256: str | None = None
     action_names: tuple[str, ...] | None = None
     raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
@@ -165,11 +186,28 @@ class PolicyMetadata:
         if not (limits.pan_min <= limits.pan_max and limits.tilt_min <= limits.tilt_max):
             raise fail(f"'head_limits_deg' are not ordered (min <= max): {dict(limits_deg)}")
 
+        if np.abs(table_deg).max() > MAX_MOVE_DEG:
+            raise fail(f"'action_table_deg' moves more than {MAX_MOVE_DEG} degrees per action")
+        for key, bound in _HEAD_LIMIT_BOUNDS_DEG.items():
+            value = float(limits_deg[key])
+            if not (math.isfinite(value) and -bound <= value <= bound):
+                raise fail(f"'head_limits_deg' {key} = {value} lies outside +-{bound} degrees")
+
         names = values.get("action_names")
         if names is not None:
             if not isinstance(names, list) or len(names) != table_deg.shape[0]:
                 raise fail("'action_names' must list one name per action")
             names = tuple(str(n) for n in names)
+            for name, row in zip(names, table_deg, strict=True):
+                if name in _ACTION_SIGNS and tuple(np.sign(row)) != _ACTION_SIGNS[name]:
+                    raise fail(f"action {name!r} moves the head by {row.tolist()} degrees")
+
+        model_sha256 = values.get("model_sha256")
+        if not (isinstance(model_sha256, str) and _is_sha256(model_sha256)):
+            raise fail(
+                f"'model_sha256' must be the model's SHA-256 (64 hex digits), got"
+                f" {model_sha256!r}: without it a model from another export would be accepted"
+            )
 
         def optional_str(key: str) -> str | None:
             value = values.get(key)
@@ -191,7 +229,7 @@ class PolicyMetadata:
             opset=opset,
             package_version=optional_str("package_version"),
             model_file=optional_str("model_file"),
-            model_sha256=optional_str("model_sha256"),
+            model_sha256=model_sha256,
             training_config_sha256=optional_str("training_config_sha256"),
             action_names=names,
             raw=dict(values),

@@ -10,16 +10,44 @@ Typical use::
     plot_run("runs/paper")                      # training.png and one PNG per curve
 """
 
-from activevision.training.checkpoint import CheckpointError
-from activevision.training.config import (
-    TrainConfig,
-    apply_overrides,
-    load_config,
-    preset,
-    save_config,
-)
-from activevision.training.plots import plot_run
-from activevision.training.trainer import Trainer, load_policy, make_env, resume, train
+import importlib
+from typing import TYPE_CHECKING, Any
+
+# Lazy exports (PEP 562): ``activevision.training.config`` and its presets stay importable
+# without loading torch (the CLI builds its help from them); the rest loads on first use.
+_EXPORTS = {
+    "CheckpointError": "checkpoint",
+    "TrainConfig": "config",
+    "apply_overrides": "config",
+    "load_config": "config",
+    "preset": "config",
+    "save_config": "config",
+    "plot_run": "plots",
+    "Trainer": "trainer",
+    "load_policy": "trainer",
+    "make_env": "trainer",
+    "resume": "trainer",
+    "train": "trainer",
+}
+
+if TYPE_CHECKING:
+    from activevision.training.checkpoint import CheckpointError
+    from activevision.training.config import (
+        TrainConfig,
+        apply_overrides,
+        load_config,
+        preset,
+        save_config,
+    )
+    from activevision.training.plots import plot_run
+    from activevision.training.trainer import Trainer, load_policy, make_env, resume, train
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _EXPORTS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+
 
 __all__ = [
     "CheckpointError",

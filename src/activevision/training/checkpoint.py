@@ -9,6 +9,11 @@ A checkpoint is a directory ``checkpoints/step_00003000/`` holding
 * ``state.json`` — counters and generator states;
 * ``manifest.json`` — size and SHA-256 of every file above.
 
+Every weights file the package writes (a checkpoint's ``model.safetensors``, a run's
+``policy.safetensors`` and ``best_policy.safetensors``) also carries the SHA-256 of its
+tensors and metadata in its own header, and :func:`load_tensors`, the one reader of them all,
+refuses a file whose content does not match it.
+
 It is written into a hidden temporary directory that is renamed into place only once complete
 (a rename is atomic), so a crash mid-save leaves the previous checkpoint untouched; older
 checkpoints are deleted only after the new one exists. Loading checks the manifest, so a
@@ -35,7 +40,10 @@ from activevision.io import fsync_path
 
 CHECKPOINTS_DIR = "checkpoints"
 MANIFEST = "manifest.json"
+#: The files of every checkpoint (besides the manifest); verification requires exactly these.
+CHECKPOINT_FILES = ("model.safetensors", "optimizer.pt", "replay.npz", "state.json")
 _PREFIX = "step_"
+_CHECKSUM_KEY = "content_sha256"  #: safetensors metadata key of the weights' own checksum
 
 
 class CheckpointError(RuntimeError):
@@ -76,6 +84,7 @@ def write_checkpoint(
     """
     directory = Path(run_dir) / CHECKPOINTS_DIR
     directory.mkdir(parents=True, exist_ok=True)
+    remove_stale_writes(run_dir)
     final = directory / checkpoint_name(step)
     tmp = Path(tempfile.mkdtemp(dir=directory, prefix=f".{final.name}.", suffix=".tmp"))
     try:
@@ -95,13 +104,45 @@ def write_checkpoint(
     return final
 
 
-def verify_checkpoint(path: str | os.PathLike[str]) -> None:
-    """Check every file against the manifest; CheckpointError on any difference."""
+def remove_stale_writes(run_dir: str | os.PathLike[str]) -> list[Path]:
+    """Delete the hidden ``.step_*.tmp`` directories that a killed checkpoint write left
+    behind (each as large as the replay buffer); returns what was removed. Call it only
+    while no other process writes checkpoints of this run."""
+    directory = Path(run_dir) / CHECKPOINTS_DIR
+    if not directory.is_dir():
+        return []
+    stale = [
+        p
+        for p in directory.iterdir()
+        if p.is_dir() and p.name.startswith(f".{_PREFIX}") and p.name.endswith(".tmp")
+    ]
+    for path in stale:
+        shutil.rmtree(path, ignore_errors=True)
+    return stale
+
+
+def verify_checkpoint(
+    path: str | os.PathLike[str], expected_files: tuple[str, ...] = CHECKPOINT_FILES
+) -> None:
+    """Check that the manifest lists exactly ``expected_files``, that the directory holds
+    nothing else, and every file against its size and SHA-256; CheckpointError otherwise."""
     path = Path(path)
     try:
         manifest = json.loads((path / MANIFEST).read_text())
     except (OSError, json.JSONDecodeError) as error:
         raise CheckpointError(f"checkpoint {path} has no readable manifest: {error}") from error
+    if not isinstance(manifest, dict) or sorted(manifest) != sorted(expected_files):
+        listed = sorted(manifest) if isinstance(manifest, dict) else manifest
+        raise CheckpointError(
+            f"checkpoint {path}: the manifest must list {sorted(expected_files)}, it lists"
+            f" {listed!r}"
+        )
+    present = {p.name for p in path.iterdir() if p.name != MANIFEST}
+    missing, extra = sorted(set(expected_files) - present), sorted(present - set(expected_files))
+    if missing:
+        raise CheckpointError(f"checkpoint {path} is missing {', '.join(missing)}")
+    if extra:
+        raise CheckpointError(f"checkpoint {path} holds unexpected files {extra}")
     for name, expected in manifest.items():
         file = path / name
         if not file.is_file():
@@ -114,19 +155,34 @@ def verify_checkpoint(path: str | os.PathLike[str]) -> None:
 def save_tensors(
     path: Path, tensors: Mapping[str, torch.Tensor], metadata: Mapping[str, Any]
 ) -> None:
-    """Save tensors with safetensors; metadata values are stored as JSON strings."""
+    """Save tensors with safetensors; metadata values are stored as JSON strings, beside the
+    SHA-256 of both (checked by :func:`load_tensors`)."""
+    if _CHECKSUM_KEY in metadata:
+        raise ValueError(f"metadata key {_CHECKSUM_KEY!r} is reserved for the checksum")
     plain = {name: t.detach().cpu().contiguous() for name, t in tensors.items()}
-    save_file(plain, str(path), metadata={k: json.dumps(v) for k, v in metadata.items()})
+    header = {k: json.dumps(v) for k, v in metadata.items()}
+    header[_CHECKSUM_KEY] = _content_digest(plain, header)
+    save_file(plain, str(path), metadata=header)
 
 
 def load_tensors(path: Path) -> tuple[dict[str, torch.Tensor], dict[str, Any]]:
-    """Tensors and metadata written by :func:`save_tensors` (CheckpointError if unreadable)."""
+    """Tensors and metadata written by :func:`save_tensors`; CheckpointError if the file is
+    missing, unreadable, carries no checksum or does not match it."""
     try:
         tensors = load_file(str(path))
         with safe_open(str(path), framework="pt") as file:
-            metadata = {k: json.loads(v) for k, v in (file.metadata() or {}).items()}
+            header = dict(file.metadata() or {})
+        stored = header.pop(_CHECKSUM_KEY, None)
+        metadata = {k: json.loads(v) for k, v in header.items()}
     except (OSError, SafetensorError, json.JSONDecodeError) as error:
         raise CheckpointError(f"cannot read weights from {path}: {error}") from error
+    if stored is None:
+        raise CheckpointError(
+            f"{path} carries no checksum (written by an older activevision), so it cannot be"
+            " verified; retrain the run or resume it from a verified checkpoint"
+        )
+    if _content_digest(tensors, header) != stored:
+        raise CheckpointError(f"{path} is corrupt: its tensors or metadata fail the checksum")
     return tensors, metadata
 
 
@@ -159,6 +215,16 @@ def load_arrays(path: Path) -> dict[str, np.ndarray]:
 
 
 # ---------------------------------------------------------------------- helpers
+def _content_digest(tensors: Mapping[str, torch.Tensor], header: Mapping[str, str]) -> str:
+    """SHA-256 over the metadata strings and every tensor's name, dtype, shape and bytes."""
+    sha = hashlib.sha256(json.dumps(dict(header), sort_keys=True).encode())
+    for name in sorted(tensors):
+        tensor = tensors[name].contiguous()
+        sha.update(f"{name}|{tensor.dtype}|{tuple(tensor.shape)}|".encode())
+        sha.update(tensor.reshape(-1).view(torch.uint8).numpy().tobytes())
+    return sha.hexdigest()
+
+
 def _file_digest(path: Path) -> dict[str, Any]:
     sha = hashlib.sha256()
     with open(path, "rb") as file:

@@ -177,8 +177,21 @@ def validate(config: TrainConfig) -> None:
         raise ValueError(
             f"device must be 'auto', 'cpu', 'cuda[:n]' or 'mps', got {config.device!r}"
         )
-    if not config.env_id:
+    _check_env(config.env_id, config.env_kwargs)
+
+
+def _check_env(env_id: str, env_kwargs: dict[str, Any]) -> None:
+    """activevision's own envs check every keyword and value here, before a run starts
+    (other envs check theirs when made; ``make_env`` names an unregistered id)."""
+    if not env_id:
         raise ValueError("env_id must not be empty")
+    if env_id.removeprefix("activevision:") == "ActiveVision-v0":
+        from activevision.envs.kwargs import env_config_from_kwargs
+
+        try:
+            env_config_from_kwargs(env_kwargs)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"env_kwargs: {error}") from None
 
 
 def _check_type(key: str, annotation: Any, value: Any) -> Any:

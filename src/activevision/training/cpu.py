@@ -19,10 +19,24 @@ _M_MMAP_THRESHOLD = -3
 
 
 def resolve_device(name: str) -> torch.device:
-    """ "auto" means cuda when available, else cpu."""
+    """ "auto" means cuda when available, else cpu. ValueError for a device this machine
+    does not have (``cuda`` without a GPU, ``cuda:3`` with one)."""
     if name == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
-    return torch.device(name)
+    try:
+        device = torch.device(name)
+    except RuntimeError as error:
+        raise ValueError(f"device {name!r} is not a torch device: {error}") from None
+    if device.type == "cuda":
+        count = torch.cuda.device_count() if torch.cuda.is_available() else 0
+        if count == 0 or (device.index or 0) >= count:
+            raise ValueError(
+                f"device {name!r} requested but this machine has {count} CUDA device(s);"
+                " use device=auto or cpu"
+            )
+    if device.type == "mps" and not torch.backends.mps.is_available():
+        raise ValueError(f"device {name!r} requested but MPS is not available here")
+    return device
 
 
 def resolve_num_threads(num_threads: int) -> int:

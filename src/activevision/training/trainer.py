@@ -79,7 +79,10 @@ def make_env(config: TrainConfig) -> gym.Env:
         import activevision.envs  # noqa: F401  (registers ActiveVision-v0)
     except ImportError:
         pass
-    return gym.make(config.env_id, **config.env_kwargs)
+    try:
+        return gym.make(config.env_id, **config.env_kwargs)
+    except gym.error.Error as error:  # e.g. NameNotFound: one clear line, not a traceback
+        raise ValueError(f"env_id {config.env_id!r}: {error}") from None
 
 
 class Trainer:
@@ -106,9 +109,10 @@ class Trainer:
         self.run_dir = Path(run_dir)
         if not _resuming and ckpt.list_checkpoints(self.run_dir):
             raise ValueError(f"{self.run_dir} already holds a run; use Trainer.resume()")
+        self.device = resolve_device(config.device)  # before anything is written
         self.run_dir.mkdir(parents=True, exist_ok=True)
+        ckpt.remove_stale_writes(self.run_dir)  # left by a checkpoint write that was killed
         configure_torch_cpu(config.num_threads)
-        self.device = resolve_device(config.device)
 
         self.env_factory = env_factory or (lambda: make_env(config))
         self.env = self.env_factory()
@@ -402,6 +406,7 @@ class Trainer:
             "best_eval": self.best_eval if self._best_weights is not None else None,
             "best_step": self._best_step,
             "evaluations_rows": len(self.evaluations_log.rows()),
+            "config_sha256": _config_digest(self.run_dir),
         }
 
         def write_files(directory: Path) -> None:
@@ -439,9 +444,20 @@ class Trainer:
             state = json.loads((path / "state.json").read_text())
         except (OSError, json.JSONDecodeError) as error:
             raise ckpt.CheckpointError(f"cannot read {path / 'state.json'}: {error}") from error
+        if not isinstance(state, dict):
+            raise ckpt.CheckpointError(f"{path / 'state.json'} must hold a JSON object")
+        _check_config_unchanged(run_dir, path, state)
 
         trainer = cls(load_config(run_dir / "config.json"), run_dir, env_factory, _resuming=True)
-        trainer._load_state(tensors, optimizer_state, replay_state, state)
+        try:
+            trainer._load_state(tensors, optimizer_state, replay_state, state)
+        except (KeyError, TypeError, ValueError, IndexError, RuntimeError) as error:
+            trainer.close()
+            if isinstance(error, ckpt.CheckpointError):
+                raise
+            raise ckpt.CheckpointError(
+                f"checkpoint {path} does not fit this run ({type(error).__name__}: {error})"
+            ) from error
         return trainer
 
     def _load_state(
@@ -458,11 +474,13 @@ class Trainer:
         self.learner.target.load_state_dict(part("target."))
         self.learner.optimizer.load_state_dict(optimizer_state)
         try:
-            self.buffer = PrioritizedReplayBuffer.from_state_dict(replay_state)
+            buffer = PrioritizedReplayBuffer.from_state_dict(replay_state)
         except KeyError as error:
             raise ckpt.CheckpointError(
                 f"the checkpoint's replay buffer lacks {error} (written by an older activevision?)"
             ) from error
+        _check_buffer_fits(buffer, self.buffer)
+        self.buffer = buffer
         self.step = int(state["step"])
         self.episode = int(state["episode"])
         self.rng.bit_generator.state = state["rng"]
@@ -587,6 +605,40 @@ def _chw_shape(space: gym.Space) -> tuple[int, int, int]:
     if len(space.shape) == 3:
         return tuple(space.shape)
     raise ValueError(f"observations must be (H, W) or (stack, H, W), got {space.shape}")
+
+
+def _check_buffer_fits(loaded: PrioritizedReplayBuffer, fresh: PrioritizedReplayBuffer) -> None:
+    """The checkpoint's replay buffer must be one this run's config would build."""
+    for name in ("capacity", "obs_shape", "alpha", "eps", "n_step", "gamma", "aux_dim"):
+        if getattr(loaded, name) != getattr(fresh, name):
+            raise ckpt.CheckpointError(
+                f"the checkpoint's replay buffer has {name}={getattr(loaded, name)!r}, the run's"
+                f" config gives {getattr(fresh, name)!r}"
+            )
+
+
+def _config_digest(run_dir: Path) -> str:
+    return hashlib.sha256((run_dir / "config.json").read_bytes()).hexdigest()
+
+
+def _check_config_unchanged(run_dir: Path, checkpoint: Path, state: dict[str, Any]) -> None:
+    """A resumed run must go on with the config its checkpoint was taken under."""
+    saved = state.get("config_sha256")
+    if saved is None:
+        raise ckpt.CheckpointError(
+            f"checkpoint {checkpoint} does not record its config's checksum (written by an"
+            " older activevision); start a new run"
+        )
+    try:
+        current = _config_digest(run_dir)
+    except OSError as error:
+        raise ckpt.CheckpointError(f"cannot read {run_dir / 'config.json'}: {error}") from error
+    if current != saved:
+        raise ckpt.CheckpointError(
+            f"{run_dir / 'config.json'} was changed after checkpoint {checkpoint.name}; resuming"
+            " would mix two configurations: restore the file, or start a new run with the"
+            " new config"
+        )
 
 
 def _digest(obs: np.ndarray | None) -> str | None:

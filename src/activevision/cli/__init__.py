@@ -1,0 +1,47 @@
+"""The ``activevision`` command line: ``main`` and ``build_parser``; one module per command
+group (``train``, ``evaluate``, ``deploy``, ``scene``, ``quickstart``), shared argument types
+in :mod:`activevision.cli.args` and the output-path check in :mod:`activevision.cli.outputs`.
+
+Heavy imports (torch, matplotlib) happen inside the command that needs them, so
+``activevision --help`` is instant."""
+
+from __future__ import annotations
+
+import sys
+
+from activevision.cli import deploy, evaluate, quickstart, scene, train
+from activevision.cli.args import ArgumentParser
+
+_COMMAND_GROUPS = (train, evaluate, deploy, quickstart, scene)
+
+
+def build_parser() -> ArgumentParser:
+    parser = ArgumentParser(
+        prog="activevision",
+        description="Learn where a humanoid soccer robot should look (DDQN + PER).",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    for group in _COMMAND_GROUPS:
+        group.add_parsers(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one command; returns the exit code (0 done, 2 bad input or a refused file)."""
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exit_:  # --help (0) or a bad argument (2, one line already printed)
+        return exit_.code if isinstance(exit_.code, int) else 2
+    try:
+        if args.command == "quickstart":
+            return quickstart.run_quickstart(args, main)
+        args.func(args)
+    except Exception as err:
+        # Our own errors and bad input get one clear line; anything else is a bug: traceback.
+        if not isinstance(err, ValueError | OSError | ImportError) and not type(
+            err
+        ).__module__.startswith("activevision"):
+            raise
+        print(f"activevision {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    return 0

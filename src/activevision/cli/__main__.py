@@ -1,0 +1,5 @@
+import sys
+
+from activevision.cli import main
+
+sys.exit(main())

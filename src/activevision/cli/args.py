@@ -1,0 +1,156 @@
+"""Argument types and helpers shared by the ``activevision`` commands.
+
+Every value a user types is checked here, at the boundary, so a bad one ends in one line
+that names it (argparse's ``error: argument --episodes: ...``) instead of a traceback or a
+silently wrong result further down."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, NoReturn
+
+if TYPE_CHECKING:
+    from activevision.envs import EnvConfig
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with a one-line error: ``activevision CMD: error: ...`` and exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _integer(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+
+
+def positive_int(text: str) -> int:
+    """An integer >= 1 (episodes, steps, chunk sizes)."""
+    value = _integer(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return value
+
+
+def seed(text: str) -> int:
+    """A seed: an integer in [0, 2**31) (NumPy's generators take no negative seed)."""
+    value = _integer(text)
+    if not 0 <= value < 2**31:
+        raise argparse.ArgumentTypeError(f"must be an integer in [0, 2**31), got {text!r}")
+    return value
+
+
+def _finite(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return value
+
+
+def non_negative_float(text: str) -> float:
+    """A finite number >= 0 (localisation errors in metres / radians)."""
+    value = _finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text!r}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """A finite number > 0."""
+    value = _finite(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return value
+
+
+def error_levels(text: str) -> list[float]:
+    """``0:2:0.25`` (start:stop:step, stop included) or ``0,0.5,1``: finite levels >= 0."""
+    import numpy as np
+
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise argparse.ArgumentTypeError(f"expects start:stop:step, got {text!r}")
+        start, stop, step = (non_negative_float(v) for v in parts)
+        if step <= 0:
+            raise argparse.ArgumentTypeError(f"step must be positive, got {text!r}")
+        if stop < start:
+            raise argparse.ArgumentTypeError(f"stop is below start in {text!r}")
+        return [round(float(v), 6) for v in np.arange(start, stop + step / 2, step)]
+    levels = [non_negative_float(v) for v in text.split(",")]
+    if len(set(levels)) != len(levels):
+        raise argparse.ArgumentTypeError(f"repeats a level: {text!r}")
+    return levels
+
+
+def seed_list(text: str) -> list[int]:
+    """``0..9`` (both ends included), ``0,3,7`` or ``5``."""
+    if ".." in text:
+        start, _, stop = text.partition("..")
+        first, last = seed(start), seed(stop)
+        if last < first:
+            raise argparse.ArgumentTypeError(f"the end is before the start in {text!r}")
+        return list(range(first, last + 1))
+    seeds = [seed(v) for v in text.split(",")]
+    if len(set(seeds)) != len(seeds):
+        raise argparse.ArgumentTypeError(f"repeats a seed: {text!r}")
+    return seeds
+
+
+def grid_item(text: str) -> tuple[str, list[str]]:
+    """``learning_rate=5e-4,1e-3``: a config key and its values (as text, parsed like
+    ``--set`` when each trial's config is built)."""
+    key, sep, values = text.partition("=")
+    if not sep or not key.strip() or not values.strip():
+        raise argparse.ArgumentTypeError(f"expects KEY=V1,V2,..., got {text!r}")
+    return key.strip(), [v.strip() for v in values.split(",")]
+
+
+def choice_list(choices: Callable[[], tuple[str, ...]]) -> Callable[[str], str]:
+    """An argument type accepting one of ``choices()`` (looked up when parsing)."""
+
+    def parse(text: str) -> str:
+        known = choices()
+        if text not in known:
+            raise argparse.ArgumentTypeError(f"unknown {text!r}; choose from {', '.join(known)}")
+        return text
+
+    return parse
+
+
+def add_weights(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--weights",
+        choices=("final", "best"),
+        default="final",
+        help="the run's final weights or its best validated ones (eval_interval)",
+    )
+
+
+def add_overwrite(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace output files that exist already (never a training run's own files)",
+    )
+
+
+def env_config_of_run(run_dir: Path | None) -> EnvConfig:
+    """The EnvConfig a run trained on (its config.json), else the paper's default."""
+    from activevision.envs import EnvConfig
+
+    if run_dir is None:
+        return EnvConfig()
+    from activevision.export import env_config_of
+    from activevision.training import load_config
+
+    return env_config_of(load_config(run_dir / "config.json").env_kwargs)

@@ -1,0 +1,73 @@
+"""``activevision export`` and ``demo``: the policy a robot runs."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from activevision.cli.args import add_overwrite, add_weights, seed
+from activevision.cli.outputs import check_outputs
+
+
+def _opset(text: str) -> int:
+    from activevision.export.onnx_export import check_opset
+
+    try:
+        return check_opset(int(text))
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def cmd_export(args: argparse.Namespace) -> None:
+    """ONNX model + metadata for the torch-free HeadController."""
+    from activevision.export import export_run
+    from activevision.export.onnx_export import model_path_of
+    from activevision.runtime.metadata import metadata_path_for
+
+    model = model_path_of(args.out or args.run)
+    outputs = [model, metadata_path_for(model)]
+    if args.out is None:
+        check_outputs(own=outputs)
+    else:
+        check_outputs(named=outputs, overwrite=args.overwrite)
+    exported = export_run(args.run, model, weights=args.weights, opset=args.opset)
+    print(f"wrote {exported.model_path} and {exported.metadata_path}")
+
+
+def cmd_demo(args: argparse.Namespace) -> None:
+    """Episode figure and GIF of the shipped (or a given) ONNX policy against random."""
+    from activevision.experiments.episode_figure import (
+        animate_episode,
+        plot_episodes,
+        trace_episode,
+    )
+    from activevision.experiments.policies import OnnxPolicy, RandomPolicy
+    from activevision.runtime import pretrained_policy_path
+
+    gif = args.out.with_suffix(".gif")
+    check_outputs(named=[args.out, gif], overwrite=args.overwrite)
+    policy = OnnxPolicy(args.policy or pretrained_policy_path())
+    traces = [trace_episode(p, args.seed) for p in (policy, RandomPolicy())]
+    plot_episodes(traces, args.out)
+    animate_episode(traces[0], gif)
+    print(f"wrote {args.out} and {gif}")
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser("export", help="export a run's policy to ONNX (+ policy.json)")
+    p.set_defaults(func=cmd_export)
+    p.add_argument("run", type=Path)
+    p.add_argument("--out", "-o", type=Path, help="default: RUN/policy.onnx")
+    add_weights(p)
+    p.add_argument("--opset", type=_opset, default=17, help="ONNX opset (default 17)")
+    add_overwrite(p)
+
+    p = sub.add_parser(
+        "demo", help="episode figure + GIF of the shipped policy (no training needed)"
+    )
+    p.set_defaults(func=cmd_demo)
+    p.add_argument("--policy", type=Path, help="an exported policy.onnx (default: the shipped one)")
+    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("--out", type=Path, default=Path("demo/episode.png"))
+    add_overwrite(p)

@@ -1,0 +1,210 @@
+"""``activevision evaluate``, ``compare``, ``episode`` and ``report``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from activevision.cli.args import (
+    add_overwrite,
+    add_weights,
+    choice_list,
+    env_config_of_run,
+    error_levels,
+    non_negative_float,
+    positive_int,
+    seed,
+)
+from activevision.cli.outputs import check_outputs
+
+
+def _method_names() -> tuple[str, ...]:
+    from activevision.experiments.policies import METHODS
+
+    return METHODS
+
+
+def _compare_method_names() -> tuple[str, ...]:
+    from activevision.experiments.policies import DEFAULT_ORDER
+
+    return DEFAULT_ORDER
+
+
+def _require_run_for_learned(names: list[str], run: Path | None) -> None:
+    if "learned" in names and run is None:
+        raise ValueError("the learned policy needs a run directory (--run runs/NAME)")
+
+
+def _policies(names: list[str], args: argparse.Namespace, env_config: Any, error: float = 0.0):
+    from activevision.experiments.policies import make_policy
+
+    _require_run_for_learned(names, args.run)
+    return {name: make_policy(name, error, env_config, args.run, args.weights) for name in names}
+
+
+def cmd_evaluate(args: argparse.Namespace) -> None:
+    """Fixed-seed evaluation of every method: table, CSV and JSON."""
+    from activevision.envs import ActiveVisionEnv
+    from activevision.experiments.evaluate import (
+        evaluate_policy,
+        format_table,
+        latency_summary,
+        summary_rows,
+    )
+    from activevision.experiments.policies import DEFAULT_ORDER
+    from activevision.io import write_csv, write_json
+
+    out = args.out or (args.run / "evaluation" if args.run else Path("evaluation"))
+    files = [out / n for n in ("evaluation.csv", "episodes.csv", "evaluation.json")]
+    check_outputs(own=files)
+    env_config = env_config_of_run(args.run)
+    names = args.methods or [m for m in DEFAULT_ORDER if m != "learned" or args.run]
+    policies = _policies(names, args, env_config, args.error)
+    env = ActiveVisionEnv(env_config)
+    summaries, episodes, latency = {}, [], {}
+    for name, policy in policies.items():
+        records, summary, lat = evaluate_policy(
+            policy, args.episodes, args.seed, env=env, measure_latency=name == "learned"
+        )
+        summaries[name] = summary
+        episodes += [{"method": name, **r} for r in records]
+        if lat:
+            latency = latency_summary(lat)
+    print(format_table(summaries))
+    if latency:
+        print(
+            f"learned policy per-decision latency (batch 1, CPU): "
+            f"p50 {latency['p50_ms']:.2f} ms, p99 {latency['p99_ms']:.2f} ms "
+            f"(paper: 2.3 ms on a GTX 1060)"
+        )
+    rows = summary_rows(summaries, episodes=args.episodes, seed=args.seed, error=args.error)
+    write_csv(files[0], rows)
+    write_csv(files[1], episodes)
+    write_json(
+        files[2],
+        {"methods": rows, "latency": latency, "episodes": args.episodes, "seed": args.seed},
+    )
+    print(f"wrote {out}/evaluation.csv, evaluation.json, episodes.csv")
+
+
+def cmd_compare(args: argparse.Namespace) -> None:
+    """The localisation-error experiment and its figure (on Ray with ``--ray``)."""
+    from activevision.experiments.compare import plot_compare
+
+    out = args.out or (args.run / "compare" if args.run else Path("compare"))
+    check_outputs(own=[out / "compare.csv", out / "compare.png"])
+    _require_run_for_learned(args.methods or [], args.run)
+    if args.overwrite:
+        (out / "compare.csv").unlink(missing_ok=True)
+    env_config = env_config_of_run(args.run)
+    if args.ray:
+        from activevision.scaleout.compare import compare_ray, default_method_names
+
+        compare_ray(
+            out,
+            default_method_names(args.run, args.methods),
+            args.errors,
+            args.episodes,
+            args.seed,
+            env_config,
+            run_dir=args.run,
+            weights=args.weights,
+            chunk=args.chunk,
+            address=args.address,
+            num_cpus=args.num_cpus,
+        )
+    else:
+        from activevision.experiments.compare import compare, default_methods
+        from activevision.experiments.policies import LearnedPolicy
+
+        learned = LearnedPolicy.from_run(args.run, weights=args.weights) if args.run else None
+        methods = default_methods(env_config, learned)
+        if args.methods:
+            methods = {k: v for k, v in methods.items() if k in args.methods}
+        compare(out, methods, args.errors, args.episodes, args.seed, env_config)
+    plot_compare(out / "compare.csv", out / "compare.png")
+    print(f"wrote {out}/compare.csv and compare.png")
+
+
+def cmd_episode(args: argparse.Namespace) -> None:
+    """The paper's qualitative episode figure (and a GIF) for two methods."""
+    from activevision.experiments.episode_figure import (
+        animate_episode,
+        plot_episodes,
+        trace_episode,
+    )
+
+    gif = args.out.with_suffix(".gif")
+    check_outputs(named=[args.out, gif], overwrite=args.overwrite)
+    env_config = env_config_of_run(args.run)
+    names = args.policies or (["learned", "random"] if args.run else ["oracle", "random"])
+    policies = _policies(names, args, env_config)
+    traces = [trace_episode(p, args.seed, env_config) for p in policies.values()]
+    plot_episodes(traces, args.out, config=env_config)
+    animate_episode(traces[0], gif, env_config)
+    print(f"wrote {args.out} and {gif}")
+
+
+def cmd_report(args: argparse.Namespace) -> None:
+    from activevision.experiments.report import write_report
+
+    check_outputs(own=[args.run / "report.md"])
+    print(f"wrote {write_report(args.run)}")
+
+
+def _add_common(p: argparse.ArgumentParser, run_help: str) -> None:
+    p.add_argument("--run", type=Path, help=run_help)
+    add_weights(p)
+    p.add_argument("--seed", type=seed, default=0)
+
+
+def add_parsers(sub: Any) -> None:
+    method = choice_list(_method_names)
+    p = sub.add_parser("evaluate", help="score methods on fixed-seed episodes")
+    p.set_defaults(func=cmd_evaluate)
+    _add_common(p, "a training run: adds the learned policy")
+    p.add_argument("--methods", nargs="+", type=method, help=" ".join(_method_names()))
+    p.add_argument("--episodes", type=positive_int, default=100)
+    p.add_argument(
+        "--error",
+        type=non_negative_float,
+        default=0.0,
+        help="localisation error of the entropy methods (m and rad)",
+    )
+    p.add_argument("--out", type=Path)
+
+    p = sub.add_parser("compare", help="success vs localisation error, every method")
+    p.set_defaults(func=cmd_compare)
+    _add_common(p, "a training run: adds the learned policy")
+    p.add_argument(
+        "--methods",
+        nargs="+",
+        type=choice_list(_compare_method_names),
+        help=" ".join(_compare_method_names()),
+    )
+    p.add_argument(
+        "--errors", type=error_levels, default="0:2:0.25", help="start:stop:step or a,b,c"
+    )
+    p.add_argument("--episodes", type=positive_int, default=100)
+    p.add_argument("--out", type=Path)
+    p.add_argument(
+        "--overwrite", action="store_true", help="start over instead of resuming compare.csv"
+    )
+    p.add_argument("--ray", action="store_true", help="distribute over Ray tasks")
+    p.add_argument("--address", help="with --ray: auto | ray://HEAD:10001 (default: local)")
+    p.add_argument("--num-cpus", type=positive_int, help="with --ray: CPUs of the local Ray")
+    p.add_argument("--chunk", type=positive_int, default=25, help="with --ray: episodes a task")
+
+    p = sub.add_parser("episode", help="episode figure (and GIF) of two methods from one start")
+    p.set_defaults(func=cmd_episode)
+    _add_common(p, "a training run (for the learned policy)")
+    p.add_argument(
+        "--policies", nargs="+", type=method, help="default: learned random (oracle random)"
+    )
+    p.add_argument("--out", type=Path, required=True)
+    add_overwrite(p)
+
+    p = sub.add_parser("report", help="one Markdown page with a run's figures and tables")
+    p.set_defaults(func=cmd_report)
+    p.add_argument("run", type=Path)

@@ -1,0 +1,51 @@
+"""``activevision quickstart``: the README's main job (``make run``)."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from activevision.cli.args import positive_int, seed
+
+
+def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
+    """The commands the main job runs: train (or resume), evaluate, compare, episode, report.
+    A second run finds the run and redoes evaluation and figures, replacing their files."""
+    from activevision.training.checkpoint import list_checkpoints
+
+    out, run_seed, episodes = str(args.out), str(args.seed), str(args.episodes)
+    if list_checkpoints(args.out):
+        steps = [["train", "--resume", out]]
+    else:
+        extra = ["--steps", str(args.steps)] if args.steps is not None else []
+        steps = [["train", "--preset", "quickstart", "--seed", run_seed, "--out", out, *extra]]
+    return [
+        *steps,
+        ["evaluate", "--run", out, "--episodes", episodes, "--seed", run_seed],
+        ["compare", "--run", out, "--errors", "0:2:0.5", "--episodes", episodes]
+        + ["--seed", run_seed, "--overwrite"],
+        ["episode", "--run", out, "--seed", run_seed, "--overwrite"]
+        + ["--out", str(args.out / "episode.png")],
+        ["report", out],
+    ]
+
+
+def run_quickstart(args: argparse.Namespace, main: Callable[[list[str]], int]) -> int:
+    """Run :func:`quickstart_steps` one after the other; stop at the first that fails."""
+    for argv in quickstart_steps(args):
+        print(f"\n$ activevision {' '.join(argv)}", flush=True)
+        code = main(argv)
+        if code:
+            return code
+    return 0
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser("quickstart", help="short training + evaluation + figures + report")
+    p.set_defaults(func=None)  # run by cli.main, which passes itself
+    p.add_argument("--out", type=Path, default=Path("runs/quickstart"))
+    p.add_argument("--steps", type=positive_int, default=None, help="default: the preset's")
+    p.add_argument("--episodes", type=positive_int, default=100)
+    p.add_argument("--seed", type=seed, default=0)

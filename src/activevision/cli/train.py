@@ -1,0 +1,169 @@
+"""``activevision train``, ``plot`` and ``sweep``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from activevision.cli.args import (
+    add_overwrite,
+    choice_list,
+    grid_item,
+    positive_float,
+    positive_int,
+    seed,
+    seed_list,
+)
+from activevision.cli.outputs import OutputError, is_training_run
+
+
+def _preset_names() -> tuple[str, ...]:
+    from activevision.training.config import PRESET_NAMES
+
+    return PRESET_NAMES
+
+
+def cmd_train(args: argparse.Namespace) -> None:
+    """Train (or resume) a DDQN + PER run."""
+    from activevision.training import plot_run
+
+    run_dir = _resume(args) if args.resume is not None else _train_fresh(args)
+    if run_dir is not None:
+        print(f"figures: {plot_run(run_dir)}")
+
+
+def _resume(args: argparse.Namespace) -> Path | None:
+    from activevision.training import Trainer
+
+    given = [f"--{n}" for n in ("config", "preset", "seed", "set", "out") if _given(args, n)]
+    if given:
+        raise ValueError(
+            f"--resume continues a run with its own config.json; {', '.join(given)} cannot be"
+            " combined with it (start a new run with --out instead)"
+        )
+    trainer = Trainer.resume(args.resume)
+    try:
+        total = trainer.config.total_timesteps
+        if trainer.step >= total:
+            if args.steps is not None:
+                raise ValueError(
+                    f"{args.resume} is finished ({trainer.step} of {total} steps); --steps"
+                    " cannot extend it (its schedules end at total_timesteps): train a new run"
+                    " with a larger --steps"
+                )
+            print(f"{args.resume} is finished ({total} steps); nothing to train")
+        else:
+            trainer.train(args.steps)
+    finally:
+        trainer.close()
+    return args.resume
+
+
+def _given(args: argparse.Namespace, name: str) -> bool:
+    return getattr(args, name) not in (None, [])
+
+
+def _train_fresh(args: argparse.Namespace) -> Path:
+    from activevision.training import apply_overrides, load_config, preset, train
+    from activevision.training.checkpoint import list_checkpoints
+
+    if args.out is None:
+        raise ValueError("--out runs/NAME is required (or --resume runs/NAME)")
+    if args.config is not None and args.preset is not None:
+        raise ValueError("--config and --preset cannot be combined (the file is the config)")
+    if list_checkpoints(args.out):
+        raise OutputError(f"{args.out} already holds a run; continue it with --resume {args.out}")
+    if is_training_run(args.out) and not args.overwrite:
+        raise OutputError(
+            f"{args.out} already holds a run that has no checkpoint yet; pass --overwrite to"
+            " start it over"
+        )
+    config = load_config(args.config) if args.config else preset(args.preset or "paper")
+    overrides = list(args.set or [])
+    if args.steps is not None:
+        overrides.append(f"total_timesteps={args.steps}")
+    if args.seed is not None:
+        overrides.append(f"seed={args.seed}")
+    train(apply_overrides(config, overrides), args.out)
+    return args.out
+
+
+def cmd_plot(args: argparse.Namespace) -> None:
+    from activevision.training import plot_run
+
+    if not is_training_run(args.run):
+        raise ValueError(f"{args.run} is not a training run (no config.json and metrics.csv)")
+    print(f"wrote {plot_run(args.run)}")
+
+
+def cmd_sweep(args: argparse.Namespace) -> None:
+    """Run a Ray Tune sweep; print where its outputs went."""
+    from activevision.scaleout.sweep import sweep
+    from activevision.training import apply_overrides, load_config, preset
+
+    config = load_config(args.config) if args.config else preset(args.preset or "paper")
+    config = apply_overrides(config, list(args.set or []))
+    rows = sweep(
+        config,
+        args.seeds,
+        dict(args.grid or []),
+        args.out,
+        address=args.address,
+        num_cpus=args.num_cpus,
+        max_failures=args.max_failures,
+        cpus_per_trial=args.cpus_per_trial,
+    )
+    print(f"{len(rows)} aggregated rows")
+    print(f"wrote {args.out}/trials.csv, sweep.csv and sweep.png")
+
+
+def _add_config_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--config", type=Path, help="TrainConfig JSON file (instead of --preset)")
+    p.add_argument(
+        "--preset",
+        type=choice_list(_preset_names),
+        help=f"a named config: {' | '.join(_preset_names())} (default: paper)",
+    )
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a config key")
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser("train", help="train a DDQN + PER head controller")
+    p.set_defaults(func=cmd_train)
+    _add_config_arguments(p)
+    p.add_argument(
+        "--steps",
+        type=positive_int,
+        help="total environment steps; with --resume: at most this many more",
+    )
+    p.add_argument("--seed", type=seed)
+    p.add_argument("--out", type=Path, help="run directory, e.g. runs/NAME")
+    p.add_argument("--resume", type=Path, metavar="RUN", help="continue runs/NAME")
+    add_overwrite(p)
+
+    p = sub.add_parser("plot", help="draw a run's training figures")
+    p.set_defaults(func=cmd_plot)
+    p.add_argument("run", type=Path)
+
+    text = "seed x grid sweep of training runs on Ray Tune (pip install activevision[ray])"
+    p = sub.add_parser("sweep", help=text, description=text)
+    p.set_defaults(func=cmd_sweep)
+    p.add_argument(
+        "--seeds", type=seed_list, default="0..4", help="0..9 (inclusive) or 0,1,2 (default 0..4)"
+    )
+    p.add_argument(
+        "--grid",
+        action="append",
+        type=grid_item,
+        metavar="KEY=V1,V2",
+        help="sweep a config key (repeatable)",
+    )
+    _add_config_arguments(p)
+    p.add_argument("--out", type=Path, required=True, help="sweep directory, e.g. runs/SWEEP")
+    p.add_argument("--address", help="join a Ray cluster: auto | ray://HEAD:10001")
+    p.add_argument("--num-cpus", type=positive_int, help="CPUs of the local Ray instance")
+    p.add_argument("--cpus-per-trial", type=positive_float, default=1.0)
+    p.add_argument(
+        "--max-failures", type=int, default=2, help="restarts of a failed trial (default 2)"
+    )
