@@ -16,6 +16,12 @@ import torch
 from activevision.runtime import HeadCommand, HeadController, PolicyFileError
 from activevision.runtime import pretrained as pretrained_module
 
+_D = 3 * math.sqrt(2) / 2
+#: The exported 9-action table in degrees (stay, 4 axis moves, 4 diagonals).
+TABLE_DEG = np.array(
+    [(0, 0), (3, 0), (-3, 0), (0, -3), (0, 3), (_D, -_D), (_D, _D), (-_D, -_D), (-_D, _D)]
+)
+
 
 def torch_q(network, stacked: np.ndarray) -> np.ndarray:
     with torch.inference_mode():
@@ -169,11 +175,23 @@ def test_corrupt_metadata(policy_copy):
         ({"stack": 2}, "input shape"),
         ({"image_width": 320}, "input shape"),
         ({"n_actions": 5}, "n_actions"),
-        ({"action_table_deg": [[0, 0]] * 5, "n_actions": 5}, "5 actions"),
+        ({"action_table_deg": [[0, 0]] * 5, "n_actions": 5, "action_names": ["stay"] * 5},
+         "5 actions"),
+        ({"action_table_deg": [[0, 0]] * 5, "n_actions": 5}, "one name per action"),
         ({"input_name": "image"}, "no input 'image'"),
         ({"format_version": 99}, "format_version"),
         ({"head_limits_deg": {"pan_min": 0}}, "head_limits_deg"),
         ({"model_sha256": "0" * 64}, "SHA-256"),
+        ({"model_sha256": None}, "model_sha256"),
+        ({"model_sha256": "abc"}, "model_sha256"),
+        ({"action_table_deg": TABLE_DEG[::-1].tolist()}, "moves the head"),
+        ({"action_table_deg": (TABLE_DEG * 20).tolist()}, "more than 30"),
+        (
+            {"head_limits_deg": {"pan_min": -720, "pan_max": 720, "tilt_min": 5, "tilt_max": 65}},
+            "outside",
+        ),
+        ({"head_limits_deg": {"pan_min": -90, "pan_max": 90, "tilt_min": 5, "tilt_max": 900}},
+         "outside"),
     ],
 )
 def test_metadata_mismatch(policy_copy, change, message):
@@ -224,3 +242,10 @@ def test_missing_onnxruntime_names_the_extra(policy):
                             timeout=60)
     assert result.returncode == 0, result.stderr
     assert "activevision[runtime]" in result.stdout
+
+
+def test_runtime_action_names_are_the_envs():
+    from activevision.envs.actions import ACTION_NAMES_8WAY
+    from activevision.runtime.metadata import STANDARD_ACTION_NAMES
+
+    assert STANDARD_ACTION_NAMES == ACTION_NAMES_8WAY

@@ -39,11 +39,22 @@ def default_methods(
     return methods
 
 
-def _done_levels(csv_path: Path) -> list[dict]:
+def done_levels(csv_path: Path) -> list[dict]:
     if not csv_path.exists():
         return []
     with csv_path.open() as f:
         return list(csv.DictReader(f))
+
+
+def check_resumable(csv_path: Path, rows: list[dict], episodes: int, seed: int) -> None:
+    """Levels already in the CSV are kept only if they were played on the same episodes."""
+    for row in rows:
+        if (row.get("episodes"), row.get("seed")) != (str(episodes), str(seed)):
+            raise ValueError(
+                f"{csv_path} holds levels of {row.get('episodes')} episodes from seed"
+                f" {row.get('seed')}, not {episodes} from seed {seed}: resume with those, or"
+                " pass --overwrite to start over"
+            )
 
 
 def compare(
@@ -62,7 +73,8 @@ def compare(
     """
     out_dir = Path(out_dir)
     csv_path = out_dir / "compare.csv"
-    rows = _done_levels(csv_path)
+    rows = done_levels(csv_path)
+    check_resumable(csv_path, rows, episodes, seed)
     done = {(float(r["error"]), r["method"]) for r in rows}
     env = ActiveVisionEnv(config or EnvConfig())
     todo = [
@@ -78,7 +90,7 @@ def compare(
             if (float(e), name) in done:
                 continue
             _, summary, _ = evaluate_policy(factory(float(e)), episodes, seed=seed + level, env=env)
-            rows += summary_rows({name: summary}, error=float(e), episodes=episodes)
+            rows += summary_rows({name: summary}, error=float(e), episodes=episodes, seed=seed)
             if bar is not None:
                 bar.update()
                 bar.set_postfix(error=e, method=name, success=f"{summary['success'].mean:.2f}")

@@ -40,6 +40,7 @@ from activevision.runtime.metadata import (
     METADATA_FORMAT,
     METADATA_FORMAT_VERSION,
     MODEL_FILENAME,
+    STANDARD_ACTION_NAMES,
     PolicyMetadata,
     metadata_path_for,
 )
@@ -109,7 +110,8 @@ def policy_metadata(
         head_limits: a :class:`activevision.geometry.CameraConfig` (or anything with
             ``pan_min``, ``pan_max``, ``tilt_min``, ``tilt_max`` attributes or keys), radians.
         training_config_sha256: SHA-256 of the training run's ``config.json``, if any.
-        action_names: optional name per action (e.g. ``ACTION_NAMES_8WAY``).
+        action_names: name per action; default: the env's (``ACTION_NAMES_8WAY``, cut to the
+            table's length). The runtime checks each row moves the way its name says.
     """
     table = np.asarray(action_table, dtype=np.float64)
     if table.ndim != 2 or table.shape[1] != 2:
@@ -123,7 +125,7 @@ def policy_metadata(
         "action_table_deg": np.degrees(table).tolist(),
         "head_limits_deg": {k: limit(k) for k in ("pan_min", "pan_max", "tilt_min", "tilt_max")},
         "training_config_sha256": training_config_sha256,
-        "action_names": list(action_names[: len(table)]) if action_names is not None else None,
+        "action_names": list((action_names or STANDARD_ACTION_NAMES)[: len(table)]),
     }
 
 

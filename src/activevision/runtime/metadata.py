@@ -70,6 +70,10 @@ _ACTION_SIGNS = {
 }
 
 
+#: The env's action names, in its order (activevision.envs.actions.ACTION_NAMES_8WAY).
+STANDARD_ACTION_NAMES = tuple(_ACTION_SIGNS)
+
+
 def _is_sha256(text: str) -> bool:
     return len(text) == 64 and all(c in "0123456789abcdef" for c in text)
 
@@ -121,7 +125,7 @@ class PolicyMetadata:
     model_file: str | None = None
     model_sha256: str = ""
     training_config_sha256: str | None = None
-    action_names: tuple[str, ...] | None = None
+    action_names: tuple[str, ...] = ()
     raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -194,13 +198,12 @@ class PolicyMetadata:
                 raise fail(f"'head_limits_deg' {key} = {value} lies outside +-{bound} degrees")
 
         names = values.get("action_names")
-        if names is not None:
-            if not isinstance(names, list) or len(names) != table_deg.shape[0]:
-                raise fail("'action_names' must list one name per action")
-            names = tuple(str(n) for n in names)
-            for name, row in zip(names, table_deg, strict=True):
-                if name in _ACTION_SIGNS and tuple(np.sign(row)) != _ACTION_SIGNS[name]:
-                    raise fail(f"action {name!r} moves the head by {row.tolist()} degrees")
+        if not isinstance(names, list) or len(names) != table_deg.shape[0]:
+            raise fail("'action_names' must list one name per action")
+        names = tuple(str(n) for n in names)
+        for name, row in zip(names, table_deg, strict=True):
+            if name in _ACTION_SIGNS and tuple(np.sign(row)) != _ACTION_SIGNS[name]:
+                raise fail(f"action {name!r} moves the head by {row.tolist()} degrees")
 
         model_sha256 = values.get("model_sha256")
         if not (isinstance(model_sha256, str) and _is_sha256(model_sha256)):

@@ -64,7 +64,7 @@ def compare_ray(
     ``weights``: the run's "final" or "best" weights.
     ``address``/``num_cpus``: see :func:`~activevision.scaleout.ray_session.ray_session`.
     """
-    from activevision.experiments.compare import _done_levels
+    from activevision.experiments.compare import check_resumable, done_levels
     from activevision.experiments.evaluate import summarise, summary_rows
     from activevision.io import write_csv
     from activevision.scaleout.ray_session import ray_session
@@ -78,7 +78,8 @@ def compare_ray(
         raise ValueError("the learned policy needs --run runs/NAME")
     config = config or EnvConfig()
     csv_path = Path(out_dir) / "compare.csv"
-    rows = _done_levels(csv_path)
+    rows = done_levels(csv_path)
+    check_resumable(csv_path, rows, episodes, seed)
     done = {(float(r["error"]), r["method"]) for r in rows}
     run = str(run_dir) if run_dir is not None else None
     starts = list(range(0, episodes, chunk))
@@ -109,7 +110,9 @@ def compare_ray(
         for e, refs in pending:  # in level order, so the CSV matches the local run's
             for name, chunk_refs in refs.items():
                 records = [r for part in ray.get(chunk_refs) for r in part]
-                rows += summary_rows({name: summarise(records)}, error=e, episodes=episodes)
+                rows += summary_rows(
+                    {name: summarise(records)}, error=e, episodes=episodes, seed=seed
+                )
             write_csv(csv_path, rows)
     return rows
 
