@@ -33,6 +33,11 @@ sky-only rows do not pile up on one thread; single frames skip the threads altog
 crossbars and the ball are composited over the ground far-to-near (painter's order by
 distance) with their coverage as alpha. Values are rounded to uint8 once per pixel.
 
+The work arrays are uninitialised (``np.empty``): for each camera the setup pass writes
+every entry that the row pass reads (a shape out of view gets an empty row range *and* edges
+no pixel touches), and the row pass reads a shape's edges only on rows in its range, so a
+frame never depends on what the memory held before, i.e. on the other frames of its batch.
+
 Goal posts are drawn as their silhouette: the quad between the two vertical generators
 tangent to the sight lines from the camera (exact side edges); the bottom and top edges,
 really arcs of the end circles, are straight lines moved 2/3 of the arc's sagitta towards
@@ -148,11 +153,34 @@ def _clip_plane(src, n_src, dst, a, b, c, e):
 
 
 @njit(**_JIT)
+def _store_empty(edges, n_edges, rows):
+    """Mark a shape out of view: no rows, and ``n_edges`` edges that no pixel touches.
+
+    The row range alone already tells the row passes to skip the shape; the edges are
+    written too so that no pass can ever read a previous camera's (or uninitialised) edges:
+    ``l = (0, 0, -1e30)`` puts every pixel far outside, so ``_span`` is empty and every
+    coverage 0. The pixel half-widths are kept finite (fastmath assumes no inf)."""
+    rows[0] = 0
+    rows[1] = 0
+    for e in range(n_edges):
+        edge = edges[e]
+        edge[0] = 0.0
+        edge[1] = 0.0
+        edge[2] = -1e30
+        edge[3] = 0.5
+        edge[4] = 0.5
+        edge[5] = 1.0
+        edge[6] = 0.5
+        edge[7] = 0.0
+
+
+@njit(**_JIT)
 def _polygon_edges_and_rows(pts, n_pts, focal, cx, cy, width, height, edges, rows, clip):
     """Edge lines of the convex 3D polygon ``pts[:n_pts]`` (camera frame) into ``edges`` and
-    the image rows ``[rows[0], rows[1])`` its projection touches (empty when off-image):
-    the polygon is clipped to the view frustum (image borders and depth >= Z_NEAR) and the
-    clipped vertices projected. ``clip``: (2, >= n_pts + 5, 3) scratch."""
+    the image rows ``[rows[0], rows[1])`` its projection touches: the polygon is clipped to
+    the view frustum (image borders and depth >= Z_NEAR) and the clipped vertices projected.
+    Off-image polygons get no rows and empty edges (:func:`_store_empty`), so both outputs
+    are always written. ``clip``: (2, >= n_pts + 5, 3) scratch."""
     # Trivial rejection: every vertex outside the same frustum plane.
     out_near = True
     out_left = True
@@ -169,8 +197,7 @@ def _polygon_edges_and_rows(pts, n_pts, focal, cx, cy, width, height, edges, row
         out_top &= focal * y + cy * z < 0.0
         out_bottom &= (height - cy) * z - focal * y < 0.0
     if out_near or out_left or out_right or out_top or out_bottom:
-        rows[0] = 0
-        rows[1] = 0
+        _store_empty(edges, n_pts, rows)
         return
     src = clip[0]
     dst = clip[1]
@@ -184,8 +211,7 @@ def _polygon_edges_and_rows(pts, n_pts, focal, cx, cy, width, height, edges, row
     m = _clip_plane(dst, m, src, 0.0, focal, cy, 0.0)  # v >= 0
     m = _clip_plane(src, m, dst, 0.0, -focal, height - cy, 0.0)  # v <= height
     if m < 3:
-        rows[0] = 0
-        rows[1] = 0
+        _store_empty(edges, n_pts, rows)
         return
     v_min = 1e300
     v_max = -1e300
@@ -196,8 +222,7 @@ def _polygon_edges_and_rows(pts, n_pts, focal, cx, cy, width, height, edges, row
     rows[0] = max(math.floor(v_min), 0)
     rows[1] = min(math.ceil(v_max), height)
     if rows[1] <= rows[0]:
-        rows[0] = 0
-        rows[1] = 0
+        _store_empty(edges, n_pts, rows)
         return
     gx = 0.0
     gy = 0.0
@@ -477,9 +502,8 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
         dx = cam[0] - px
         dy = cam[1] - py
         dist = math.sqrt(dx * dx + dy * dy)
-        if dist <= pr * 1.001:
-            quad_rows[n, base + p, 0] = 0
-            quad_rows[n, base + p, 1] = 0
+        if dist <= pr * 1.001:  # camera inside the post: not drawn
+            _store_empty(quad_edges[n, base + p], 4, quad_rows[n, base + p])
             continue
         ux, uy = dx / dist, dy / dist
         cos_b = pr / dist
@@ -519,9 +543,8 @@ def _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, ca
         dx = cam[0] - bx
         dz = cam[2] - bz
         dist = math.sqrt(dx * dx + dz * dz)
-        if dist <= br * 1.001:
-            quad_rows[n, base + b, 0] = 0
-            quad_rows[n, base + b, 1] = 0
+        if dist <= br * 1.001:  # camera inside the crossbar: not drawn
+            _store_empty(quad_edges[n, base + b], 4, quad_rows[n, base + b])
             continue
         ux, uz = dx / dist, dz / dist
         cos_b = br / dist
@@ -697,7 +720,11 @@ def _render_rows(n, row0, row_step, out, params, n_paint, n_posts, n_bars,
                     touched_hi = max(touched_hi, s1)
         if ring_rows[n, 0, 0] <= j < ring_rows[n, 0, 1]:
             s0, s1 = _span(ring_edges[n, 0], ring_edges.shape[2], v, -1.0, width)
-            h0, h1 = _span(ring_edges[n, 1], ring_edges.shape[2], v, 1.0, width)
+            # The hole polygon has its own row range (empty when it is off-image while the
+            # ring is not): outside it no pixel of this row is certainly in the hole.
+            h0, h1 = 0, 0
+            if ring_rows[n, 1, 0] <= j < ring_rows[n, 1, 1]:
+                h0, h1 = _span(ring_edges[n, 1], ring_edges.shape[2], v, 1.0, width)
             _ring_row(homography[n], v, s0, s1, h0, h1, params[P_RING_X], params[P_RING_Y],
                       params[P_RING_IN], params[P_RING_OUT], paint)
             if s1 > s0:
