@@ -109,13 +109,12 @@ class Trainer:
         self.run_dir = Path(run_dir)
         if not _resuming and ckpt.list_checkpoints(self.run_dir):
             raise ValueError(f"{self.run_dir} already holds a run; use Trainer.resume()")
-        self.device = resolve_device(config.device)  # before anything is written
+        self.device = resolve_device(config.device)  # bad device or env: before any write
+        self.env_factory = env_factory or (lambda: make_env(config))
+        self.env = self.env_factory()
         self.run_dir.mkdir(parents=True, exist_ok=True)
         ckpt.remove_stale_writes(self.run_dir)  # left by a checkpoint write that was killed
         configure_torch_cpu(config.num_threads)
-
-        self.env_factory = env_factory or (lambda: make_env(config))
-        self.env = self.env_factory()
         self._eval_env: gym.Env | None = None  # built at the first validation
         if not isinstance(self.env.action_space, gym.spaces.Discrete):
             raise ValueError(f"need a Discrete action space, got {self.env.action_space}")

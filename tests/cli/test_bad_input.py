@@ -1,0 +1,287 @@
+"""Bad input, as a new or hostile user types it: every case ends in exit code 2 and one line
+on stderr that names the problem; no traceback, no silent acceptance, no file destroyed."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from activevision.cli import main
+
+#: A training run small enough for a test (CPU seconds), through the real CLI.
+TINY_TRAIN = [
+    "train",
+    "--preset",
+    "quickstart",
+    "--steps",
+    "60",
+    "--set",
+    "learning_starts=20",
+    "--set",
+    "batch_size=8",
+    "--set",
+    "buffer_size=500",
+    "--set",
+    "epoch_steps=30",
+    "--set",
+    "checkpoint_interval=30",
+    "--set",
+    "tensorboard=false",
+    "--set",
+    "num_threads=1",
+]
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory) -> Path:
+    run = tmp_path_factory.mktemp("runs") / "tiny"
+    assert main([*TINY_TRAIN, "--out", str(run)]) == 0
+    return run
+
+
+@pytest.fixture
+def run(trained, tmp_path) -> Path:
+    """A private copy of the tiny run, free to be tampered with."""
+    return Path(shutil.copytree(trained, tmp_path / "run"))
+
+
+def one_clear_line(capsys, *needles: str) -> str:
+    captured = capsys.readouterr()
+    lines = [line for line in captured.err.splitlines() if line.strip()]
+    assert len(lines) == 1, captured.err
+    assert "Traceback" not in captured.err + captured.out
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+    return lines[0]
+
+
+def digests(directory: Path) -> dict[str, str]:
+    return {
+        str(p.relative_to(directory)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(directory.rglob("*"))
+        if p.is_file()
+    }
+
+
+# (argv with {run} and {tmp} placeholders, what the error line must name)
+BAD_ARGUMENTS = [
+    (["evaluate", "--episodes", "0"], "--episodes"),
+    (["evaluate", "--episodes", "-3"], "'-3'"),
+    (["evaluate", "--episodes", "many"], "'many'"),
+    (["evaluate", "--error", "-1"], "'-1'"),
+    (["evaluate", "--error", "nan"], "'nan'"),
+    (["evaluate", "--error", "inf"], "'inf'"),
+    (["evaluate", "--seed", "-1"], "'-1'"),
+    (["evaluate", "--methods", "nope"], "'nope'"),
+    (["evaluate", "--methods", "learned"], "--run"),
+    (["compare", "--error", "-1"], "--error"),
+    (["compare", "--errors", "1:0:0.5"], "'1:0:0.5'"),
+    (["compare", "--errors", "0:2:0"], "step"),
+    (["compare", "--errors", "0,nan"], "'nan'"),
+    (["compare", "--errors", "0,0"], "repeats"),
+    (["compare", "--methods", "nope"], "'nope'"),
+    (["compare", "--methods", "learned"], "--run"),
+    (["compare", "--episodes", "0"], "--episodes"),
+    (["compare", "--chunk", "0"], "--chunk"),
+    (["episode", "--seed", "-1", "--out", "{tmp}/e.png"], "'-1'"),
+    (["episode", "--policies", "nope", "--out", "{tmp}/e.png"], "'nope'"),
+    (["episode", "--policies", "learned", "--out", "{tmp}/e.png"], "--run"),
+    (["demo", "--seed", "x"], "'x'"),
+    (["render", "--field", "moon", "--out", "{tmp}/v.png"], "'moon'"),
+    (["render", "--seed", "2147483648", "--out", "{tmp}/v.png"], "2147483648"),
+    (["render"], "--out"),
+    (["export", "{run}", "--opset", "1"], "opset"),
+    (["export", "{run}", "--opset", "999"], "opset"),
+    (["export", "{tmp}/missing"], "missing"),
+    (["quickstart", "--steps", "-1"], "--steps"),
+    (["quickstart", "--episodes", "0"], "--episodes"),
+    (["train", "--preset", "nope", "--out", "{tmp}/x"], "'nope'"),
+    (["train", "--steps", "0", "--out", "{tmp}/x"], "--steps"),
+    (["train", "--seed", "-1", "--out", "{tmp}/x"], "'-1'"),
+    (["train"], "--out"),
+    (["train", "--set", "nope=1", "--out", "{tmp}/x"], "'nope'"),
+    (["train", "--set", "learning_rate", "--out", "{tmp}/x"], "key=value"),
+    (["train", "--set", "learning_rate=-1", "--out", "{tmp}/x"], "learning_rate"),
+    (["train", "--set", "env_kwargs.nope=1", "--out", "{tmp}/x"], "'nope'"),
+    (["train", "--set", "env_kwargs.step_deg=\"3\"", "--out", "{tmp}/x"], "step_deg"),
+    (["train", "--set", "env_kwargs.field=42", "--out", "{tmp}/x"], "field"),
+    (["train", "--set", "env_kwargs.field=\"moon\"", "--out", "{tmp}/x"], "moon"),
+    (["train", "--set", "env_kwargs.frame_stack=true", "--out", "{tmp}/x"], "frame_stack"),
+    (["train", "--set", "env_kwargs.ball_lost_reward=NaN", "--out", "{tmp}/x"], "ball_lost"),
+    (["train", "--set", "env_kwargs.max_episode_steps=0", "--out", "{tmp}/x"], "max_episode"),
+    (["train", "--set", "env_id=Nope-v0", "--steps", "30", "--out", "{tmp}/x"], "Nope-v0"),
+    (["train", "--set", "device=cuda:7", "--out", "{tmp}/x"], "cuda"),
+    (["train", "--set", "device=tpu", "--out", "{tmp}/x"], "device"),
+    (["train", "--config", "{tmp}/none.json", "--out", "{tmp}/x"], "none.json"),
+    (["train", "--resume", "{tmp}/missing"], "missing"),
+    (["train", "--resume", "{run}", "--set", "learning_rate=1e-3"], "--set"),
+    (["train", "--resume", "{run}", "--seed", "3"], "--seed"),
+    (["train", "--resume", "{run}", "--preset", "paper"], "--preset"),
+    (["train", "--resume", "{run}", "--steps", "30"], "finished"),
+    (["train", "--out", "{run}"], "--resume"),
+    (["sweep", "--seeds", "3..1", "--out", "{tmp}/s"], "'3..1'"),
+    (["sweep", "--grid", "learning_rate", "--out", "{tmp}/s"], "KEY=V1"),
+    (["plot", "{tmp}"], "not a training run"),
+    (["report", "{tmp}"], "not a training run"),
+    (["nope"], "invalid choice"),
+]
+
+
+@pytest.mark.parametrize(("argv", "needle"), BAD_ARGUMENTS, ids=" ".join)
+def test_bad_arguments(trained, tmp_path, capsys, argv, needle):
+    before = digests(trained)
+    filled = [a.format(run=trained, tmp=tmp_path) for a in argv]
+    assert main(filled) == 2
+    one_clear_line(capsys, needle.format(run=trained, tmp=tmp_path))
+    assert digests(trained) == before  # nothing of the run was touched
+    assert not (tmp_path / "x").exists()  # a refused training run leaves no directory
+
+
+# ------------------------------------------------------------ outputs never overwritten
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["evaluate", "--run", "{run}", "--methods", "random", "--out", "{run}"], "episodes.csv"),
+        (["export", "{run}", "-o", "{run}/config.onnx"], "config.json"),
+        (["export", "{run}", "-o", "{run}/config.onnx", "--overwrite"], "training run"),
+        (["episode", "--run", "{run}", "--out", "{run}/policy.safetensors"], "training run"),
+        (["render", "--out", "{run}/config.json", "--overwrite"], "training run"),
+        (["viewpoints", "--out", "{run}/metrics.csv", "--overwrite"], "metrics.csv"),
+    ],
+    ids=lambda v: " ".join(v) if isinstance(v, list) else v,
+)
+def test_run_files_are_never_overwritten(run, capsys, argv, needle):
+    before = digests(run)
+    assert main([a.format(run=run) for a in argv]) == 2
+    one_clear_line(capsys, needle, "refusing")
+    assert digests(run) == before
+
+
+def test_named_outputs_need_overwrite(tmp_path, capsys):
+    picture = tmp_path / "view.png"
+    picture.write_bytes(b"a photo of my robot")
+    assert main(["render", "--out", str(picture)]) == 2
+    one_clear_line(capsys, "--overwrite")
+    assert picture.read_bytes() == b"a photo of my robot"
+    assert main(["render", "--out", str(picture), "--overwrite"]) == 0
+    assert picture.read_bytes().startswith(b"\x89PNG")
+
+
+def test_finished_run_resumes_to_nothing_and_says_so(run, capsys):
+    assert main(["train", "--resume", str(run)]) == 0
+    assert "finished" in capsys.readouterr().out
+
+
+def test_run_without_checkpoint_needs_overwrite(run, capsys):
+    shutil.rmtree(run / "checkpoints")
+    assert main([*TINY_TRAIN, "--out", str(run)]) == 2
+    one_clear_line(capsys, "--overwrite")
+    assert main([*TINY_TRAIN, "--out", str(run), "--overwrite"]) == 0
+
+
+def test_stale_checkpoint_writes_are_cleaned_on_the_next_start(trained, tmp_path):
+    run = Path(shutil.copytree(trained, tmp_path / "run"))
+    stale = run / "checkpoints" / ".step_000000090.abc.tmp"
+    stale.mkdir()
+    (stale / "replay.npz").write_bytes(b"\0" * 1000)
+    shutil.rmtree(run / "checkpoints" / "step_000000060")  # the run is at step 30 again
+    assert main(["train", "--resume", str(run)]) == 0
+    assert not stale.exists()
+
+
+# ------------------------------------------------------------ tampered files
+def flip_bytes(path: Path, count: int = 1000) -> None:
+    data = bytearray(path.read_bytes())
+    start = len(data) // 3
+    for i in range(start, min(start + count, len(data))):
+        data[i] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+def latest(run: Path) -> Path:
+    return sorted((run / "checkpoints").iterdir())[-1]
+
+
+def rewrite_manifest(checkpoint: Path) -> None:
+    """What a careful attacker does: recompute the manifest after editing a file."""
+    from activevision.training.checkpoint import _file_digest
+
+    names = sorted(p.name for p in checkpoint.iterdir() if p.name != "manifest.json")
+    manifest = {n: _file_digest(checkpoint / n) for n in names}
+    (checkpoint / "manifest.json").write_text(json.dumps(manifest))
+
+
+def edit_state(run: Path, change: Callable[[dict], None]) -> None:
+    path = latest(run) / "state.json"
+    state = json.loads(path.read_text())
+    change(state)
+    path.write_text(json.dumps(state))
+    rewrite_manifest(latest(run))
+
+
+def replace_replay_array(run: Path, name: str, value) -> None:
+    import numpy as np
+
+    path = latest(run) / "replay.npz"
+    with np.load(path) as archive:
+        arrays = {k: archive[k] for k in archive.files}
+    arrays[name] = np.asarray(value)
+    with open(path, "wb") as file:
+        np.savez(file, **arrays)
+    rewrite_manifest(latest(run))
+
+
+TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
+    # (name, tamper, command, what the error names)
+    ("policy weights", lambda r: flip_bytes(r / "policy.safetensors"),
+     ["evaluate", "--run", "{run}", "--methods", "learned", "--episodes", "2"], "policy"),
+    ("policy weights, export", lambda r: flip_bytes(r / "policy.safetensors"),
+     ["export", "{run}", "-o", "{run}/../out.onnx"], "policy.safetensors"),
+    ("policy weights, episode", lambda r: flip_bytes(r / "policy.safetensors", 10),
+     ["episode", "--run", "{run}", "--out", "{run}/../e.png"], "policy.safetensors"),
+    ("truncated weights", lambda r: (r / "policy.safetensors").write_bytes(b"\x08"),
+     ["export", "{run}", "-o", "{run}/../out.onnx"], "policy.safetensors"),
+    ("checkpoint weights", lambda r: flip_bytes(latest(r) / "model.safetensors"),
+     ["train", "--resume", "{run}"], "corrupt"),
+    ("empty manifest", lambda r: (latest(r) / "manifest.json").write_text("{}"),
+     ["train", "--resume", "{run}"], "manifest"),
+    ("manifest not an object", lambda r: (latest(r) / "manifest.json").write_text("[1]"),
+     ["train", "--resume", "{run}"], "manifest"),
+    ("extra checkpoint file", lambda r: (latest(r) / "evil.pt").write_bytes(b"x"),
+     ["train", "--resume", "{run}"], "evil.pt"),
+    ("edited config", lambda r: (r / "config.json").write_text(
+        (r / "config.json").read_text().replace('"learning_rate": 0.0005', '"learning_rate": 0.1')),
+     ["train", "--resume", "{run}"], "config.json"),
+    ("config not JSON", lambda r: (r / "config.json").write_text("{"),
+     ["evaluate", "--run", "{run}", "--methods", "learned"], "config.json"),
+    ("config with a bad env value", lambda r: (r / "config.json").write_text(
+        (r / "config.json").read_text().replace('"env_kwargs": {}', '"env_kwargs": {"x": 1}')),
+     ["export", "{run}", "-o", "{run}/../out.onnx"], "'x'"),
+    ("state.json missing a key", lambda r: edit_state(r, lambda s: s.pop("episode_seed")),
+     ["train", "--resume", "{run}"], "episode_seed"),
+    ("state.json wrong type", lambda r: edit_state(r, lambda s: s.update(step="soon")),
+     ["train", "--resume", "{run}"], "checkpoint"),
+    ("state.json not an object", lambda r: ((latest(r) / "state.json").write_text("[]"),
+                                            rewrite_manifest(latest(r))),
+     ["train", "--resume", "{run}"], "JSON object"),
+    ("replay of another shape", lambda r: replace_replay_array(r, "shape", [500, 2, 120, 160]),
+     ["train", "--resume", "{run}"], "obs_shape"),
+    ("replay missing an array", lambda r: replace_replay_array(r, "counters", [1, 2]),
+     ["train", "--resume", "{run}"], "checkpoint"),
+]
+
+
+@pytest.mark.parametrize(("tamper", "argv", "needle"), [t[1:] for t in TAMPERS],
+                         ids=[t[0] for t in TAMPERS])
+def test_tampered_files_are_refused(trained, tmp_path, capsys, tamper, argv, needle):
+    run = Path(shutil.copytree(trained, tmp_path / "run"))
+    # an unfinished run, so resume has work to do
+    shutil.rmtree(run / "checkpoints" / "step_000000060")
+    tamper(run)
+    assert main([a.format(run=run) for a in argv]) == 2
+    one_clear_line(capsys, needle)
