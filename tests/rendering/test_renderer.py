@@ -7,10 +7,12 @@ import math
 import numpy as np
 import pytest
 
+import activevision.rendering.renderer as renderer_module
 from activevision.geometry import CameraConfig, FieldSpec, project_points
 from activevision.rendering import (
     RenderConfig,
     Renderer,
+    _kernel,
     render_reference,
     render_supersampled,
 )
@@ -145,6 +147,52 @@ def test_matches_supersampled_ground_truth_near_lines(renderer):
         assert near[k].sum() > 300
         assert err.mean() < 2.0, f"view {k}: MAE {err.mean():.2f}"
     assert np.abs(fast - truth)[near].mean() < 1.0
+
+
+def ring_row_ranges(renderer, pose, pan, tilt) -> np.ndarray:
+    """The setup pass's ``[first, end)`` image rows of the centre circle's outer polygon
+    (``[0]``) and hole polygon (``[1]``) for one camera."""
+    scene = renderer.scene
+    work = _kernel._allocate(1, scene.paint_quads.shape[0], scene.posts.shape[0],
+                             scene.crossbars.shape[0], scene.ring_polygons.shape[1])
+    _kernel._setup_camera(0, np.array([pose]), np.array([pan]), np.array([tilt]),
+                          np.zeros((1, 2)), False, renderer._params, scene.paint_quads,
+                          scene.carpet_quad, scene.ring_polygons, scene.posts, scene.crossbars,
+                          W, H, *work)
+    return work[3][0]
+
+
+def test_ring_with_its_hole_off_image(renderer, monkeypatch):
+    # Issue #14: with the hole polygon off the image (no rows) while the ring covers rows
+    # 33-119, the hole span was cut from edges never written for this camera: whatever the
+    # memory held (another camera's edges, in a batch) could blank the ring. Garbage of the
+    # kind "an edge that takes every pixel" did so deterministically (MAE 7 vs the truth).
+    pose, pan, tilt = (0.0, 1.0, -1.6), 1.55, 0.92
+    rows = ring_row_ranges(renderer, pose, pan, tilt)
+    assert rows[0, 1] - rows[0, 0] > 50 and rows[1, 1] <= rows[1, 0]
+    alone = renderer.render(np.array(pose), pan, tilt, None)[0]
+    # a batch big enough for the threaded kernel, the camera in the middle of it
+    others = random_states(6, seed=11)[:3]
+    batch_pose = np.insert(others[0], 3, pose, axis=0)
+    batch_pan, batch_tilt = np.insert(others[1], 3, pan), np.insert(others[2], 3, tilt)
+    renders = {"batch": renderer.render(batch_pose, batch_pan, batch_tilt, None)[3]}
+    for seed in range(1, 1 + _kernel.GARBAGE_KINDS):
+        monkeypatch.setattr(renderer_module, "_WORK_GARBAGE_SEED", seed)
+        renders[f"alone, garbage {seed}"] = renderer.render(np.array(pose), pan, tilt, None)[0]
+        renders[f"batch, garbage {seed}"] = renderer.render(batch_pose, batch_pan, batch_tilt,
+                                                            None)[3]
+    for name, img in renders.items():
+        np.testing.assert_array_equal(img, alone, err_msg=name)
+
+    fast = alone.astype(float)
+    ring = fast > CFG.grass + 20
+    assert ring.sum() > 500  # the ring is drawn
+    near = dilate(ring[None] | (fast[None] != round(CFG.grass)), 2)
+    truth = render_supersampled(np.array([pose]), pan, tilt, None, samples_per_axis=16,
+                                mask=near)[0]
+    err = np.abs(fast - truth)[near[0]]
+    assert err.mean() < 2.0, f"MAE {err.mean():.2f}"
+    assert err.max() < 20
 
 
 def test_ball_appears_where_projected(renderer):

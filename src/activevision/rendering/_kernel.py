@@ -767,7 +767,9 @@ def _render_rows(n, row0, row_step, out, params, n_paint, n_posts, n_bars,
 
 @njit(**_JIT)
 def _allocate(n_cams, n_paint, n_posts, n_bars, n_ring_sides):
-    """Per-call work arrays of the setup pass."""
+    """Per-call work arrays of the setup pass. Uninitialised on purpose (speed): for each
+    camera the setup writes every entry that the row pass reads, so an image never depends
+    on what the memory held before (``garbage`` of the kernels tests exactly that)."""
     n_quads = n_paint + 1 + n_posts + n_bars
     return (
         np.empty((n_cams, n_quads, 4, EDGE_PARAMS)),  # quad_edges
@@ -789,23 +791,121 @@ def _allocate(n_cams, n_paint, n_posts, n_bars, n_ring_sides):
     )
 
 
+@njit(**_JIT)
+def _xorshift(x):
+    x ^= x << np.uint64(13)
+    x ^= x >> np.uint64(7)
+    x ^= x << np.uint64(17)
+    return x
+
+
+#: Kinds of garbage of :func:`_fill_garbage`: random mixed values; an edge that takes every
+#: pixel with row ranges over every row (stale data that *looks* valid is what turns a
+#: missing write into wrong pixels); NaN and -1 everywhere.
+GARBAGE_KINDS = 3
+#: One edge (EDGE_PARAMS,) whose half-plane contains the whole image.
+_ACCEPT_ALL_EDGE = (0.0, 0.0, 1e30, 0.5, 0.5, 1.0, 0.5, 0.0)
+
+
+@njit(**_JIT)
+def _garbage_floats(arr, seed):
+    """Fill the C-contiguous float array ``arr`` with garbage of kind ``seed % GARBAGE_KINDS``
+    drawn from ``seed``."""
+    flat = arr.reshape(arr.size)
+    kind = seed % GARBAGE_KINDS
+    x = np.uint64(seed) | np.uint64(1)
+    for i in range(flat.size):
+        if kind == 1:
+            flat[i] = _ACCEPT_ALL_EDGE[i % EDGE_PARAMS]
+            continue
+        if kind == 2:
+            flat[i] = np.nan
+            continue
+        x = _xorshift(x)
+        small = (np.int64(x >> np.uint64(40)) % 2001 - 1000) * 0.01  # -10 .. 10
+        pick = np.int64(x & np.uint64(3))
+        if pick == 0:
+            flat[i] = np.nan
+        elif pick == 1:
+            flat[i] = 1e300 if x & np.uint64(32) else -1e300
+        elif pick == 2:
+            flat[i] = small * 1e4
+        else:
+            flat[i] = small
+
+
+@njit(**_JIT)
+def _garbage_ints(arr, seed):
+    """Fill the C-contiguous int64 array ``arr`` with garbage of kind ``seed % GARBAGE_KINDS``
+    (huge, negative, plausible row, column and object indices) drawn from ``seed``."""
+    flat = arr.reshape(arr.size)
+    kind = seed % GARBAGE_KINDS
+    x = np.uint64(seed) | np.uint64(1)
+    for i in range(flat.size):
+        if kind == 1:
+            flat[i] = 0 if i % 2 == 0 else 1 << 20  # row ranges [0, 2^20): every row
+            continue
+        if kind == 2:
+            flat[i] = -1
+            continue
+        x = _xorshift(x)
+        pick = np.int64(x & np.uint64(3))
+        if pick == 0:
+            flat[i] = np.int64(x >> np.uint64(1))
+        elif pick == 1:
+            flat[i] = -1 - np.int64(x >> np.uint64(50))
+        else:
+            flat[i] = np.int64(x >> np.uint64(40)) % 300
+
+
+@njit(**_JIT)
+def _fill_garbage(work, value, seed):
+    """Test hook: overwrite every work buffer of :func:`_allocate` and the row scratch
+    ``value`` with garbage of kind ``seed % GARBAGE_KINDS``, as if the memory held anything
+    at all (including another camera's data)."""
+    k = GARBAGE_KINDS  # seed + m k: the same kind, different values per buffer
+    _garbage_floats(work[0], seed + k)
+    _garbage_ints(work[1], seed + 2 * k)
+    _garbage_floats(work[2], seed + 3 * k)
+    _garbage_ints(work[3], seed + 4 * k)
+    _garbage_floats(work[4], seed + 5 * k)
+    _garbage_floats(work[5], seed + 6 * k)
+    _garbage_ints(work[6], seed + 7 * k)
+    _garbage_ints(work[7], seed + 8 * k)
+    _garbage_ints(work[8], seed + 9 * k)
+    _garbage_ints(work[9], seed + 10 * k)
+    _garbage_ints(work[10], seed + 11 * k)
+    _garbage_floats(work[11], seed + 12 * k)
+    _garbage_floats(work[12], seed + 13 * k)
+    _garbage_floats(work[13], seed + 14 * k)
+    _garbage_floats(work[14], seed + 15 * k)
+    _garbage_floats(work[15], seed + 16 * k)
+    _garbage_floats(value, seed + 17 * k)
+
+
 @njit(cache=True, fastmath=True, nogil=True, parallel=True)
 def render_kernel(pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,
-                  ring_polygons, posts, bars, row_blocks, out):
+                  ring_polygons, posts, bars, row_blocks, out, garbage):
     """Render ``len(pose)`` cameras into ``out`` (N, H, W) uint8, on all numba threads.
-    Each camera's rows are split into ``row_blocks`` interleaved sets of work."""
+    Each camera's rows are split into ``row_blocks`` interleaved sets of work. ``garbage``:
+    0, or a seed to fill the work memory with garbage first (:func:`_fill_garbage`, for
+    the tests; the images must not change)."""
     n_cams = pose.shape[0]
     width = out.shape[2]
     n_paint = paint_quads.shape[0]
     n_posts = posts.shape[0]
     n_bars = bars.shape[0]
     work = _allocate(n_cams, n_paint, n_posts, n_bars, ring_polygons.shape[1])
+    if garbage != 0:
+        _fill_garbage(work, np.empty(1, dtype=np.float32), garbage)
     for n in prange(n_cams):
         _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,
                       ring_polygons, posts, bars, out.shape[2], out.shape[1], *work)
     for item in prange(n_cams * row_blocks):
         n = item // row_blocks
         value = np.empty(width, dtype=np.float32)
+        if garbage != 0:
+            _garbage_floats(value, garbage + GARBAGE_KINDS * item)
         paint = np.zeros(width, dtype=np.float32)
         _render_rows(n, item - n * row_blocks, row_blocks, out, params, n_paint, n_posts,
                      n_bars, *work[:11], value, paint)
@@ -813,7 +913,7 @@ def render_kernel(pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpe
 
 @njit(cache=True, fastmath=True, nogil=True)
 def render_kernel_serial(pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,
-                         ring_polygons, posts, bars, out):
+                         ring_polygons, posts, bars, out, garbage):
     """:func:`render_kernel` on the calling thread only: no thread hand-off, which matters
     for single frames (and on machines whose cores are busy with other work)."""
     n_cams = pose.shape[0]
@@ -823,6 +923,8 @@ def render_kernel_serial(pose, pan, tilt, ball_xy, has_ball, params, paint_quads
     n_bars = bars.shape[0]
     work = _allocate(n_cams, n_paint, n_posts, n_bars, ring_polygons.shape[1])
     value = np.empty(width, dtype=np.float32)
+    if garbage != 0:
+        _fill_garbage(work, value, garbage)
     paint = np.zeros(width, dtype=np.float32)
     for n in range(n_cams):
         _setup_camera(n, pose, pan, tilt, ball_xy, has_ball, params, paint_quads, carpet,

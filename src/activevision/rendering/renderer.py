@@ -21,6 +21,11 @@ _DEFAULT_CONFIG = RenderConfig()
 #: microseconds, comparable to waking the worker threads (far more when the cores are busy).
 PARALLEL_MIN_BATCH = 4
 
+#: Test hook: a non-zero seed makes the kernels fill their (uninitialised) work memory with
+#: garbage before rendering. Images must not change: every value a kernel reads is written
+#: for the camera first. Tests set it with ``monkeypatch``; never set in production code.
+_WORK_GARBAGE_SEED = 0
+
 
 def _float_array(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as a C-contiguous float64 array of exactly ``shape``, or a ValueError."""
@@ -76,7 +81,9 @@ class Renderer:
 
     Batches of ``PARALLEL_MIN_BATCH`` or more frames are split over the numba threads
     (``numba.set_num_threads``); smaller ones, or all with ``parallel=False``, render on the
-    calling thread. Both give identical images. A Renderer holds no mutable state.
+    calling thread. Both give identical images, and a frame does not depend on the other
+    frames of its batch or on earlier calls: the kernels allocate their work memory per call
+    and write every value they read. A Renderer holds no mutable state.
 
     Example::
 
@@ -178,7 +185,7 @@ class Renderer:
             _kernel.render_kernel_serial(
                 pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
                 scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
-                scene.crossbars, out,
+                scene.crossbars, out, _WORK_GARBAGE_SEED,
             )
         else:
             # Enough interleaved row sets per camera that every thread gets a fair share.
@@ -186,7 +193,7 @@ class Renderer:
             _kernel.render_kernel(
                 pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
                 scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
-                scene.crossbars, row_blocks, out,
+                scene.crossbars, row_blocks, out, _WORK_GARBAGE_SEED,
             )
         if self.config.has_noise:
             apply_noise(out, self.config, rng)
