@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
 from activevision.geometry import CameraConfig, FieldSpec, field_preset
+from activevision.geometry.field import FIELD_PRESETS
+from activevision.typecheck import check_dataclass_fields
 
 SuccessMode = Literal["tolerance", "landmarks"]
 ActionSet = Literal["8way", "4way"]
@@ -39,20 +43,18 @@ class EnvConfig:
     max_start_draws: int = 1000  #: rejection-sampling guard for episode starts
 
     def __post_init__(self) -> None:
-        if isinstance(self.field, str):  # a preset name, e.g. from a JSON run config
-            object.__setattr__(self, "field", field_preset(self.field))
+        object.__setattr__(self, "field", _field_spec(self.field))
+        # Types first (one message naming field and value), so that the range checks below
+        # compare numbers, never strings or None.
+        check_dataclass_fields(self)
 
         def bad(name: str, why: str) -> ValueError:
             return ValueError(f"EnvConfig.{name}: {why}, got {getattr(self, name)!r}")
 
         if not 0 < self.step_deg <= 30:
             raise bad("step_deg", "must lie in (0, 30] degrees")
-        if self.action_set not in ("8way", "4way"):
-            raise bad("action_set", "must be '8way' or '4way'")
-        if not isinstance(self.frame_stack, int) or self.frame_stack < 1:
+        if self.frame_stack < 1:
             raise bad("frame_stack", "must be a positive integer")
-        if self.success_mode not in ("tolerance", "landmarks"):
-            raise bad("success_mode", "must be 'tolerance' or 'landmarks'")
         if not self.success_tolerance_deg > 0:
             raise bad("success_tolerance_deg", "must be positive")
         if not self.reward_resolution_deg >= 0:
@@ -75,6 +77,8 @@ class EnvConfig:
             raise bad("start_tilt_range_deg", "must lie within the camera's tilt limits")
         if not self.ball_distance_range[0] > 0:
             raise bad("ball_distance_range", "must be positive")
+        if self.max_start_draws < 1:
+            raise bad("max_start_draws", "must be a positive integer")
 
     @classmethod
     def release(cls, **overrides: Any) -> EnvConfig:
@@ -87,4 +91,47 @@ class EnvConfig:
         )
 
     def replace(self, **changes: Any) -> EnvConfig:
+        """A copy with ``changes``; an unknown name is a ValueError (the environments pass their
+        keyword arguments here, and gymnasium.make rewords a TypeError into a long one)."""
+        names = {f.name for f in dataclasses.fields(self)}
+        for name, value in changes.items():
+            if name not in names:
+                raise ValueError(
+                    f"EnvConfig: unknown keyword {name}={value!r}; the fields are {sorted(names)}"
+                )
         return dataclasses.replace(self, **changes)
+
+
+def _field_spec(value: object) -> FieldSpec:
+    """``EnvConfig.field`` as a FieldSpec: a preset name (how JSON run configs store the
+    field) becomes its FieldSpec. Checked here, not by the generic type check, so that the
+    message names the presets too."""
+    if isinstance(value, str):
+        try:
+            return field_preset(value)
+        except ValueError as e:
+            raise ValueError(f"EnvConfig.field: {e}") from None
+    if not isinstance(value, FieldSpec):
+        raise ValueError(
+            f"EnvConfig.field: expects FieldSpec or a preset name {sorted(FIELD_PRESETS)}, "
+            f"got {value!r}"
+        )
+    return value
+
+
+def resolve_config(config: EnvConfig | None, overrides: Mapping[str, Any]) -> EnvConfig:
+    """The environments' configuration: ``config`` (default :class:`EnvConfig()`) with the
+    keyword ``overrides`` applied."""
+    if config is None:
+        config = EnvConfig()
+    elif not isinstance(config, EnvConfig):
+        raise ValueError(f"config: expects EnvConfig or None, got {config!r}")
+    return config.replace(**overrides) if overrides else config
+
+
+def check_count(name: str, value: object) -> int:
+    """``value`` as a positive int (``max_episode_steps``, ``num_envs``); bools, floats and
+    the rest are a ValueError naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise ValueError(f"{name}: expects a positive integer, got {value!r}")
+    return int(value)

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from activevision.typecheck import check_dataclass_fields
+
 
 @dataclass(frozen=True)
 class CameraConfig:
@@ -37,6 +39,7 @@ class CameraConfig:
     tilt_max: float = math.radians(65.0)
 
     def __post_init__(self) -> None:
+        check_dataclass_fields(self)  # types first: the comparisons below need numbers
         for name in ("width", "height"):
             value = getattr(self, name)
             if not isinstance(value, int | np.integer) or value <= 0:

@@ -11,6 +11,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from activevision.typecheck import check_dataclass_fields
+
 
 class LandmarkType(enum.IntEnum):
     """Kinds of field features a RoboCup vision pipeline detects."""
@@ -63,6 +65,7 @@ class FieldSpec:
     ball_radius: float = 0.07  #: FIFA size 1; the paper's world uses 0.07 m
 
     def __post_init__(self) -> None:
+        check_dataclass_fields(self)  # types first: the comparisons below need numbers
         for f in fields(self):
             value = getattr(self, f.name)
             if value is None:
