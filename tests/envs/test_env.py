@@ -55,7 +55,9 @@ def test_start_state_is_valid():
     env = ActiveVisionEnv()
     for seed in range(10):
         _, info = env.reset(seed=seed)
-        assert len(info["desired_landmarks"]) > 0
+        k = len(env.sim.landmarks)
+        assert info["desired_mask"].shape == info["observed_mask"].shape == (k,)
+        assert info["desired_mask"].any()
         assert not info["success"]
         d = np.linalg.norm(info["ball"] - info["pose"][:2])
         assert 1.0 - 1e-9 <= d <= 3.0 + 1e-9

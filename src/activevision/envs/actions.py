@@ -30,3 +30,28 @@ def action_table(step_deg: float, action_set: str = "8way") -> np.ndarray:
     if count is None:
         raise ValueError(f"action_set must be '8way' or '4way', got {action_set!r}")
     return np.asarray(moves[:count], dtype=np.float64)
+
+
+
+def check_actions(actions: object, n_actions: int, shape: tuple[int, ...]) -> np.ndarray:
+    """``actions`` as an integer array of ``shape`` with values in ``0..n_actions - 1``.
+
+    Floats (even whole ones), bools, NaN, strings, None and wrongly shaped input are a
+    ValueError naming the value: NumPy would otherwise index the action table with them
+    (bools as masks, negatives from the end) or fail deep inside with an IndexError.
+    """
+    try:
+        array = np.asarray(actions)
+    except (TypeError, ValueError):  # ragged nested lists
+        array = np.asarray(None)
+    span = f"0..{n_actions - 1}"
+    expects = f"an integer in {span}" if shape == () else f"integers in {span}, shape {shape}"
+    if array.dtype == np.bool_ or not np.issubdtype(array.dtype, np.integer):
+        raise ValueError(f"invalid action {actions!r}: expects {expects}, got dtype {array.dtype}")
+    if array.shape != shape:
+        raise ValueError(f"invalid action {actions!r}: expects {expects}, got shape {array.shape}")
+    bad = (array < 0) | (array >= n_actions)
+    if bad.any():
+        where = "" if shape == () else f" {int(array[bad].flat[0])} in"
+        raise ValueError(f"invalid action{where} {actions!r}: expects {expects}")
+    return array

@@ -9,7 +9,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from activevision.envs.config import EnvConfig
+from activevision.envs.actions import check_actions
+from activevision.envs.config import EnvConfig, check_count, resolve_config
 from activevision.envs.simulation import EpisodeBatch
 from activevision.localisation import LocalisationConfig
 
@@ -68,15 +69,19 @@ class ActiveVisionEnv(gym.Env):
     image. Truncates after 20 steps (``max_episode_steps`` of the registration).
 
     ## Info
-    ``goal_viewpoint`` (pan, tilt rad), ``goal_entropy``, ``desired_landmarks`` and
-    ``observed_landmarks`` (landmark ids), ``success_rate`` (|observed ∩ desired| /
+    ``goal_viewpoint`` (pan, tilt rad), ``goal_entropy``, ``desired_mask`` and
+    ``observed_mask`` (the goal view's and the current view's landmarks: (K,) bool over
+    landmark ids, K the field's landmark count), ``success_rate`` (|observed ∩ desired| /
     |desired|), ``success``, ``ball_lost``, ``steps_to_success`` and ``ball_lost_step`` (20
     if it did not happen), ``episode_score`` (the release's: 1 success, 0 ball lost, else the
-    success rate), ``head``, ``pose``, ``believed_pose``, ``ball``, ``step``.
+    success rate), ``head``, ``pose``, ``believed_pose``, ``ball``, ``step``. Every value
+    keeps its shape and type at every step (arrays float64 or bool; scalars Python float,
+    int or bool), so ``gymnasium.make_vec`` stacks them in every vectorization mode.
 
     ## Arguments
     ``gymnasium.make("ActiveVision-v0", config=EnvConfig(...), localisation=..., render_mode=...)``
     or any :class:`EnvConfig` field as a keyword (``frame_stack=4``, ``success_mode=...``).
+    A wrong type, a value out of range or an unknown keyword raises ``ValueError`` naming it.
     ``render_mode="rgb_array"`` returns the camera image beside a top view of the field.
 
     ## Version History
@@ -93,14 +98,16 @@ class ActiveVisionEnv(gym.Env):
         max_episode_steps: int = 20,
         **config_overrides: Any,
     ) -> None:
-        config = config or EnvConfig()
-        if config_overrides:
-            config = config.replace(**config_overrides)
+        config = resolve_config(config, config_overrides)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None")
+            raise ValueError(
+                f"render_mode: expects one of {self.metadata['render_modes']} or None, "
+                f"got {render_mode!r}"
+            )
         self.config = config
         self.render_mode = render_mode
-        self.max_episode_steps = max_episode_steps
+        # Only the info's "did not happen" value: the time limit is gymnasium.make's TimeLimit.
+        self.max_episode_steps = check_count("max_episode_steps", max_episode_steps)
         self.sim = EpisodeBatch(config, 1, localisation)
         self.observation_space = observation_space(config)
         self.action_space = spaces.Discrete(len(self.sim.actions))
@@ -115,9 +122,8 @@ class ActiveVisionEnv(gym.Env):
         return self._frames.copy(), self.sim.info(0, self.max_episode_steps)
 
     def step(self, action):
-        if not self.action_space.contains(action):
-            raise ValueError(f"invalid action {action!r} for {self.action_space}")
-        return self._after_move(self.sim.step(np.array([int(action)])))
+        action = check_actions(action, len(self.sim.actions), ())
+        return self._after_move(self.sim.step(action.reshape(1)))
 
     def jump_head(self, pan: float, tilt: float):
         """Move the head straight to ``(pan, tilt)`` rad in one step (clipped to the limits),

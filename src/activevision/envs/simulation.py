@@ -8,9 +8,11 @@ its own generator; nothing here touches global random state.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from activevision.envs.actions import action_table
+from activevision.envs.actions import action_table, check_actions
 from activevision.envs.config import EnvConfig
 from activevision.envs.reward import approach_reward, viewpoint_distance_deg
 from activevision.envs.starts import StartGenerationError, draw_starts
@@ -26,6 +28,10 @@ class EpisodeBatch:
     def __init__(
         self, cfg: EnvConfig, num_envs: int, localisation: LocalisationConfig | None = None
     ) -> None:
+        if localisation is not None and not isinstance(localisation, LocalisationConfig):
+            raise ValueError(
+                f"localisation: expects LocalisationConfig or None, got {localisation!r}"
+            )
         self.cfg = cfg
         self.n = num_envs
         self.localisation = localisation or LocalisationConfig()
@@ -111,13 +117,7 @@ class EpisodeBatch:
             ``(reward, terminated, success, ball_lost)``, each (N,).
         """
         idx = np.arange(self.n) if active is None else np.flatnonzero(active)
-        actions = np.asarray(actions)
-        n_actions = len(self.actions)
-        bad = (actions[idx] < 0) | (actions[idx] >= n_actions)
-        if bad.any():
-            raise ValueError(
-                f"invalid action {actions[idx][bad][0]!r}: expected 0..{n_actions - 1}"
-            )
+        actions = check_actions(actions, len(self.actions), (self.n,))
         move = self.actions[actions[idx]]
         return self.move_head(idx, self.pan[idx] + move[:, 0], self.tilt[idx] + move[:, 1])
 
@@ -182,7 +182,12 @@ class EpisodeBatch:
         )
 
     def info_arrays(self, max_episode_steps: int) -> dict[str, np.ndarray]:
-        """Per-slot episode facts as arrays over all N slots (see the env's Info section)."""
+        """Per-slot episode facts as arrays over all N slots (see the env's Info section).
+
+        Every entry has the same shape and dtype at every step (float64, int64 or bool,
+        landmark sets as (N, K) boolean masks over landmark ids), so Gymnasium's vectorizers
+        can stack the single environments' infos and get exactly these arrays.
+        """
         success = self.success_step >= 0
         lost = self.ball_lost_step >= 0
         rate = (self.desired & self.observed).sum(1) / np.maximum(self.desired.sum(1), 1)
@@ -200,28 +205,18 @@ class EpisodeBatch:
             "believed_pose": self.believed_pose.copy(),
             "ball": self.ball.copy(),
             "step": self.step_count.copy(),
+            "desired_mask": self.desired.copy(),
+            "observed_mask": self.observed.copy(),
         }
 
-    def info(self, i: int, max_episode_steps: int) -> dict:
-        """The single-environment ``info`` dict of slot ``i``: the entries of
-        :meth:`info_arrays` for that slot, and the landmark sets as id arrays."""
-        desired, observed = self.desired[i], self.observed[i]
-        success, lost = bool(self.success_step[i] >= 0), bool(self.ball_lost_step[i] >= 0)
-        rate = float((desired & observed).sum() / max(desired.sum(), 1))
+    def info(self, i: int, max_episode_steps: int) -> dict[str, Any]:
+        """The single-environment ``info`` dict of slot ``i``: slot ``i`` of
+        :meth:`info_arrays`, scalars as Python ``float``, ``int`` and ``bool``.
+
+        Python scalars, not NumPy ones: Gymnasium's vectorizers stack those into float64,
+        int64 and bool arrays, but put a NumPy bool into an object array.
+        """
         return {
-            "goal_viewpoint": self.goal[i].copy(),
-            "goal_entropy": float(self.goal_entropy[i]),
-            "success_rate": rate,
-            "success": success,
-            "ball_lost": lost,
-            "steps_to_success": int(self.success_step[i]) if success else max_episode_steps,
-            "ball_lost_step": int(self.ball_lost_step[i]) if lost else max_episode_steps,
-            "episode_score": 1.0 if success else (0.0 if lost else rate),
-            "head": self.head[i].copy(),
-            "pose": self.pose[i].copy(),
-            "believed_pose": self.believed_pose[i].copy(),
-            "ball": self.ball[i].copy(),
-            "step": int(self.step_count[i]),
-            "desired_landmarks": np.flatnonzero(desired),
-            "observed_landmarks": np.flatnonzero(observed),
+            key: value[i].item() if value.ndim == 1 else value[i]
+            for key, value in self.info_arrays(max_episode_steps).items()
         }

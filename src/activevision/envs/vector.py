@@ -12,7 +12,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from activevision.envs.active_vision import observation_space
-from activevision.envs.config import EnvConfig
+from activevision.envs.config import EnvConfig, check_count, resolve_config
 from activevision.envs.simulation import EpisodeBatch
 from activevision.localisation import LocalisationConfig
 
@@ -23,8 +23,12 @@ class ActiveVisionVectorEnv(VectorEnv):
     Sub-environment ``i`` reset with ``seed=s`` is seeded with ``s + i`` and draws from its own
     generator, so its trajectory equals a single ``ActiveVision-v0`` reset with ``seed=s + i``.
     Autoreset follows Gymnasium's default (``NEXT_STEP``): the step after an episode ends
-    resets that sub-environment and ignores its action. Infos are arrays over sub-environments
-    (landmark sets as (N, K) boolean masks ``desired_mask`` and ``observed_mask``).
+    resets that sub-environment and ignores its action. Truncation follows Gymnasium's
+    ``TimeLimit`` (truncated once ``max_episode_steps`` steps are done, even on a step that
+    also terminates), as single envs from ``gymnasium.make`` do. Infos hold the single env's
+    keys as arrays over sub-environments (landmark sets as (N, K) boolean masks
+    ``desired_mask`` and ``observed_mask``): the very arrays ``SyncVectorEnv`` and
+    ``AsyncVectorEnv`` stack from single envs. Actions must be integers in the action space.
     """
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
@@ -37,14 +41,9 @@ class ActiveVisionVectorEnv(VectorEnv):
         max_episode_steps: int = 20,
         **config_overrides: Any,
     ) -> None:
-        if not isinstance(num_envs, int | np.integer) or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
-        config = config or EnvConfig()
-        if config_overrides:
-            config = config.replace(**config_overrides)
-        self.config = config
-        self.num_envs = int(num_envs)
-        self.max_episode_steps = max_episode_steps
+        self.num_envs = check_count("num_envs", num_envs)
+        self.config = config = resolve_config(config, config_overrides)
+        self.max_episode_steps = check_count("max_episode_steps", max_episode_steps)
         self.sim = EpisodeBatch(config, self.num_envs, localisation)
         self.single_observation_space = observation_space(config)
         self.single_action_space = spaces.Discrete(len(self.sim.actions))
@@ -86,13 +85,14 @@ class ActiveVisionVectorEnv(VectorEnv):
         self._frames[started] = self._frames[started, -1:]
 
     def step(self, actions):
-        actions = np.asarray(actions)
-        if actions.shape != (self.num_envs,):
-            raise ValueError(f"actions must have shape ({self.num_envs},), got {actions.shape}")
+        # EpisodeBatch.step checks dtype, shape and range of every action (resetting
+        # sub-environments ignore theirs, but it must still lie in the action space).
         resetting = self._needs_reset.copy()
         stepping = ~resetting
         reward, terminated, _, _ = self.sim.step(actions, active=stepping)
-        truncated = stepping & ~terminated & (self.sim.step_count >= self.max_episode_steps)
+        # Gymnasium's TimeLimit rule, which single envs from gymnasium.make follow: truncated
+        # whenever the limit is reached, even on a step that also terminates.
+        truncated = stepping & (self.sim.step_count >= self.max_episode_steps)
         started = np.flatnonzero(resetting)
         if len(started):
             self.sim.reset(started, [self._rngs[i] for i in started])
@@ -103,7 +103,5 @@ class ActiveVisionVectorEnv(VectorEnv):
 
     def _infos(self) -> dict[str, Any]:
         infos: dict[str, Any] = self.sim.info_arrays(self.max_episode_steps)
-        infos["desired_mask"] = self.sim.desired.copy()
-        infos["observed_mask"] = self.sim.observed.copy()
         infos.update({f"_{key}": self._every_env for key in list(infos)})
         return infos

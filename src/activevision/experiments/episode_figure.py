@@ -44,7 +44,11 @@ def trace_episode(policy: HeadPolicy, seed: int, config: EnvConfig | None = None
 
     def snap(obs, info, reward):
         return Snapshot(
-            obs[-1].copy(), *info["head"], info["observed_landmarks"], reward, info["step"]
+            obs[-1].copy(),
+            *info["head"],
+            np.flatnonzero(info["observed_mask"]),
+            reward,
+            info["step"],
         )
 
     shots = [snap(obs, info, 0.0)]
@@ -62,7 +66,7 @@ def trace_episode(policy: HeadPolicy, seed: int, config: EnvConfig | None = None
         info["pose"],
         info["ball"],
         tuple(info["goal_viewpoint"]),
-        info["desired_landmarks"],
+        np.flatnonzero(info["desired_mask"]),
         shots,
         info["success"],
         info["ball_lost"],
