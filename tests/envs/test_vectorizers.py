@@ -1,0 +1,174 @@
+"""Every way to vectorise ActiveVision-v0 gives the same batches: Gymnasium's SyncVectorEnv
+and AsyncVectorEnv over single envs, the native vector env, and N single envs stepped by
+hand with Gymnasium's NEXT_STEP autoreset. Byte for byte: observations, rewards,
+terminated, truncated and every info array, dtypes included."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import activevision.envs  # noqa: F401  (registers ActiveVision-v0)
+from activevision.envs import ActiveVisionEnv, ActiveVisionVectorEnv
+from activevision.envs.actions import action_table
+
+N, SEED, STEPS = 3, 5, 200
+
+#: (observations, rewards, terminated, truncated, infos) of one reset or step of N envs
+Batch = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]
+Step = tuple[np.ndarray, float, bool, bool, dict[str, Any]]
+
+
+def random_actions(steps: int = STEPS, n: int = N, seed: int = 0) -> np.ndarray:
+    return np.random.default_rng(seed).integers(0, 9, (steps, n))
+
+
+def vector_rollout(envs: gym.vector.VectorEnv, seed: int, actions: np.ndarray) -> list[Batch]:
+    """Reset with ``seed`` (sub-env i gets seed + i), then one batch per row of ``actions``."""
+    obs, infos = envs.reset(seed=seed)
+    n = actions.shape[1]
+    out = [(obs, np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), infos)]
+    return out + [envs.step(a) for a in actions]
+
+
+def singles_rollout(seed: int, actions: np.ndarray) -> list[Batch]:
+    """``gym.make`` envs stepped one by one (env i reset with seed + i), batched as
+    Gymnasium's vectorizers batch them."""
+    envs = [gym.make("ActiveVision-v0") for _ in range(actions.shape[1])]
+    first = [env.reset(seed=seed + i) for i, env in enumerate(envs)]
+    steps: list[Step] = [(obs, 0.0, False, False, info) for obs, info in first]
+    out = [stack(steps)]
+    for row in actions:
+        steps = [next_step(env, int(a), s) for env, a, s in zip(envs, row, steps, strict=True)]
+        out.append(stack(steps))
+    return out
+
+
+def next_step(env: gym.Env, action: int, last: Step) -> Step:
+    """Gymnasium's NEXT_STEP autoreset: the step after an episode ends resets the env
+    (reward 0, neither terminated nor truncated) and ignores the action."""
+    if last[2] or last[3]:
+        obs, info = env.reset()
+        return obs, 0.0, False, False, info
+    return env.step(action)
+
+
+def stack(steps: list[Step]) -> Batch:
+    obs, reward, terminated, truncated, infos = zip(*steps, strict=True)
+    batch: dict[str, Any] = {key: np.array([info[key] for info in infos]) for key in infos[0]}
+    batch.update({f"_{key}": np.ones(len(infos), bool) for key in infos[0]})  # "has key" masks
+    return np.stack(obs), np.array(reward), np.array(terminated), np.array(truncated), batch
+
+
+def assert_same_batches(got: list[Batch], want: list[Batch]) -> None:
+    assert len(got) == len(want)
+    names = ("observations", "rewards", "terminated", "truncated")
+    for t, (g, w) in enumerate(zip(got, want, strict=True)):
+        for name, a, b in zip(names, g[:4], w[:4], strict=True):
+            assert_same_bytes(a, b, f"step {t}: {name}")
+        assert g[4].keys() == w[4].keys(), f"step {t}: info keys"
+        for key in w[4]:
+            assert_same_bytes(g[4][key], w[4][key], f"step {t}: info[{key!r}]")
+
+
+def assert_same_bytes(a: Any, b: Any, where: str) -> None:
+    a, b = np.asarray(a), np.asarray(b)
+    assert (a.dtype, a.shape) == (b.dtype, b.shape), where
+    if a.tobytes() != b.tobytes():
+        at = np.argwhere(a != b)
+        pytest.fail(f"{where}: {len(at)} elements differ, first at {tuple(at[0])}")
+
+
+@pytest.fixture(scope="module")
+def reference() -> list[Batch]:
+    return singles_rollout(SEED, random_actions())
+
+
+@pytest.mark.parametrize("mode", ["sync", "async", "vector_entry_point"])
+def test_make_vec_modes_equal_single_envs(mode: str, reference: list[Batch]) -> None:
+    envs = gym.make_vec("ActiveVision-v0", num_envs=N, vectorization_mode=mode)
+    try:
+        got = vector_rollout(envs, SEED, random_actions())
+    finally:
+        envs.close()
+    assert_same_batches(got, reference)
+    # 200 steps cross the 20-step limit: both kinds of episode end (and autoresets) happen
+    assert np.any([b[2] for b in got]) and np.any([b[3] for b in got])
+
+
+def test_async_close_returns() -> None:
+    """The issue's hang: a fresh process makes an async vector env, steps it and closes it
+    (a parent that failed to merge the workers' infos left close() waiting forever)."""
+    code = textwrap.dedent("""
+        import gymnasium as gym, numpy as np, activevision.envs
+        envs = gym.make_vec("ActiveVision-v0", num_envs=2, vectorization_mode="async")
+        envs.reset(seed=0)
+        for a in np.random.default_rng(0).integers(0, 9, (25, 2)):
+            envs.step(a)
+        envs.close()
+        print("closed")
+    """)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["closed"]
+
+
+def test_info_values_keep_shape_and_type() -> None:
+    """What lets every vectorizer stack the infos: per key, one type, shape and dtype at
+    every step, episode ends and resets included."""
+    env = gym.make("ActiveVision-v0")
+    _, info = env.reset(seed=3)
+    signature = {key: _signature(value) for key, value in info.items()}
+    for a in random_actions(60, 1)[:, 0]:
+        _, _, terminated, truncated, info = env.step(int(a))
+        assert {key: _signature(value) for key, value in info.items()} == signature
+        if terminated or truncated:
+            _, info = env.reset()
+            assert {key: _signature(value) for key, value in info.items()} == signature
+    k = len(env.unwrapped.sim.landmarks)
+    assert signature["desired_mask"] == signature["observed_mask"] == (np.ndarray, (k,), "bool")
+    assert signature["steps_to_success"] == (int, (), None)
+
+
+def _signature(value: Any) -> tuple[type, tuple[int, ...], str | None]:
+    dtype = value.dtype.name if isinstance(value, np.ndarray) else None
+    return type(value), np.shape(value), dtype
+
+
+def greedy_episode(seed: int) -> list[int]:
+    """The actions of a greedy walk to the goal viewpoint, up to its success."""
+    env = ActiveVisionEnv()
+    table = np.degrees(action_table(3.0))
+    _, info = env.reset(seed=seed)
+    actions = []
+    for _ in range(20):
+        delta = np.degrees(info["goal_viewpoint"] - info["head"])
+        actions.append(int(np.argmin(np.linalg.norm(delta - table, axis=1))))
+        _, _, terminated, _, info = env.step(actions[-1])
+        if terminated:
+            return actions if info["success"] else []
+    return []
+
+
+def test_success_on_the_last_step_is_also_truncated_everywhere() -> None:
+    """TimeLimit's rule: a step that reaches max_episode_steps is truncated even when it also
+    terminates; the native vector env follows it, so all vectorizers agree."""
+    seed, actions = next((s, a) for s in range(20) if (a := greedy_episode(s)))
+    limit = len(actions)  # the episode succeeds on its last allowed step
+    single = gym.make("ActiveVision-v0", max_episode_steps=limit)
+    single.reset(seed=seed)
+    vector = ActiveVisionVectorEnv(num_envs=1, max_episode_steps=limit)
+    vector.reset(seed=seed)
+    for a in actions:
+        _, _, s_term, s_trunc, _ = single.step(a)
+        _, _, v_term, v_trunc, _ = vector.step(np.array([a]))
+        assert (s_term, s_trunc) == (v_term[0], v_trunc[0])
+    assert s_term and s_trunc
