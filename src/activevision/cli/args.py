@@ -7,8 +7,9 @@ silently wrong result further down."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
@@ -76,34 +77,45 @@ def error_levels(text: str) -> list[float]:
     """``0:2:0.25`` (start:stop:step, stop included) or ``0,0.5,1``: finite levels >= 0."""
     import numpy as np
 
-    if ":" in text:
-        parts = text.split(":")
-        if len(parts) != 3:
-            raise argparse.ArgumentTypeError(f"expects start:stop:step, got {text!r}")
-        start, stop, step = (non_negative_float(v) for v in parts)
-        if step <= 0:
-            raise argparse.ArgumentTypeError(f"step must be positive, got {text!r}")
-        if stop < start:
-            raise argparse.ArgumentTypeError(f"stop is below start in {text!r}")
-        return [round(float(v), 6) for v in np.arange(start, stop + step / 2, step)]
-    levels = [non_negative_float(v) for v in text.split(",")]
-    if len(set(levels)) != len(levels):
-        raise argparse.ArgumentTypeError(f"repeats a level: {text!r}")
-    return levels
+    with _naming(text):
+        if ":" in text:
+            parts = text.split(":")
+            if len(parts) != 3:
+                raise argparse.ArgumentTypeError("expects start:stop:step")
+            start, stop, step = (non_negative_float(v) for v in parts)
+            if step <= 0:
+                raise argparse.ArgumentTypeError("step must be positive")
+            if stop < start:
+                raise argparse.ArgumentTypeError("stop is below start")
+            return [round(float(v), 6) for v in np.arange(start, stop + step / 2, step)]
+        levels = [non_negative_float(v) for v in text.split(",")]
+        if len(set(levels)) != len(levels):
+            raise argparse.ArgumentTypeError("repeats a level")
+        return levels
 
 
 def seed_list(text: str) -> list[int]:
     """``0..9`` (both ends included), ``0,3,7`` or ``5``."""
-    if ".." in text:
-        start, _, stop = text.partition("..")
-        first, last = seed(start), seed(stop)
-        if last < first:
-            raise argparse.ArgumentTypeError(f"the end is before the start in {text!r}")
-        return list(range(first, last + 1))
-    seeds = [seed(v) for v in text.split(",")]
-    if len(set(seeds)) != len(seeds):
-        raise argparse.ArgumentTypeError(f"repeats a seed: {text!r}")
-    return seeds
+    with _naming(text):
+        if ".." in text:
+            start, _, stop = text.partition("..")
+            first, last = seed(start), seed(stop)
+            if last < first:
+                raise argparse.ArgumentTypeError("the end is before the start")
+            return list(range(first, last + 1))
+        seeds = [seed(v) for v in text.split(",")]
+        if len(set(seeds)) != len(seeds):
+            raise argparse.ArgumentTypeError("repeats a seed")
+        return seeds
+
+
+@contextlib.contextmanager
+def _naming(text: str) -> Iterator[None]:
+    """Add the whole value to an error about one of its parts."""
+    try:
+        yield
+    except argparse.ArgumentTypeError as error:
+        raise argparse.ArgumentTypeError(f"{error} (in {text!r})") from None
 
 
 def grid_item(text: str) -> tuple[str, list[str]]:
