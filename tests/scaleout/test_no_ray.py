@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from activevision.experiments.policies import make_policy
+from activevision.experiments.methods import make_policy
 from activevision.scaleout import RAY_INSTALL_HINT, aggregate, require_ray
 from activevision.scaleout.compare import default_method_names
 from activevision.scaleout.sweep import grid_points, trial_config, trial_name

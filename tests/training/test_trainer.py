@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from activevision.agents.q_network import QNetwork
-from activevision.experiments.evaluate import episode_seed
+from activevision.envs.seeding import episode_seed
 from activevision.training import checkpoint as ckpt
 from activevision.training.config import TrainConfig
 from activevision.training.metrics import EPOCH_FIELDS, TIMING_FIELDS

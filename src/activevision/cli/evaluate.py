@@ -20,15 +20,15 @@ from activevision.cli.outputs import check_outputs
 
 
 def _method_names() -> tuple[str, ...]:
-    from activevision.experiments.policies import METHODS
+    from activevision.experiments.methods import method_names
 
-    return METHODS
+    return method_names()
 
 
 def _compare_method_names() -> tuple[str, ...]:
-    from activevision.experiments.policies import DEFAULT_ORDER
+    from activevision.experiments.methods import compare_method_names
 
-    return DEFAULT_ORDER
+    return compare_method_names()
 
 
 def _require_run_for_learned(names: list[str], run: Path | None) -> None:
@@ -37,7 +37,7 @@ def _require_run_for_learned(names: list[str], run: Path | None) -> None:
 
 
 def _policies(names: list[str], args: argparse.Namespace, env_config: Any, error: float = 0.0):
-    from activevision.experiments.policies import make_policy
+    from activevision.experiments.methods import make_policy
 
     _require_run_for_learned(names, args.run)
     return {name: make_policy(name, error, env_config, args.run, args.weights) for name in names}
@@ -52,14 +52,13 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         latency_summary,
         summary_rows,
     )
-    from activevision.experiments.policies import DEFAULT_ORDER
     from activevision.io import write_csv, write_json
 
     out = args.out or (args.run / "evaluation" if args.run else Path("evaluation"))
     files = [out / n for n in ("evaluation.csv", "episodes.csv", "evaluation.json")]
     check_outputs(own=files)
     env_config = env_config_of_run(args.run)
-    names = args.methods or [m for m in DEFAULT_ORDER if m != "learned" or args.run]
+    names = args.methods or [m for m in _compare_method_names() if m != "learned" or args.run]
     policies = _policies(names, args, env_config, args.error)
     env = ActiveVisionEnv(env_config)
     summaries, episodes, latency = {}, [], {}

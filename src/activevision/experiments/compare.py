@@ -18,7 +18,8 @@ import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.experiments.evaluate import evaluate_policy, summary_rows
-from activevision.experiments.policies import DEFAULT_ORDER, HeadPolicy, make_policy
+from activevision.experiments.methods import compare_method_names, make_policy
+from activevision.experiments.policies import HeadPolicy
 from activevision.io import write_csv
 
 DEFAULT_ERRORS = tuple(np.round(np.arange(0.0, 2.01, 0.25), 2))
@@ -34,8 +35,9 @@ def default_methods(
     methods: dict[str, MethodFactory] = {}
     if learned is not None:
         methods["learned"] = lambda e: learned
-    for name in DEFAULT_ORDER[1:]:
-        methods[name] = lambda e, name=name: make_policy(name, e, config)
+    for name in compare_method_names():
+        if name != "learned":
+            methods[name] = lambda e, name=name: make_policy(name, e, config)
     return methods
 
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
+from activevision.envs.seeding import episode_seed
 from activevision.experiments.policies import HeadPolicy, HeadTarget
 
 Z95 = 1.959963984540054  #: two-sided 95% quantile of the standard normal
@@ -65,11 +66,6 @@ def summarise(episodes: Sequence[dict]) -> dict[str, Interval]:
         else:
             out[name] = mean_interval(values)
     return out
-
-
-def episode_seed(base_seed: int, episode: int) -> int:
-    """Seed of episode ``episode``: every method sees the same start for the same seed."""
-    return base_seed * 1_000_003 + episode
 
 
 def run_episode(

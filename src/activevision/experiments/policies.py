@@ -8,7 +8,6 @@ localisation error) and the ball; the oracle the true goal (an upper bound, not 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -48,12 +47,13 @@ def greedy_action(head, target, table: np.ndarray) -> int:
 
 
 class RandomPolicy:
-    """Uniformly random actions."""
+    """Uniformly random actions of the env's action set."""
 
     name = "random"
 
-    def __init__(self, n_actions: int = 9) -> None:
-        self.n_actions = n_actions
+    def __init__(self, config: EnvConfig | None = None) -> None:
+        cfg = config or EnvConfig()
+        self.n_actions = len(action_table(cfg.step_deg, cfg.action_set))
         self._rng = np.random.default_rng(0)
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
@@ -204,38 +204,3 @@ class OnnxPolicy:
     def act(self, obs: np.ndarray, info: dict) -> int:
         pan, tilt = info["head"]
         return self.controller.act(obs[-1], pan, tilt).action
-
-
-#: Method names :func:`make_policy` knows (``learned`` needs a run directory).
-METHODS = ("learned", "shipped", "entropy_jump", "entropy_steps", "oracle", "scan", "random")
-#: Order of the local ``activevision compare`` (learned first when there is a run).
-DEFAULT_ORDER = ("learned", "entropy_jump", "entropy_steps", "oracle", "scan", "random")
-
-
-def make_policy(
-    name: str,
-    error: float,
-    config: EnvConfig,
-    run_dir: str | Path | None = None,
-    weights: str = "final",
-) -> HeadPolicy:
-    """A fresh policy of method ``name``; ``error`` is the localisation error the entropy
-    methods plan with, ``run_dir`` the training run of ``learned`` and ``weights`` which of
-    its weights ("final" or "best")."""
-    if name == "learned":
-        if run_dir is None:
-            raise ValueError("the learned policy needs a run directory (--run runs/NAME)")
-        return LearnedPolicy.from_run(run_dir, weights=weights)
-    if name == "shipped":
-        from activevision.runtime import pretrained_policy_path
-
-        return OnnxPolicy(pretrained_policy_path())
-    if name in ("entropy_jump", "entropy_steps"):
-        return EntropyPolicy(error, jump=name == "entropy_jump", config=config)
-    if name == "oracle":
-        return OraclePolicy(config)
-    if name == "scan":
-        return ScanPolicy(config=config)
-    if name == "random":
-        return RandomPolicy()
-    raise ValueError(f"unknown method {name!r}; choose from {sorted(METHODS)}")

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from activevision.envs import EnvConfig
-from activevision.experiments.policies import DEFAULT_ORDER, METHODS, make_policy
+from activevision.experiments.methods import compare_method_names, make_policy, method
 
 
 def evaluate_chunk(
@@ -30,7 +30,8 @@ def evaluate_chunk(
     """Episode records of ``method`` for ``episode_indices`` of the level seeded ``base_seed``
     (what :func:`~activevision.experiments.evaluate.evaluate_policy` computes for them)."""
     from activevision.envs import ActiveVisionEnv
-    from activevision.experiments.evaluate import episode_seed, run_episode
+    from activevision.envs.seeding import episode_seed
+    from activevision.experiments.evaluate import run_episode
 
     env = ActiveVisionEnv(config)
     policy = make_policy(method, error, config, run_dir, weights)
@@ -72,8 +73,7 @@ def compare_ray(
     if chunk < 1:
         raise ValueError(f"chunk must be positive, got {chunk}")
     for name in method_names:
-        if name not in METHODS:
-            raise ValueError(f"unknown method {name!r}; choose from {sorted(METHODS)}")
+        method(name)  # ValueError naming the choices for an unknown name
     if "learned" in method_names and run_dir is None:
         raise ValueError("the learned policy needs --run runs/NAME")
     config = config or EnvConfig()
@@ -120,5 +120,5 @@ def compare_ray(
 def default_method_names(run_dir: str | Path | None, selected: Sequence[str] | None) -> list[str]:
     """The methods ``activevision compare`` runs: its default order, filtered by ``selected``
     (the local CLI ignores the order and unknown names of ``--methods``; so does this)."""
-    names = [m for m in DEFAULT_ORDER if m != "learned" or run_dir is not None]
+    names = [m for m in compare_method_names() if m != "learned" or run_dir is not None]
     return [m for m in names if not selected or m in selected]

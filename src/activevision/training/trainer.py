@@ -50,6 +50,7 @@ from activevision.agents.ddqn import DDQNLearner
 from activevision.agents.dqn_math import epsilon_greedy, linear_schedule
 from activevision.agents.q_network import QNetwork
 from activevision.agents.replay.prioritized import PrioritizedReplayBuffer
+from activevision.envs.seeding import episode_seed
 from activevision.io import atomic_path
 from activevision.training import checkpoint as ckpt
 from activevision.training.config import TrainConfig, load_config, save_config
@@ -295,10 +296,6 @@ class Trainer:
         Uses an environment of its own, so training's environment, generators and replay are
         untouched (a run with validation trains exactly like one without).
         """
-        # the seeds of `activevision evaluate --seed eval_seed` (imported here: the trainer
-        # itself works with any Gymnasium environment)
-        from activevision.experiments.evaluate import episode_seed
-
         c = self.config
         if self._eval_env is None:
             self._eval_env = self.env_factory()

@@ -1,0 +1,134 @@
+"""The registry of head-control methods: a name maps to a factory of a fresh policy.
+
+``activevision evaluate`` / ``compare`` / ``episode`` take their choices, their order and
+their help from it, so a method added here is everywhere at once::
+
+    @register_method("my_scan", help="my team's scan")
+    def _my_scan(context: MethodContext) -> HeadPolicy:
+        return MyScan(context.config)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from activevision.envs.config import EnvConfig
+from activevision.experiments.policies import (
+    EntropyPolicy,
+    HeadPolicy,
+    LearnedPolicy,
+    OnnxPolicy,
+    OraclePolicy,
+    RandomPolicy,
+    ScanPolicy,
+)
+
+
+@dataclass(frozen=True)
+class MethodContext:
+    """What a factory may use to build its policy."""
+
+    config: EnvConfig  #: the env the policy plays
+    error: float = 0.0  #: localisation error the entropy methods plan with (m and rad)
+    run_dir: Path | None = None  #: training run of the learned policy
+    weights: str = "final"  #: which of its weights: "final" or "best"
+
+
+MethodFactory = Callable[[MethodContext], HeadPolicy]
+
+
+@dataclass(frozen=True)
+class Method:
+    name: str
+    factory: MethodFactory
+    help: str
+    in_compare: bool  #: part of ``activevision compare``'s default set
+    needs_run: bool  #: needs ``--run``
+
+
+_REGISTRY: dict[str, Method] = {}
+
+
+def register_method(
+    name: str, *, help: str, in_compare: bool = True, needs_run: bool = False
+) -> Callable[[MethodFactory], MethodFactory]:
+    """Register ``factory`` under ``name`` (in registration order: the compare order)."""
+
+    def add(factory: MethodFactory) -> MethodFactory:
+        if name in _REGISTRY:
+            raise ValueError(f"method {name!r} is registered already")
+        _REGISTRY[name] = Method(name, factory, help, in_compare, needs_run)
+        return factory
+
+    return add
+
+
+def method_names() -> tuple[str, ...]:
+    """Every registered method, in registration order."""
+    return tuple(_REGISTRY)
+
+
+def compare_method_names() -> tuple[str, ...]:
+    """The methods of ``activevision compare`` and the default of ``evaluate``, in order."""
+    return tuple(n for n, m in _REGISTRY.items() if m.in_compare)
+
+
+def method(name: str) -> Method:
+    if name not in _REGISTRY:
+        raise ValueError(f"unknown method {name!r}; choose from {', '.join(_REGISTRY)}")
+    return _REGISTRY[name]
+
+
+def make_policy(
+    name: str,
+    error: float,
+    config: EnvConfig,
+    run_dir: str | Path | None = None,
+    weights: str = "final",
+) -> HeadPolicy:
+    """A fresh policy of method ``name`` (see :class:`MethodContext` for the arguments)."""
+    entry = method(name)
+    if entry.needs_run and run_dir is None:
+        raise ValueError(f"the {name} policy needs a run directory (--run runs/NAME)")
+    run = Path(run_dir) if run_dir is not None else None
+    return entry.factory(MethodContext(config or EnvConfig(), error, run, weights))
+
+
+@register_method("learned", help="a trained run's Q-network (--run)", needs_run=True)
+def _learned(context: MethodContext) -> HeadPolicy:
+    assert context.run_dir is not None
+    return LearnedPolicy.from_run(context.run_dir, weights=context.weights)
+
+
+@register_method("entropy_jump", help="Algorithm 1 on the believed pose, jump there")
+def _entropy_jump(context: MethodContext) -> HeadPolicy:
+    return EntropyPolicy(context.error, jump=True, config=context.config)
+
+
+@register_method("entropy_steps", help="Algorithm 1 on the believed pose, 3-degree moves")
+def _entropy_steps(context: MethodContext) -> HeadPolicy:
+    return EntropyPolicy(context.error, jump=False, config=context.config)
+
+
+@register_method("oracle", help="greedy moves to the true goal (the ceiling)")
+def _oracle(context: MethodContext) -> HeadPolicy:
+    return OraclePolicy(context.config)
+
+
+@register_method("scan", help="pan sweep around the ball, tilt on the ball")
+def _scan(context: MethodContext) -> HeadPolicy:
+    return ScanPolicy(config=context.config)
+
+
+@register_method("random", help="uniformly random moves")
+def _random(context: MethodContext) -> HeadPolicy:
+    return RandomPolicy(context.config)
+
+
+@register_method("shipped", help="the policy shipped in the package (ONNX)", in_compare=False)
+def _shipped(context: MethodContext) -> HeadPolicy:
+    from activevision.runtime import pretrained_policy_path
+
+    return OnnxPolicy(pretrained_policy_path())
