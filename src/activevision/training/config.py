@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from activevision.io import write_text
+from activevision.typecheck import check_dataclass_fields
 
 
 @dataclass(frozen=True)
@@ -96,8 +97,7 @@ class TrainConfig:
     """Show a tqdm progress bar (only when stderr is a terminal)."""
 
     def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):  # type check first, so range checks can compare
-            object.__setattr__(self, f.name, _check_type(f.name, f.type, getattr(self, f.name)))
+        check_dataclass_fields(self)  # types first, so the range checks can compare
         validate(self)
 
     def replace(self, **changes: Any) -> TrainConfig:
@@ -192,25 +192,6 @@ def _check_env(env_id: str, env_kwargs: dict[str, Any]) -> None:
             env_config_from_kwargs(env_kwargs)
         except (TypeError, ValueError) as error:
             raise ValueError(f"env_kwargs: {error}") from None
-
-
-def _check_type(key: str, annotation: Any, value: Any) -> Any:
-    """Check (and, for int -> float, convert) one value against its field's annotation."""
-    expected = str(annotation)
-    if expected == "bool":
-        ok = isinstance(value, bool)
-    elif expected == "int":
-        ok = isinstance(value, int) and not isinstance(value, bool)
-    elif expected == "float":
-        ok = isinstance(value, int | float) and not isinstance(value, bool)
-        value = float(value) if ok else value
-    elif expected == "str":
-        ok = isinstance(value, str)
-    else:  # dict[str, Any]
-        ok = isinstance(value, dict)
-    if not ok:
-        raise ValueError(f"TrainConfig key {key!r} expects {expected}, got {value!r}")
-    return value
 
 
 def more_episodes(factor: int) -> TrainConfig:
