@@ -49,7 +49,9 @@ def single_digest(steps: int = 300, **kwargs) -> str:
 
 
 def vector_digest(steps: int = 200, num_envs: int = 8) -> str:
-    env = gym.make_vec("ActiveVision-v0", num_envs=num_envs, vectorization_mode="vector_entry_point")
+    env = gym.make_vec(
+        "ActiveVision-v0", num_envs=num_envs, vectorization_mode="vector_entry_point"
+    )
     rng = np.random.default_rng(3)
     sha = hashlib.sha256()
     obs, info = env.reset(seed=5)
