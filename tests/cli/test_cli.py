@@ -12,10 +12,13 @@ def test_render_and_viewpoints_write_pictures(tmp_path):
     assert (tmp_path / "vp.png").stat().st_size > 20_000
 
 
-def test_quickstart_trains_evaluates_and_reports(tmp_path):
+def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     out = tmp_path / "run"
     argv = ["quickstart", "--out", str(out), "--steps", "600", "--episodes", "6"]
     assert main(argv) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.startswith("main job: learned ") and "scan" in last and "random" in last
+    assert "goal reached" in last and str(out / "report.md") in last
     for name in (
         "config.json",
         "metrics.csv",

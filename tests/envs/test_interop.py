@@ -37,3 +37,20 @@ def test_stable_baselines3_dqn_trains_a_few_hundred_steps():
     action, _ = model.predict(obs, deterministic=True)
     assert env.action_space.contains(int(action))
     assert np.isfinite(model.q_net(torch.as_tensor(obs[None])).detach().numpy()).all()
+
+
+def test_import_activevision_registers_the_env_without_heavy_imports():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, gymnasium as gym\n"
+        "import activevision\n"
+        "assert 'numba' not in sys.modules and 'torch' not in sys.modules\n"
+        "env = gym.make('ActiveVision-v0')\n"
+        "obs, info = env.reset(seed=0)\n"
+        "assert obs.shape == (1, 120, 160)\n"
+        "env = gym.make('activevision:ActiveVision-v0')\n"
+        "assert 'torch' not in sys.modules\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=300)

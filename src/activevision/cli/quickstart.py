@@ -39,7 +39,24 @@ def run_quickstart(args: argparse.Namespace, main: Callable[[list[str]], int]) -
         code = main(argv)
         if code:
             return code
+    print(f"\n{summary_line(args.out)}")
     return 0
+
+
+def summary_line(run_dir: Path) -> str:
+    """One line: the learned policy against scan and random (paper's success rate and goal
+    reached, 95% intervals in evaluation.csv), and where the report is."""
+    import json
+
+    rows = json.loads((run_dir / "evaluation" / "evaluation.json").read_text())["methods"]
+    by_method = {row["method"]: row for row in rows}
+    parts = [
+        f"{name} {by_method[name]['success_rate']:.1%} success rate,"
+        f" {by_method[name]['success']:.1%} goal reached"
+        for name in ("learned", "scan", "random")
+        if name in by_method
+    ]
+    return f"main job: {' | '.join(parts)}; report: {run_dir / 'report.md'}"
 
 
 def add_parsers(sub: Any) -> None:

@@ -1,0 +1,25 @@
+"""Registers activevision's environments with Gymnasium.
+
+``import activevision`` calls :func:`register_envs`, as ale_py and minigrid do, so
+``gymnasium.make("activevision:ActiveVision-v0")`` works. Registration names the entry points
+as strings: nothing heavy (numba, the renderer, torch) is imported until an env is made.
+"""
+
+from __future__ import annotations
+
+ENV_ID = "ActiveVision-v0"
+
+
+def register_envs() -> None:
+    """Register ``ActiveVision-v0`` (single and native vector entry points) once."""
+    try:
+        from gymnasium.envs.registration import register, registry
+    except ImportError:  # the robot runtime needs no Gymnasium
+        return
+    if ENV_ID not in registry:
+        register(
+            id=ENV_ID,
+            entry_point="activevision.envs.active_vision:ActiveVisionEnv",
+            vector_entry_point="activevision.envs.vector:ActiveVisionVectorEnv",
+            max_episode_steps=20,
+        )
