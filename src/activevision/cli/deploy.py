@@ -37,12 +37,9 @@ def cmd_export(args: argparse.Namespace) -> None:
 
 def cmd_demo(args: argparse.Namespace) -> None:
     """Episode figure and GIF of the shipped (or a given) ONNX policy against random."""
-    from activevision.experiments.episode_figure import (
-        animate_episode,
-        plot_episodes,
-        trace_episode,
-    )
+    from activevision.experiments.episode_figure import trace_episode
     from activevision.experiments.policies import OnnxPolicy, RandomPolicy
+    from activevision.figures.episode import animate_episode, plot_episodes
     from activevision.runtime import pretrained_policy_path
 
     gif = args.out.with_suffix(".gif")

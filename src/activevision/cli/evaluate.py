@@ -128,11 +128,8 @@ def cmd_compare(args: argparse.Namespace) -> None:
 
 def cmd_episode(args: argparse.Namespace) -> None:
     """The paper's qualitative episode figure (and a GIF) for two methods."""
-    from activevision.experiments.episode_figure import (
-        animate_episode,
-        plot_episodes,
-        trace_episode,
-    )
+    from activevision.experiments.episode_figure import trace_episode
+    from activevision.figures.episode import animate_episode, plot_episodes
 
     gif = args.out.with_suffix(".gif")
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
@@ -140,8 +137,8 @@ def cmd_episode(args: argparse.Namespace) -> None:
     names = args.policies or (["learned", "random"] if args.run else ["oracle", "random"])
     policies = _policies(names, args, env_config)
     traces = [trace_episode(p, args.seed, env_config) for p in policies.values()]
-    plot_episodes(traces, args.out, config=env_config)
-    animate_episode(traces[0], gif, env_config)
+    plot_episodes(traces, args.out)
+    animate_episode(traces[0], gif)
     print(f"wrote {args.out} and {gif}")
 
 

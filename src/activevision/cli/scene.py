@@ -31,7 +31,8 @@ def _random_episode(episode_seed: int, field: str) -> Any:
 
 def cmd_render(args: argparse.Namespace) -> None:
     """Camera image beside the top view for a random episode start."""
-    from activevision.rendering.topview import episode_panel, save_rgb
+    from activevision.envs.view import episode_panel
+    from activevision.figures.canvas import save_rgb
 
     check_outputs(named=[args.out], overwrite=args.overwrite)
     sim = _random_episode(args.seed, args.field)
@@ -41,11 +42,12 @@ def cmd_render(args: argparse.Namespace) -> None:
 
 def cmd_viewpoints(args: argparse.Namespace) -> None:
     """Every candidate viewpoint's footprint shaded by its entropy; the best in red."""
-    from activevision.rendering.viewpoints_plot import plot_viewpoint_search
+    from activevision.envs.view import viewpoint_search
+    from activevision.figures.scene import plot_viewpoint_search
 
     check_outputs(named=[args.out], overwrite=args.overwrite)
     sim = _random_episode(args.seed, args.field)
-    plot_viewpoint_search(sim, 0, args.out)
+    plot_viewpoint_search(viewpoint_search(sim, 0), args.out)
     print(f"wrote {args.out}")
 
 

@@ -142,6 +142,6 @@ class ActiveVisionEnv(gym.Env):
     def render(self):
         if self.render_mode != "rgb_array":
             return None
-        from activevision.rendering.topview import episode_panel
+        from activevision.envs.view import episode_panel  # imports matplotlib: only here
 
         return episode_panel(self.sim, 0, self._frames[-1])

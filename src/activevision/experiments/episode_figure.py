@@ -1,64 +1,41 @@
-"""The paper's qualitative figure: episodes of two methods from the same start, step by
-step (camera image over the top view: robot red circle, goal view red, current view blue,
-visible landmarks coloured by type), and an animated GIF of one episode."""
+"""Episodes for the paper's qualitative figure: :func:`trace_episode` plays one policy and
+records every step; :mod:`activevision.figures.episode` draws the traces (``plot_episodes``,
+``animate_episode``)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.experiments.policies import HeadPolicy, HeadTarget
+from activevision.figures.episode import EpisodeTrace, Snapshot
 
 
-@dataclass(frozen=True)
-class Snapshot:
-    """What one step of an episode looked like."""
-
-    image: np.ndarray
-    pan: float
-    tilt: float
-    observed: np.ndarray  #: visible landmark ids
-    reward: float
-    step: int
-
-
-@dataclass(frozen=True)
-class EpisodeTrace:
-    policy: str
-    pose: np.ndarray
-    ball: np.ndarray
-    goal: tuple[float, float]
-    desired: np.ndarray
-    snapshots: list[Snapshot]
-    success: bool
-    ball_lost: bool
+def _snapshot(obs: np.ndarray, info: dict[str, Any], reward: float) -> Snapshot:
+    return Snapshot(
+        obs[-1].copy(),
+        *info["head"],
+        np.flatnonzero(info["observed_mask"]),
+        reward,
+        info["step"],
+    )
 
 
 def trace_episode(policy: HeadPolicy, seed: int, config: EnvConfig | None = None) -> EpisodeTrace:
+    """One episode of ``policy`` from the start ``seed`` draws, step by step."""
     env = ActiveVisionEnv(config or EnvConfig())
     obs, info = env.reset(seed=seed)
     policy.reset(info, np.random.default_rng([seed, 7]))
-
-    def snap(obs, info, reward):
-        return Snapshot(
-            obs[-1].copy(),
-            *info["head"],
-            np.flatnonzero(info["observed_mask"]),
-            reward,
-            info["step"],
-        )
-
-    shots = [snap(obs, info, 0.0)]
+    shots = [_snapshot(obs, info, 0.0)]
     for _ in range(env.max_episode_steps):
         action = policy.act(obs, info)
         if isinstance(action, HeadTarget):
             obs, reward, terminated, _, info = env.jump_head(action.pan, action.tilt)
         else:
             obs, reward, terminated, _, info = env.step(action)
-        shots.append(snap(obs, info, reward))
+        shots.append(_snapshot(obs, info, reward))
         if terminated:
             break
     return EpisodeTrace(
@@ -70,115 +47,7 @@ def trace_episode(policy: HeadPolicy, seed: int, config: EnvConfig | None = None
         shots,
         info["success"],
         info["ball_lost"],
+        field=env.config.field,
+        camera=env.config.camera,
+        landmarks=env.sim.landmarks,
     )
-
-
-def _pick(snapshots: list[Snapshot], columns: int) -> list[Snapshot]:
-    idx = np.unique(np.linspace(0, len(snapshots) - 1, min(columns, len(snapshots))).round())
-    return [snapshots[int(i)] for i in idx]
-
-
-def _outcome(trace: EpisodeTrace) -> str:
-    if trace.success:
-        return f"success in {len(trace.snapshots) - 1} steps"
-    return "ball lost" if trace.ball_lost else "no success in 20 steps"
-
-
-def plot_episodes(
-    traces: list[EpisodeTrace],
-    out_png: str | Path,
-    columns: int = 6,
-    config: EnvConfig | None = None,
-) -> None:
-    """For each trace a strip of ``columns`` steps: camera image above the top view."""
-    import matplotlib.pyplot as plt
-
-    from activevision.geometry import field_landmarks
-    from activevision.io import atomic_path
-    from activevision.rendering.topview import draw_topview
-
-    cfg = config or EnvConfig()
-    landmarks = field_landmarks(cfg.field)
-    fig, axes = plt.subplots(
-        2 * len(traces),
-        columns,
-        figsize=(2.6 * columns, 4.1 * len(traces)),
-        gridspec_kw={"height_ratios": [0.75, 1] * len(traces)},
-        squeeze=False,
-    )
-    for r, trace in enumerate(traces):
-        shots = _pick(trace.snapshots, columns)
-        for c in range(columns):
-            ax_img, ax_top = axes[2 * r, c], axes[2 * r + 1, c]
-            if c >= len(shots):
-                ax_img.axis("off")
-                ax_top.axis("off")
-                continue
-            s = shots[c]
-            ax_img.imshow(s.image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
-            ax_img.set_xticks([])
-            ax_img.set_yticks([])
-            label = f"{trace.policy}: step {s.step}" + (f", r={s.reward:+.0f}" if s.step else "")
-            ax_img.set_title(label, fontsize=8)
-            draw_topview(
-                ax_top,
-                cfg.field,
-                landmarks,
-                cfg.camera,
-                trace.pose,
-                s.pan,
-                s.tilt,
-                trace.ball,
-                trace.goal,
-                s.observed,
-            )
-        axes[2 * r, 0].set_ylabel(_outcome(trace), fontsize=8)
-    fig.suptitle(
-        "red: robot and goal view, blue: current view; landmarks in view coloured by "
-        "type (L red, T blue, lines yellow, boundary purple)",
-        fontsize=9,
-    )
-    fig.tight_layout()
-    with atomic_path(out_png) as tmp:
-        fig.savefig(tmp, dpi=100, format="png")
-    plt.close(fig)
-
-
-def animate_episode(
-    trace: EpisodeTrace, out_gif: str | Path, config: EnvConfig | None = None, fps: int = 3
-) -> None:
-    """An animated GIF: camera image beside the top view, one frame per step."""
-    from PIL import Image
-
-    from activevision.geometry import field_landmarks
-    from activevision.io import atomic_path
-    from activevision.rendering.topview import figure_to_rgb, view_figure
-
-    cfg = config or EnvConfig()
-    landmarks = field_landmarks(cfg.field)
-    frames = []
-    for s in trace.snapshots:
-        fig = view_figure(
-            cfg.field,
-            landmarks,
-            cfg.camera,
-            s.image,
-            trace.pose,
-            s.pan,
-            s.tilt,
-            trace.ball,
-            trace.goal,
-            s.observed,
-            title=f"{trace.policy}, step {s.step}",
-        )
-        frames.append(Image.fromarray(figure_to_rgb(fig)))
-    frames += [frames[-1]] * 2  # linger on the outcome
-    with atomic_path(out_gif) as tmp:
-        frames[0].save(
-            tmp,
-            format="GIF",
-            save_all=True,
-            append_images=frames[1:],
-            duration=int(1000 / fps),
-            loop=0,
-        )

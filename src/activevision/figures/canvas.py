@@ -1,0 +1,41 @@
+"""Off-screen figures without pyplot: a :class:`~matplotlib.figure.Figure` on its own Agg
+canvas, so drawing never touches the user's backend or pyplot's global figures."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from activevision.io import atomic_path
+
+
+def new_figure(**kwargs: Any) -> Figure:
+    """A :class:`Figure` (``figsize``, ``layout``, ... as for ``Figure``) drawn by Agg."""
+    fig = Figure(**kwargs)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def figure_to_rgb(fig: Figure) -> np.ndarray:
+    """The figure rendered as an (H, W, 3) uint8 RGB array."""
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+
+def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: float) -> None:
+    """Write the figure as PNG atomically."""
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format="png")
+
+
+def save_rgb(rgb: np.ndarray, path: str | os.PathLike[str]) -> None:
+    """Write an RGB array as PNG atomically."""
+    from matplotlib.image import imsave
+
+    with atomic_path(path) as tmp:
+        imsave(tmp, rgb, format="png")

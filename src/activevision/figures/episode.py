@@ -1,0 +1,138 @@
+"""The paper's qualitative figure: episodes of two methods from the same start, step by
+step (camera image over the top view: robot red circle, goal view red, current view blue,
+visible landmarks coloured by type), and an animated GIF of one episode.
+
+Fed with :class:`EpisodeTrace` records (``activevision.experiments.episode_figure``
+traces them)."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure
+from activevision.figures.scene import view_figure
+from activevision.figures.topview import draw_topview
+from activevision.geometry import CameraConfig, FieldSpec, LandmarkSet
+from activevision.io import atomic_path
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """What one step of an episode looked like."""
+
+    image: np.ndarray
+    pan: float
+    tilt: float
+    observed: np.ndarray  #: visible landmark ids
+    reward: float
+    step: int
+
+
+@dataclass(frozen=True)
+class EpisodeTrace:
+    """One episode of one policy, step by step, with the world it was played in."""
+
+    policy: str
+    pose: np.ndarray
+    ball: np.ndarray
+    goal: tuple[float, float]
+    desired: np.ndarray
+    snapshots: list[Snapshot]
+    success: bool
+    ball_lost: bool
+    field: FieldSpec
+    camera: CameraConfig
+    landmarks: LandmarkSet
+
+
+def _pick(snapshots: list[Snapshot], columns: int) -> list[Snapshot]:
+    idx = np.unique(np.linspace(0, len(snapshots) - 1, min(columns, len(snapshots))).round())
+    return [snapshots[int(i)] for i in idx]
+
+
+def _outcome(trace: EpisodeTrace) -> str:
+    if trace.success:
+        return f"success in {len(trace.snapshots) - 1} steps"
+    return "ball lost" if trace.ball_lost else "no success in 20 steps"
+
+
+def plot_episodes(
+    traces: list[EpisodeTrace], out_png: str | os.PathLike[str], columns: int = 6
+) -> None:
+    """For each trace a strip of ``columns`` steps: camera image above the top view."""
+    fig = new_figure(figsize=(2.6 * columns, 4.1 * len(traces)))
+    axes = fig.subplots(
+        2 * len(traces),
+        columns,
+        gridspec_kw={"height_ratios": [0.75, 1] * len(traces)},
+        squeeze=False,
+    )
+    for r, trace in enumerate(traces):
+        shots = _pick(trace.snapshots, columns)
+        for c in range(columns):
+            ax_img, ax_top = axes[2 * r, c], axes[2 * r + 1, c]
+            if c >= len(shots):
+                ax_img.axis("off")
+                ax_top.axis("off")
+                continue
+            s = shots[c]
+            ax_img.imshow(s.image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+            ax_img.set_xticks([])
+            ax_img.set_yticks([])
+            label = f"{trace.policy}: step {s.step}" + (f", r={s.reward:+.0f}" if s.step else "")
+            ax_img.set_title(label, fontsize=8)
+            draw_topview(
+                ax_top,
+                trace.field,
+                trace.landmarks,
+                trace.camera,
+                trace.pose,
+                s.pan,
+                s.tilt,
+                trace.ball,
+                trace.goal,
+                s.observed,
+            )
+        axes[2 * r, 0].set_ylabel(_outcome(trace), fontsize=8)
+    fig.suptitle(
+        "red: robot and goal view, blue: current view; landmarks in view coloured by "
+        "type (L red, T blue, lines yellow, boundary purple)",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    save_figure(fig, out_png, dpi=100)
+
+
+def animate_episode(trace: EpisodeTrace, out_gif: str | os.PathLike[str], fps: int = 3) -> None:
+    """An animated GIF: camera image beside the top view, one frame per step."""
+    from PIL import Image
+
+    frames = []
+    for s in trace.snapshots:
+        fig = view_figure(
+            trace.field,
+            trace.landmarks,
+            trace.camera,
+            s.image,
+            trace.pose,
+            s.pan,
+            s.tilt,
+            trace.ball,
+            trace.goal,
+            s.observed,
+            title=f"{trace.policy}, step {s.step}",
+        )
+        frames.append(Image.fromarray(figure_to_rgb(fig)))
+    frames += [frames[-1]] * 2  # linger on the outcome
+    with atomic_path(out_gif) as tmp:
+        frames[0].save(
+            tmp,
+            format="GIF",
+            save_all=True,
+            append_images=frames[1:],
+            duration=int(1000 / fps),
+            loop=0,
+        )
