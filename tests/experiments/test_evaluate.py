@@ -5,7 +5,7 @@ import pytest
 
 from activevision.envs import ActiveVisionEnv
 from activevision.envs.actions import action_table
-from activevision.experiments.compare import compare, plot_compare
+from activevision.experiments.compare import compare
 from activevision.experiments.evaluate import (
     episode_seed,
     evaluate_policy,
@@ -21,6 +21,7 @@ from activevision.experiments.policies import (
     ScanPolicy,
     greedy_action,
 )
+from activevision.figures.compare import plot_compare
 
 
 class Recorder:

@@ -6,10 +6,11 @@ import torch
 
 from activevision.agents.q_network import QNetwork
 from activevision.envs.seeding import episode_seed
+from activevision.figures.training import CURVES
 from activevision.training import checkpoint as ckpt
 from activevision.training.config import TrainConfig
 from activevision.training.metrics import EPOCH_FIELDS, TIMING_FIELDS
-from activevision.training.plots import CURVES, plot_run
+from activevision.training.plots import plot_run
 from activevision.training.trainer import Trainer, goal_offset, load_policy, resume, train
 from activevision.training.validation import greedy_episodes, summarise_validation
 

@@ -3,10 +3,14 @@ group (``train``, ``evaluate``, ``deploy``, ``scene``, ``quickstart``), shared a
 in :mod:`activevision.cli.args` and the output-path check in :mod:`activevision.cli.outputs`.
 
 Heavy imports (torch, matplotlib) happen inside the command that needs them, so
-``activevision --help`` is instant."""
+``activevision --help`` is instant. The command is the only place a matplotlib backend is
+chosen: :func:`main` sets ``MPLBACKEND=Agg`` (unless the user set one) before any command
+imports matplotlib; the library's figures (:mod:`activevision.figures`) draw on their own
+Agg canvas and never choose one."""
 
 from __future__ import annotations
 
+import os
 import sys
 
 from activevision.cli import deploy, evaluate, quickstart, scene, train
@@ -28,6 +32,8 @@ def build_parser() -> ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run one command; returns the exit code (0 done, 2 bad input or a refused file)."""
+    # Headless by default; an environment variable, so --help needs no matplotlib import.
+    os.environ.setdefault("MPLBACKEND", "Agg")
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as exit_:  # --help (0) or a bad argument (2, one line already printed)

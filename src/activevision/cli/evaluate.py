@@ -89,7 +89,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
 
 def cmd_compare(args: argparse.Namespace) -> None:
     """The localisation-error experiment and its figure (on Ray with ``--ray``)."""
-    from activevision.experiments.compare import plot_compare
+    from activevision.figures.compare import plot_compare
 
     out = args.out or (args.run / "compare" if args.run else Path("compare"))
     check_outputs(own=[out / "compare.csv", out / "compare.png"])

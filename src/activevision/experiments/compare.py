@@ -1,5 +1,5 @@
 """The paper's localisation-error experiment: success of every method as the robot's
-self-localisation error grows (the paper's comparison figure).
+self-localisation error grows; :mod:`activevision.figures.compare` draws the figure.
 
 At error level ``e`` the entropy-based head control searches its goal from the true pose
 moved ``e`` m in a random direction and turned by ``+-e`` rad, and is scored against the
@@ -100,48 +100,3 @@ def compare(
     if bar is not None:
         bar.close()
     return rows
-
-
-def plot_compare(
-    csv_path: str | Path, out_png: str | Path, metrics: Sequence[str] = ("success_rate", "success")
-) -> None:
-    """Success vs localisation error, one curve per method with its 95% band."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from activevision.io import atomic_path
-
-    with Path(csv_path).open() as f:
-        rows = list(csv.DictReader(f))
-    titles = {
-        "success_rate": "success rate (|observed ∩ desired| / |desired|)",
-        "success": "episodes reaching the goal",
-        "score": "release score",
-    }
-    fig, axes = plt.subplots(1, len(metrics), figsize=(5.5 * len(metrics), 4), squeeze=False)
-    for ax, metric in zip(axes[0], metrics, strict=True):
-        for method in dict.fromkeys(r["method"] for r in rows):
-            sel = sorted(
-                (r for r in rows if r["method"] == method), key=lambda r: float(r["error"])
-            )
-            e = [float(r["error"]) for r in sel]
-            mean = [float(r[metric]) for r in sel]
-            ax.plot(e, mean, "o-", ms=3, label=method)
-            ax.fill_between(
-                e,
-                [float(r[f"{metric}_low"]) for r in sel],
-                [float(r[f"{metric}_high"]) for r in sel],
-                alpha=0.2,
-            )
-        ax.set_xlabel("localisation error e (m and rad)")
-        ax.set_ylabel(metric)
-        ax.set_title(titles.get(metric, metric), fontsize=10)
-        ax.set_ylim(-0.02, 1.02)
-        ax.grid(alpha=0.3)
-    axes[0][-1].legend(fontsize=8, loc="lower left")
-    fig.tight_layout()
-    with atomic_path(out_png) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)

@@ -328,37 +328,16 @@ def aggregate(trials: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[
 
 
 def plot_sweep(rows: Sequence[Mapping[str, Any]], out_png: str | Path) -> None:
-    """Success rate vs step, one mean curve with a +-std band per grid point."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from activevision.io import atomic_path
+    """Success rate vs step, one mean curve with a +-std band per grid point (drawn by
+    :func:`activevision.figures.sweep.plot_sweep_curves`)."""
+    from activevision.figures.sweep import plot_sweep_curves
 
     skip = {"epoch", "step", "seeds"} | {f"{m}_{s}" for m in METRICS for s in STATS}
     curves: dict[str, list[Mapping[str, Any]]] = {}
     for r in rows:
         label = ", ".join(f"{k}={v}" for k, v in r.items() if k not in skip) or "base config"
         curves.setdefault(label, []).append(r)
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for label, sel in curves.items():
-        sel = sorted(sel, key=lambda r: r["step"])
-        step = np.array([r["step"] for r in sel], float)
-        mean = np.array([r["success_rate_mean"] for r in sel], float)
-        std = np.array([r["success_rate_std"] for r in sel], float)
-        ax.plot(step, mean, "o-", ms=3, label=f"{label} (n={max(r['seeds'] for r in sel)})")
-        ax.fill_between(step, mean - std, mean + std, alpha=0.2)
-    ax.set_xlabel("environment step")
-    ax.set_ylabel("success rate (mean ± std over seeds)")
-    ax.set_ylim(-0.02, 1.02)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
-    with atomic_path(out_png) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    plot_sweep_curves(curves, out_png)
 
 
 STATS = ("mean", "std", "min", "max")

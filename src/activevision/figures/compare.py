@@ -1,0 +1,52 @@
+"""The paper's comparison figure: success of every method vs the robot's localisation error,
+one curve per method with its 95% band, read from ``compare.csv``."""
+
+from __future__ import annotations
+
+import csv
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+from activevision.figures.canvas import new_figure, save_figure
+
+TITLES = {
+    "success_rate": "success rate (|observed ∩ desired| / |desired|)",
+    "success": "episodes reaching the goal",
+    "score": "release score",
+}
+
+
+def plot_compare(
+    csv_path: str | os.PathLike[str],
+    out_png: str | os.PathLike[str],
+    metrics: Sequence[str] = ("success_rate", "success"),
+) -> None:
+    """Success vs localisation error, one curve per method with its 95% band: a panel per
+    ``metrics`` column of ``csv_path`` (with its ``_low`` / ``_high`` bounds)."""
+    with Path(csv_path).open() as f:
+        rows = list(csv.DictReader(f))
+    fig = new_figure(figsize=(5.5 * len(metrics), 4))
+    axes = fig.subplots(1, len(metrics), squeeze=False)
+    for ax, metric in zip(axes[0], metrics, strict=True):
+        for method in dict.fromkeys(r["method"] for r in rows):
+            sel = sorted(
+                (r for r in rows if r["method"] == method), key=lambda r: float(r["error"])
+            )
+            e = [float(r["error"]) for r in sel]
+            mean = [float(r[metric]) for r in sel]
+            ax.plot(e, mean, "o-", ms=3, label=method)
+            ax.fill_between(
+                e,
+                [float(r[f"{metric}_low"]) for r in sel],
+                [float(r[f"{metric}_high"]) for r in sel],
+                alpha=0.2,
+            )
+        ax.set_xlabel("localisation error e (m and rad)")
+        ax.set_ylabel(metric)
+        ax.set_title(TITLES.get(metric, metric), fontsize=10)
+        ax.set_ylim(-0.02, 1.02)
+        ax.grid(alpha=0.3)
+    axes[0][-1].legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    save_figure(fig, out_png, dpi=120)

@@ -1,0 +1,35 @@
+"""A sweep's figure: success rate vs environment step, one mean curve with a +-std band per
+grid point (``activevision.scaleout.plot_sweep`` groups ``sweep.csv``'s rows into curves)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from activevision.figures.canvas import new_figure, save_figure
+
+
+def plot_sweep_curves(
+    curves: Mapping[str, Sequence[Mapping[str, Any]]], out_png: str | os.PathLike[str]
+) -> None:
+    """One curve per label: its rows' ``success_rate_mean`` (+- ``success_rate_std``) vs
+    ``step``, labelled with the largest ``seeds`` count."""
+    fig = new_figure(figsize=(7, 4.5))
+    ax = fig.subplots()
+    for label, sel in curves.items():
+        sel = sorted(sel, key=lambda r: r["step"])
+        step = np.array([r["step"] for r in sel], float)
+        mean = np.array([r["success_rate_mean"] for r in sel], float)
+        std = np.array([r["success_rate_std"] for r in sel], float)
+        ax.plot(step, mean, "o-", ms=3, label=f"{label} (n={max(r['seeds'] for r in sel)})")
+        ax.fill_between(step, mean - std, mean + std, alpha=0.2)
+    ax.set_xlabel("environment step")
+    ax.set_ylabel("success rate (mean ± std over seeds)")
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    save_figure(fig, out_png, dpi=120)

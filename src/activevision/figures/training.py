@@ -1,0 +1,126 @@
+"""The paper's training figures: each curve of a run as its own PNG, and all of them in
+``training.png``. Fed with a run's CSV logs as columns (``activevision.training.plot_run``
+reads them)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.axes import Axes
+
+from activevision.figures.canvas import new_figure, save_figure
+
+#: A CSV log as columns: name -> values.
+Columns = Mapping[str, Sequence[float]]
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One training curve: which CSV column against which, and how to label it."""
+
+    file: str  # PNG written for this curve alone
+    source: str  # "episodes" or "metrics"
+    x: str
+    y: str
+    title: str
+    ylabel: str
+
+
+CURVES = (
+    Curve("reward.png", "episodes", "episode", "reward", "Total reward per episode", "reward"),
+    Curve("loss.png", "metrics", "epoch", "loss", "TD loss (Huber)", "loss"),
+    Curve("success_rate.png", "metrics", "epoch", "success_rate", "Success rate", "rate"),
+    Curve(
+        "success_duration.png", "metrics", "epoch", "success_duration", "Success duration", "steps"
+    ),
+    Curve(
+        "ball_loss_duration.png",
+        "metrics",
+        "epoch",
+        "ball_loss_duration",
+        "Ball-loss duration",
+        "steps",
+    ),
+)
+
+
+def moving_average(values: np.ndarray, window: int) -> np.ndarray:
+    """Trailing mean over up to ``window`` finite values (shorter at the start)."""
+    values = np.asarray(values, dtype=np.float64)
+    finite = np.isfinite(values)
+    sums = np.cumsum(np.where(finite, values, 0.0))
+    counts = np.cumsum(finite)
+    start = np.maximum(np.arange(values.size) - window, -1)
+    shifted_sums = np.where(start >= 0, sums[np.maximum(start, 0)], 0.0)
+    shifted_counts = np.where(start >= 0, counts[np.maximum(start, 0)], 0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return (sums - shifted_sums) / (counts - shifted_counts)
+
+
+def _draw_validation(ax: Axes, x: np.ndarray, table: Columns, validation: Columns) -> None:
+    """Greedy validation's success rate on the epoch axis of ``table``."""
+    epochs_per_step = x[-1] / np.asarray(table["step"])[-1]
+    ax.plot(
+        np.asarray(validation["step"]) * epochs_per_step,
+        validation["success_rate"],
+        color="tab:orange",
+        marker="s",
+        markersize=3,
+        linewidth=1.2,
+        label="greedy validation",
+    )
+    ax.legend(loc="lower right", fontsize=8)
+
+
+def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> None:
+    """``curve`` from ``table`` (its source's columns; empty: "no data yet"), with the greedy
+    ``validation`` over the success rate when given."""
+    if not table:
+        ax.text(0.5, 0.5, "no data yet", ha="center", va="center", transform=ax.transAxes)
+    else:
+        x, y = np.asarray(table[curve.x]), np.asarray(table[curve.y])
+        if curve.source == "episodes":  # noisy: raw values faint, moving average on top
+            ax.plot(x, y, color="tab:blue", alpha=0.25, linewidth=0.8, label="episode")
+            window = max(len(y) // 50, 10)
+            ax.plot(x, moving_average(y, window), color="tab:blue", label=f"mean of {window}")
+            ax.legend(loc="lower right", fontsize=8)
+        else:
+            ax.plot(x, y, color="tab:blue", marker="o", markersize=3, linewidth=1.2)
+        if curve.y == "success_rate" and validation:
+            _draw_validation(ax, x, table, validation)
+    ax.set_title(curve.title)
+    ax.set_xlabel(curve.x)
+    ax.set_ylabel(curve.ylabel)
+    ax.grid(True, alpha=0.3)
+
+
+def plot_training(
+    tables: Mapping[str, Columns],
+    out_dir: str | os.PathLike[str],
+    title: str,
+    validation: Columns | None = None,
+) -> Path:
+    """Each of :data:`CURVES` as its own PNG in ``out_dir`` and all of them in
+    ``training.png`` (titled "Training: ``title``"); returns the latter. ``tables`` maps each
+    curve source ("episodes", "metrics") to its columns."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    validation = validation or {}
+    for curve in CURVES:
+        fig = new_figure(figsize=(6, 4), layout="constrained")
+        draw_curve(fig.subplots(), curve, tables[curve.source], validation)
+        save_figure(fig, out_dir / curve.file, dpi=120)
+
+    fig = new_figure(figsize=(15, 8), layout="constrained")
+    axes = fig.subplots(2, 3)
+    for ax, curve in zip(axes.flat, CURVES, strict=False):
+        draw_curve(ax, curve, tables[curve.source], validation)
+    axes.flat[-1].set_axis_off()
+    fig.suptitle(f"Training: {title}")
+    combined = out_dir / "training.png"
+    save_figure(fig, combined, dpi=110)
+    return combined
