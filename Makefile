@@ -33,9 +33,11 @@ run: install
 
 lint: install-test
 	$(BIN)/ruff check src tests bench
+	$(BIN)/lint-imports
 
 test: install-test
 	$(BIN)/ruff check src tests bench
+	$(BIN)/lint-imports
 	NUMBA_CACHE_DIR=$(CURDIR)/.numba_cache $(BIN)/python -m pytest -q tests
 
 bench: install-test
