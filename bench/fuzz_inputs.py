@@ -137,15 +137,15 @@ def _field_hostiles(hint: typing.Any) -> list[str]:
 
 def fuzz_config_keys(rng: random.Random, tally: Tally) -> None:
     """``--set KEY=V`` for every TrainConfig field and every env keyword, library path."""
-    from activevision.envs import EnvConfig
-    from activevision.training.config import TrainConfig, apply_overrides
+    from activevision.training.config import SECTIONS, TrainConfig, apply_overrides
 
-    targets: list[tuple[str, typing.Any]] = []
-    for f, hint in typing.get_type_hints(TrainConfig).items():
-        if f != "env_kwargs":
-            targets.append((f, hint))
-    for f, hint in typing.get_type_hints(EnvConfig).items():
-        targets.append((f"env_kwargs.{f}", hint))
+    hints = typing.get_type_hints(TrainConfig)
+    targets: list[tuple[str, typing.Any]] = [
+        (name, hint) for name, hint in hints.items() if name not in SECTIONS
+    ]
+    for section in SECTIONS:
+        for f, hint in typing.get_type_hints(hints[section]).items():
+            targets.append((f"{section}.{f}", hint))
     for key, hint in targets:
         for text in _field_hostiles(hint):
             tally.cases += 1

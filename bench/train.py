@@ -169,7 +169,7 @@ def env_only_steps_per_s(make: Callable[[], gym.Env], steps: int = 300, warmup: 
 
 def training_steps_per_s(make: Callable[[], gym.Env], threads: int, epoch: int = 300) -> float:
     """Steps/s of the trainer in an epoch where every step also runs an update."""
-    config = TrainConfig(
+    config = TrainConfig().replace(
         total_timesteps=2 * epoch,
         epoch_steps=epoch,
         learning_starts=epoch,

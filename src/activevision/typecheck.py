@@ -68,6 +68,77 @@ def check_dataclass_fields(instance: Any) -> None:
             raise ValueError(f"{cls.__name__}.{f.name}: expects {wanted}, got {value!r}") from None
         if normalised is not value:
             object.__setattr__(instance, f.name, normalised)  # frozen dataclasses too
+        why = _out_of_range(normalised, f.metadata)
+        if why:
+            raise ValueError(f"{cls.__name__}.{f.name}: must be {why}, got {value!r}")
+
+
+def in_range(
+    low: float | None = None,
+    high: float | None = None,
+    *,
+    low_open: bool = False,
+    high_open: bool = False,
+) -> Mapping[str, Any]:
+    """Field metadata that bounds a number: ``field(default=32, metadata=in_range(1))``.
+    :func:`check_dataclass_fields` checks it after the type, so each field's range is
+    written beside the field."""
+    return types.MappingProxyType(
+        {"range": (low, high, low_open, high_open)}
+    )
+
+
+def _out_of_range(value: Any, metadata: Mapping[str, Any]) -> str:
+    """Why ``value`` breaks the field's :func:`in_range` bounds ("" when it does not)."""
+    if "range" not in metadata:
+        return ""
+    low, high, low_open, high_open = metadata["range"]
+    below = low is not None and (value <= low if low_open else value < low)
+    above = high is not None and (value >= high if high_open else value > high)
+    if not (below or above):
+        return ""
+    if low is not None and high is not None:
+        return f"in {'(' if low_open else '['}{low}, {high}{')' if high_open else ']'}"
+    if low is not None:
+        return f"{'>' if low_open else '>='} {low}"
+    return f"{'<' if high_open else '<='} {high}"
+
+
+def config_to_dict(instance: Any) -> dict[str, Any]:
+    """A (nested) config dataclass as plain JSON values: dataclass fields become objects,
+    tuples lists."""
+
+    def plain(value: Any) -> Any:
+        if dataclasses.is_dataclass(value) and not isinstance(value, type):
+            return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        if isinstance(value, tuple | list):
+            return [plain(v) for v in value]
+        if isinstance(value, Mapping):
+            return {k: plain(v) for k, v in value.items()}
+        return value
+
+    return typing.cast(dict[str, Any], plain(instance))
+
+
+def config_from_dict(cls: type, values: Any, where: str = "") -> Any:
+    """Build config dataclass ``cls`` from :func:`config_to_dict`'s output, recursing into
+    fields whose type is a dataclass (missing keys take their defaults). ValueError names an
+    unknown key by its dotted path."""
+    where = where or cls.__name__
+    if not isinstance(values, Mapping):
+        raise ValueError(f"{where}: expects an object of {cls.__name__} fields, got {values!r}")
+    hints = _field_types(cls)
+    known = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {unknown}; known: {sorted(known)}")
+    kwargs = {}
+    for name, value in values.items():
+        hint = hints[name]
+        if dataclasses.is_dataclass(hint) and isinstance(value, Mapping):
+            value = config_from_dict(hint, value, f"{where}.{name}")
+        kwargs[name] = value
+    return cls(**kwargs)
 
 
 def _check(value: Any, hint: Any, finite: bool) -> Any:

@@ -107,7 +107,9 @@ BAD_ARGUMENTS = [
     (["train", "--set", "nope=1", "--out", "{tmp}/x"], "'nope'"),
     (["train", "--set", "learning_rate", "--out", "{tmp}/x"], "key=value"),
     (["train", "--set", "learning_rate=-1", "--out", "{tmp}/x"], "learning_rate"),
-    (["train", "--set", "env_kwargs.nope=1", "--out", "{tmp}/x"], "'nope'"),
+    (["train", "--set", "env_kwargs.nope=1", "--out", "{tmp}/x"], "nope"),
+    (["train", "--set", "env.nope=1", "--out", "{tmp}/x"], "nope"),
+    (["train", "--set", "learner.gamma=2", "--out", "{tmp}/x"], "gamma"),
     (["train", "--set", "env_kwargs.step_deg=\"3\"", "--out", "{tmp}/x"], "step_deg"),
     (["train", "--set", "env_kwargs.field=42", "--out", "{tmp}/x"], "field"),
     (["train", "--set", "env_kwargs.field=\"moon\"", "--out", "{tmp}/x"], "moon"),
@@ -259,8 +261,8 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
      ["train", "--resume", "{run}"], "config.json"),
     ("config not JSON", lambda r: (r / "config.json").write_text("{"),
      ["evaluate", "--run", "{run}", "--methods", "learned"], "config.json"),
-    ("config with a bad env value", lambda r: (r / "config.json").write_text(
-        (r / "config.json").read_text().replace('"env_kwargs": {}', '"env_kwargs": {"x": 1}')),
+    ("config with a bad env key", lambda r: (r / "config.json").write_text(
+        (r / "config.json").read_text().replace('"env": {', '"env": {"x": 1, ')),
      ["export", "{run}", "-o", "{run}/../out.onnx"], "'x'"),
     ("state.json missing a key", lambda r: edit_state(r, lambda s: s.pop("episode_seed")),
      ["train", "--resume", "{run}"], "episode_seed"),

@@ -59,7 +59,7 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys):
 
 
 def test_train_help_names_every_preset(capsys):
-    from activevision.training.config import PRESET_NAMES
+    from activevision.training.presets import PRESET_NAMES
 
     assert main(["train", "--help"]) == 0
     help_text = " ".join(capsys.readouterr().out.split())

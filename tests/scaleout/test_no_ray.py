@@ -39,7 +39,7 @@ def test_grid_points_and_trial_configs():
         {"batch_size": "16", "learning_rate": 5e-4},
     ]
     config = trial_config(TrainConfig(), 4, points[0])
-    assert (config.seed, config.batch_size, config.learning_rate) == (4, 16, 1e-3)
+    assert (config.seed, config.learner.batch_size, config.learner.learning_rate) == (4, 16, 1e-3)
     assert trial_name(4, points[0]) == "seed=4,batch_size=16,learning_rate=0.001"
     assert grid_points({}) == [{}]
     with pytest.raises(ValueError):

@@ -1,26 +1,36 @@
+import dataclasses
 import json
+import subprocess
+import sys
 
 import pytest
 
+from activevision.envs import EnvConfig
+from activevision.geometry import FieldSpec
 from activevision.training.config import (
+    LearnerConfig,
+    RunConfig,
     TrainConfig,
     apply_overrides,
+    field_paths,
     load_config,
-    preset,
     save_config,
 )
+from activevision.training.presets import PRESET_NAMES, preset
 
 
 def test_paper_defaults_and_release_preset():
     config = TrainConfig()
-    assert (config.batch_size, config.buffer_size, config.learning_rate) == (32, 1_000_000, 5e-4)
-    assert (config.gamma, config.target_update_interval) == (0.99, 10_000)
-    assert (config.exploration_initial, config.exploration_final) == (1.0, 0.02)
-    assert (config.per_alpha, config.per_beta0, config.per_eps) == (0.6, 0.4, 1e-6)
-    assert (config.learning_starts, config.exploration_fraction) == (1000, 0.1)
+    learner, replay, exploration = config.learner, config.replay, config.exploration
+    assert (learner.batch_size, replay.buffer_size, learner.learning_rate) == (32, 1_000_000, 5e-4)
+    assert (learner.gamma, learner.target_update_interval) == (0.99, 10_000)
+    assert (exploration.initial, exploration.final) == (1.0, 0.02)
+    assert (replay.alpha, replay.beta0, replay.eps) == (0.6, 0.4, 1e-6)
+    assert (learner.learning_starts, exploration.fraction) == (1000, 0.1)
+    assert config.env == EnvConfig() and config.run.total_timesteps == 30_000
     assert preset("paper") == config
     release = preset("release")
-    assert (release.learning_starts, release.exploration_fraction) == (500, 0.85)
+    assert (release.learner.learning_starts, release.exploration.fraction) == (500, 0.85)
     with pytest.raises(ValueError, match="nope"):
         preset("nope")
 
@@ -30,69 +40,140 @@ def test_more_episodes_keep_the_papers_update_budget(name, factor):
     paper, more = preset("paper"), preset(name)
 
     def updates(c):
-        return (c.total_timesteps - c.learning_starts) // c.train_freq
+        return (c.run.total_timesteps - c.learner.learning_starts) // c.learner.train_freq
 
-    assert more.total_timesteps == factor * paper.total_timesteps
+    assert more.run.total_timesteps == factor * paper.run.total_timesteps
     assert updates(more) == updates(paper)  # 29,000 gradient updates each
-    assert more.target_update_interval // more.train_freq == paper.target_update_interval
-    assert more.learning_starts // more.train_freq == paper.learning_starts
-    assert more.eval_interval > 0  # validated, so the run's curve shows the greedy policy
+    assert more.learner.target_update_interval // more.learner.train_freq == (
+        paper.learner.target_update_interval
+    )
+    assert more.learner.learning_starts // more.learner.train_freq == paper.learner.learning_starts
+    assert more.run.eval_interval > 0  # validated, so the run's curve shows the greedy policy
     # exploration spans the same fraction of the run; the learner itself is the paper's
-    for key in ("learning_rate", "gamma", "batch_size", "exploration_fraction", "per_alpha"):
-        assert getattr(more, key) == getattr(paper, key)
+    for path in ("learning_rate", "gamma", "batch_size"):
+        assert getattr(more.learner, path) == getattr(paper.learner, path)
+    assert (more.exploration, more.replay, more.env) == (
+        paper.exploration, paper.replay, paper.env
+    )
 
 
 def test_drq_aux_is_the_paper_run_with_two_training_aids():
     paper, drq_aux = preset("paper"), preset("drq_aux")
-    assert (drq_aux.augment_shift, drq_aux.aux_goal_weight) == (8, 1.0)
+    assert (drq_aux.learner.augment_shift, drq_aux.learner.aux_goal_weight) == (8, 1.0)
     assert drq_aux.replace(augment_shift=0, aux_goal_weight=0.0) == paper
 
 
-def test_json_round_trip(tmp_path):
-    env_kwargs = {"frame_stack": 2, "max_episode_steps": 20}
-    config = TrainConfig(seed=3, env_kwargs=env_kwargs, learning_rate=1e-3)
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_every_preset_round_trips_through_json(tmp_path, name):
+    config = preset(name).replace(**{"seed": 3, "env.frame_stack": 2, "env.field": "paper2019"})
     save_config(config, tmp_path / "config.json")
-    assert load_config(tmp_path / "config.json") == config
+    loaded = load_config(tmp_path / "config.json")
+    assert loaded == config and isinstance(loaded.env.field, FieldSpec)
+    assert loaded.env.field == FieldSpec.paper_2019()
     assert not list(tmp_path.glob(".*tmp"))  # the temporary file is gone
 
 
+def test_flat_config_of_activevision_0_1_still_loads(tmp_path):
+    old = {
+        "seed": 4,
+        "env_id": "ActiveVision-v0",
+        "env_kwargs": {"field": "paper2019", "success_mode": "landmarks"},
+        "learning_rate": 1e-3,
+        "per_alpha": 0.5,
+        "exploration_fraction": 0.85,
+        "total_timesteps": 600,
+        "tensorboard": False,
+    }
+    path = tmp_path / "config.json"
+    path.write_text(json.dumps(old))
+    config = load_config(path)
+    assert config.seed == 4 and config.learner.learning_rate == 1e-3
+    assert (config.replay.alpha, config.exploration.fraction) == (0.5, 0.85)
+    assert (config.run.total_timesteps, config.run.tensorboard) == (600, False)
+    assert config.env == EnvConfig(field=FieldSpec.paper_2019(), success_mode="landmarks")
+    path.write_text(json.dumps({**old, "env_kwargs": {"stack": 2}}))
+    with pytest.raises(ValueError, match="stack"):
+        load_config(path)
+
+
 @pytest.mark.parametrize(
-    ("key", "value"),
+    ("key", "value", "named"),
     [
-        ("learning_rate", -1e-3),
-        ("exploration_fraction", 1.5),
-        ("gamma", -0.1),
-        ("batch_size", 0),
-        ("n_step", 0),
-        ("learning_starts", -1),
-        ("per_eps", 0.0),
-        ("checkpoint_interval", 250),  # not a multiple of epoch_steps
-        ("batch_size", 3.5),
-        ("dueling", "yes"),
-        ("device", "tpu"),
+        ("learning_rate", -1e-3, "learning_rate"),
+        ("exploration_fraction", 1.5, "fraction"),
+        ("exploration.fraction", float("nan"), "fraction"),
+        ("gamma", -0.1, "gamma"),
+        ("batch_size", 0, "batch_size"),
+        ("n_step", 0, "n_step"),
+        ("learning_starts", -1, "learning_starts"),
+        ("per_eps", 0.0, "eps"),
+        ("checkpoint_interval", 250, "checkpoint_interval"),  # not a multiple of epoch_steps
+        ("batch_size", 3.5, "batch_size"),
+        ("dueling", "yes", "dueling"),
+        ("device", "tpu", "device"),
+        ("seed", -1, "seed"),
+        ("env.step_deg", "3", "step_deg"),
+        ("env.frame_stack", True, "frame_stack"),
+        ("env.field", 42, "field"),
+        ("env_id", "", "env_id"),
+        ("learner", 3, "learner"),
     ],
 )
-def test_invalid_values_name_the_key(key, value):
-    with pytest.raises(ValueError, match=key):
-        TrainConfig(**{key: value})
+def test_invalid_values_name_the_key(key, value, named):
+    with pytest.raises(ValueError, match=named):
+        TrainConfig().replace(**{key: value})
+
+
+def test_each_section_checks_its_own_fields():
+    with pytest.raises(ValueError, match=r"LearnerConfig\.gamma: must be in \[0.0, 1.0\]"):
+        LearnerConfig(gamma=2.0)
+    with pytest.raises(ValueError, match=r"RunConfig\.total_timesteps: must be >= 1"):
+        RunConfig(total_timesteps=0)
 
 
 def test_unknown_keys_name_the_key(tmp_path):
     path = tmp_path / "config.json"
-    path.write_text(json.dumps({"learning_rate": 1e-3, "lerning_rate": 1e-3}))
-    with pytest.raises(ValueError, match="lerning_rate"):
+    path.write_text(json.dumps({"learner": {"learning_rate": 1e-3, "lerning_rate": 1e-3}}))
+    expected = r"TrainConfig\.learner: unknown key\(s\) \['lerning_rate'\]"
+    with pytest.raises(ValueError, match=expected):
         load_config(path)
 
 
-def test_cli_overrides():
+def test_cli_overrides_by_path_leaf_and_old_name():
     config = apply_overrides(
         TrainConfig(),
-        ["learning_rate=1e-3", "dueling=true", "env_id=Other-v1", "env_kwargs.stack=4"],
+        [
+            "learner.learning_rate=1e-3",
+            "dueling=true",
+            "env_id=Other-v1",
+            "env.step_deg=4",
+            "env_kwargs.frame_stack=2",
+            "per_alpha=0.5",
+            "total_timesteps=600",
+        ],
     )
-    assert config.learning_rate == 1e-3 and config.dueling and config.env_id == "Other-v1"
-    assert config.env_kwargs == {"stack": 4}
-    assert apply_overrides(config, ['env_kwargs={"a": 1}']).env_kwargs == {"a": 1}
+    assert config.learner.learning_rate == 1e-3 and config.learner.dueling
+    assert config.env_id == "Other-v1" and config.replay.alpha == 0.5
+    assert (config.env.step_deg, config.env.frame_stack, config.run.total_timesteps) == (4, 2, 600)
     with pytest.raises(ValueError, match="bogus"):
         apply_overrides(config, ["bogus=1"])
     with pytest.raises(ValueError, match="total_timesteps"):
         apply_overrides(config, ["total_timesteps=-5"])
+
+
+def test_every_field_has_a_key_and_a_source_comment():
+    paths = field_paths()
+    for section in ("env", "learner", "exploration", "replay", "run"):
+        cls = type(getattr(TrainConfig(), section))
+        for f in dataclasses.fields(cls):
+            assert paths[f"{section}.{f.name}"] == f"{section}.{f.name}"
+
+
+def test_presets_load_without_torch():
+    code = (
+        "import sys\n"
+        "from activevision.training.presets import PRESET_NAMES, preset\n"
+        "[preset(n) for n in PRESET_NAMES]\n"
+        "assert 'torch' not in sys.modules, 'torch imported'\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)

@@ -32,7 +32,7 @@ def tiny_config(**changes) -> TrainConfig:
         env_id="unused",
     )
     values.update(changes)
-    return TrainConfig(**values)
+    return TrainConfig().replace(**values)
 
 
 def read_rows(path):

@@ -162,7 +162,6 @@ def env_config_of_run(run_dir: Path | None) -> EnvConfig:
 
     if run_dir is None:
         return EnvConfig()
-    from activevision.export import env_config_of
-    from activevision.training import load_config
+    from activevision.training.config import load_config
 
-    return env_config_of(load_config(run_dir / "config.json").env_kwargs)
+    return load_config(run_dir / "config.json").env

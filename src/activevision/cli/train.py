@@ -19,9 +19,15 @@ from activevision.cli.outputs import OutputError, is_training_run
 
 
 def _preset_names() -> tuple[str, ...]:
-    from activevision.training.config import PRESET_NAMES
+    from activevision.training.presets import PRESET_NAMES
 
     return PRESET_NAMES
+
+
+def _preset_help() -> dict[str, str]:
+    from activevision.training.presets import PRESET_HELP
+
+    return PRESET_HELP
 
 
 def cmd_train(args: argparse.Namespace) -> None:
@@ -44,7 +50,7 @@ def _resume(args: argparse.Namespace) -> Path | None:
         )
     trainer = Trainer.resume(args.resume)
     try:
-        total = trainer.config.total_timesteps
+        total = trainer.config.run.total_timesteps
         if trainer.step >= total:
             if args.steps is not None:
                 raise ValueError(
@@ -123,9 +129,16 @@ def _add_config_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--preset",
         type=choice_list(_preset_names),
-        help=f"a named config: {' | '.join(_preset_names())} (default: paper)",
+        help="a named config (default: paper): "
+        + "; ".join(f"{name}: {text}" for name, text in _preset_help().items()),
     )
-    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a config key")
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="override a config value: learner.learning_rate=1e-3, env.step_deg=4, or a unique"
+        " field name (learning_rate=1e-3); values are JSON",
+    )
 
 
 def add_parsers(sub: Any) -> None:

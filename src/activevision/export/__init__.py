@@ -13,12 +13,11 @@ from activevision.export.onnx_export import (
     export_onnx,
     policy_metadata,
 )
-from activevision.export.run import env_config_of, export_run
+from activevision.export.run import export_run
 
 __all__ = [
     "DEFAULT_OPSET",
     "ExportedPolicy",
-    "env_config_of",
     "export_onnx",
     "export_run",
     "policy_metadata",

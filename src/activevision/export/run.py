@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from pathlib import Path
 from typing import Any
@@ -24,9 +23,8 @@ def export_run(
     weights, or with ``weights="best"`` those with the best validation score.
 
     Reads the weights with :func:`activevision.training.load_policy`, the action table and
-    head limits from the run's environment settings (``config.json`` ``env_kwargs`` over
-    :class:`activevision.envs.EnvConfig` defaults) and records the SHA-256 of
-    ``config.json`` in the metadata.
+    head limits from the run's environment settings (``config.json``'s ``env``) and
+    records the SHA-256 of ``config.json`` in the metadata.
 
     Args:
         run_dir: a run directory written by :mod:`activevision.training`.
@@ -34,19 +32,15 @@ def export_run(
         **export_options: passed on to :func:`export_onnx` (``opset``, ``dynamic_batch``...).
     """
     from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
-    from activevision.training import load_policy
+    from activevision.training import load_config, load_policy
 
     run_dir = Path(run_dir)
     config_path = run_dir / CONFIG_FILENAME
     try:
         config_bytes = config_path.read_bytes()
-        config = json.loads(config_bytes)
     except FileNotFoundError as error:
         raise FileNotFoundError(f"{run_dir} is not a training run: no {CONFIG_FILENAME}") from error
-    except (OSError, json.JSONDecodeError) as error:
-        raise ValueError(f"cannot read {config_path}: {error}") from error
-
-    env = env_config_of(config.get("env_kwargs") or {})
+    env = load_config(config_path).env
     network = load_policy(run_dir, weights=weights)
     if network.stack != env.frame_stack:
         raise ValueError(
@@ -62,11 +56,3 @@ def export_run(
     metadata["step_deg"] = env.step_deg
     metadata["action_set"] = env.action_set
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)
-
-
-def env_config_of(env_kwargs: dict[str, Any]):  # -> activevision.envs.EnvConfig
-    """The :class:`EnvConfig` a run's ``env_kwargs`` describe (ValueError naming an unknown
-    keyword or a bad value)."""
-    from activevision.envs.kwargs import env_config_from_kwargs
-
-    return env_config_from_kwargs(env_kwargs)

@@ -136,8 +136,8 @@ def train_trial(params: dict[str, Any]) -> None:
         reported = False
         # train() checkpoints when it returns, so train a checkpoint interval per call
         # (an epoch when checkpoints are only taken at the end), then report its epochs
-        chunk = config.checkpoint_interval or config.epoch_steps
-        while trainer.step < config.total_timesteps:
+        chunk = config.run.checkpoint_interval or config.run.epoch_steps
+        while trainer.step < config.run.total_timesteps:
             for row in trainer.train(steps=chunk):
                 report(row)
                 reported = True
@@ -194,8 +194,8 @@ def sweep(
     for point in points:
         for seed in seeds:
             config = trial_config(base_config, seed, point)
-            if config.num_threads == 0:
-                config = config.replace(num_threads=max(1, math.floor(cpus_per_trial)))
+            if config.run.num_threads == 0:
+                config = config.replace(**{"run.num_threads": max(1, math.floor(cpus_per_trial))})
             name = trial_name(seed, point)
             trials.append(
                 {

@@ -4,7 +4,7 @@ Typical use::
 
     from activevision.training import TrainConfig, Trainer, load_policy, plot_run
 
-    config = TrainConfig(env_kwargs={"frame_stack": 1}, total_timesteps=30_000)
+    config = TrainConfig().replace(**{"env.frame_stack": 1, "run.total_timesteps": 30_000})
     Trainer(config, "runs/paper").train()      # or train(config, "runs/paper")
     policy = load_policy("runs/paper")          # QNetwork, eval mode
     plot_run("runs/paper")                      # training.png and one PNG per curve
@@ -20,7 +20,7 @@ _EXPORTS = {
     "TrainConfig": "config",
     "apply_overrides": "config",
     "load_config": "config",
-    "preset": "config",
+    "preset": "presets",
     "save_config": "config",
     "plot_run": "plots",
     "Trainer": "trainer",
@@ -36,10 +36,10 @@ if TYPE_CHECKING:
         TrainConfig,
         apply_overrides,
         load_config,
-        preset,
         save_config,
     )
     from activevision.training.plots import plot_run
+    from activevision.training.presets import preset
     from activevision.training.trainer import Trainer, load_policy, make_env, resume, train
 
 

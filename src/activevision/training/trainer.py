@@ -75,13 +75,12 @@ BEST_POLICY_FILE = "best_policy.safetensors"  #: best greedy validation score (e
 
 
 def make_env(config: TrainConfig) -> gym.Env:
-    """``gymnasium.make(config.env_id, **config.env_kwargs)``, registering activevision's envs."""
+    """``gymnasium.make(config.env_id)``; activevision's own env gets ``config.env``."""
+    from activevision.registration import ENV_ID
+
+    kwargs = {"config": config.env} if config.env_id.removeprefix("activevision:") == ENV_ID else {}
     try:
-        import activevision.envs  # noqa: F401  (registers ActiveVision-v0)
-    except ImportError:
-        pass
-    try:
-        return gym.make(config.env_id, **config.env_kwargs)
+        return gym.make(config.env_id, **kwargs)
     except gym.error.Error as error:  # e.g. NameNotFound: one clear line, not a traceback
         raise ValueError(f"env_id {config.env_id!r}: {error}") from None
 
@@ -93,9 +92,8 @@ class Trainer:
         config: the run's configuration.
         run_dir: directory for config, logs and checkpoints. Must not hold a checkpoint
             already (continue such a run with :meth:`Trainer.resume`).
-        env_factory: builds the environment; default ``gymnasium.make(config.env_id,
-            **config.env_kwargs)``. Its observations must be uint8 (stack, H, W) or (H, W),
-            its actions Discrete.
+        env_factory: builds the environment; default :func:`make_env`. Its observations
+            must be uint8 (stack, H, W) or (H, W), its actions Discrete.
     """
 
     def __init__(
@@ -110,12 +108,12 @@ class Trainer:
         self.run_dir = Path(run_dir)
         if not _resuming and ckpt.list_checkpoints(self.run_dir):
             raise ValueError(f"{self.run_dir} already holds a run; use Trainer.resume()")
-        self.device = resolve_device(config.device)  # bad device or env: before any write
+        self.device = resolve_device(config.run.device)  # bad device or env: before any write
         self.env_factory = env_factory or (lambda: make_env(config))
         self.env = self.env_factory()
         self.run_dir.mkdir(parents=True, exist_ok=True)
         ckpt.remove_stale_writes(self.run_dir)  # left by a checkpoint write that was killed
-        configure_torch_cpu(config.num_threads)
+        configure_torch_cpu(config.run.num_threads)
         self._eval_env: gym.Env | None = None  # built at the first validation
         if not isinstance(self.env.action_space, gym.spaces.Discrete):
             raise ValueError(f"need a Discrete action space, got {self.env.action_space}")
@@ -124,14 +122,14 @@ class Trainer:
 
         trainer_seed, replay_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(3)
         self.rng = np.random.default_rng(int(trainer_seed))
-        aux_dim = GOAL_OFFSET_DIM if config.aux_goal_weight else 0
+        aux_dim = GOAL_OFFSET_DIM if config.learner.aux_goal_weight else 0
         with torch.random.fork_rng(devices=[]):  # seed network init without touching global RNG
             torch.manual_seed(int(init_seed))
             network = QNetwork(
                 self.n_actions,
                 self.obs_shape[0],
                 self.obs_shape[1:],
-                dueling=config.dueling,
+                dueling=config.learner.dueling,
                 aux_outputs=aux_dim,
             )
         channels_last = self.device.type == "cpu"
@@ -139,20 +137,20 @@ class Trainer:
             network.to_channels_last()
         self.learner = DDQNLearner(
             network,
-            learning_rate=config.learning_rate,
-            max_grad_norm=config.max_grad_norm,
+            learning_rate=config.learner.learning_rate,
+            max_grad_norm=config.learner.max_grad_norm,
             device=self.device,
             channels_last=channels_last,
-            aux_weight=config.aux_goal_weight,
+            aux_weight=config.learner.aux_goal_weight,
         )
         self.buffer = PrioritizedReplayBuffer(
-            config.buffer_size,
+            config.replay.buffer_size,
             self.obs_shape,
-            config.per_alpha,
-            config.per_eps,
+            config.replay.alpha,
+            config.replay.eps,
             int(replay_seed),
-            n_step=config.n_step,
-            gamma=config.gamma,
+            n_step=config.learner.n_step,
+            gamma=config.learner.gamma,
             aux_dim=aux_dim,
         )
 
@@ -185,14 +183,14 @@ class Trainer:
     def epsilon(self) -> float:
         """Exploration rate at the current step (SB2 LinearSchedule)."""
         c = self.config
-        duration = c.exploration_fraction * c.total_timesteps
-        return linear_schedule(c.exploration_initial, c.exploration_final, duration, self.step)
+        duration = c.exploration.fraction * c.run.total_timesteps
+        return linear_schedule(c.exploration.initial, c.exploration.final, duration, self.step)
 
     @property
     def beta(self) -> float:
         """Importance-sampling exponent at the current step, beta0 -> 1 over the run."""
         c = self.config
-        return linear_schedule(c.per_beta0, 1.0, c.total_timesteps, self.step)
+        return linear_schedule(c.replay.beta0, 1.0, c.run.total_timesteps, self.step)
 
     # ------------------------------------------------------------------ the loop
     def train(self, steps: int | None = None) -> list[dict[str, float]]:
@@ -202,7 +200,11 @@ class Trainer:
         ``checkpoint_interval`` steps and when it returns.
         """
         c = self.config
-        end = c.total_timesteps if steps is None else min(self.step + steps, c.total_timesteps)
+        end = (
+            c.run.total_timesteps
+            if steps is None
+            else min(self.step + steps, c.run.total_timesteps)
+        )
         epochs: list[dict[str, float]] = []
         progress = _progress_bar(c, self.step, end)
         epoch_start = (self.step, time.perf_counter())
@@ -211,19 +213,21 @@ class Trainer:
             while self.step < end:
                 self._env_step()
                 progress.update(1)
-                if self.step % c.epoch_steps == 0:
+                if self.step % c.run.epoch_steps == 0:
                     steps_per_s = (self.step - epoch_start[0]) / (
                         time.perf_counter() - epoch_start[1]
                     )
                     epochs.append(self._finish_epoch(steps_per_s))
                     progress.set_postfix(_postfix(epochs[-1]), refresh=False)
                     epoch_start = (self.step, time.perf_counter())
-                if c.eval_interval and self.step % c.eval_interval == 0:
+                if c.run.eval_interval and self.step % c.run.eval_interval == 0:
                     self.validate()
                     epoch_start = (self.step, time.perf_counter())  # keep it out of steps/s
-                if c.checkpoint_interval and self.step % c.checkpoint_interval == 0:
+                if c.run.checkpoint_interval and self.step % c.run.checkpoint_interval == 0:
                     self.save_checkpoint()
-            saved_last_step = c.checkpoint_interval and self.step % c.checkpoint_interval == 0
+            saved_last_step = (
+                c.run.checkpoint_interval and self.step % c.run.checkpoint_interval == 0
+            )
             if self.step > start_step and not saved_last_step:
                 self.save_checkpoint()
         finally:
@@ -260,19 +264,21 @@ class Trainer:
         self._episode_reward += float(reward)
         self.step += 1
 
-        if self.step > c.learning_starts and len(self.buffer) >= c.batch_size:
-            if self.step % c.train_freq == 0:
-                for _ in range(c.gradient_steps):
-                    batch = self.buffer.sample(c.batch_size, self.beta)
-                    if c.augment_shift:
+        if self.step > c.learner.learning_starts and len(self.buffer) >= c.learner.batch_size:
+            if self.step % c.learner.train_freq == 0:
+                for _ in range(c.learner.gradient_steps):
+                    batch = self.buffer.sample(c.learner.batch_size, self.beta)
+                    if c.learner.augment_shift:
                         batch = batch._replace(
-                            obs=random_shifts(batch.obs, c.augment_shift, self.rng),
-                            next_obs=random_shifts(batch.next_obs, c.augment_shift, self.rng),
+                            obs=random_shifts(batch.obs, c.learner.augment_shift, self.rng),
+                            next_obs=random_shifts(
+                                batch.next_obs, c.learner.augment_shift, self.rng
+                            ),
                         )
                     result = self.learner.update(batch)
                     self.buffer.update_priorities(batch.indices, result.td_errors)
                     self.epoch_log.losses.append(result.loss)
-            if self.step % c.target_update_interval == 0:
+            if self.step % c.learner.target_update_interval == 0:
                 self.learner.sync_target()
 
         if terminated or truncated:
@@ -299,7 +305,7 @@ class Trainer:
         c = self.config
         if self._eval_env is None:
             self._eval_env = self.env_factory()
-        seeds = [episode_seed(c.eval_seed, i) for i in range(c.eval_episodes)]
+        seeds = [episode_seed(c.run.eval_seed, i) for i in range(c.run.eval_episodes)]
         records = greedy_episodes(self.learner.q_values, self._eval_env, seeds, self.obs_shape)
         row = summarise_validation(self.step, records, self.best_eval)
         self.evaluations_log.append(row)
@@ -334,10 +340,10 @@ class Trainer:
         self._episode_reward = 0.0
 
     def _aux_target(self, info: dict[str, Any]) -> np.ndarray | None:
-        return goal_offset(info) if self.config.aux_goal_weight else None
+        return goal_offset(info) if self.config.learner.aux_goal_weight else None
 
     def _finish_epoch(self, steps_per_s: float) -> dict[str, float]:
-        epoch = self.step // self.config.epoch_steps
+        epoch = self.step // self.config.run.epoch_steps
         row = self.epoch_log.summary(epoch, self.step, self.epsilon, self.beta, steps_per_s)
         self.metrics_log.append(row)
         writer = self._tensorboard()
@@ -349,7 +355,7 @@ class Trainer:
         return row
 
     def _tensorboard(self) -> Any:
-        if self.config.tensorboard and self._writer is None:
+        if self.config.run.tensorboard and self._writer is None:
             from torch.utils.tensorboard import SummaryWriter  # heavy import, only when used
 
             self._writer = SummaryWriter(
@@ -374,7 +380,7 @@ class Trainer:
             "n_actions": self.n_actions,
             "stack": self.obs_shape[0],
             "image_shape": list(self.obs_shape[1:]),
-            "dueling": self.config.dueling,
+            "dueling": self.config.learner.dueling,
             "aux_outputs": self.learner.online.aux_outputs,
             "step": self.step,
         }
@@ -412,7 +418,7 @@ class Trainer:
             (directory / "state.json").write_text(json.dumps(state))
 
         path = ckpt.write_checkpoint(
-            self.run_dir, self.step, write_files, self.config.keep_checkpoints
+            self.run_dir, self.step, write_files, self.config.run.keep_checkpoints
         )
         with atomic_path(self.run_dir / POLICY_FILE) as tmp:
             ckpt.save_tensors(tmp, online, metadata)
@@ -515,7 +521,7 @@ class Trainer:
 def train(
     config: TrainConfig, run_dir: str | os.PathLike[str], env_factory: EnvFactory | None = None
 ) -> list[dict[str, float]]:
-    """Train a fresh run to ``config.total_timesteps``; returns the per-epoch metrics."""
+    """Train a fresh run to ``config.run.total_timesteps``; returns the per-epoch metrics."""
     trainer = Trainer(config, run_dir, env_factory)
     try:
         return trainer.train()
@@ -644,7 +650,7 @@ def _digest(obs: np.ndarray | None) -> str | None:
 def _progress_bar(config: TrainConfig, start: int, end: int) -> Any:
     from tqdm.auto import tqdm
 
-    enabled = config.progress_bar and sys.stderr.isatty()
+    enabled = config.run.progress_bar and sys.stderr.isatty()
     return tqdm(total=end, initial=start, disable=not enabled, unit="step", dynamic_ncols=True)
 
 

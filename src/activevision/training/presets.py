@@ -1,0 +1,77 @@
+"""Named training configurations, torch-free (the CLI's help lists them from this table)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from activevision.training.config import (
+    ExplorationConfig,
+    LearnerConfig,
+    RunConfig,
+    TrainConfig,
+)
+
+
+def more_episodes(factor: int) -> TrainConfig:
+    """The paper's learner and update budget fed ``factor`` times the episodes.
+
+    One update every ``factor`` environment steps (SB3's DQN default is 4), so still
+    ~30,000 updates, with learning start, target syncs and exploration at the same points of
+    the run. A simulated step costs ~0.1 ms and an update ~25 ms, so the run takes about as
+    long as the paper's; validation (every ``factor * 1000`` steps, 200 episodes) is on.
+    """
+    paper = TrainConfig()
+    return TrainConfig(
+        learner=LearnerConfig(
+            train_freq=factor,
+            learning_starts=factor * paper.learner.learning_starts,
+            target_update_interval=factor * paper.learner.target_update_interval,
+        ),
+        run=RunConfig(
+            total_timesteps=factor * paper.run.total_timesteps,
+            checkpoint_interval=factor * 3000,
+            eval_interval=factor * 1000,
+            eval_episodes=200,
+        ),
+    )
+
+
+_PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
+    "paper": (TrainConfig, "the paper: 30,000 steps, its hyper-parameters"),
+    "release": (
+        lambda: TrainConfig(
+            learner=LearnerConfig(learning_starts=500), exploration=ExplorationConfig(fraction=0.85)
+        ),
+        "the authors' code release",
+    ),
+    # the paper's run (30,000 steps, one update per step) plus DrQ random shifts of up to
+    # 8 px and the auxiliary goal-offset head: 80-82% against 77-79% (README)
+    "drq_aux": (
+        lambda: TrainConfig(learner=LearnerConfig(augment_shift=8, aux_goal_weight=1.0)),
+        "the paper's run + image shifts and an auxiliary goal head",
+    ),
+    # more data, same learner: 81-83% (4x, 8x) against the paper set-up's 79% (README)
+    "data4x": (lambda: more_episodes(4), "4x the episodes for the paper's 30,000 updates"),
+    "data8x": (lambda: more_episodes(8), "8x the episodes (the shipped policy)"),
+    # The README's main job: the paper's learner with its schedule compressed to 6,000
+    # steps (under 3 minutes on a 2-core CPU; 12,000 steps measured no better). The
+    # paper's 10,000-step target sync and 1,000 learning starts would leave so short a
+    # run without a single target update.
+    "quickstart": (
+        lambda: TrainConfig(
+            learner=LearnerConfig(learning_starts=500, target_update_interval=500),
+            exploration=ExplorationConfig(fraction=0.3),
+            run=RunConfig(total_timesteps=6000),
+        ),
+        "a short run that learns visibly in minutes (make run)",
+    ),
+}
+PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
+PRESET_HELP: dict[str, str] = {name: text for name, (_, text) in _PRESETS.items()}
+
+
+def preset(name: str) -> TrainConfig:
+    """A named configuration (see :data:`PRESET_HELP`)."""
+    if name not in _PRESETS:
+        raise ValueError(f"unknown preset {name!r}; choose from {', '.join(_PRESETS)}")
+    return _PRESETS[name][0]()
