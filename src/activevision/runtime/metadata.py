@@ -143,100 +143,124 @@ class PolicyMetadata:
         cls, values: Mapping[str, Any], source: str = "policy metadata"
     ) -> PolicyMetadata:
         """Validate a decoded policy.json; :class:`PolicyFileError` names the bad key."""
+        read = _MetadataReader(values, source)
+        table_deg = read.action_table_deg()
+        return cls(
+            image_height=read.positive_int("image_height"),
+            image_width=read.positive_int("image_width"),
+            stack=read.positive_int("stack"),
+            action_table=np.radians(table_deg),
+            head_limits=read.head_limits(),
+            input_name=read.optional_str("input_name") or "frames",
+            output_name=read.optional_str("output_name") or "q_values",
+            opset=read.opset(),
+            package_version=read.optional_str("package_version"),
+            model_file=read.optional_str("model_file"),
+            model_sha256=read.model_sha256(),
+            training_config_sha256=read.optional_str("training_config_sha256"),
+            action_names=read.action_names(table_deg),
+            raw=dict(values),
+        )
 
-        def fail(why: str) -> PolicyFileError:
-            return PolicyFileError(f"{source}: {why}")
 
+class _MetadataReader:
+    """Reads one policy.json key at a time; every problem is a PolicyFileError naming it."""
+
+    def __init__(self, values: Any, source: str) -> None:
+        self.source = source
         if not isinstance(values, Mapping):
-            raise fail(f"expected a JSON object, got {type(values).__name__}")
+            raise self.fail(f"expected a JSON object, got {type(values).__name__}")
+        self.values = values
         if values.get("format") != METADATA_FORMAT:
-            raise fail(f"'format' must be {METADATA_FORMAT!r}, got {values.get('format')!r}")
+            raise self.fail(
+                f"'format' must be {METADATA_FORMAT!r}, got {values.get('format')!r}"
+            )
         version = values.get("format_version")
         if version != METADATA_FORMAT_VERSION:
-            raise fail(
+            raise self.fail(
                 f"unsupported 'format_version' {version!r} (this activevision reads "
                 f"{METADATA_FORMAT_VERSION})"
             )
 
-        def positive_int(key: str) -> int:
-            value = values.get(key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise fail(f"{key!r} must be a positive integer, got {value!r}")
-            return value
+    def fail(self, why: str) -> PolicyFileError:
+        return PolicyFileError(f"{self.source}: {why}")
 
-        height, width, stack = (positive_int(k) for k in ("image_height", "image_width", "stack"))
+    def positive_int(self, key: str) -> int:
+        value = self.values.get(key)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise self.fail(f"{key!r} must be a positive integer, got {value!r}")
+        return value
 
+    def optional_str(self, key: str) -> str | None:
+        value = self.values.get(key)
+        if value is not None and not isinstance(value, str):
+            raise self.fail(f"{key!r} must be a string, got {value!r}")
+        return value
+
+    def opset(self) -> int | None:
+        opset = self.values.get("opset")
+        if opset is not None and (isinstance(opset, bool) or not isinstance(opset, int)):
+            raise self.fail(f"'opset' must be an integer, got {opset!r}")
+        return opset
+
+    def action_table_deg(self) -> np.ndarray:
         try:
-            table_deg = np.asarray(values.get("action_table_deg"), dtype=np.float64)
+            table = np.asarray(self.values.get("action_table_deg"), dtype=np.float64)
         except (TypeError, ValueError) as error:
-            raise fail(f"'action_table_deg' is not a numeric table: {error}") from error
-        if table_deg.ndim != 2 or table_deg.shape[1] != 2 or table_deg.shape[0] < 1:
-            raise fail(f"'action_table_deg' must be a list of [d_pan, d_tilt] pairs, got shape "
-                       f"{table_deg.shape}")
-        if not np.all(np.isfinite(table_deg)):
-            raise fail("'action_table_deg' holds non-finite values")
-        n_actions = values.get("n_actions", table_deg.shape[0])
-        if n_actions != table_deg.shape[0]:
-            raise fail(f"'n_actions' is {n_actions!r} but 'action_table_deg' has "
-                       f"{table_deg.shape[0]} rows")
+            raise self.fail(f"'action_table_deg' is not a numeric table: {error}") from error
+        if table.ndim != 2 or table.shape[1] != 2 or table.shape[0] < 1:
+            raise self.fail(
+                f"'action_table_deg' must be a list of [d_pan, d_tilt] pairs, got shape "
+                f"{table.shape}"
+            )
+        if not np.all(np.isfinite(table)):
+            raise self.fail("'action_table_deg' holds non-finite values")
+        if np.abs(table).max() > MAX_MOVE_DEG:
+            raise self.fail(f"'action_table_deg' moves more than {MAX_MOVE_DEG} degrees per action")
+        n_actions = self.values.get("n_actions", table.shape[0])
+        if n_actions != table.shape[0]:
+            raise self.fail(
+                f"'n_actions' is {n_actions!r} but 'action_table_deg' has {table.shape[0]} rows"
+            )
+        return table
 
-        limits_deg = values.get("head_limits_deg")
+    def head_limits(self) -> HeadLimits:
+        limits_deg = self.values.get("head_limits_deg")
         if not isinstance(limits_deg, Mapping) or set(limits_deg) < set(_HEAD_LIMIT_KEYS):
-            raise fail(f"'head_limits_deg' must be an object with keys {list(_HEAD_LIMIT_KEYS)}")
+            raise self.fail(
+                f"'head_limits_deg' must be an object with keys {list(_HEAD_LIMIT_KEYS)}"
+            )
         try:
-            limits = HeadLimits(*(math.radians(float(limits_deg[k])) for k in _HEAD_LIMIT_KEYS))
+            degrees = {k: float(limits_deg[k]) for k in _HEAD_LIMIT_KEYS}
         except (TypeError, ValueError) as error:
-            raise fail(f"'head_limits_deg' holds a non-numeric value: {error}") from error
-        if not (limits.pan_min <= limits.pan_max and limits.tilt_min <= limits.tilt_max):
-            raise fail(f"'head_limits_deg' are not ordered (min <= max): {dict(limits_deg)}")
-
-        if np.abs(table_deg).max() > MAX_MOVE_DEG:
-            raise fail(f"'action_table_deg' moves more than {MAX_MOVE_DEG} degrees per action")
+            raise self.fail(f"'head_limits_deg' holds a non-numeric value: {error}") from error
         for key, bound in _HEAD_LIMIT_BOUNDS_DEG.items():
-            value = float(limits_deg[key])
-            if not (math.isfinite(value) and -bound <= value <= bound):
-                raise fail(f"'head_limits_deg' {key} = {value} lies outside +-{bound} degrees")
+            if not (math.isfinite(degrees[key]) and -bound <= degrees[key] <= bound):
+                raise self.fail(
+                    f"'head_limits_deg' {key} = {degrees[key]} lies outside +-{bound} degrees"
+                )
+        limits = HeadLimits(*(math.radians(degrees[k]) for k in _HEAD_LIMIT_KEYS))
+        if not (limits.pan_min <= limits.pan_max and limits.tilt_min <= limits.tilt_max):
+            raise self.fail(f"'head_limits_deg' are not ordered (min <= max): {dict(limits_deg)}")
+        return limits
 
-        names = values.get("action_names")
+    def action_names(self, table_deg: np.ndarray) -> tuple[str, ...]:
+        names = self.values.get("action_names")
         if not isinstance(names, list) or len(names) != table_deg.shape[0]:
-            raise fail("'action_names' must list one name per action")
-        names = tuple(str(n) for n in names)
+            raise self.fail("'action_names' must list one name per action")
         for name, row in zip(names, table_deg, strict=True):
             if name in _ACTION_SIGNS and tuple(np.sign(row)) != _ACTION_SIGNS[name]:
-                raise fail(f"action {name!r} moves the head by {row.tolist()} degrees")
+                raise self.fail(f"action {name!r} moves the head by {row.tolist()} degrees")
+        return tuple(str(n) for n in names)
 
-        model_sha256 = values.get("model_sha256")
-        if not (isinstance(model_sha256, str) and _is_sha256(model_sha256)):
-            raise fail(
+    def model_sha256(self) -> str:
+        digest = self.values.get("model_sha256")
+        if not (isinstance(digest, str) and _is_sha256(digest)):
+            raise self.fail(
                 f"'model_sha256' must be the model's SHA-256 (64 hex digits), got"
-                f" {model_sha256!r}: without it a model from another export would be accepted"
+                f" {digest!r}: without it a model from another export would be accepted"
             )
-
-        def optional_str(key: str) -> str | None:
-            value = values.get(key)
-            if value is not None and not isinstance(value, str):
-                raise fail(f"{key!r} must be a string, got {value!r}")
-            return value
-
-        opset = values.get("opset")
-        if opset is not None and (isinstance(opset, bool) or not isinstance(opset, int)):
-            raise fail(f"'opset' must be an integer, got {opset!r}")
-        return cls(
-            image_height=height,
-            image_width=width,
-            stack=stack,
-            action_table=np.radians(table_deg),
-            head_limits=limits,
-            input_name=optional_str("input_name") or "frames",
-            output_name=optional_str("output_name") or "q_values",
-            opset=opset,
-            package_version=optional_str("package_version"),
-            model_file=optional_str("model_file"),
-            model_sha256=model_sha256,
-            training_config_sha256=optional_str("training_config_sha256"),
-            action_names=names,
-            raw=dict(values),
-        )
+        return digest
 
 
 def load_metadata(path: str | os.PathLike[str]) -> PolicyMetadata:
