@@ -184,14 +184,41 @@ def sweep(
     from activevision.scaleout.ray_session import ray_session
 
     out_dir = Path(out_dir).resolve()
+    trials = _trial_specs(base_config, seeds, grid, out_dir, cpus_per_trial, crash_after_epoch)
+    statuses: dict[str, dict[str, Any]] = {t["name"]: {"restarts": 0} for t in trials}
+    with ray_session(address, num_cpus) as ray:
+        if gpus_per_trial is None:
+            gpus_per_trial = 1.0 if ray.cluster_resources().get("GPU", 0) > 0 else 0.0
+        _fit(trials, statuses, out_dir, cpus_per_trial, gpus_per_trial, max_failures, verbose)
+
+    trial_rows = [_trial_row(t, statuses[t["name"]]) for t in trials]
+    write_csv(out_dir / "trials.csv", trial_rows)
+    failed = [r["name"] for r in trial_rows if r["status"] != "TERMINATED"]
+    if failed:
+        warnings.warn(f"sweep trials did not finish: {failed}", RuntimeWarning, stacklevel=2)
+    rows = aggregate(trials, out_dir)
+    write_csv(out_dir / "sweep.csv", rows)
+    if rows:
+        plot_sweep(rows, out_dir / "sweep.png")
+    return rows
+
+
+def _trial_specs(
+    base_config: TrainConfig,
+    seeds: Iterable[int],
+    grid: Mapping[str, Sequence[Any]] | None,
+    out_dir: Path,
+    cpus_per_trial: float,
+    crash_after_epoch: int | None,
+) -> list[dict[str, Any]]:
+    """One plain-data trial description per (grid point, seed), in sweep order."""
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("a sweep needs at least one seed")
     if len(set(seeds)) != len(seeds):
         raise ValueError(f"duplicate seeds: {seeds}")
-    points = grid_points(grid or {})
     trials = []
-    for point in points:
+    for point in grid_points(grid or {}):
         for seed in seeds:
             config = trial_config(base_config, seed, point)
             if config.run.num_threads == 0:
@@ -207,51 +234,48 @@ def sweep(
                     "crash_after_epoch": crash_after_epoch,
                 }
             )
-    statuses: dict[str, dict[str, Any]] = {t["name"]: {"restarts": 0} for t in trials}
+    return trials
 
-    with ray_session(address, num_cpus) as ray:
-        from ray import tune
 
-        class _Recorder(tune.Callback):
-            """Final status and restart count of every trial (runs in the driver)."""
+def _fit(
+    trials: list[dict[str, Any]],
+    statuses: dict[str, dict[str, Any]],
+    out_dir: Path,
+    cpus_per_trial: float,
+    gpus_per_trial: float,
+    max_failures: int,
+    verbose: int,
+) -> None:
+    """Run every trial as a Ray Tune grid; record each one's final status and restarts."""
+    from ray import tune
 
-            def on_trial_recover(self, iteration, trials, trial, **info):
-                statuses[trial.config["trial"]["name"]]["restarts"] += 1
+    class _Recorder(tune.Callback):
+        """Final status and restart count of every trial (runs in the driver)."""
 
-            def on_trial_complete(self, iteration, trials, trial, **info):
-                statuses[trial.config["trial"]["name"]]["status"] = "TERMINATED"
+        def on_trial_recover(self, iteration, trials, trial, **info):
+            statuses[trial.config["trial"]["name"]]["restarts"] += 1
 
-            def on_trial_error(self, iteration, trials, trial, **info):
-                statuses[trial.config["trial"]["name"]]["status"] = "ERROR"
+        def on_trial_complete(self, iteration, trials, trial, **info):
+            statuses[trial.config["trial"]["name"]]["status"] = "TERMINATED"
 
-        if gpus_per_trial is None:
-            gpus_per_trial = 1.0 if ray.cluster_resources().get("GPU", 0) > 0 else 0.0
-        trainable = tune.with_resources(train_trial, {"cpu": cpus_per_trial, "gpu": gpus_per_trial})
-        tuner = tune.Tuner(
-            trainable,
-            param_space={"trial": tune.grid_search(trials)},
-            tune_config=tune.TuneConfig(num_samples=1, trial_dirname_creator=_tune_dirname),
-            run_config=tune.RunConfig(
-                name="tune",
-                storage_path=str(out_dir / "ray_results"),
-                failure_config=tune.FailureConfig(max_failures=max_failures),
-                checkpoint_config=tune.CheckpointConfig(num_to_keep=1),
-                callbacks=[_Recorder()],
-                verbose=verbose,
-            ),
-        )
-        tuner.fit()
+        def on_trial_error(self, iteration, trials, trial, **info):
+            statuses[trial.config["trial"]["name"]]["status"] = "ERROR"
 
-    trial_rows = [_trial_row(t, statuses[t["name"]]) for t in trials]
-    write_csv(out_dir / "trials.csv", trial_rows)
-    failed = [r["name"] for r in trial_rows if r["status"] != "TERMINATED"]
-    if failed:
-        warnings.warn(f"sweep trials did not finish: {failed}", RuntimeWarning, stacklevel=2)
-    rows = aggregate(trials, out_dir)
-    write_csv(out_dir / "sweep.csv", rows)
-    if rows:
-        plot_sweep(rows, out_dir / "sweep.png")
-    return rows
+    trainable = tune.with_resources(train_trial, {"cpu": cpus_per_trial, "gpu": gpus_per_trial})
+    tuner = tune.Tuner(
+        trainable,
+        param_space={"trial": tune.grid_search(trials)},
+        tune_config=tune.TuneConfig(num_samples=1, trial_dirname_creator=_tune_dirname),
+        run_config=tune.RunConfig(
+            name="tune",
+            storage_path=str(out_dir / "ray_results"),
+            failure_config=tune.FailureConfig(max_failures=max_failures),
+            checkpoint_config=tune.CheckpointConfig(num_to_keep=1),
+            callbacks=[_Recorder()],
+            verbose=verbose,
+        ),
+    )
+    tuner.fit()
 
 
 def _tune_dirname(trial: Any) -> str:
