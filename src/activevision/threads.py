@@ -19,8 +19,10 @@ def numba_threads() -> int:
     """``numba.get_num_threads()``, leaving PyTorch's thread count as it was (PyTorch is not
     imported here: only adjusted when the process already uses it)."""
     torch = sys.modules.get("torch")
-    before = torch.get_num_threads() if torch is not None else None
-    threads = numba.get_num_threads()
-    if before is not None and torch.get_num_threads() != before:
+    if torch is None:
+        return int(numba.get_num_threads())
+    before = torch.get_num_threads()
+    threads = int(numba.get_num_threads())
+    if torch.get_num_threads() != before:
         torch.set_num_threads(before)
     return threads

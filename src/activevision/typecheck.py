@@ -55,7 +55,7 @@ def check_dataclass_fields(instance: Any) -> None:
         ValueError: ``"{Class}.{field}: expects {type}, got {value!r}"`` for the first field
             that does not fit.
     """
-    cls = type(instance)
+    cls: type = type(instance)
     hints = _field_types(cls)
     for f in dataclasses.fields(instance):
         value = getattr(instance, f.name)
@@ -135,7 +135,7 @@ def config_from_dict(cls: type, values: Any, where: str = "") -> Any:
     kwargs = {}
     for name, value in values.items():
         hint = hints[name]
-        if dataclasses.is_dataclass(hint) and isinstance(value, Mapping):
+        if isinstance(hint, type) and dataclasses.is_dataclass(hint) and isinstance(value, Mapping):
             value = config_from_dict(hint, value, f"{where}.{name}")
         kwargs[name] = value
     return cls(**kwargs)

@@ -8,6 +8,7 @@ norm clipped separately (``tf.clip_by_norm`` per variable, ``grad_norm_clipping=
 from __future__ import annotations
 
 import copy
+import typing
 from collections.abc import Iterable
 from typing import NamedTuple
 
@@ -17,6 +18,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from activevision.agents.dqn_math import double_q_targets, weighted_huber_loss
+from activevision.agents.q_network import QNetwork
 from activevision.agents.replay.prioritized import ReplayBatch
 
 
@@ -106,7 +108,8 @@ def ddqn_update(
         )
     targets = targets.clone()  # an ordinary tensor again, so autograd may save it
     if aux_weight:
-        q_values, aux_predictions = online.forward_with_aux(batch.obs)
+        # the aux head is QNetwork's (any module works without it)
+        q_values, aux_predictions = typing.cast(QNetwork, online).forward_with_aux(batch.obs)
     else:
         q_values = online(batch.obs)
     q_taken = q_values.gather(1, batch.actions.unsqueeze(1)).squeeze(1)

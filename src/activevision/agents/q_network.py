@@ -121,7 +121,8 @@ class QNetwork(nn.Module):
     def to_channels_last(self) -> QNetwork:
         """Store the convolution weights channels-last (NHWC), which oneDNN runs faster."""
         for conv in (self.conv1, self.conv2, self.conv3):
-            conv.to(memory_format=torch.channels_last)
+            # what Module.to(memory_format=...) does: only the 4-D weight changes layout
+            conv.weight.data = conv.weight.data.contiguous(memory_format=torch.channels_last)
         return self
 
 

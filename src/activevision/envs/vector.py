@@ -50,7 +50,9 @@ class ActiveVisionVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._rngs = [seeding.np_random()[0] for _ in range(self.num_envs)]
-        self._frames = np.zeros(self.observation_space.shape, dtype=np.uint8)
+        self._frames = np.zeros(
+            (self.num_envs, *self.single_observation_space.shape), dtype=np.uint8
+        )
         self._needs_reset = np.zeros(self.num_envs, dtype=bool)
         self._all = np.arange(self.num_envs)
         # Gymnasium's "_key" masks: every sub-environment reports every key, every step.
@@ -58,6 +60,7 @@ class ActiveVisionVectorEnv(VectorEnv):
         self._every_env.flags.writeable = False
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        seeds: list[int | None]
         if seed is None:
             seeds = [None] * self.num_envs
         elif isinstance(seed, int | np.integer):

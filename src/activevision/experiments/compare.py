@@ -11,6 +11,7 @@ that ignores the error is the sampling noise the confidence band shows.
 from __future__ import annotations
 
 import csv
+import functools
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -37,8 +38,12 @@ def default_methods(
         methods["learned"] = lambda e: learned
     for name in compare_method_names():
         if name != "learned":
-            methods[name] = lambda e, name=name: make_policy(name, e, config)
+            methods[name] = functools.partial(_make_at_error, name, config)
     return methods
+
+
+def _make_at_error(name: str, config: EnvConfig, error: float) -> HeadPolicy:
+    return make_policy(name, error, config)
 
 
 def done_levels(csv_path: Path) -> list[dict]:

@@ -14,9 +14,11 @@ from activevision.figures.episode import EpisodeTrace, Snapshot
 
 
 def _snapshot(obs: np.ndarray, info: dict[str, Any], reward: float) -> Snapshot:
+    pan, tilt = info["head"]
     return Snapshot(
         obs[-1].copy(),
-        *info["head"],
+        float(pan),
+        float(tilt),
         np.flatnonzero(info["observed_mask"]),
         reward,
         info["step"],

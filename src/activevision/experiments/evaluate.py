@@ -119,7 +119,7 @@ def evaluate_policy(
         intervals, and per-decision latencies (empty unless ``measure_latency``).
     """
     env = env or ActiveVisionEnv(config or EnvConfig())
-    latencies: list[float] = [] if measure_latency else None
+    latencies: list[float] | None = [] if measure_latency else None
     records = [
         run_episode(env, policy, episode_seed(seed, i), env.max_episode_steps, latencies)
         for i in range(episodes)

@@ -24,6 +24,7 @@ import io
 import json
 import math
 import os
+import typing
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -203,7 +204,7 @@ def _onnx_bytes(
         torch.onnx.export(
             module,
             (example,),
-            buffer,
+            typing.cast(Any, buffer),  # a file-like object, which its annotation omits
             input_names=[INPUT_NAME],
             output_names=[OUTPUT_NAME],
             dynamic_axes=dynamic_axes,

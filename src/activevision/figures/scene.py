@@ -31,7 +31,7 @@ def view_figure(
     tilt: float,
     ball: Sequence[float] | np.ndarray | None,
     goal: tuple[float, float] | None = None,
-    visible_ids: Sequence[int] = (),
+    visible_ids: Sequence[int] | np.ndarray = (),
     title: str | None = None,
 ) -> Figure:
     """Camera image (grayscale, (H, W) uint8) beside the top view, as a figure."""
@@ -58,7 +58,7 @@ def view_rgb(
     tilt: float,
     ball: Sequence[float] | np.ndarray | None,
     goal: tuple[float, float] | None = None,
-    visible_ids: Sequence[int] = (),
+    visible_ids: Sequence[int] | np.ndarray = (),
     title: str | None = None,
 ) -> np.ndarray:
     """:func:`view_figure` as an (H, W, 3) uint8 RGB array (``env.render()``'s frame)."""

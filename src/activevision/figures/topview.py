@@ -78,7 +78,10 @@ def draw_footprint(
 
 
 def draw_landmarks(
-    ax: Axes, landmarks: LandmarkSet, ids: Sequence[int], points: np.ndarray | None = None
+    ax: Axes,
+    landmarks: LandmarkSet,
+    ids: Sequence[int] | np.ndarray,
+    points: np.ndarray | None = None,
 ) -> None:
     """Landmarks ``ids`` coloured by type; segments drawn whole, with their measured point
     (``points``, (K, 2)) marked when given."""
@@ -117,7 +120,7 @@ def draw_topview(
     tilt: float,
     ball: Sequence[float] | np.ndarray | None = None,
     goal: tuple[float, float] | None = None,
-    visible_ids: Sequence[int] = (),
+    visible_ids: Sequence[int] | np.ndarray = (),
     title: str | None = None,
 ) -> None:
     """The paper's top view: field, robot, ball, current view (blue), goal view (red)."""

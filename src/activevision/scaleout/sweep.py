@@ -332,8 +332,8 @@ def aggregate(trials: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[
         point_key = tuple(sorted((k, repr(v)) for k, v in trial["point"].items()))
         keys[point_key] = dict(trial["point"])
         by_epoch = groups.setdefault(point_key, {})
-        for row in _metrics_rows(Path(trial["run_dir"])):
-            by_epoch.setdefault(int(float(row["epoch"])), []).append(row)
+        for metrics_row in _metrics_rows(Path(trial["run_dir"])):
+            by_epoch.setdefault(int(float(metrics_row["epoch"])), []).append(metrics_row)
     rows = []
     for point_key, by_epoch in groups.items():
         for epoch in sorted(by_epoch):

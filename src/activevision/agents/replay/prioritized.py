@@ -85,7 +85,7 @@ class PrioritizedReplayBuffer:
         self.gamma = float(gamma)
         self.aux_dim = int(aux_dim)
 
-        self.frames = FrameStore(self.obs_shape[1:], chunk_frames)
+        self.frames = FrameStore((self.obs_shape[1], self.obs_shape[2]), chunk_frames)
         # per-transition scalars; np.zeros is lazily backed, so unused slots cost no memory
         self._obs_ids = np.zeros(self.capacity, dtype=np.int64)
         self._next_obs_ids = np.zeros(self.capacity, dtype=np.int64)
@@ -241,7 +241,7 @@ class PrioritizedReplayBuffer:
     @classmethod
     def from_state_dict(cls, state: dict[str, np.ndarray]) -> PrioritizedReplayBuffer:
         """Rebuild a buffer, bit for bit, from :meth:`state_dict`."""
-        capacity, *obs_shape = (int(v) for v in state["shape"])
+        capacity, stack, height, width = (int(v) for v in state["shape"])
         alpha, eps = (float(v) for v in state["alpha_eps"])
         cursor, size, first_frame_id, open_obs_id, chunk_frames = (
             int(v) for v in state["counters"]
@@ -249,7 +249,7 @@ class PrioritizedReplayBuffer:
         n_step, gamma = state["n_step_gamma"]
         buffer = cls(
             capacity,
-            tuple(obs_shape),
+            (stack, height, width),
             alpha,
             eps,
             chunk_frames=chunk_frames,

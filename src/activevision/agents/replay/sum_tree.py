@@ -122,7 +122,7 @@ class ProportionalSampler:
 
     def get_state(self) -> dict[str, Any]:
         """The generator's state (a JSON-serialisable dict)."""
-        return self.rng.bit_generator.state
+        return dict(self.rng.bit_generator.state)
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore a state from :meth:`get_state`."""
