@@ -275,7 +275,38 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
      ["train", "--resume", "{run}"], "obs_shape"),
     ("replay missing an array", lambda r: replace_replay_array(r, "counters", [1, 2]),
      ["train", "--resume", "{run}"], "checkpoint"),
+    ("optimizer state of another network", lambda r: swap_optimizer_state(r),
+     ["train", "--resume", "{run}"], "checkpoint"),
+    ("compare.csv of other episodes", lambda r: write_compare_csv(r, episodes=50),
+     ["compare", "--run", "{run}", "--methods", "random", "--errors", "0,0.5",
+      "--episodes", "2"], "50 episodes"),
+    ("evaluation.json not JSON", lambda r: write_file(r / "evaluation" / "evaluation.json", "{"),
+     ["report", "{run}"], "evaluation.json"),
+    ("metrics.csv garbage", lambda r: (r / "metrics.csv").write_text("epoch,step\nx,y\n"),
+     ["plot", "{run}"], "metrics.csv"),
 ]
+
+
+def write_file(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+
+
+def write_compare_csv(run: Path, episodes: int) -> None:
+    header = "error,episodes,seed,method,success_rate\n"
+    write_file(run / "compare" / "compare.csv", header + f"0.0,{episodes},0,random,0.7\n")
+
+
+def swap_optimizer_state(run: Path) -> None:
+    """An Adam state of a 2-parameter model: a valid file the run's network cannot use."""
+    import torch
+
+    params = [torch.nn.Parameter(torch.zeros(3)), torch.nn.Parameter(torch.zeros(2))]
+    optimizer = torch.optim.Adam(params)
+    sum(p.sum() for p in params).backward()
+    optimizer.step()
+    torch.save(optimizer.state_dict(), latest(run) / "optimizer.pt")
+    rewrite_manifest(latest(run))
 
 
 @pytest.mark.parametrize(("tamper", "argv", "needle"), [t[1:] for t in TAMPERS],

@@ -18,7 +18,7 @@ import platform
 from pathlib import Path
 
 import activevision
-from activevision.io import write_text
+from activevision.io import read_json, write_text
 
 
 def _csv_rows(path: Path) -> list[dict]:
@@ -46,7 +46,7 @@ def write_report(run_dir: str | Path) -> Path:
     run = Path(run_dir)
     if not (run / "config.json").exists():
         raise FileNotFoundError(f"{run} is not a training run (no config.json)")
-    config = json.loads((run / "config.json").read_text())
+    config = read_json(run / "config.json")
     parts = [
         f"# activevision report: `{run.name}`",
         "",
@@ -67,7 +67,7 @@ def write_report(run_dir: str | Path) -> Path:
         ]
     evaluation = run / "evaluation" / "evaluation.json"
     if evaluation.exists():
-        data = json.loads(evaluation.read_text())
+        data = read_json(evaluation)
         rows = [{k: str(v) for k, v in r.items()} for r in data["methods"]]
         parts += [
             "",

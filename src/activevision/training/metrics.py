@@ -160,4 +160,7 @@ def read_csv_columns(path: str | os.PathLike[str]) -> dict[str, list[float]]:
         rows = list(csv.DictReader(file))
     if not rows:
         return {}
-    return {key: [float(r[key]) if r[key] != "" else math.nan for r in rows] for key in rows[0]}
+    try:
+        return {key: [float(r[key]) if r[key] != "" else math.nan for r in rows] for key in rows[0]}
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{path} is not a metrics table of numbers: {error}") from None
