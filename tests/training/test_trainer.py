@@ -8,10 +8,12 @@ from activevision.agents.q_network import QNetwork
 from activevision.envs.seeding import episode_seed
 from activevision.figures.training import CURVES
 from activevision.training import checkpoint as ckpt
+from activevision.training.aux_targets import goal_offset
 from activevision.training.config import TrainConfig
 from activevision.training.metrics import EPOCH_FIELDS, TIMING_FIELDS
 from activevision.training.plots import plot_run
-from activevision.training.trainer import Trainer, goal_offset, load_policy, resume, train
+from activevision.training.policy_files import load_policy
+from activevision.training.trainer import Trainer, resume, train
 from activevision.training.validation import greedy_episodes, summarise_validation
 
 
@@ -88,16 +90,16 @@ def comparable(rows):
 def test_resume_gives_exactly_the_uninterrupted_result(tmp_path, fake_env_factory, options):
     config = tiny_config(**options)
     straight, interrupted = tmp_path / "straight", tmp_path / "interrupted"
-    train(config, straight, fake_env_factory)
+    train(config, straight, fake_env_factory, aux_target=goal_offset)  # used with aux_goal_weight
 
-    first = Trainer(config, interrupted, fake_env_factory)
+    first = Trainer(config, interrupted, fake_env_factory, aux_target=goal_offset)
     first.train(steps=60)  # one epoch: checkpoint at step 60
     first.train(steps=10)  # stops mid-epoch: checkpoint at step 70 ...
     assert first._obs is not None  # ... which falls inside an episode
     for _ in range(25):  # progress after the checkpoint, lost in a "crash"
         first._env_step()
     first.close()
-    resume(interrupted, fake_env_factory)  # redoes it exactly
+    resume(interrupted, fake_env_factory, aux_target=goal_offset)  # redoes it exactly
 
     for name in ("metrics.csv", "episodes.csv"):
         assert comparable(read_rows(straight / name)) == comparable(read_rows(interrupted / name))
@@ -264,7 +266,7 @@ def test_auxiliary_goal_targets_are_the_goal_offsets_of_each_stored_observation(
     tmp_path, fake_env_factory
 ):
     config = tiny_config(aux_goal_weight=1.0, total_timesteps=60)
-    trainer = Trainer(config, tmp_path, fake_env_factory)
+    trainer = Trainer(config, tmp_path, fake_env_factory, aux_target=goal_offset)
     trainer.train()
     buffer = trainer.buffer
     batch = buffer.sample(64, beta=1.0)

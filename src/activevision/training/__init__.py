@@ -1,5 +1,10 @@
 """Training runs: configuration, the DDQN + prioritised-replay loop, checkpoints, metrics, plots.
 
+Modules: ``config`` (TrainConfig), ``trainer`` (the loop), ``build`` (what a config builds),
+``state`` (checkpoint state and I/O over ``checkpoint``), ``policy_files`` (``load_policy``),
+``loggers`` (CSV and TensorBoard), ``aux_targets`` (the auxiliary head's target),
+``environment``, ``metrics``, ``validation``, ``plots``.
+
 Typical use::
 
     from activevision.training import TrainConfig, Trainer, load_policy, plot_run
@@ -17,6 +22,10 @@ from typing import TYPE_CHECKING, Any
 # without loading torch (the CLI builds its help from them); the rest loads on first use.
 _EXPORTS = {
     "CheckpointError": "checkpoint",
+    "CsvLogger": "loggers",
+    "Logger": "loggers",
+    "TensorBoardLogger": "loggers",
+    "TrainerState": "state",
     "TrainConfig": "config",
     "apply_overrides": "config",
     "load_config": "config",
@@ -24,13 +33,15 @@ _EXPORTS = {
     "save_config": "config",
     "plot_run": "plots",
     "Trainer": "trainer",
-    "load_policy": "trainer",
-    "make_env": "trainer",
+    "goal_offset": "aux_targets",
+    "load_policy": "policy_files",
+    "make_env": "environment",
     "resume": "trainer",
     "train": "trainer",
 }
 
 if TYPE_CHECKING:
+    from activevision.training.aux_targets import goal_offset
     from activevision.training.checkpoint import CheckpointError
     from activevision.training.config import (
         TrainConfig,
@@ -38,9 +49,13 @@ if TYPE_CHECKING:
         load_config,
         save_config,
     )
+    from activevision.training.environment import make_env
+    from activevision.training.loggers import CsvLogger, Logger, TensorBoardLogger
     from activevision.training.plots import plot_run
+    from activevision.training.policy_files import load_policy
     from activevision.training.presets import preset
-    from activevision.training.trainer import Trainer, load_policy, make_env, resume, train
+    from activevision.training.state import TrainerState
+    from activevision.training.trainer import Trainer, resume, train
 
 
 def __getattr__(name: str) -> Any:
@@ -51,9 +66,14 @@ def __getattr__(name: str) -> Any:
 
 __all__ = [
     "CheckpointError",
+    "CsvLogger",
+    "Logger",
+    "TensorBoardLogger",
     "TrainConfig",
     "Trainer",
+    "TrainerState",
     "apply_overrides",
+    "goal_offset",
     "load_config",
     "load_policy",
     "make_env",

@@ -29,7 +29,7 @@ import shutil
 import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -202,7 +202,7 @@ def load_torch_state(path: Path) -> dict[str, Any]:
 def save_arrays(path: Path, arrays: Mapping[str, np.ndarray]) -> None:
     """Save plain numpy arrays as an uncompressed .npz (fast; images are uint8 already)."""
     with open(path, "wb") as file:
-        np.savez(file, **arrays)
+        np.savez(file, **cast(dict[str, Any], arrays))  # names, not savez's own keywords
 
 
 def load_arrays(path: Path) -> dict[str, np.ndarray]:

@@ -13,7 +13,7 @@ The validation episodes are those of ``activevision evaluate --seed eval_seed`` 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -51,7 +51,7 @@ def greedy_episodes(
 
 
 def summarise_validation(
-    step: int, records: list[Mapping[str, float]], best_before: float
+    step: int, records: Sequence[Mapping[str, float]], best_before: float
 ) -> dict[str, float]:
     """The ``evaluations.csv`` row of one validation; ``best`` is 1 if it beat ``best_before``."""
     success_rate = nan_mean([r["success_rate"] for r in records])

@@ -1,0 +1,152 @@
+"""A run's policy files and :func:`load_policy`, their reader.
+
+A run directory holds
+
+* ``policy.safetensors`` — the newest online weights, rewritten with every checkpoint;
+* ``best_policy.safetensors`` — with ``eval_interval``: the weights with the best greedy
+  validation score so far (metadata ``step`` and ``validation_success_rate``).
+
+Both are written atomically with :func:`activevision.training.checkpoint.save_tensors`
+(checksummed) and carry the network's shape in their metadata, so :func:`load_policy` builds
+the :class:`QNetwork` from the file alone and never executes code.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from activevision.agents.q_network import QNetwork
+from activevision.io import atomic_path
+from activevision.training import checkpoint as ckpt
+
+POLICY_FILE = "policy.safetensors"  #: the newest online weights
+BEST_POLICY_FILE = "best_policy.safetensors"  #: best greedy validation score (eval_interval)
+
+
+def network_metadata(network: torch.nn.Module, step: int) -> dict[str, Any]:
+    """What :func:`load_policy` needs to rebuild ``network`` (a QNetwork), and the step of
+    its weights."""
+    if not isinstance(network, QNetwork):
+        raise TypeError(f"policy files hold QNetwork weights, got a {type(network).__name__}")
+    return {
+        "n_actions": network.n_actions,
+        "stack": network.stack,
+        "image_shape": list(network.image_shape),
+        "dueling": network.dueling,
+        "aux_outputs": network.aux_outputs,
+        "step": step,
+    }
+
+
+def write_policy(
+    run_dir: Path, weights: Mapping[str, torch.Tensor], metadata: Mapping[str, Any]
+) -> Path:
+    """Write (atomically) ``policy.safetensors``: the run's newest online weights."""
+    path = run_dir / POLICY_FILE
+    with atomic_path(path) as tmp:
+        ckpt.save_tensors(tmp, weights, metadata)
+    return path
+
+
+def write_best_policy(
+    run_dir: Path,
+    weights: Mapping[str, torch.Tensor],
+    metadata: Mapping[str, Any],
+    step: int,
+    success_rate: float,
+) -> Path:
+    """Write (atomically) ``best_policy.safetensors``: weights of ``step`` that scored the
+    best validation ``success_rate``."""
+    path = run_dir / BEST_POLICY_FILE
+    full = {**metadata, "step": step, "validation_success_rate": success_rate}
+    with atomic_path(path) as tmp:
+        ckpt.save_tensors(tmp, weights, full)
+    return path
+
+
+@dataclass
+class BestWeights:
+    """The weights with the best greedy validation score so far (SB3 ``EvalCallback``)."""
+
+    score: float = -math.inf  #: validation success rate (-inf: no validation yet)
+    step: int = 0  #: the step the weights are of
+    weights: dict[str, torch.Tensor] | None = None  #: a copy of the network's state dict
+
+    def keep(self, network: torch.nn.Module, step: int, score: float) -> None:
+        """Take a copy of ``network``'s weights as the best, scoring ``score`` at ``step``."""
+        self.keep_weights(network.state_dict(), step, score)
+
+    def keep_weights(self, weights: Mapping[str, torch.Tensor], step: int, score: float) -> None:
+        """Take a copy of ``weights`` (a state dict) as the best."""
+        self.weights = {k: v.detach().clone() for k, v in weights.items()}
+        self.step, self.score = step, score
+
+    def write(self, run_dir: Path, metadata: Mapping[str, Any]) -> Path:
+        """Write ``best_policy.safetensors`` (``metadata``: :func:`network_metadata`)."""
+        if self.weights is None:
+            raise ValueError("no best weights to write: nothing was validated yet")
+        return write_best_policy(run_dir, self.weights, metadata, self.step, self.score)
+
+
+def load_policy(
+    path: str | os.PathLike[str], device: str = "cpu", weights: str = "final"
+) -> QNetwork:
+    """A trained QNetwork in eval mode, from a run directory, a checkpoint, or a weights file.
+
+    Reads safetensors only (no code is executed). A run directory's ``policy.safetensors``
+    holds its newest online weights (``weights="final"``), ``best_policy.safetensors`` those
+    with the best validation score (``weights="best"``, runs with ``eval_interval``).
+    """
+    path = _weights_file(Path(path), weights)
+    tensors, meta = ckpt.load_tensors(path)
+    if any(k.startswith("online.") for k in tensors):
+        tensors = {
+            k.removeprefix("online."): v for k, v in tensors.items() if k.startswith("online.")
+        }
+    try:
+        network = QNetwork(
+            meta["n_actions"],
+            meta["stack"],
+            tuple(meta["image_shape"]),
+            meta["dueling"],
+            aux_outputs=meta.get("aux_outputs", 0),
+        )
+        network.load_state_dict(tensors)
+    except (KeyError, RuntimeError) as error:
+        raise ckpt.CheckpointError(f"{path} does not hold QNetwork weights: {error}") from error
+    return network.to(device).eval()
+
+
+def _weights_file(path: Path, weights: str) -> Path:
+    """The weights file that ``load_policy(path, weights=weights)`` reads."""
+    if weights not in ("final", "best"):
+        raise ValueError(f"weights must be 'final' or 'best', got {weights!r}")
+    if path.is_dir() and weights == "best":
+        path = path / BEST_POLICY_FILE
+        if not path.exists():
+            raise ckpt.CheckpointError(
+                f"no {path.name} in {path.parent}: train with eval_interval > 0 to keep one"
+            )
+    elif path.is_dir():
+        path = path / POLICY_FILE if (path / POLICY_FILE).exists() else path / "model.safetensors"
+    if not path.exists():
+        raise ckpt.CheckpointError(f"no policy weights at {path}")
+    return path
+
+
+__all__ = [
+    "BEST_POLICY_FILE",
+    "POLICY_FILE",
+    "BestWeights",
+    "load_policy",
+    "network_metadata",
+    "write_best_policy",
+    "write_policy",
+]
