@@ -1,0 +1,227 @@
+"""The logger protocol: what the trainer hands its loggers, and the CSV and TensorBoard backends."""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Mapping
+
+import pytest
+
+from activevision.training.aux_targets import goal_offset
+from activevision.training.config import TrainConfig
+from activevision.training.loggers import (
+    EPISODE_TAGS,
+    VALIDATION_TAGS,
+    CsvLogger,
+    LogPosition,
+    TensorBoardLogger,
+    default_loggers,
+)
+from activevision.training.metrics import EPISODE_FIELDS, EPOCH_FIELDS, TENSORBOARD_TAGS
+from activevision.training.trainer import Trainer, resume, train
+from activevision.training.validation import EVALUATION_FIELDS
+
+
+def tiny_config(**changes) -> TrainConfig:
+    values = dict(
+        seed=3,
+        total_timesteps=120,
+        epoch_steps=60,
+        batch_size=8,
+        buffer_size=1000,
+        learning_starts=20,
+        target_update_interval=50,
+        checkpoint_interval=60,
+        eval_interval=40,
+        eval_episodes=2,
+        tensorboard=False,
+        progress_bar=False,
+        num_threads=1,
+        env_id="unused",
+    )
+    values.update(changes)
+    return TrainConfig().replace(**values)
+
+
+class RecordingLogger:
+    """A logger of one's own: keeps every call."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple] = []
+
+    def start(self, resume: LogPosition | None) -> None:
+        self.calls.append(("start", resume))
+
+    def record_epoch(self, row: Mapping[str, float], step: int) -> None:
+        self.calls.append(("epoch", dict(row), step))
+
+    def record_episode(self, record: Mapping[str, float], step: int) -> None:
+        self.calls.append(("episode", dict(record), step))
+
+    def record_validation(self, row: Mapping[str, float], step: int) -> None:
+        self.calls.append(("validation", dict(row), step))
+
+    def flush(self) -> None:
+        self.calls.append(("flush",))
+
+    def close(self) -> None:
+        self.calls.append(("close",))
+
+    def records(self, kind: str) -> list[dict]:
+        return [call[1] for call in self.calls if call[0] == kind]
+
+
+def csv_rows(path) -> list[dict[str, float]]:
+    with open(path, newline="") as file:
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(file)]
+
+
+def same_rows(recorded: list[dict], written: list[dict]) -> bool:
+    def plain(row):  # NaN == NaN for this comparison
+        return {k: ("nan" if math.isnan(float(v)) else float(v)) for k, v in row.items()}
+
+    return [plain(r) for r in recorded] == [plain(r) for r in written]
+
+
+def test_a_custom_logger_receives_every_record_the_csv_logs_get(tmp_path, fake_env_factory):
+    recorder = RecordingLogger()
+    epochs = train(
+        tiny_config(), tmp_path, fake_env_factory, loggers=[CsvLogger(tmp_path), recorder]
+    )
+    assert recorder.calls[0] == ("start", None)  # a fresh run
+    assert recorder.calls[-2:] == [("flush",), ("close",)]
+    assert recorder.records("epoch") == epochs
+    assert same_rows(recorder.records("epoch"), csv_rows(tmp_path / "metrics.csv"))
+    assert same_rows(recorder.records("episode"), csv_rows(tmp_path / "episodes.csv"))
+    assert same_rows(recorder.records("validation"), csv_rows(tmp_path / "evaluations.csv"))
+    assert [r["step"] for r in recorder.records("validation")] == [40, 80, 120]
+    assert len(recorder.records("episode")) >= 120 // 20
+    for kind, record, step in (c for c in recorder.calls if len(c) == 3):
+        assert step == record["step"], kind  # each record comes with its step
+
+
+def test_given_loggers_replace_the_default_ones(tmp_path, fake_env_factory):
+    recorder = RecordingLogger()
+    train(tiny_config(tensorboard=True), tmp_path, fake_env_factory, loggers=[recorder])
+    assert recorder.records("epoch")
+    assert not (tmp_path / "metrics.csv").exists()
+    assert not (tmp_path / "tensorboard").exists()
+    assert (tmp_path / "policy.safetensors").exists()  # the rest of the run is unchanged
+
+
+def test_default_loggers_follow_the_tensorboard_switch(tmp_path):
+    kinds = [type(x) for x in default_loggers(tiny_config(tensorboard=True), tmp_path)]
+    assert kinds == [CsvLogger, TensorBoardLogger]
+    assert [type(x) for x in default_loggers(tiny_config(), tmp_path)] == [CsvLogger]
+
+
+def test_resume_starts_loggers_at_the_checkpoint(tmp_path, fake_env_factory):
+    first = Trainer(tiny_config(), tmp_path, fake_env_factory)
+    first.train(steps=60)
+    episodes = first.episode
+    for _ in range(30):  # lost in a crash: the logs hold rows the resumed run must forget
+        first._env_step()
+    first.validate()
+    first.close()
+
+    recorder = RecordingLogger()
+    resume(tmp_path, fake_env_factory, loggers=[CsvLogger(tmp_path), recorder])
+    assert recorder.calls[0] == ("start", LogPosition(60, 1, episodes, 1))
+    assert [r["step"] for r in recorder.records("epoch")] == [120]
+    assert [r["step"] for r in recorder.records("validation")] == [80, 120]
+    assert len(csv_rows(tmp_path / "metrics.csv")) == 2
+    assert [r["step"] for r in csv_rows(tmp_path / "evaluations.csv")] == [40, 80, 120]
+    assert len(csv_rows(tmp_path / "episodes.csv")) == episodes + len(recorder.records("episode"))
+
+
+def epoch_row(step: int, **changes: float) -> dict[str, float]:
+    row = {name: float(i) for i, name in enumerate(EPOCH_FIELDS)}
+    return {**row, "step": step, **changes}
+
+
+def episode_row(episode: int, step: int) -> dict[str, float]:
+    return {**{name: 0.5 for name in EPISODE_FIELDS}, "episode": episode, "step": step}
+
+
+def validation_row(step: int) -> dict[str, float]:
+    return {**{name: 0.25 for name in EVALUATION_FIELDS}, "step": step, "best": 1}
+
+
+def test_csv_logger_writes_the_three_logs_and_truncates_on_resume(tmp_path):
+    logger = CsvLogger(tmp_path)
+    with pytest.raises(RuntimeError, match="start"):
+        logger.record_epoch(epoch_row(1), 1)
+    logger.start(None)
+    for name, fields in [
+        ("metrics.csv", EPOCH_FIELDS),
+        ("episodes.csv", EPISODE_FIELDS),
+        ("evaluations.csv", EVALUATION_FIELDS),
+    ]:
+        assert (tmp_path / name).read_text().splitlines() == [",".join(fields)]
+    for step in (1, 2, 3):
+        logger.record_epoch(epoch_row(step), step)
+        logger.record_episode(episode_row(step, step), step)
+        logger.record_validation(validation_row(step), step)
+    logger.close()
+    assert [r["step"] for r in csv_rows(tmp_path / "metrics.csv")] == [1, 2, 3]
+    assert csv_rows(tmp_path / "episodes.csv")[1] == episode_row(2, 2)
+    assert csv_rows(tmp_path / "evaluations.csv")[2] == validation_row(3)
+
+    again = CsvLogger(tmp_path)
+    again.start(LogPosition(step=2, epochs=2, episodes=1, validations=0))
+    assert [r["step"] for r in csv_rows(tmp_path / "metrics.csv")] == [1, 2]
+    assert [r["step"] for r in csv_rows(tmp_path / "episodes.csv")] == [1]
+    assert csv_rows(tmp_path / "evaluations.csv") == []
+    CsvLogger(tmp_path).start(None)  # a fresh run: headers only
+    assert csv_rows(tmp_path / "metrics.csv") == []
+
+
+def scalars(log_dir) -> dict[str, list[tuple[int, float]]]:
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    events = EventAccumulator(str(log_dir))
+    events.Reload()
+    return {
+        tag: [(e.step, e.value) for e in events.Scalars(tag)] for tag in events.Tags()["scalars"]
+    }
+
+
+def test_tensorboard_logger_keeps_the_tags_and_purges_on_resume(tmp_path):
+    logger = TensorBoardLogger(tmp_path / "tb")
+    logger.start(None)
+    assert not (tmp_path / "tb").exists()  # the writer is made at the first record
+    for step in (10, 20, 30):
+        logger.record_epoch(epoch_row(step, loss=math.nan if step == 20 else 0.5), step)
+        logger.record_episode(episode_row(step, step), step)
+        logger.record_validation(validation_row(step), step)
+    logger.flush()
+    logger.close()
+    found = scalars(tmp_path / "tb")
+    expected = {*TENSORBOARD_TAGS.values(), *EPISODE_TAGS.values(), *VALIDATION_TAGS.values()}
+    assert set(found) == expected
+    assert set(EPISODE_TAGS.values()) == {"charts/episodic_return", "charts/episodic_length"}
+    assert set(VALIDATION_TAGS.values()) == {"eval/success_rate", "eval/mean_episodic_return"}
+    assert found["losses/td_loss"] == [(10, 0.5), (30, 0.5)]  # NaN is left out
+    assert found["charts/SPS"] == [
+        (s, float(EPOCH_FIELDS.index("steps_per_s"))) for s in (10, 20, 30)
+    ]
+    assert found["charts/episodic_length"] == [(10, 0.5), (20, 0.5), (30, 0.5)]
+    assert found["eval/success_rate"] == [(10, 0.25), (20, 0.25), (30, 0.25)]
+
+    resumed = TensorBoardLogger(tmp_path / "tb")
+    resumed.start(LogPosition(step=20, epochs=1, episodes=1, validations=1))
+    resumed.record_epoch(epoch_row(20, epsilon=9.0), 20)
+    resumed.close()
+    epsilon = scalars(tmp_path / "tb")["charts/epsilon"]
+    assert epsilon == [(10, float(EPOCH_FIELDS.index("epsilon"))), (20, 9.0)]  # 30 purged
+
+
+def test_a_training_run_writes_todays_tensorboard_tags(tmp_path, fake_env_factory):
+    train(tiny_config(tensorboard=True), tmp_path, fake_env_factory, aux_target=goal_offset)
+    found = scalars(tmp_path / "tensorboard")
+    allowed = {*TENSORBOARD_TAGS.values(), *EPISODE_TAGS.values(), *VALIDATION_TAGS.values()}
+    assert set(found) <= allowed
+    assert {"charts/episodic_return", "eval/success_rate", "charts/epsilon"} <= set(found)
+    assert [step for step, _ in found["charts/epsilon"]] == [60, 120]
+    assert [step for step, _ in found["eval/mean_episodic_return"]] == [40, 80, 120]
