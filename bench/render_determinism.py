@@ -23,7 +23,8 @@ import numpy as np
 
 import activevision.rendering.renderer as renderer_module
 from activevision.geometry import CameraConfig, FieldSpec
-from activevision.rendering import Renderer, _kernel
+from activevision.rendering import Renderer
+from activevision.rendering.kernels.garbage import GARBAGE_KINDS
 
 
 def random_cameras(n: int, rng: np.random.Generator, camera: CameraConfig, field: FieldSpec):
@@ -99,7 +100,7 @@ def main() -> None:
         "batches of 16": (threaded, chunks(16)),
         "serial batch": (serial, batch),
     }
-    for seed in range(1, 1 + _kernel.GARBAGE_KINDS):
+    for seed in range(1, 1 + GARBAGE_KINDS):
         paths[f"alone, garbage {seed}"] = (threaded, with_garbage(seed, alone))
         paths[f"batch, garbage {seed}"] = (threaded, with_garbage(seed, batch))
 

@@ -12,13 +12,16 @@ from hypothesis import strategies as st
 
 import activevision.rendering.renderer as renderer_module
 from activevision.geometry import CameraConfig, FieldSpec
-from activevision.rendering import Renderer, _kernel
+from activevision.rendering import Renderer
+from activevision.rendering.kernels import raster
+from activevision.rendering.kernels.bundles import allocate_work
+from activevision.rendering.kernels.garbage import GARBAGE_KINDS, fill_garbage
 
 CAM = CameraConfig()
 SPEC = FieldSpec()
 CARPET_X, CARPET_Y = SPEC.carpet_half_extent
-#: One seed per kind of garbage of ``_kernel._fill_garbage``.
-GARBAGE_SEEDS = tuple(range(101, 101 + _kernel.GARBAGE_KINDS))
+#: One seed per kind of garbage of ``kernels.garbage.fill_garbage``.
+GARBAGE_SEEDS = tuple(range(101, 101 + GARBAGE_KINDS))
 
 
 @pytest.fixture(scope="module")
@@ -118,30 +121,28 @@ def test_frame_depends_on_its_camera_only(parallel, serial, cameras, has_ball):
 
 @pytest.mark.parametrize("seed", GARBAGE_SEEDS)
 def test_garbage_overwrites_every_work_buffer(seed):
-    # The garbage test above is only as strong as its reach: every buffer of _allocate and
-    # the row scratch must be overwritten entirely.
-    scene = Renderer().scene
-    work = _kernel._allocate(3, scene.paint_quads.shape[0], scene.posts.shape[0],
-                             scene.crossbars.shape[0], scene.ring_polygons.shape[1])
+    # The garbage test above is only as strong as its reach: every buffer of allocate_work
+    # and the row scratch must be overwritten entirely.
+    work = allocate_work(3, Renderer()._kernel_scene)
     value = np.empty(CAM.width, dtype=np.float32)
     sentinel = 7777
     for arr in (*work, value):
         arr[...] = sentinel
-    _kernel._fill_garbage(work, value, seed)
-    for k, arr in enumerate((*work, value)):
-        assert not (arr == sentinel).any(), f"work buffer {k} keeps entries"
+    fill_garbage(work, value, seed)
+    for name, arr in (*work._asdict().items(), ("value", value)):
+        assert not (arr == sentinel).any(), f"work buffer {name} keeps entries"
 
 
 def test_renderer_hands_the_garbage_seed_to_both_kernels(monkeypatch):
     seen = []
     for name in ("render_kernel", "render_kernel_serial"):
-        kernel = getattr(_kernel, name)
+        kernel = getattr(raster, name)
 
         def spy(*args, _kernel_fn=kernel):
             seen.append(args[-1])
             return _kernel_fn(*args)
 
-        monkeypatch.setattr(_kernel, name, spy)
+        monkeypatch.setattr(raster, name, spy)
     monkeypatch.setattr(renderer_module, "_WORK_GARBAGE_SEED", GARBAGE_SEEDS[1])
     r = Renderer()
     r.render(np.zeros(3), 0.0, 0.3, None)

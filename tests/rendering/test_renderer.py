@@ -12,10 +12,12 @@ from activevision.geometry import CameraConfig, FieldSpec, project_points
 from activevision.rendering import (
     RenderConfig,
     Renderer,
-    _kernel,
     render_reference,
     render_supersampled,
 )
+from activevision.rendering.kernels.bundles import Cameras, allocate_work
+from activevision.rendering.kernels.camera_setup import setup_camera
+from activevision.rendering.kernels.garbage import GARBAGE_KINDS
 
 CAM = CameraConfig()
 CFG = RenderConfig()
@@ -152,14 +154,12 @@ def test_matches_supersampled_ground_truth_near_lines(renderer):
 def ring_row_ranges(renderer, pose, pan, tilt) -> np.ndarray:
     """The setup pass's ``[first, end)`` image rows of the centre circle's outer polygon
     (``[0]``) and hole polygon (``[1]``) for one camera."""
-    scene = renderer.scene
-    work = _kernel._allocate(1, scene.paint_quads.shape[0], scene.posts.shape[0],
-                             scene.crossbars.shape[0], scene.ring_polygons.shape[1])
-    _kernel._setup_camera(0, np.array([pose]), np.array([pan]), np.array([tilt]),
-                          np.zeros((1, 2)), False, renderer._params, scene.paint_quads,
-                          scene.carpet_quad, scene.ring_polygons, scene.posts, scene.crossbars,
-                          W, H, *work)
-    return work[3][0]
+    scene = renderer._kernel_scene
+    work = allocate_work(1, scene)
+    cameras = Cameras(np.array([pose]), np.array([pan]), np.array([tilt]), np.zeros((1, 2)),
+                      False)
+    setup_camera(0, scene, renderer._kernel_params, cameras, work)
+    return work.ring_rows[0]
 
 
 def test_ring_with_its_hole_off_image(renderer, monkeypatch):
@@ -176,7 +176,7 @@ def test_ring_with_its_hole_off_image(renderer, monkeypatch):
     batch_pose = np.insert(others[0], 3, pose, axis=0)
     batch_pan, batch_tilt = np.insert(others[1], 3, pan), np.insert(others[2], 3, tilt)
     renders = {"batch": renderer.render(batch_pose, batch_pan, batch_tilt, None)[3]}
-    for seed in range(1, 1 + _kernel.GARBAGE_KINDS):
+    for seed in range(1, 1 + GARBAGE_KINDS):
         monkeypatch.setattr(renderer_module, "_WORK_GARBAGE_SEED", seed)
         renders[f"alone, garbage {seed}"] = renderer.render(np.array(pose), pan, tilt, None)[0]
         renders[f"batch, garbage {seed}"] = renderer.render(batch_pose, batch_pan, batch_tilt,

@@ -1,16 +1,19 @@
-"""The fast batched renderer of the robot's head camera (see ``_kernel`` for the method)."""
+"""The fast batched renderer of the robot's head camera (see :mod:`.kernels` for the
+method)."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from activevision.geometry.camera import CameraConfig
 from activevision.geometry.field import FieldSpec
-from activevision.rendering import _kernel
 from activevision.rendering.config import RenderConfig
-from activevision.rendering.scene import SceneArrays, build_scene
+from activevision.rendering.kernels import raster
+from activevision.rendering.kernels.bundles import Cameras, scene_bundles
+from activevision.rendering.scene import build_scene
 from activevision.threads import numba_threads
 
 _DEFAULT_FIELD = FieldSpec()
@@ -51,32 +54,13 @@ def _per_camera(name: str, value, n: int) -> np.ndarray:
     return _float_array(name, arr, (n,))
 
 
-def scene_params(scene: SceneArrays, camera: CameraConfig, config: RenderConfig) -> np.ndarray:
-    """The kernel's float64 parameter vector (indices ``_kernel.P_*``)."""
-    params = np.zeros(_kernel.N_PARAMS)
-    params[_kernel.P_FOCAL] = camera.focal
-    params[_kernel.P_CX] = camera.width / 2
-    params[_kernel.P_CY] = camera.height / 2
-    params[_kernel.P_CAM_H] = camera.camera_height
-    params[_kernel.P_RING_X], params[_kernel.P_RING_Y] = scene.ring[0], scene.ring[1]
-    params[_kernel.P_RING_IN], params[_kernel.P_RING_OUT] = scene.ring[2], scene.ring[3]
-    params[_kernel.P_BALL_R] = scene.ball_radius
-    params[_kernel.P_GRASS] = config.grass
-    params[_kernel.P_LINE] = config.line
-    params[_kernel.P_BACKGROUND] = config.background
-    params[_kernel.P_POST] = config.post
-    params[_kernel.P_BALL_LIT] = config.ball_lit
-    params[_kernel.P_BALL_SHADOW] = config.ball_shadow
-    return params
-
-
 class Renderer:
     """Renders what the robot's head camera sees, for many cameras per call.
 
     The image (``camera.height`` x ``camera.width``, uint8 grey) shows the carpet, every
     painted line at its true width, the centre circle, the penalty marks and a short centre
     mark, both goals (posts and crossbars) and the ball, anti-aliased by exact box-filter
-    coverage of each pixel (see :mod:`activevision.rendering._kernel`). Greys and optional
+    coverage of each pixel (see :mod:`activevision.rendering.kernels`). Greys and optional
     noise come from :class:`RenderConfig`.
 
     Batches of ``PARALLEL_MIN_BATCH`` or more frames are split over the numba threads
@@ -109,7 +93,11 @@ class Renderer:
         #: tens of microseconds.
         self.parallel = bool(parallel)
         self.scene = build_scene(field)
-        self._params = scene_params(self.scene, camera, config)
+        # What the kernels see of the scene, the camera and the greys (kernels.bundles), and
+        # the plain tuples of their fields the entry points are handed (numba types those in
+        # C, namedtuples in Python).
+        self._kernel_scene, self._kernel_params = scene_bundles(self.scene, camera, config)
+        self._kernel_fields = (tuple(self._kernel_scene), tuple(self._kernel_params))
 
     @property
     def image_shape(self) -> tuple[int, int]:
@@ -118,10 +106,10 @@ class Renderer:
 
     def render(
         self,
-        pose,
-        pan,
-        tilt,
-        ball_xy,
+        pose: ArrayLike,
+        pan: ArrayLike,
+        tilt: ArrayLike,
+        ball_xy: ArrayLike | None,
         out: np.ndarray | None = None,
         rng: np.random.Generator | None = None,
     ) -> np.ndarray:
@@ -178,23 +166,16 @@ class Renderer:
         if self.config.has_noise and not isinstance(rng, np.random.Generator):
             raise ValueError("rng must be a numpy.random.Generator when noise/jitter is on")
 
-        scene = self.scene
+        scene, params = self._kernel_fields
+        cameras = tuple(Cameras(pose_arr, pan_arr, tilt_arr, ball_arr, has_ball))
         # small batches run serially and never start numba's thread pool
         threads = numba_threads() if self.parallel and n >= PARALLEL_MIN_BATCH else 1
         if threads == 1:
-            _kernel.render_kernel_serial(
-                pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
-                scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
-                scene.crossbars, out, _WORK_GARBAGE_SEED,
-            )
+            raster.render_kernel_serial(scene, params, cameras, out, _WORK_GARBAGE_SEED)
         else:
             # Enough interleaved row sets per camera that every thread gets a fair share.
             row_blocks = max(1, math.ceil(4 * threads / n))
-            _kernel.render_kernel(
-                pose_arr, pan_arr, tilt_arr, ball_arr, has_ball, self._params,
-                scene.paint_quads, scene.carpet_quad, scene.ring_polygons, scene.posts,
-                scene.crossbars, row_blocks, out, _WORK_GARBAGE_SEED,
-            )
+            raster.render_kernel(scene, params, cameras, row_blocks, out, _WORK_GARBAGE_SEED)
         if self.config.has_noise:
             apply_noise(out, self.config, rng)
         return out

@@ -1,0 +1,257 @@
+"""The setup pass of the renderer: per camera, every shape's image edge lines and the range
+of image rows it touches (its polygon clipped to the view frustum and projected; shapes out
+of view get no rows and edges no pixel touches), the pixel -> ground homography of the ring,
+the ball's parameters and box, and the painter's order of posts, crossbars and ball (see
+:mod:`activevision.rendering.kernels`)."""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from activevision.geometry.kernels import camera_rotation
+from activevision.rendering.kernels.bundles import JIT, JIT_PART, Z_NEAR, Optics, View
+from activevision.rendering.kernels.edges import polygon_edges_and_rows, store_edge, store_empty
+
+
+@njit(**JIT)
+def setup_camera(n, scene, params, cams, work):
+    """Per-camera precomputation (see :mod:`activevision.rendering.kernels`) for camera
+    ``n`` of ``cams``, into slice ``n`` of every :class:`RenderWork` array.
+
+    One function, its sections written out: handing the work or scene bundle (arrays) to
+    helpers would count references to every array of it on each call."""
+    rot = work.rot[n]
+    camera_rotation(cams.pose[n, 2] + cams.pan[n], cams.tilt[n], rot)
+    cam = work.cam[n]
+    cam[0] = cams.pose[n, 0]
+    cam[1] = cams.pose[n, 1]
+    cam[2] = params.cam_h
+    pts = work.pts[n]
+    clip = work.clip[n]
+    view = View(rot, cam, pts, clip)
+    optics = Optics(params.focal, params.cx, params.cy, params.width, params.height)
+    quad_edges = work.quad_edges[n]
+    quad_rows = work.quad_rows[n]
+    n_paint = scene.paint_quads.shape[0]
+    n_posts = scene.posts.shape[0]
+    n_bars = scene.bars.shape[0]
+
+    # painted quads, then the carpet
+    for q in range(n_paint + 1):
+        src = scene.paint_quads[q] if q < n_paint else scene.carpet
+        for k in range(4):
+            _to_camera(rot, cam, src[k, 0], src[k, 1], 0.0, pts[k])
+        polygon_edges_and_rows(pts, 4, optics, quad_edges[q], quad_rows[q], clip)
+
+    # posts, then crossbars: the silhouette quad of each cylinder
+    for o in range(n_posts + n_bars):
+        edges = quad_edges[n_paint + 1 + o]
+        rows = quad_rows[n_paint + 1 + o]
+        if o < n_posts:
+            drawn = _post_quad(scene.posts[o], optics, view, edges, rows)
+        else:
+            drawn = _bar_quad(scene.bars[o - n_posts], optics, view, edges, rows)
+        if not drawn:  # the camera is inside the cylinder
+            store_empty(edges, 4, rows)
+
+    # Centre circle: the outer polygon bounds the rows and columns to shade, the inner one
+    # marks pixels certainly inside the hole.
+    polygons = scene.ring_polygons
+    n_sides = polygons.shape[1]
+    for o in range(2):
+        for k in range(n_sides):
+            x = params.ring_x + polygons[o, k, 0]
+            y = params.ring_y + polygons[o, k, 1]
+            _to_camera(rot, cam, x, y, 0.0, pts[k])
+        polygon_edges_and_rows(pts, n_sides, optics, work.ring_edges[n, o], work.ring_rows[n, o],
+                               clip)
+    # Pixel -> ground homography: ground point (gx, gy) / gz of the ray through (u, v),
+    # with gz = -(ray's world z) > 0 below the horizon.
+    cam_h = params.cam_h
+    focal = params.focal
+    homography = work.homography[n]
+    for r in range(3):
+        if r < 2:
+            g0 = cam_h * rot[0, r] - cam[r] * rot[0, 2]
+            g1 = cam_h * rot[1, r] - cam[r] * rot[1, 2]
+            g2 = cam_h * rot[2, r] - cam[r] * rot[2, 2]
+        else:
+            g0 = -rot[0, 2]
+            g1 = -rot[1, 2]
+            g2 = -rot[2, 2]
+        homography[r, 0] = g0 / focal
+        homography[r, 1] = g1 / focal
+        homography[r, 2] = g2 - (g0 * params.cx + g1 * params.cy) / focal
+
+    # Ball: the parameters of coverage.ball_shade and its pixel box (empty when there is
+    # no ball or it is out of view)
+    ball_r = params.ball_r
+    _to_camera(rot, cam, cams.ball_xy[n, 0], cams.ball_xy[n, 1], ball_r, pts[0])
+    c0, c1, c2 = pts[0, 0], pts[0, 1], pts[0, 2]
+    ball_info = work.ball_info[n]
+    ball_info[0] = c0
+    ball_info[1] = c1
+    ball_info[2] = c2
+    ball_info[3] = c0 * c0 + c1 * c1 + c2 * c2 - ball_r * ball_r
+    ball_info[4] = rot[0, 2]
+    ball_info[5] = rot[1, 2]
+    ball_info[6] = rot[2, 2]
+    ball_info[7] = c0 * rot[0, 2] + c1 * rot[1, 2] + c2 * rot[2, 2]  # c . up
+    ball_info[8] = 1.0 / ball_r
+    if cams.has_ball and c2 + ball_r > Z_NEAR and ball_info[3] > 0.0:
+        i0, i1 = _angular_extent(c0, c2, ball_r, focal, params.cx, params.width)
+        j0, j1 = _angular_extent(c1, c2, ball_r, focal, params.cy, params.height)
+    else:
+        i0, i1, j0, j1 = 0, 0, 0, 0
+    if i1 <= i0 or j1 <= j0:
+        i0, i1, j0, j1 = 0, 0, 0, 0
+    ball_box = work.ball_box[n]
+    ball_box[0] = i0
+    ball_box[1] = i1
+    ball_box[2] = j0
+    ball_box[3] = j1
+
+    # Objects far to near (painter's order): posts, crossbars, ball.
+    posts = scene.posts
+    bars = scene.bars
+    n_objects = n_posts + n_bars + 1
+    keys = work.keys[n]
+    order = work.object_order[n]
+    for p in range(n_posts):
+        dx = posts[p, 0] - cam[0]
+        dy = posts[p, 1] - cam[1]
+        keys[p] = dx * dx + dy * dy
+    for b in range(n_bars):
+        dx = bars[b, 0] - cam[0]
+        dy = min(max(cam[1], bars[b, 1]), bars[b, 2]) - cam[1]
+        dz = bars[b, 3] - cam[2]
+        keys[n_posts + b] = dx * dx + dy * dy + dz * dz
+    keys[n_objects - 1] = c0 * c0 + c1 * c1 + c2 * c2
+    for k in range(n_objects):
+        order[k] = k
+    for k in range(1, n_objects):  # insertion sort, descending distance
+        m = k
+        while m > 0 and keys[order[m - 1]] < keys[order[m]]:
+            tmp = order[m - 1]
+            order[m - 1] = order[m]
+            order[m] = tmp
+            m -= 1
+
+    # the paint quads in view, and the first row that shows more than background
+    n_visible = 0
+    for q in range(n_paint):
+        if quad_rows[q, 1] > quad_rows[q, 0]:
+            work.visible_paint[n, n_visible] = q
+            n_visible += 1
+    work.visible_count[n] = n_visible
+    first = params.height
+    for q in range(n_paint, n_paint + 1 + n_posts + n_bars):
+        if quad_rows[q, 1] > quad_rows[q, 0]:
+            first = min(first, quad_rows[q, 0])
+    if ball_box[3] > ball_box[2]:
+        first = min(first, ball_box[2])
+    work.first_row[n] = first
+
+
+@njit(**JIT_PART)
+def _tangents(ca, cb, r, pa, pb):
+    """The circle of centre ``(ca, cb)`` and radius ``r`` seen from ``(pa, pb)``, in one
+    plane: ``(outside, ua, ub, cos_b, t1a, t1b, t2a, t2b)``: whether the viewpoint is outside
+    (all else 0 if not), the unit vector from the centre towards it, the cosine of the angle
+    at the centre between it and the tangent points, and the two tangent points (the centre
+    plus ``r`` times the unit vector turned by ``+-b``)."""
+    da = pa - ca
+    db = pb - cb
+    dist = math.sqrt(da * da + db * db)
+    if dist <= r * 1.001:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ua, ub = da / dist, db / dist
+    cos_b = r / dist
+    sin_b = math.sqrt(1.0 - cos_b * cos_b)
+    t1a = ca + r * (ua * cos_b - ub * sin_b)
+    t1b = cb + r * (ub * cos_b + ua * sin_b)
+    t2a = ca + r * (ua * cos_b + ub * sin_b)
+    t2b = cb + r * (ub * cos_b - ua * sin_b)
+    return True, ua, ub, cos_b, t1a, t1b, t2a, t2b
+
+
+@njit(**JIT_PART)
+def _post_quad(post, optics, view, edges, rows):
+    """A post's silhouette quad through the two vertical generators tangent to the sight
+    lines, into ``edges`` and ``rows``; False (nothing written) when the camera is inside
+    the post."""
+    rot, cam, pts = view.rot, view.cam, view.pts
+    pr, ph = post[2], post[3]
+    outside, ux, uy, cos_b, t1x, t1y, t2x, t2y = _tangents(post[0], post[1], pr, cam[0], cam[1])
+    if not outside:
+        return False
+    # The true bottom (top) outline is the near arc of the base (top) circle, which bulges
+    # towards the camera by the sagitta r (1 - cos b) beyond the chord T1 T2. A straight edge
+    # moved 2/3 of the way out covers the same area (parabolic segment).
+    shift = pr * (1.0 - cos_b) * (2.0 / 3.0)
+    sx, sy = shift * ux, shift * uy
+    _to_camera(rot, cam, t1x + sx, t1y + sy, 0.0, pts[0])
+    _to_camera(rot, cam, t2x + sx, t2y + sy, 0.0, pts[1])
+    _to_camera(rot, cam, t2x + sx, t2y + sy, ph, pts[2])
+    _to_camera(rot, cam, t1x + sx, t1y + sy, ph, pts[3])
+    polygon_edges_and_rows(pts, 4, optics, edges, rows, view.clip)
+    # The sides are the exact tangent generators (the shifted corners are not on them).
+    ix = 0.25 * (pts[0, 0] + pts[1, 0] + pts[2, 0] + pts[3, 0])
+    iy = 0.25 * (pts[0, 1] + pts[1, 1] + pts[2, 1] + pts[3, 1])
+    iz = 0.25 * (pts[0, 2] + pts[1, 2] + pts[2, 2] + pts[3, 2])
+    _to_camera(rot, cam, t2x, t2y, 0.0, pts[5])
+    _to_camera(rot, cam, t2x, t2y, ph, pts[6])
+    store_edge(pts[5], pts[6], (ix, iy, iz), optics, edges[1])
+    _to_camera(rot, cam, t1x, t1y, ph, pts[5])
+    _to_camera(rot, cam, t1x, t1y, 0.0, pts[6])
+    store_edge(pts[5], pts[6], (ix, iy, iz), optics, edges[3])
+    return True
+
+
+@njit(**JIT_PART)
+def _bar_quad(bar, optics, view, edges, rows):
+    """A crossbar's silhouette quad, as a post's in the vertical x-z plane (its axis runs
+    along y); False (nothing written) when the camera is inside the bar."""
+    rot, cam, pts = view.rot, view.cam, view.pts
+    y0, y1 = bar[1], bar[2]
+    outside, _, _, _, t1x, t1z, t2x, t2z = _tangents(bar[0], bar[3], bar[4], cam[0], cam[2])
+    if not outside:
+        return False
+    _to_camera(rot, cam, t1x, y0, t1z, pts[0])
+    _to_camera(rot, cam, t2x, y0, t2z, pts[1])
+    _to_camera(rot, cam, t2x, y1, t2z, pts[2])
+    _to_camera(rot, cam, t1x, y1, t1z, pts[3])
+    polygon_edges_and_rows(pts, 4, optics, edges, rows, view.clip)
+    return True
+
+
+@njit(**JIT)
+def _angular_extent(a, z, r, focal, centre, size):
+    """Pixel interval ``[lo, hi)`` covered by a sphere seen at lateral offset ``a`` and depth
+    ``z`` (one image axis), radius ``r``; the whole axis when it is too close to tell."""
+    rho = math.sqrt(a * a + z * z)
+    if rho <= r * 1.0001:
+        return 0, size
+    alpha = math.atan2(a, z)
+    beta = math.asin(r / rho)
+    if alpha - beta <= -1.5 or alpha + beta >= 1.5:
+        return 0, size
+    lo = centre + focal * math.tan(alpha - beta)
+    hi = centre + focal * math.tan(alpha + beta)
+    lo = min(max(lo, -1.0), size + 1.0)
+    hi = min(max(hi, -1.0), size + 1.0)
+    return max(math.floor(lo), 0), min(math.ceil(hi), size)
+
+
+@njit(**JIT)
+def _to_camera(rot, cam, x, y, z, out):
+    """World point ``(x, y, z)`` in the coordinates of the camera at ``cam`` (3,) turned by
+    ``rot`` (3, 3), into ``out`` (3,)."""
+    dx = x - cam[0]
+    dy = y - cam[1]
+    dz = z - cam[2]
+    out[0] = rot[0, 0] * dx + rot[0, 1] * dy + rot[0, 2] * dz
+    out[1] = rot[1, 0] * dx + rot[1, 1] * dy + rot[1, 2] * dz
+    out[2] = rot[2, 0] * dx + rot[2, 1] * dy + rot[2, 2] * dz

@@ -1,0 +1,240 @@
+"""The row pass of the renderer and its entry points (see :mod:`activevision.rendering.kernels`
+for the method).
+
+Entry points: :func:`render_kernel` hands row work to the numba threads in interleaved sets
+(rows ``b, b + B, b + 2B, ...``) so that sky-only rows do not pile up on one thread;
+:func:`render_kernel_serial` renders on the calling thread (single frames). Both take the
+:class:`.bundles.Scene`, :class:`.bundles.Params` and :class:`.bundles.Cameras` as plain
+tuples of their fields (see :mod:`.bundles`), and ``garbage`` last: 0, or a seed to fill the
+work memory with garbage first (:func:`.garbage.fill_garbage`, for the tests; the images
+must not change).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from activevision.rendering.kernels.bundles import (
+    JIT,
+    JIT_PART,
+    Cameras,
+    Params,
+    RenderWork,
+    Scene,
+    allocate_work,
+)
+from activevision.rendering.kernels.camera_setup import setup_camera
+from activevision.rendering.kernels.coverage import (
+    ball_shade,
+    fully_inside,
+    paint_quad_pixels,
+    quad_coverage,
+    ring_row,
+    span,
+)
+from activevision.rendering.kernels.garbage import GARBAGE_KINDS, fill_garbage, garbage_floats
+
+
+@njit(**JIT_PART)
+def _quad_columns(edges, v, width, min_width):
+    """Columns of row centre ``v`` that a quad touches, ``[s0, s1)``, and those it covers
+    entirely, ``[i0, i1)`` (``(s1, s1)`` when none, or when ``[s0, s1)`` is not wider than
+    ``min_width``: not worth looking for). Returns ``(s0, s1, i0, i1)``."""
+    s0, s1 = span(edges, 4, v, -1.0, width)
+    i0, i1 = s1, s1
+    if s1 - s0 > min_width:
+        i0, i1 = span(edges, 4, v, 1.0, width)
+        if i1 <= i0:
+            i0, i1 = s1, s1
+    return s0, s1, i0, i1
+
+
+@njit(**JIT_PART)
+def _carpet_row(edges, v, params, value):
+    """``value`` (W,) of a row the carpet's ``edges`` reach: background, the carpet and its
+    anti-aliased border."""
+    width = value.shape[0]
+    grass = params.grass
+    background = params.background
+    if fully_inside(edges, 4, 0.5, v) and fully_inside(edges, 4, width - 0.5, v):
+        # Both end pixels fully on the carpet, so the whole row is (convexity).
+        value[:] = grass
+        return
+    o0, o1, i0, i1 = _quad_columns(edges, v, width, -1)
+    value[:o0] = background
+    value[o1:] = background
+    value[i0:i1] = grass
+    # partly covered pixels: [o0, i0) and [i1, o1)
+    for i in range(o0, i0):
+        c = quad_coverage(edges, i + 0.5, v)
+        value[i] = background + c * (grass - background)
+    for i in range(i1, o1):
+        c = quad_coverage(edges, i + 0.5, v)
+        value[i] = background + c * (grass - background)
+
+
+@njit(**JIT_PART)
+def _paint_quad_row(edges, v, paint):
+    """Max-combine a painted quad's coverage of row centre ``v`` into ``paint``; returns the
+    columns ``[s0, s1)`` it touches."""
+    # pixels fully inside a quad wider than 4 px: coverage 1 without per-pixel work
+    s0, s1, i0, i1 = _quad_columns(edges, v, paint.shape[0], 4)
+    paint[i0:i1] = 1.0
+    paint_quad_pixels(edges, v, s0, i0, paint)
+    paint_quad_pixels(edges, v, i1, s1, paint)
+    return s0, s1
+
+
+@njit(**JIT_PART)
+def _post_quad_row(edges, v, grey, value):
+    """Composite a post's or crossbar's quad of grey ``grey`` over row centre ``v`` of
+    ``value``, with its coverage as alpha."""
+    s0, s1, i0, i1 = _quad_columns(edges, v, value.shape[0], 4)
+    value[i0:i1] = grey
+    for i in range(s0, i0):
+        a = quad_coverage(edges, i + 0.5, v)
+        value[i] += a * (grey - value[i])
+    for i in range(i1, s1):
+        a = quad_coverage(edges, i + 0.5, v)
+        value[i] += a * (grey - value[i])
+
+
+@njit(**JIT)
+def render_rows(n, rows, out, scene, params, work, value, paint):
+    """Rows ``row0, row0 + row_step, ...`` (``rows = (row0, row_step)``) of image ``n`` into
+    ``out`` (N, H, W). ``value`` (W,) float32 scratch; ``paint`` (W,) float32 scratch that is
+    all zero on entry and on exit.
+
+    The per-row helpers take single arrays and :class:`.bundles.Params` (scalars), never the
+    work bundle: every call with a bundle of arrays would count references to all of them,
+    once per row."""
+    row0, row_step = rows
+    height = out.shape[1]
+    width = out.shape[2]
+    n_paint = scene.paint_quads.shape[0]
+    carpet = n_paint
+    n_quad_objects = scene.posts.shape[0] + scene.bars.shape[0]
+    quad_edges = work.quad_edges[n]
+    quad_rows = work.quad_rows[n]
+    ring_edges = work.ring_edges[n]
+    ring_rows = work.ring_rows[n]
+    homography = work.homography[n]
+    ball_info = work.ball_info[n]
+    ball_box = work.ball_box[n]
+    object_order = work.object_order[n]
+    visible_paint = work.visible_paint[n]
+    n_visible = work.visible_count[n]
+    first_row = work.first_row[n]
+    n_sides = ring_edges.shape[1]
+    line_minus_grass = params.line - params.grass
+    bg_u8 = np.uint8(int(params.background + 0.5))
+    for j in range(row0, height, row_step):
+        if j < first_row:
+            out[n, j, :] = bg_u8
+            continue
+        v = j + 0.5
+        # --- ground: background, carpet, its anti-aliased border
+        if quad_rows[carpet, 0] <= j < quad_rows[carpet, 1]:
+            _carpet_row(quad_edges[carpet], v, params, value)
+        else:
+            value[:] = params.background
+        # --- paint: lines, marks, centre circle (coverages combine with max)
+        touched_lo = width
+        touched_hi = 0
+        for vq in range(n_visible):
+            q = visible_paint[vq]
+            if quad_rows[q, 0] <= j < quad_rows[q, 1]:
+                s0, s1 = _paint_quad_row(quad_edges[q], v, paint)
+                if s1 > s0:
+                    touched_lo = min(touched_lo, s0)
+                    touched_hi = max(touched_hi, s1)
+        if ring_rows[0, 0] <= j < ring_rows[0, 1]:
+            s0, s1 = span(ring_edges[0], n_sides, v, -1.0, width)
+            # The hole polygon has its own row range (empty when it is off-image while the
+            # ring is not): outside it no pixel of this row is certainly in the hole.
+            h0, h1 = 0, 0
+            if ring_rows[1, 0] <= j < ring_rows[1, 1]:
+                h0, h1 = span(ring_edges[1], n_sides, v, 1.0, width)
+            ring_row(homography, v, (s0, s1), (h0, h1), params, paint)
+            if s1 > s0:
+                touched_lo = min(touched_lo, s0)
+                touched_hi = max(touched_hi, s1)
+        for i in range(touched_lo, touched_hi):
+            value[i] += paint[i] * line_minus_grass
+            paint[i] = 0.0
+        # --- posts, crossbars, ball: far to near, coverage as alpha
+        for k in range(n_quad_objects + 1):
+            o = object_order[k]
+            if o < n_quad_objects:
+                q = n_paint + 1 + o
+                if quad_rows[q, 0] <= j < quad_rows[q, 1]:
+                    _post_quad_row(quad_edges[q], v, params.post, value)
+            elif ball_box[2] <= j < ball_box[3]:
+                for i in range(ball_box[0], ball_box[1]):
+                    a, grey = ball_shade(ball_info, i + 0.5, v, params)
+                    if a > 0.0:
+                        value[i] += a * (grey - value[i])
+        for i in range(width):
+            out[n, j, i] = np.uint8(min(max(value[i] + np.float32(0.5), np.float32(0.0)),
+                                        np.float32(255.0)))
+
+
+@njit(**JIT_PART)
+def _check_size(params, out):
+    """Every kernel takes the image size from ``params``: ``out`` must have it."""
+    if out.shape[1] != params.height or out.shape[2] != params.width:
+        raise ValueError("render kernels: out does not have the image size of params")
+
+
+@njit(**JIT_PART)
+def _bundles(scene, params, cameras, out):
+    """An entry point's bundles from the tuples of their fields (size-checked against
+    ``out``), and the work memory: ``(scene, params, cameras, work)``."""
+    params = Params(*params)
+    _check_size(params, out)
+    cams = Cameras(*cameras)
+    scene = Scene(*scene)
+    return scene, params, cams, allocate_work(cams.pose.shape[0], scene)
+
+
+@njit(cache=True, fastmath=True, nogil=True, parallel=True)
+def render_kernel(scene, params, cameras, row_blocks, out, garbage):
+    """Render the cameras into ``out`` (N, H, W) uint8, on all numba threads. Each camera's
+    rows are split into ``row_blocks`` interleaved sets of work."""
+    # As _bundles, written out: numba's parfor lowering finds the class of a namedtuple used
+    # in a prange body only from the call that made it, so each is made right here.
+    scene = Scene(*scene)
+    params = Params(*params)
+    cams = Cameras(*cameras)
+    _check_size(params, out)
+    work = RenderWork(*allocate_work(cams.pose.shape[0], scene))
+    n_cams = cams.pose.shape[0]
+    width = params.width
+    if garbage != 0:
+        fill_garbage(work, np.empty(1, dtype=np.float32), garbage)
+    for n in prange(n_cams):
+        setup_camera(n, scene, params, cams, work)
+    for item in prange(n_cams * row_blocks):
+        n = item // row_blocks
+        value = np.empty(width, dtype=np.float32)
+        if garbage != 0:
+            garbage_floats(value, garbage + GARBAGE_KINDS * item)
+        paint = np.zeros(width, dtype=np.float32)
+        render_rows(n, (item - n * row_blocks, row_blocks), out, scene, params, work, value,
+                    paint)
+
+
+@njit(**JIT)
+def render_kernel_serial(scene, params, cameras, out, garbage):
+    """:func:`render_kernel` on the calling thread only: no thread hand-off, which matters
+    for single frames (and on machines whose cores are busy with other work)."""
+    scene, params, cams, work = _bundles(scene, params, cameras, out)
+    width = params.width
+    value = np.empty(width, dtype=np.float32)
+    if garbage != 0:
+        fill_garbage(work, value, garbage)
+    paint = np.zeros(width, dtype=np.float32)
+    for n in range(cams.pose.shape[0]):
+        setup_camera(n, scene, params, cams, work)
+        render_rows(n, (0, 1), out, scene, params, work, value, paint)
