@@ -16,6 +16,7 @@ from activevision.envs.actions import action_table
 from activevision.envs.config import EnvConfig
 from activevision.envs.starts import corrupt_pose
 from activevision.geometry import field_landmarks
+from activevision.geometry.angles import wrap_angle
 from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
 
 
@@ -145,7 +146,7 @@ class ScanPolicy:
     def act(self, obs: np.ndarray, info: dict) -> int:
         x, y, theta = info["pose"]
         dx, dy = np.asarray(info["ball"]) - (x, y)
-        bearing = (np.arctan2(dy, dx) - theta + np.pi) % (2 * np.pi) - np.pi
+        bearing = wrap_angle(np.arctan2(dy, dx) - theta)
         ball_tilt = np.arctan2(self.cfg.camera.camera_height, np.hypot(dx, dy))
         pan = bearing + self.amplitude * np.sin(2 * np.pi * self._t / self.period)
         self._t += 1

@@ -1,8 +1,9 @@
 """Heading arithmetic: angle wrapping, residuals and circular means (FilterPy's
 ``residual_x`` / ``residual_z`` / ``x_mean_fn`` / ``z_mean_fn`` for the pose UKF).
 
-Every heading difference is wrapped to ``(-pi, pi]`` and every mean of headings is a circular
-mean (``atan2`` of the weighted sine and cosine sums): averaging 179 deg and -179 deg must give
+Every heading difference is wrapped to ``(-pi, pi]`` (the package's one convention,
+:func:`activevision.geometry.angles.wrap_angle`) and every mean of headings is a circular mean
+(``atan2`` of the weighted sine and cosine sums): averaging 179 deg and -179 deg must give
 180 deg, not 0.
 """
 
@@ -10,14 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-TWO_PI = 2.0 * np.pi
-
-
-def wrap_angle(angle):
-    """Angle(s) wrapped to ``(-pi, pi]``."""
-    wrapped = np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), TWO_PI)
-    # np.mod can round up to exactly 2 pi for tiny negative inputs; keep the interval half-open.
-    return np.where(wrapped <= -np.pi, wrapped + TWO_PI, wrapped)
+from activevision.geometry.angles import wrap_angle
 
 
 def circular_mean(angles, weights) -> float:
