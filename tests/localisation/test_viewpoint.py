@@ -19,8 +19,7 @@ from activevision.localisation import (
     kernels,
     ukf_update_sequential,
 )
-from activevision.localisation.sigma_points import merwe_weights
-from activevision.localisation.viewpoint import DEFAULT_GRID, _noise_table
+from activevision.localisation.viewpoint import DEFAULT_GRID, search_args
 
 COV0 = DEFAULT_UKF.initial_cov
 
@@ -82,13 +81,8 @@ def test_parallel_search_equals_serial(landmarks, cam, random_start):
     serial = best_viewpoints(means, COV0, balls, landmarks, cam)
     threaded = best_viewpoints(means, COV0, balls, landmarks, cam, parallel=True)
     assert numba.get_num_threads() == 1 or np.array_equal(serial.entropies, threaded.entropies)
-    ukf = DEFAULT_UKF
-    args = (
-        means, np.broadcast_to(COV0, (5, 3, 3)).copy(), balls, landmarks.segments,
-        landmarks.max_distance, landmarks.types, _noise_table(ukf), DEFAULT_GRID.pans,
-        DEFAULT_GRID.tilts, cam.focal, float(cam.width), float(cam.height), cam.camera_height,
-        0.07, *merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa), ukf.n + ukf.lambda_, False,
-    )
+    covs = np.broadcast_to(COV0, (5, 3, 3)).copy()
+    args = search_args(means, covs, balls, landmarks, cam, DEFAULT_GRID, DEFAULT_UKF, 0.07, False)
     reference = kernels.search_kernel(*args)
     assert np.array_equal(reference[0], serial.entropies)
     for n_blocks in (1, 3, 7, 1000):

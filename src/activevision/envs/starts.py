@@ -12,12 +12,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from activevision.envs.config import EnvConfig
-from activevision.geometry.kernels import ball_in_image, camera_rotation
+from activevision.geometry.angles import wrap_angle
+from activevision.geometry.kernels import (
+    CameraModel,
+    ball_in_image,
+    camera_fields,
+    camera_rotation,
+)
 
 BALL_CANDIDATES = 16  #: ball positions tried per start candidate
 #: uniforms per start candidate: x, y, theta, pan, tilt, then distances and bearings
@@ -28,26 +35,40 @@ class StartGenerationError(RuntimeError):
     """No valid episode start was found within ``EnvConfig.max_start_draws`` draws."""
 
 
-def corrupt_pose(pose, error: float, rng: np.random.Generator) -> np.ndarray:
+class BallDraw(NamedTuple):
+    """Where :func:`candidate_kernel` puts the ball candidates."""
+
+    d_lo: float  #: distance range from the robot (m)
+    d_hi: float
+    hfov: float  #: bearing spread around the view direction (rad)
+    x_lim: float  #: the ball centre must lie within |x| <= x_lim, |y| <= y_lim
+    y_lim: float
+    radius: float  #: ball radius (m)
+
+
+def corrupt_pose(pose: np.ndarray, error: float, rng: np.random.Generator) -> np.ndarray:
     """The release's localisation error: the position moved ``error`` m in a random
-    direction, the heading turned by ``+-error`` rad (wrapped to [-pi, pi))."""
+    direction, the heading turned by ``+-error`` rad (``geometry.angles.wrap_angle``'s
+    ``(-pi, pi]``). A heading already in range is kept as it is, so a zero error leaves the
+    pose exactly as drawn (the wrap's arithmetic would round it)."""
     direction, flip = rng.random(2)
     direction = math.pi * (2 * direction - 1)
     sign = 1.0 if flip < 0.5 else -1.0
     x, y, theta = (float(v) for v in pose)
     heading = theta + error * sign
+    if not -math.pi < heading <= math.pi:
+        heading = float(wrap_angle(heading))
     return np.array([
         x + error * math.cos(direction),
         y + error * math.sin(direction),
-        (heading + math.pi) % (2 * math.pi) - math.pi,
+        heading,
     ])
 
 
 @njit(cache=True)
-def candidate_kernel(
-    u, low, high, d_lo, d_hi, hfov, x_lim, y_lim, radius, focal, width, height, cam_height
-):
-    """Start candidates from uniforms ``u`` (P, CANDIDATE_UNIFORMS).
+def candidate_kernel(u, low, high, balls, cam):
+    """Start candidates from uniforms ``u`` (P, CANDIDATE_UNIFORMS); ``balls``, ``cam``: the
+    fields of a :class:`BallDraw` and a ``geometry.kernels.CameraModel``.
 
     Returns ``(found (P,), starts (P, 7))``, rows ``(x, y, theta, pan, tilt, ball_x,
     ball_y)``: the pose and head are ``low + (high - low) * u[:5]``; ball candidate ``j``
@@ -55,6 +76,8 @@ def candidate_kernel(
     (u[5 + n + j] - 0.5)``; the first one with ``|x| <= x_lim``, ``|y| <= y_lim`` and its
     centre in the image is kept.
     """
+    d_lo, d_hi, hfov, x_lim, y_lim, radius = BallDraw(*balls)
+    cam = CameraModel(*cam)
     p, n = u.shape[0], (u.shape[1] - 5) // 2
     found = np.zeros(p, dtype=np.bool_)
     starts = np.zeros((p, 7))
@@ -70,7 +93,7 @@ def candidate_kernel(
             bx = x + dist * math.cos(bearing)
             by = y + dist * math.sin(bearing)
             if abs(bx) <= x_lim and abs(by) <= y_lim and ball_in_image(
-                bx, by, radius, x, y, rot, focal, width, height, cam_height
+                bx, by, radius, x, y, rot, cam
             ):
                 found[i] = True
                 starts[i, 5], starts[i, 6] = bx, by
@@ -88,6 +111,9 @@ def draw_starts(rngs: Sequence[np.random.Generator], cfg: EnvConfig) -> dict[str
     low = np.array([cfg.robot_x_range[0], cfg.robot_y_range[0], -np.pi, cam.pan_min, tilt_lo])
     high = np.array([cfg.robot_x_range[1], cfg.robot_y_range[1], np.pi, cam.pan_max, tilt_hi])
     r = spec.ball_radius
+    d_lo, d_hi = cfg.ball_distance_range
+    balls = tuple(BallDraw(float(d_lo), float(d_hi), float(cam.hfov), spec.half_length - r,
+                           spec.half_width - r, float(r)))
     starts = np.zeros((len(rngs), 7))
     believed = np.zeros((len(rngs), 3))
     pending = np.arange(len(rngs))
@@ -100,11 +126,7 @@ def draw_starts(rngs: Sequence[np.random.Generator], cfg: EnvConfig) -> dict[str
                 "ball": starts[:, 5:],
             }
         u = np.stack([rngs[j].random(CANDIDATE_UNIFORMS) for j in pending])
-        found, candidates = candidate_kernel(
-            u, low, high, *cfg.ball_distance_range, cam.hfov, spec.half_length - r,
-            spec.half_width - r, r, cam.focal, float(cam.width), float(cam.height),
-            cam.camera_height,
-        )
+        found, candidates = candidate_kernel(u, low, high, balls, camera_fields(cam))
         for j, row in zip(pending[found], candidates[found], strict=True):
             starts[j] = row
             believed[j] = corrupt_pose(row[:3], cfg.localisation_error, rngs[j])

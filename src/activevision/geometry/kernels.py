@@ -3,15 +3,44 @@ environment's per-step visibility test, the best-viewpoint search).
 
 They re-implement :mod:`activevision.geometry.camera` and
 :mod:`activevision.geometry.visibility` operation for operation, so the visible masks agree
-exactly (tests/geometry/test_kernels.py checks it on random cameras).
+exactly (tests/geometry/test_kernels.py checks it on random cameras). The camera goes in as a
+:class:`CameraModel` bundle (from Python: a plain tuple of its fields, see
+:func:`camera_fields`).
 """
 
 from __future__ import annotations
 
 import math
+from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
+
+from activevision.geometry.camera import CameraConfig
+from activevision.geometry.landmarks import LandmarkSet
+
+
+class CameraModel(NamedTuple):
+    """The head camera as the kernels see it: a pinhole of ``focal`` px on a
+    ``width`` x ``height`` image, ``cam_height`` m above the ground."""
+
+    focal: float
+    width: float
+    height: float
+    cam_height: float
+
+
+@lru_cache(maxsize=16)
+def camera_fields(cam: CameraConfig) -> tuple[float, float, float, float]:
+    """The fields of ``cam``'s :class:`CameraModel` as a plain tuple, what a kernel called
+    from Python takes: numba types a plain tuple in C but a namedtuple in Python (about
+    2.5 us per call)."""
+    model = CameraModel(
+        float(cam.focal), float(cam.width), float(cam.height), float(cam.camera_height)
+    )
+    return tuple(model)
 
 
 @njit(cache=True)
@@ -24,8 +53,10 @@ def camera_rotation(yaw, tilt, rot):
 
 
 @njit(cache=True)
-def image_halfplanes(x, y, rot, focal, width, height, cam_height, planes):
-    """The four image half-planes on the ground (as ``geometry.camera.image_halfplanes``)."""
+def image_halfplanes(x, y, rot, cam, planes):
+    """The four image half-planes on the ground (as ``geometry.camera.image_halfplanes``) of
+    the :class:`CameraModel` ``cam`` at ``(x, y)`` turned by ``rot``, into ``planes``."""
+    focal, width, height, cam_height = cam
     # M has rows (r_i0, r_i1, t_i) with t = -R c; G = K M, K = [[f, 0, w/2], [0, f, h/2], [0, 0, 1]]
     m = np.empty((3, 3))
     for i in range(3):
@@ -76,8 +107,10 @@ def clip_visible(ax, ay, bx, by, planes, r0, r1):
 
 
 @njit(cache=True)
-def ball_in_image(bx, by, radius, x, y, rot, focal, width, height, cam_height):
-    """Whether the ball centre projects into the image (as ``geometry.visibility.ball_visible``)."""
+def ball_in_image(bx, by, radius, x, y, rot, cam):
+    """Whether the ball centre projects into the image of the :class:`CameraModel` ``cam`` at
+    ``(x, y)`` turned by ``rot`` (as ``geometry.visibility.ball_visible``)."""
+    focal, width, height, cam_height = cam
     r0, r1, r2 = bx - x, by - y, radius - cam_height
     p0 = rot[0, 0] * r0 + rot[0, 1] * r1 + rot[0, 2] * r2
     p1 = rot[1, 0] * r0 + rot[1, 1] * r1 + rot[1, 2] * r2
@@ -90,15 +123,17 @@ def ball_in_image(bx, by, radius, x, y, rot, focal, width, height, cam_height):
 
 
 @njit(cache=True)
-def visibility_kernel(segments, max_distance, poses, pans, tilts, focal, width, height, cam_height):
-    """Visible mask (N, K) of the landmarks for N cameras (for the consistency test)."""
+def visibility_kernel(segments, max_distance, poses, pans, tilts, cam):
+    """Visible mask (N, K) of the landmarks for N cameras (``cam``: the fields of a
+    :class:`CameraModel`)."""
+    cam = CameraModel(*cam)
     n, n_lm = poses.shape[0], segments.shape[0]
     out = np.zeros((n, n_lm), dtype=np.bool_)
     rot = np.empty((3, 3))
     planes = np.empty((4, 3))
     for i in range(n):
         camera_rotation(poses[i, 2] + pans[i], tilts[i], rot)
-        image_halfplanes(poses[i, 0], poses[i, 1], rot, focal, width, height, cam_height, planes)
+        image_halfplanes(poses[i, 0], poses[i, 1], rot, cam, planes)
         for k in range(n_lm):
             ax, ay = segments[k, 0, 0], segments[k, 0, 1]
             bx, by = segments[k, 1, 0], segments[k, 1, 1]
@@ -108,66 +143,54 @@ def visibility_kernel(segments, max_distance, poses, pans, tilts, focal, width, 
 
 
 @njit(cache=True)
-def ball_kernel(balls, poses, pans, tilts, focal, width, height, cam_height, radius):
-    """Ball-visible flags (N,) for N cameras (for the consistency test)."""
+def ball_kernel(balls, poses, pans, tilts, cam, radius):
+    """Ball-visible flags (N,) for N cameras (``cam``: the fields of a
+    :class:`CameraModel`)."""
+    cam = CameraModel(*cam)
     out = np.zeros(poses.shape[0], dtype=np.bool_)
     rot = np.empty((3, 3))
     for i in range(poses.shape[0]):
         camera_rotation(poses[i, 2] + pans[i], tilts[i], rot)
-        out[i] = ball_in_image(
-            balls[i, 0],
-            balls[i, 1],
-            radius,
-            poses[i, 0],
-            poses[i, 1],
-            rot,
-            focal,
-            width,
-            height,
-            cam_height,
-        )
+        out[i] = ball_in_image(balls[i, 0], balls[i, 1], radius, poses[i, 0], poses[i, 1], rot,
+                               cam)
     return out
 
 
-def _per_camera(values, n: int) -> np.ndarray:
+def _per_camera(values: ArrayLike, n: int) -> np.ndarray:
     """``values`` as a contiguous float64 array of length ``n`` (scalars repeated)."""
     out = np.ascontiguousarray(values, dtype=np.float64)
     return out if out.shape == (n,) else np.ascontiguousarray(np.broadcast_to(out, n))
 
 
-def visible_mask(landmarks, pose, pan, tilt, cam) -> np.ndarray:
-    """Compiled :func:`~activevision.geometry.visibility.visible_landmarks` ``.visible``:
-    (N, K) bool for N cameras (no measured points; use the NumPy version for those)."""
+def _cameras(pose: ArrayLike, pan: ArrayLike, tilt: ArrayLike) -> tuple[np.ndarray, ...]:
+    """``(pose (N, 3), pan (N,), tilt (N,))`` as contiguous float64 arrays."""
     pose = np.ascontiguousarray(np.atleast_2d(pose), dtype=np.float64)
     n = len(pose)
+    return pose, _per_camera(pan, n), _per_camera(tilt, n)
+
+
+def visible_mask(
+    landmarks: LandmarkSet, pose: ArrayLike, pan: ArrayLike, tilt: ArrayLike, cam: CameraConfig
+) -> np.ndarray:
+    """Compiled :func:`~activevision.geometry.visibility.visible_landmarks` ``.visible``:
+    (N, K) bool for N cameras (no measured points; use the NumPy version for those)."""
     return visibility_kernel(
-        landmarks.segments,
-        landmarks.max_distance,
-        pose,
-        _per_camera(pan, n),
-        _per_camera(tilt, n),
-        cam.focal,
-        float(cam.width),
-        float(cam.height),
-        cam.camera_height,
+        landmarks.segments, landmarks.max_distance, *_cameras(pose, pan, tilt), camera_fields(cam)
     )
 
 
-def ball_visible_mask(ball_xy, pose, pan, tilt, cam, ball_radius: float) -> np.ndarray:
+def ball_visible_mask(
+    ball_xy: ArrayLike,
+    pose: ArrayLike,
+    pan: ArrayLike,
+    tilt: ArrayLike,
+    cam: CameraConfig,
+    ball_radius: float,
+) -> np.ndarray:
     """Compiled :func:`~activevision.geometry.visibility.ball_visible`: (N,) bool."""
-    pose = np.ascontiguousarray(np.atleast_2d(pose), dtype=np.float64)
-    n = len(pose)
+    poses, pans, tilts = _cameras(pose, pan, tilt)
+    n = len(poses)
     balls = np.ascontiguousarray(ball_xy, dtype=np.float64)
     if balls.shape != (n, 2):
         balls = np.ascontiguousarray(np.broadcast_to(balls, (n, 2)))
-    return ball_kernel(
-        balls,
-        pose,
-        _per_camera(pan, n),
-        _per_camera(tilt, n),
-        cam.focal,
-        float(cam.width),
-        float(cam.height),
-        cam.camera_height,
-        ball_radius,
-    )
+    return ball_kernel(balls, poses, pans, tilts, camera_fields(cam), ball_radius)

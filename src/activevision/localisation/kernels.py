@@ -4,18 +4,27 @@ Scalar re-implementations of exactly what the NumPy reference does -- the camera
 half-planes and Cyrus-Beck clipping of :mod:`activevision.geometry.visibility`, the ball test
 of :func:`activevision.geometry.visibility.ball_visible`, and :func:`ukf_update` -- written
 operation for operation in the same order, so the visibility masks agree exactly and the
-entropies to rounding (tests/localisation/test_kernels.py checks both). Nothing here is
+entropies to rounding (tests/localisation/test_viewpoint.py checks both). Nothing here is
 public API; :mod:`activevision.localisation.viewpoint` wraps it.
+
+The kernels take small typed bundles (numba namedtuples, below) instead of long argument
+lists; the entry points :func:`search_kernel` and :func:`search_kernel_parallel` are handed
+each as a plain tuple of its fields (``tuple(bundle)``; numba types a plain tuple in C but a
+namedtuple in Python, which costs microseconds per call) and rebuild it inside. Headings are
+wrapped by :func:`activevision.geometry.angles.wrap_angle`, the package's one convention.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
+from activevision.geometry.angles import wrap_angle as wrap
 from activevision.geometry.kernels import (
+    CameraModel,
     ball_in_image,
     camera_rotation,
     clip_visible,
@@ -23,8 +32,6 @@ from activevision.geometry.kernels import (
     range_interval,
 )
 
-PI = math.pi
-TWO_PI = 2.0 * math.pi
 LOG_2PIE = math.log(2.0 * math.pi * math.e)
 
 #: error codes written by :func:`search_kernel`
@@ -32,13 +39,70 @@ OK = 0
 NOT_PD = 1
 
 
-@njit(cache=True)
-def wrap(a):
-    """``a`` wrapped to ``(-pi, pi]`` (same arithmetic as ``angles.wrap_angle``)."""
-    w = PI - ((PI - a) % TWO_PI)
-    if w <= -PI:
-        w += TWO_PI
-    return w
+class Starts(NamedTuple):
+    """The N beliefs searched from, and the ball each must keep in view."""
+
+    means: np.ndarray  #: (N, 3) believed poses (x, y, theta)
+    covs: np.ndarray  #: (N, 3, 3) their covariances
+    balls: np.ndarray  #: (N, 2) ball positions on the ground
+    ball_radius: float
+
+
+class Landmarks(NamedTuple):
+    """The K landmarks (the arrays of a ``geometry.LandmarkSet``) and the noise model of
+    their detections."""
+
+    segments: np.ndarray  #: (K, 2, 2) end points; a point landmark has both equal
+    max_distance: np.ndarray  #: (K,) detection range (m)
+    types: np.ndarray  #: (K,) LandmarkType values: rows of ``noise``
+    noise: np.ndarray  #: (T, 3) range base (m), range fraction, bearing (rad) std per type
+
+
+class SigmaWeights(NamedTuple):
+    """The UKF's sigma-point weights."""
+
+    Wm: np.ndarray  #: (7,) mean weights
+    Wc: np.ndarray  #: (7,) covariance weights
+    n_lambda: float  #: n + lambda, the spread of the sigma points
+
+
+class Views(NamedTuple):
+    """The V candidate head positions."""
+
+    pans: np.ndarray  #: (V,)
+    tilts: np.ndarray  #: (V,)
+    ball_views_only: bool  #: skip the filter for views that miss the ball
+
+
+class Plan(NamedTuple):
+    """What each start expects of each landmark (:func:`plan_starts`), each (N, K) but
+    ``zs``."""
+
+    zs: np.ndarray  #: (N, K, 2) expected detection (range, bearing) from the mean
+    var_r: np.ndarray  #: its range variance
+    var_b: np.ndarray  #: its bearing variance
+    in_range: np.ndarray  #: whether some part of the landmark is within range
+    r_lo: np.ndarray  #: that part: segment parameters [r_lo, r_hi]
+    r_hi: np.ndarray
+    order: np.ndarray  #: (N, K) landmarks by expected range, closest first (ties by id)
+
+
+class SearchOutput(NamedTuple):
+    """The results of a search, each (N, V, ...)."""
+
+    entropies: np.ndarray  #: (N, V) entropy of the expected posterior (NaN: skipped or error)
+    ball_visible: np.ndarray  #: (N, V) whether the view shows the ball
+    visible: np.ndarray  #: (N, V, K) landmarks in view
+    posteriors: np.ndarray  #: (N, V, 3, 3) expected posterior covariances
+    errors: np.ndarray  #: (N, V) int8: OK, or NOT_PD where a covariance lost definiteness
+
+
+class UKFScratch(NamedTuple):
+    """Scratch of :func:`ukf_update_rb` (one per thread)."""
+
+    L: np.ndarray  #: (3, 3) Cholesky factor
+    sig: np.ndarray  #: (7, 3) sigma points
+    hz: np.ndarray  #: (7, 2) their expected detections
 
 
 @njit(cache=True)
@@ -91,11 +155,18 @@ def expected_rb(px, py, pth, ax, ay, bx, by):
 
 
 @njit(cache=True)
-def ukf_update_rb(x, P, z0, z1, ax, ay, bx, by, var_r, var_b, Wm, Wc, n_lambda, L, sig, hz):
+def ukf_update_rb(x, P, z, segment, noise, weights, scratch):
     """One UKF range-bearing update of ``x`` (3,) and ``P`` (3, 3) in place (as
-    ``ukf.ukf_update``). ``L``, ``sig`` (7, 3), ``hz`` (7, 2) are scratch. False if a
+    ``ukf.ukf_update``) by the detection ``z = (range, bearing)`` of the landmark ``segment =
+    (ax, ay, bx, by)`` with variances ``noise = (var_r, var_b)``, with the
+    :class:`SigmaWeights` ``weights`` and the :class:`UKFScratch` ``scratch``. False if a
     covariance is not positive definite."""
-    A = n_lambda * P
+    z0, z1 = z
+    ax, ay, bx, by = segment
+    var_r, var_b = noise
+    Wm, Wc = weights.Wm, weights.Wc
+    L, sig, hz = scratch
+    A = weights.n_lambda * P
     if not chol3(A, L):
         return False
     for j in range(3):
@@ -163,182 +234,109 @@ def ukf_update_rb(x, P, z0, z1, ax, ay, bx, by, var_r, var_b, Wm, Wc, n_lambda, 
 
 
 @njit(cache=True)
-def plan_start(mx, my, mth, segments, max_distance, types, noise_table, zs, var_r, var_b,
-               in_range, r_lo, r_hi):
-    """Planning for one believed pose: the expected detection ``z = h(mu)`` of every
-    landmark, its noise and range interval, written into the given rows; returns the
-    landmark order (closest first, ties by id)."""
+def plan_start(s, means, landmarks, plan):
+    """Planning for start ``s`` (believed pose ``means[s]``): the expected detection ``z =
+    h(mu)`` of every landmark, its noise and range interval, and the landmark order (closest
+    first, ties by id), into row ``s`` of the :class:`Plan` ``plan``."""
+    mx, my, mth = means[s, 0], means[s, 1], means[s, 2]
+    segments, noise = landmarks.segments, landmarks.noise
     for k in range(segments.shape[0]):
-        r, b = expected_rb(
-            mx,
-            my,
-            mth,
-            segments[k, 0, 0],
-            segments[k, 0, 1],
-            segments[k, 1, 0],
-            segments[k, 1, 1],
+        ax, ay = segments[k, 0, 0], segments[k, 0, 1]
+        bx, by = segments[k, 1, 0], segments[k, 1, 1]
+        r, b = expected_rb(mx, my, mth, ax, ay, bx, by)
+        plan.zs[s, k, 0], plan.zs[s, k, 1] = r, b
+        plan.in_range[s, k], plan.r_lo[s, k], plan.r_hi[s, k] = range_interval(
+            ax, ay, bx, by, mx, my, landmarks.max_distance[k]
         )
-        zs[k, 0], zs[k, 1] = r, b
-        in_range[k], r_lo[k], r_hi[k] = range_interval(
-            segments[k, 0, 0],
-            segments[k, 0, 1],
-            segments[k, 1, 0],
-            segments[k, 1, 1],
-            mx,
-            my,
-            max_distance[k],
-        )
-        t = types[k]
-        sr = noise_table[t, 0] + noise_table[t, 1] * r
-        var_r[k] = sr * sr
-        var_b[k] = noise_table[t, 2] * noise_table[t, 2]
-    return np.argsort(zs[:, 0], kind="mergesort")
+        t = landmarks.types[k]
+        sr = noise[t, 0] + noise[t, 1] * r
+        plan.var_r[s, k] = sr * sr
+        plan.var_b[s, k] = noise[t, 2] * noise[t, 2]
+    plan.order[s] = np.argsort(plan.zs[s, :, 0], kind="mergesort")
 
 
 @njit(cache=True)
-def plan_starts(means, segments, max_distance, types, noise_table):
-    """:func:`plan_start` for every start: ``(zs (N, K, 2), var_r, var_b, in_range, r_lo,
-    r_hi, order)``, each (N, K) but ``zs``."""
-    n_starts, n_lm = means.shape[0], segments.shape[0]
-    zs = np.empty((n_starts, n_lm, 2))
-    var_r = np.empty((n_starts, n_lm))
-    var_b = np.empty((n_starts, n_lm))
-    in_range = np.empty((n_starts, n_lm), dtype=np.bool_)
-    r_lo = np.empty((n_starts, n_lm))
-    r_hi = np.empty((n_starts, n_lm))
-    order = np.empty((n_starts, n_lm), dtype=np.int64)
+def plan_starts(means, landmarks):
+    """:func:`plan_start` for every start: the :class:`Plan`."""
+    n_starts, n_lm = means.shape[0], landmarks.segments.shape[0]
+    plan = Plan(
+        np.empty((n_starts, n_lm, 2)),
+        np.empty((n_starts, n_lm)),
+        np.empty((n_starts, n_lm)),
+        np.empty((n_starts, n_lm), dtype=np.bool_),
+        np.empty((n_starts, n_lm)),
+        np.empty((n_starts, n_lm)),
+        np.empty((n_starts, n_lm), dtype=np.int64),
+    )
     for s in range(n_starts):
-        order[s] = plan_start(
-            means[s, 0],
-            means[s, 1],
-            means[s, 2],
-            segments,
-            max_distance,
-            types,
-            noise_table,
-            zs[s],
-            var_r[s],
-            var_b[s],
-            in_range[s],
-            r_lo[s],
-            r_hi[s],
-        )
-    return zs, var_r, var_b, in_range, r_lo, r_hi, order
+        plan_start(s, means, landmarks, plan)
+    return plan
 
 
 @njit(cache=True)
-def search_block(
-    block,
-    n_blocks,
-    means,
-    covs,
-    balls,
-    segments,
-    pans,
-    tilts,
-    focal,
-    width,
-    height,
-    cam_height,
-    ball_radius,
-    Wm,
-    Wc,
-    n_lambda,
-    plan,
-    entropies,
-    ball_vis,
-    visible,
-    post,
-    errors,
-    ball_views_only,
-):
+def search_block(block, n_blocks, starts, landmarks, weights, views, camera, plan, out):
     """Block ``block`` of ``n_blocks`` contiguous blocks of the N x V (start, view) pairs:
     ball test, visible landmarks and the sequential UKF updates of each pair (Algorithm 1,
-    lines 3-8), written into the output arrays. Pairs are independent, so blocks can run on
-    different threads. With ``ball_views_only``, pairs whose view misses the ball (never a
-    goal) skip the filter: entropy and posterior NaN, no visible landmarks."""
-    zs, var_r, var_b, in_range, r_lo, r_hi, order = plan
-    n_views, n_lm = pans.shape[0], segments.shape[0]
+    lines 3-8), written into the :class:`SearchOutput` ``out``. Pairs are independent, so
+    blocks can run on different threads. With ``views.ball_views_only``, pairs whose view
+    misses the ball (never a goal) skip the filter: entropy and posterior NaN, no visible
+    landmarks."""
+    means, segments = starts.means, landmarks.segments
+    n_views, n_lm = views.pans.shape[0], segments.shape[0]
     n_items = means.shape[0] * n_views
     rot = np.empty((3, 3))
     planes = np.empty((4, 3))
-    L = np.empty((3, 3))
-    sig = np.empty((7, 3))
-    hz = np.empty((7, 2))
     x = np.empty(3)
+    scratch = UKFScratch(np.empty((3, 3)), np.empty((7, 3)), np.empty((7, 2)))
+    L = scratch.L
     for item in range(block * n_items // n_blocks, (block + 1) * n_items // n_blocks):
         s = item // n_views
         v = item - s * n_views
         mx, my, mth = means[s, 0], means[s, 1], means[s, 2]
-        camera_rotation(mth + pans[v], tilts[v], rot)
-        image_halfplanes(mx, my, rot, focal, width, height, cam_height, planes)
-        ball_vis[s, v] = ball_in_image(
-            balls[s, 0],
-            balls[s, 1],
-            ball_radius,
-            mx,
-            my,
-            rot,
-            focal,
-            width,
-            height,
-            cam_height,
+        camera_rotation(mth + views.pans[v], views.tilts[v], rot)
+        image_halfplanes(mx, my, rot, camera, planes)
+        out.ball_visible[s, v] = ball_in_image(
+            starts.balls[s, 0], starts.balls[s, 1], starts.ball_radius, mx, my, rot, camera
         )
-        P = post[s, v]
-        if ball_views_only and not ball_vis[s, v]:
-            entropies[s, v] = np.nan
+        P = out.posteriors[s, v]
+        if views.ball_views_only and not out.ball_visible[s, v]:
+            out.entropies[s, v] = np.nan
             P[:, :] = np.nan
             continue
-        P[:, :] = covs[s]
+        P[:, :] = starts.covs[s]
         x[0], x[1], x[2] = mx, my, mth
         ok = chol3(P, L)
         for j in range(n_lm):
-            k = order[s, j]
+            k = plan.order[s, j]
             if not ok:
                 break
+            segment = (segments[k, 0, 0], segments[k, 0, 1], segments[k, 1, 0], segments[k, 1, 1])
             if not (
-                in_range[s, k]
-                and clip_visible(
-                    segments[k, 0, 0],
-                    segments[k, 0, 1],
-                    segments[k, 1, 0],
-                    segments[k, 1, 1],
-                    planes,
-                    r_lo[s, k],
-                    r_hi[s, k],
-                )
+                plan.in_range[s, k]
+                and clip_visible(*segment, planes, plan.r_lo[s, k], plan.r_hi[s, k])
             ):
                 continue
-            visible[s, v, k] = True
+            out.visible[s, v, k] = True
             ok = ukf_update_rb(
                 x,
                 P,
-                zs[s, k, 0],
-                zs[s, k, 1],
-                segments[k, 0, 0],
-                segments[k, 0, 1],
-                segments[k, 1, 0],
-                segments[k, 1, 1],
-                var_r[s, k],
-                var_b[s, k],
-                Wm,
-                Wc,
-                n_lambda,
-                L,
-                sig,
-                hz,
+                (plan.zs[s, k, 0], plan.zs[s, k, 1]),
+                segment,
+                (plan.var_r[s, k], plan.var_b[s, k]),
+                weights,
+                scratch,
             )
         if ok:
-            entropies[s, v] = 0.5 * (3 * LOG_2PIE) + math.log(L[0, 0] * L[1, 1] * L[2, 2])
+            out.entropies[s, v] = 0.5 * (3 * LOG_2PIE) + math.log(L[0, 0] * L[1, 1] * L[2, 2])
         else:
-            entropies[s, v] = np.nan
-            errors[s, v] = NOT_PD
+            out.entropies[s, v] = np.nan
+            out.errors[s, v] = NOT_PD
 
 
 @njit(cache=True)
 def search_outputs(n_starts, n_views, n_lm):
-    """Empty ``(entropies, ball_visible, visible, posteriors, errors)`` of a search."""
-    return (
+    """An empty :class:`SearchOutput` of a search."""
+    return SearchOutput(
         np.empty((n_starts, n_views)),
         np.zeros((n_starts, n_views), dtype=np.bool_),
         np.zeros((n_starts, n_views, n_lm), dtype=np.bool_),
@@ -348,68 +346,33 @@ def search_outputs(n_starts, n_views, n_lm):
 
 
 @njit(cache=True)
-def search_kernel(
-    means,
-    covs,
-    balls,
-    segments,
-    max_distance,
-    types,
-    noise_table,
-    pans,
-    tilts,
-    focal,
-    width,
-    height,
-    cam_height,
-    ball_radius,
-    Wm,
-    Wc,
-    n_lambda,
-    ball_views_only,
-):
-    """Algorithm 1 for N starts and V candidate views, on the calling thread.
+def search_kernel(starts, landmarks, weights, views, camera):
+    """Algorithm 1 for N starts and V candidate views, on the calling thread. Arguments: the
+    fields of a :class:`Starts`, :class:`Landmarks`, :class:`SigmaWeights`, :class:`Views` and
+    ``geometry.kernels.CameraModel``.
 
-    Returns ``(entropies (N, V), ball_visible (N, V), visible (N, V, K), posterior covariances
-    (N, V, 3, 3), errors (N, V))``; ``errors`` is :data:`NOT_PD` where a covariance lost
-    positive definiteness (the caller raises). ``ball_views_only``: see :func:`search_block`.
-    """
-    out = search_outputs(means.shape[0], pans.shape[0], segments.shape[0])
-    plan = plan_starts(means, segments, max_distance, types, noise_table)
-    search_block(0, 1, means, covs, balls, segments, pans, tilts, focal, width, height,
-                 cam_height, ball_radius, Wm, Wc, n_lambda, plan, *out, ball_views_only)
+    Returns the :class:`SearchOutput`; its ``errors`` are :data:`NOT_PD` where a covariance
+    lost positive definiteness (the caller raises)."""
+    starts, landmarks, weights = Starts(*starts), Landmarks(*landmarks), SigmaWeights(*weights)
+    views, camera = Views(*views), CameraModel(*camera)
+    out = search_outputs(starts.means.shape[0], views.pans.shape[0], landmarks.segments.shape[0])
+    plan = plan_starts(starts.means, landmarks)
+    search_block(0, 1, starts, landmarks, weights, views, camera, plan, out)
     return out
 
 
 @njit(cache=True, parallel=True)
-def search_kernel_parallel(
-    means,
-    covs,
-    balls,
-    segments,
-    max_distance,
-    types,
-    noise_table,
-    pans,
-    tilts,
-    focal,
-    width,
-    height,
-    cam_height,
-    ball_radius,
-    Wm,
-    Wc,
-    n_lambda,
-    ball_views_only,
-    n_blocks,
-):
+def search_kernel_parallel(starts, landmarks, weights, views, camera, n_blocks):
     """:func:`search_kernel` with the (start, view) pairs split into ``n_blocks`` blocks
     spread over the numba threads (identical results)."""
-    out = search_outputs(means.shape[0], pans.shape[0], segments.shape[0])
-    plan = plan_starts(means, segments, max_distance, types, noise_table)
-    n_blocks = max(1, min(n_blocks, means.shape[0] * pans.shape[0]))
+    # Every bundle is made by its class right here: numba's parfor lowering finds the class
+    # of a namedtuple used in a prange body only from the call that made it.
+    starts, landmarks, weights = Starts(*starts), Landmarks(*landmarks), SigmaWeights(*weights)
+    views, camera = Views(*views), CameraModel(*camera)
+    n_starts, n_views = starts.means.shape[0], views.pans.shape[0]
+    out = SearchOutput(*search_outputs(n_starts, n_views, landmarks.segments.shape[0]))
+    plan = Plan(*plan_starts(starts.means, landmarks))
+    n_blocks = max(1, min(n_blocks, n_starts * n_views))
     for block in prange(n_blocks):
-        search_block(block, n_blocks, means, covs, balls, segments, pans, tilts, focal, width,
-                     height, cam_height, ball_radius, Wm, Wc, n_lambda, plan, *out,
-                     ball_views_only)
+        search_block(block, n_blocks, starts, landmarks, weights, views, camera, plan, out)
     return out

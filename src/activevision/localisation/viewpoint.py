@@ -26,9 +26,11 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from activevision.geometry.camera import CameraConfig, footprint_polygon
 from activevision.geometry.field import LandmarkType
+from activevision.geometry.kernels import camera_fields
 from activevision.geometry.landmarks import LandmarkSet
 from activevision.geometry.visibility import ball_visible, visible_landmarks
 from activevision.localisation import kernels
@@ -193,10 +195,44 @@ def _noise_table(ukf: UKFConfig) -> np.ndarray:
     return table
 
 
+def search_args(
+    means: np.ndarray,
+    covs: np.ndarray,
+    balls: np.ndarray,
+    landmarks: LandmarkSet,
+    cam: CameraConfig,
+    grid: ViewpointGrid,
+    ukf: UKFConfig,
+    ball_radius: float,
+    ball_views_only: bool,
+) -> tuple[tuple, ...]:
+    """The bundles of :func:`kernels.search_kernel` (``Starts``, ``Landmarks``,
+    ``SigmaWeights``, ``Views``, ``CameraModel``) for contiguous float64 ``means`` (N, 3),
+    ``covs`` (N, 3, 3) and ``balls`` (N, 2), each as the plain tuple of its fields."""
+    Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
+    bundles = (
+        kernels.Starts(means, covs, balls, float(ball_radius)),
+        kernels.Landmarks(
+            landmarks.segments, landmarks.max_distance, landmarks.types, _noise_table(ukf)
+        ),
+        kernels.SigmaWeights(Wm, Wc, ukf.n + ukf.lambda_),
+        kernels.Views(grid.pans, grid.tilts, bool(ball_views_only)),
+    )
+    return (*map(tuple, bundles), camera_fields(cam))
+
+
 def _search(
-    means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel=False,
-    ball_views_only=False,
-):
+    means: ArrayLike,
+    covs: ArrayLike,
+    balls: ArrayLike,
+    landmarks: LandmarkSet,
+    cam: CameraConfig,
+    grid: ViewpointGrid,
+    ukf: UKFConfig,
+    ball_radius: float,
+    parallel: bool = False,
+    ball_views_only: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Validate and run the compiled search: ``(entropies, ball_visible, visible, post)``."""
     means = np.ascontiguousarray(np.atleast_2d(means), dtype=np.float64)
     n = len(means)
@@ -204,27 +240,8 @@ def _search(
     balls = np.ascontiguousarray(np.broadcast_to(balls, (n, 2)), dtype=np.float64)
     if np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
         raise ValueError("best viewpoint search: belief covariances must be symmetric")
-    Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
-    args = (
-        means,
-        covs,
-        balls,
-        landmarks.segments,
-        landmarks.max_distance,
-        landmarks.types,
-        _noise_table(ukf),
-        grid.pans,
-        grid.tilts,
-        cam.focal,
-        float(cam.width),
-        float(cam.height),
-        cam.camera_height,
-        float(ball_radius),
-        Wm,
-        Wc,
-        ukf.n + ukf.lambda_,
-        ball_views_only,
-    )
+    args = search_args(means, covs, balls, landmarks, cam, grid, ukf, ball_radius,
+                       ball_views_only)
     threads = numba_threads() if parallel and n > 1 else 1  # serial: never start the pool
     if threads > 1:
         # a few blocks per thread evens out views that see many landmarks
@@ -382,19 +399,3 @@ class LocalisationConfig:
 
     grid: ViewpointGrid = DEFAULT_GRID  #: 10 x 4 candidates (paper)
     ukf: UKFConfig = DEFAULT_UKF  #: sensor model and start belief
-
-
-__all__ = [
-    "DEFAULT_GRID",
-    "LocalisationConfig",
-    "NotPositiveDefiniteError",
-    "ViewpointBatch",
-    "ViewpointGrid",
-    "ViewpointResult",
-    "ViewpointStatus",
-    "best_viewpoint",
-    "best_viewpoint_loop",
-    "best_viewpoints",
-    "candidate_footprints",
-    "choose_goal",
-]
