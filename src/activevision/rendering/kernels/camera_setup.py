@@ -34,13 +34,15 @@ def setup_camera(n, scene, params, cams, work):
     optics = Optics(params.focal, params.cx, params.cy, params.width, params.height)
     quad_edges = work.quad_edges[n]
     quad_rows = work.quad_rows[n]
-    n_paint = scene.paint_quads.shape[0]
-    n_posts = scene.posts.shape[0]
-    n_bars = scene.bars.shape[0]
+    # bundle fields into locals once: reading an array field counts a reference to it
+    paint_quads, carpet, polygons, posts, bars = scene
+    n_paint = paint_quads.shape[0]
+    n_posts = posts.shape[0]
+    n_bars = bars.shape[0]
 
     # painted quads, then the carpet
     for q in range(n_paint + 1):
-        src = scene.paint_quads[q] if q < n_paint else scene.carpet
+        src = paint_quads[q] if q < n_paint else carpet
         for k in range(4):
             _to_camera(rot, cam, src[k, 0], src[k, 1], 0.0, pts[k])
         polygon_edges_and_rows(pts, 4, optics, quad_edges[q], quad_rows[q], clip)
@@ -50,15 +52,14 @@ def setup_camera(n, scene, params, cams, work):
         edges = quad_edges[n_paint + 1 + o]
         rows = quad_rows[n_paint + 1 + o]
         if o < n_posts:
-            drawn = _post_quad(scene.posts[o], optics, view, edges, rows)
+            drawn = _post_quad(posts[o], optics, view, edges, rows)
         else:
-            drawn = _bar_quad(scene.bars[o - n_posts], optics, view, edges, rows)
+            drawn = _bar_quad(bars[o - n_posts], optics, view, edges, rows)
         if not drawn:  # the camera is inside the cylinder
             store_empty(edges, 4, rows)
 
     # Centre circle: the outer polygon bounds the rows and columns to shade, the inner one
     # marks pixels certainly inside the hole.
-    polygons = scene.ring_polygons
     n_sides = polygons.shape[1]
     for o in range(2):
         for k in range(n_sides):
@@ -114,8 +115,6 @@ def setup_camera(n, scene, params, cams, work):
     ball_box[3] = j1
 
     # Objects far to near (painter's order): posts, crossbars, ball.
-    posts = scene.posts
-    bars = scene.bars
     n_objects = n_posts + n_bars + 1
     keys = work.keys[n]
     order = work.object_order[n]
