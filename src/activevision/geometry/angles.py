@@ -24,7 +24,7 @@ TWO_PI = 2.0 * math.pi
 
 
 @vectorize(["float64(float64)"], cache=True, nopython=True)
-def wrap_angle(angle):
+def wrap_angle(angle: float) -> float:
     """``angle`` (rad) wrapped to ``(-pi, pi]``."""
     wrapped = PI - ((PI - angle) % TWO_PI)
     # the modulo can round up to exactly 2 pi for tiny negative inputs: keep it half-open

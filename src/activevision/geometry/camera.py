@@ -21,6 +21,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from activevision.typecheck import check_dataclass_fields
 
@@ -76,23 +77,26 @@ class CameraConfig:
         return np.array([[f, 0, self.width / 2], [0, f, self.height / 2], [0, 0, 1.0]])
 
 
-def head_in_limits(pan, tilt, cam: CameraConfig) -> np.ndarray:
+def head_in_limits(pan: npt.ArrayLike, tilt: npt.ArrayLike, cam: CameraConfig) -> np.ndarray:
     """True where the head angles lie within the (closed) limits."""
     pan, tilt = np.asarray(pan), np.asarray(tilt)
-    return (
+    inside: np.ndarray = (
         (pan >= cam.pan_min)
         & (pan <= cam.pan_max)
         & (tilt >= cam.tilt_min)
         & (tilt <= cam.tilt_max)
     )
+    return inside
 
 
-def clip_head(pan, tilt, cam: CameraConfig) -> tuple[np.ndarray, np.ndarray]:
+def clip_head(
+    pan: npt.ArrayLike, tilt: npt.ArrayLike, cam: CameraConfig
+) -> tuple[np.ndarray, np.ndarray]:
     """Head angles clipped to the limits."""
     return np.clip(pan, cam.pan_min, cam.pan_max), np.clip(tilt, cam.tilt_min, cam.tilt_max)
 
 
-def world_to_camera_rotation(yaw, tilt) -> np.ndarray:
+def world_to_camera_rotation(yaw: npt.ArrayLike, tilt: npt.ArrayLike) -> np.ndarray:
     """Rotation (..., 3, 3) whose rows are the camera's right, down and forward axes in
     world coordinates, for a camera looking along ``yaw`` and pitched ``tilt`` down."""
     yaw, tilt = np.broadcast_arrays(np.asarray(yaw, float), np.asarray(tilt, float))
@@ -104,7 +108,7 @@ def world_to_camera_rotation(yaw, tilt) -> np.ndarray:
     return np.stack([right, down, forward], axis=-2)
 
 
-def camera_centre(pose, cam: CameraConfig) -> np.ndarray:
+def camera_centre(pose: npt.ArrayLike, cam: CameraConfig) -> np.ndarray:
     """Camera optical centres (..., 3) in world coordinates."""
     pose = np.asarray(pose, float)
     return np.concatenate(
@@ -112,7 +116,13 @@ def camera_centre(pose, cam: CameraConfig) -> np.ndarray:
     )
 
 
-def project_points(points, pose, pan, tilt, cam: CameraConfig):
+def project_points(
+    points: npt.ArrayLike,
+    pose: npt.ArrayLike,
+    pan: npt.ArrayLike,
+    tilt: npt.ArrayLike,
+    cam: CameraConfig,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Project world points into N cameras.
 
     Args:
@@ -136,22 +146,33 @@ def project_points(points, pose, pan, tilt, cam: CameraConfig):
     return uv, depth, in_image
 
 
-def ground_to_pixel_homography(pose, pan, tilt, cam: CameraConfig) -> np.ndarray:
+def ground_to_pixel_homography(
+    pose: npt.ArrayLike, pan: npt.ArrayLike, tilt: npt.ArrayLike, cam: CameraConfig
+) -> np.ndarray:
     """Homographies (N, 3, 3) taking ground points ``(x, y, 1)`` to homogeneous pixels
     ``(u w, v w, w)``, where ``w`` is the depth (positive in front of the camera)."""
     pose = np.atleast_2d(np.asarray(pose, float))
     rot = world_to_camera_rotation(pose[:, 2] + np.asarray(pan), np.asarray(tilt))
     t = -np.einsum("nij,nj->ni", rot, camera_centre(pose, cam))
     m = np.stack([rot[:, :, 0], rot[:, :, 1], t], axis=-1)
-    return np.einsum("ij,njk->nik", cam.intrinsics(), m)
+    homography: np.ndarray = np.einsum("ij,njk->nik", cam.intrinsics(), m)
+    return homography
 
 
-def pixel_to_ground_homography(pose, pan, tilt, cam: CameraConfig) -> np.ndarray:
+def pixel_to_ground_homography(
+    pose: npt.ArrayLike, pan: npt.ArrayLike, tilt: npt.ArrayLike, cam: CameraConfig
+) -> np.ndarray:
     """Inverse homographies (N, 3, 3): pixel ``(u, v, 1)`` to homogeneous ground points."""
     return np.linalg.inv(ground_to_pixel_homography(pose, pan, tilt, cam))
 
 
-def pixel_to_ground(uv, pose, pan, tilt, cam: CameraConfig):
+def pixel_to_ground(
+    uv: npt.ArrayLike,
+    pose: npt.ArrayLike,
+    pan: npt.ArrayLike,
+    tilt: npt.ArrayLike,
+    cam: CameraConfig,
+) -> tuple[np.ndarray, np.ndarray]:
     """Back-project pixels to the ground plane.
 
     Args:
@@ -182,7 +203,9 @@ def pixel_to_ground(uv, pose, pan, tilt, cam: CameraConfig):
     return xy, valid
 
 
-def image_halfplanes(pose, pan, tilt, cam: CameraConfig) -> np.ndarray:
+def image_halfplanes(
+    pose: npt.ArrayLike, pan: npt.ArrayLike, tilt: npt.ArrayLike, cam: CameraConfig
+) -> np.ndarray:
     """The image as four half-planes on the ground: (N, 4, 3) rows ``(a, b, c)`` such that
     a ground point ``(x, y)`` projects inside the image iff ``a x + b y + c >= 0`` for all
     four rows (left, right, top, bottom border). Together they also imply depth > 0."""
@@ -192,7 +215,12 @@ def image_halfplanes(pose, pan, tilt, cam: CameraConfig) -> np.ndarray:
 
 
 def footprint_polygon(
-    pose, pan, tilt, cam: CameraConfig, max_distance: float = 4.0, points_per_side: int = 16
+    pose: npt.ArrayLike,
+    pan: npt.ArrayLike,
+    tilt: npt.ArrayLike,
+    cam: CameraConfig,
+    max_distance: float = 4.0,
+    points_per_side: int = 16,
 ) -> np.ndarray:
     """The ground seen by each camera, up to ``max_distance`` (horizontal, from the robot).
 
@@ -229,4 +257,5 @@ def footprint_polygon(
         dist = np.where(hits, cam.camera_height * horiz / -rays[..., 2], np.inf)
     dist = np.minimum(dist, max_distance)
     direction = rays[..., :2] / np.maximum(horiz, 1e-12)[..., None]
-    return pose[:, None, :2] + dist[..., None] * direction
+    polygon: np.ndarray = pose[:, None, :2] + dist[..., None] * direction
+    return polygon

@@ -84,12 +84,13 @@ class FieldSpec:
             ("centre_circle_diameter", self.centre_circle_diameter, min(self.length, self.width)),
             ("line_width", self.line_width, self.goal_area_length),
         ]
-        if self.penalty_area_length is not None:
+        pa_length, pa_width = self.penalty_area_length, self.penalty_area_width
+        if pa_length is not None and pa_width is not None:  # both or neither (checked above)
             checks += [
-                ("penalty_area_width", self.penalty_area_width, self.width),
-                ("penalty_area_length", self.penalty_area_length, self.length / 2),
-                ("goal_area_length", self.goal_area_length, self.penalty_area_length),
-                ("goal_area_width", self.goal_area_width, self.penalty_area_width),
+                ("penalty_area_width", pa_width, self.width),
+                ("penalty_area_length", pa_length, self.length / 2),
+                ("goal_area_length", self.goal_area_length, pa_length),
+                ("goal_area_width", self.goal_area_width, pa_width),
             ]
         for name, value, limit in checks:
             if value >= limit:

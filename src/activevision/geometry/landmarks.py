@@ -34,13 +34,19 @@ class LandmarkSet:
 
     @property
     def is_point(self) -> np.ndarray:
-        return np.all(self.segments[:, 0] == self.segments[:, 1], axis=1)
+        is_point: np.ndarray = np.all(self.segments[:, 0] == self.segments[:, 1], axis=1)
+        return is_point
 
     def count_by_type(self) -> dict[LandmarkType, int]:
         return {t: int(np.sum(self.types == t)) for t in LandmarkType}
 
 
-def _goal_end_features(spec: FieldSpec, s: float):
+def _goal_end_features(
+    spec: FieldSpec, s: float
+) -> tuple[
+    list[tuple[str, LandmarkType, tuple[float, float]]],
+    list[tuple[str, tuple[float, float], tuple[float, float]]],
+]:
     """Points and lines at the goal end with sign ``s`` (+1: +x goal)."""
     hl, hw = spec.half_length, spec.half_width
     side = "+x" if s > 0 else "-x"
@@ -79,16 +85,17 @@ def _goal_end_features(spec: FieldSpec, s: float):
     )
     lines.append((f"goal_line{side}", (s * hl, -hw), (s * hl, hw)))
     boxes = [("goal_area", spec.goal_area_length, spec.goal_area_width)]
-    if spec.penalty_area_length is not None:
-        boxes.append(("penalty_area", spec.penalty_area_length, spec.penalty_area_width))
+    pa_length, pa_width = spec.penalty_area_length, spec.penalty_area_width
+    if pa_length is not None and pa_width is not None:  # FieldSpec: both or neither
+        boxes.append(("penalty_area", pa_length, pa_width))
         for sy in (1.0, -1.0):
             y = "+y" if sy > 0 else "-y"
-            half = spec.penalty_area_width / 2
+            half = pa_width / 2
             pts.append(
                 (
                     f"penalty_area_corner{side}{y}",
                     LandmarkType.L_CORNER,
-                    (s * (hl - spec.penalty_area_length), sy * half),
+                    (s * (hl - pa_length), sy * half),
                 )
             )
             pts.append((f"penalty_area_t{side}{y}", LandmarkType.T_JUNCTION, (s * hl, sy * half)))

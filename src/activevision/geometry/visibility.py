@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from activevision.geometry.camera import CameraConfig, image_halfplanes, project_points
 from activevision.geometry.landmarks import LandmarkSet
@@ -25,7 +26,9 @@ class Visibility:
     points: np.ndarray  #: (N, K, 2) measured ground point of each landmark (NaN if unseen)
 
 
-def clip_segments(segments, halfplanes, centre, max_distance):
+def clip_segments(
+    segments: np.ndarray, halfplanes: np.ndarray, centre: np.ndarray, max_distance: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Parameter interval ``[t0, t1]`` of each segment ``a + t (b - a)``, ``t`` in [0, 1],
     inside all half-planes and within ``max_distance`` of ``centre``.
 
@@ -65,17 +68,26 @@ def clip_segments(segments, halfplanes, centre, max_distance):
     return np.where(empty, np.inf, t0), np.where(empty, -np.inf, t1)
 
 
-def closest_points(segments, centre, t0, t1):
+def closest_points(
+    segments: np.ndarray, centre: np.ndarray, t0: np.ndarray, t1: np.ndarray
+) -> np.ndarray:
     """Point of each clipped segment ``[t0, t1]`` closest to ``centre``: (N, K, 2)."""
     a, b = segments[:, 0], segments[:, 1]
     d = b - a
     qa = np.sum(d * d, axis=-1)
     t_star = np.sum((centre[:, None, :] - a[None]) * d[None], axis=-1) / np.maximum(qa, 1e-18)
     t = np.clip(t_star, t0, t1)
-    return a[None] + t[..., None] * d[None]
+    points: np.ndarray = a[None] + t[..., None] * d[None]
+    return points
 
 
-def visible_landmarks(landmarks: LandmarkSet, pose, pan, tilt, cam: CameraConfig) -> Visibility:
+def visible_landmarks(
+    landmarks: LandmarkSet,
+    pose: npt.ArrayLike,
+    pan: npt.ArrayLike,
+    tilt: npt.ArrayLike,
+    cam: CameraConfig,
+) -> Visibility:
     """Landmarks each of N cameras sees, and their measured ground points."""
     pose = np.atleast_2d(np.asarray(pose, float))
     pan = np.broadcast_to(np.asarray(pan, float), pose.shape[:1])
@@ -90,7 +102,14 @@ def visible_landmarks(landmarks: LandmarkSet, pose, pan, tilt, cam: CameraConfig
     return Visibility(visible=visible, points=points)
 
 
-def ball_visible(ball_xy, pose, pan, tilt, cam: CameraConfig, ball_radius: float) -> np.ndarray:
+def ball_visible(
+    ball_xy: npt.ArrayLike,
+    pose: npt.ArrayLike,
+    pan: npt.ArrayLike,
+    tilt: npt.ArrayLike,
+    cam: CameraConfig,
+    ball_radius: float,
+) -> np.ndarray:
     """Whether each camera sees the ball: its centre ``(x, y, radius)`` projects inside the
     image (so at least about half of the ball is in view). ``ball_xy``: (N, 2) or (2,)."""
     pose = np.atleast_2d(np.asarray(pose, float))

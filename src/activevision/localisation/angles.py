@@ -10,39 +10,40 @@ Every heading difference is wrapped to ``(-pi, pi]`` (the package's one conventi
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from activevision.geometry.angles import wrap_angle
 
 
-def circular_mean(angles, weights) -> float:
+def circular_mean(angles: npt.ArrayLike, weights: npt.ArrayLike) -> float:
     """Weighted circular mean of ``angles`` (rad), in ``(-pi, pi]``."""
     s = np.dot(weights, np.sin(angles))
     c = np.dot(weights, np.cos(angles))
     return float(wrap_angle(np.arctan2(s, c)))
 
 
-def residual_x(a, b) -> np.ndarray:
+def residual_x(a: npt.ArrayLike, b: np.ndarray) -> np.ndarray:
     """State difference ``a - b`` for poses ``(x, y, theta)``, heading wrapped."""
-    y = np.asarray(a, dtype=np.float64) - b
+    y: np.ndarray = np.asarray(a, dtype=np.float64) - b
     y[..., 2] = wrap_angle(y[..., 2])
     return y
 
 
-def residual_z(a, b) -> np.ndarray:
+def residual_z(a: npt.ArrayLike, b: np.ndarray) -> np.ndarray:
     """Measurement difference ``a - b`` for ``(range, bearing)``, bearing wrapped."""
-    y = np.asarray(a, dtype=np.float64) - b
+    y: np.ndarray = np.asarray(a, dtype=np.float64) - b
     y[..., 1] = wrap_angle(y[..., 1])
     return y
 
 
-def state_mean(sigmas, Wm) -> np.ndarray:
+def state_mean(sigmas: npt.ArrayLike, Wm: npt.ArrayLike) -> np.ndarray:
     """Weighted mean of pose sigma points (M, 3): arithmetic in x, y, circular in theta."""
     sigmas = np.asarray(sigmas, dtype=np.float64)
     x = np.dot(Wm, sigmas[:, :2])
     return np.array([x[0], x[1], circular_mean(sigmas[:, 2], Wm)])
 
 
-def measurement_mean(sigmas, Wm) -> np.ndarray:
+def measurement_mean(sigmas: npt.ArrayLike, Wm: npt.ArrayLike) -> np.ndarray:
     """Weighted mean of range-bearing sigma points (M, 2): arithmetic range, circular
     bearing."""
     sigmas = np.asarray(sigmas, dtype=np.float64)

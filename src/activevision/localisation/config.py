@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import numpy as np
+import numpy.typing as npt
 
 from activevision.geometry.field import LandmarkType
 
@@ -105,7 +106,7 @@ class UKFConfig:
         """Covariance of the belief at an episode start: ``diag(initial_std)^2``."""
         return np.diag(np.square(self.initial_std))
 
-    def noise_arrays(self, types) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def noise_arrays(self, types: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(range_base, range_fraction, bearing)``, each (K,), for landmark ``types``."""
         rows = [self.noise[LandmarkType(int(t))] for t in np.asarray(types).ravel()]
         return (

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from activevision.localisation.sigma_points import NotPositiveDefiniteError
 
 
-def entropy(cov):
+def entropy(cov: npt.ArrayLike) -> float | np.ndarray:
     """``H = 1/2 ln |2 pi e Sigma| = n/2 ln(2 pi e) + 1/2 ln |Sigma|`` (nats).
 
     ``cov``: (..., n, n); computed with ``slogdet`` so tiny or huge determinants neither

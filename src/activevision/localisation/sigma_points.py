@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 
 class NotPositiveDefiniteError(np.linalg.LinAlgError):
     """A covariance that must be symmetric positive definite is not."""
 
 
-def merwe_weights(n: int, alpha: float, beta: float, kappa: float):
+def merwe_weights(n: int, alpha: float, beta: float, kappa: float) -> tuple[np.ndarray, np.ndarray]:
     """Mean and covariance weights ``(Wm, Wc)``, each (2n+1,)."""
     lambda_ = alpha**2 * (n + kappa) - n
     c = 0.5 / (n + lambda_)
@@ -20,7 +21,7 @@ def merwe_weights(n: int, alpha: float, beta: float, kappa: float):
     return Wm, Wc
 
 
-def cholesky(P) -> np.ndarray:
+def cholesky(P: np.ndarray) -> np.ndarray:
     """Lower Cholesky factor of ``P``; raises :class:`NotPositiveDefiniteError` (never
     repairs the matrix: an indefinite covariance is a bug upstream)."""
     try:
@@ -31,7 +32,9 @@ def cholesky(P) -> np.ndarray:
         ) from None
 
 
-def merwe_sigma_points(x, P, alpha: float, kappa: float) -> np.ndarray:
+def merwe_sigma_points(
+    x: npt.ArrayLike, P: npt.ArrayLike, alpha: float, kappa: float
+) -> np.ndarray:
     """Sigma points (2n+1, n): ``x``, then ``x + L[:, k]``, then ``x - L[:, k]``, with
     ``L L^T = (n + lambda) P``. Headings are left unwrapped (the models wrap)."""
     x = np.asarray(x, dtype=np.float64)

@@ -25,9 +25,11 @@ Symbols as in FilterPy: ``x``/``P`` mean and covariance, ``Wm``/``Wc`` sigma-poi
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from activevision.geometry.field import LandmarkType
 from activevision.localisation.angles import (
@@ -44,8 +46,11 @@ from activevision.localisation.sigma_points import (
     merwe_weights,
 )
 
+#: An odometry step ``(dx, dy, dtheta)`` in the robot frame.
+Odometry = Sequence[float] | np.ndarray
 
-def fx_odometry(sigmas, odom) -> np.ndarray:
+
+def fx_odometry(sigmas: npt.ArrayLike, odom: Odometry) -> np.ndarray:
     """Apply the odometry step ``odom = (dx, dy, dtheta)`` (robot frame) to poses (M, 3)."""
     sigmas = np.atleast_2d(np.asarray(sigmas, dtype=np.float64))
     c, s = np.cos(sigmas[:, 2]), np.sin(sigmas[:, 2])
@@ -56,13 +61,13 @@ def fx_odometry(sigmas, odom) -> np.ndarray:
     )
 
 
-def is_point(segment) -> bool:
+def is_point(segment: npt.ArrayLike) -> bool:
     """Whether the landmark ``segment`` (2, 2) is a point (``a == b``)."""
     a, b = np.asarray(segment, dtype=np.float64)
     return bool(a[0] == b[0] and a[1] == b[1])
 
 
-def line_normal(segment, heading: float, bearing: float) -> np.ndarray:
+def line_normal(segment: npt.ArrayLike, heading: float, bearing: float) -> np.ndarray:
     """Unit normal (2,) of the line through ``segment``, oriented to agree with a detection at
     ``bearing`` by a robot with ``heading``: ``n . (cos, sin)(heading + bearing) >= 0``."""
     a, b = np.asarray(segment, dtype=np.float64)
@@ -73,7 +78,9 @@ def line_normal(segment, heading: float, bearing: float) -> np.ndarray:
     return n if along >= 0.0 else -n
 
 
-def hx_range_bearing(sigmas, segment, normal=None) -> np.ndarray:
+def hx_range_bearing(
+    sigmas: npt.ArrayLike, segment: npt.ArrayLike, normal: np.ndarray | None = None
+) -> np.ndarray:
     """Measurement ``(range, bearing)`` of a landmark from each pose (M, 3); (M, 2).
 
     Points: range and wrapped bearing of the point. Lines: the polar form ``(rho, alpha)``
@@ -94,21 +101,23 @@ def hx_range_bearing(sigmas, segment, normal=None) -> np.ndarray:
     return np.stack([rho, alpha], axis=-1)
 
 
-def _normal_towards(pose, segment) -> np.ndarray:
+def _normal_towards(pose: np.ndarray, segment: npt.ArrayLike) -> np.ndarray:
     a, b = np.asarray(segment, dtype=np.float64)
     d = b - a
-    n = np.array([-d[1], d[0]]) / np.hypot(d[0], d[1])
+    n: np.ndarray = np.array([-d[1], d[0]]) / np.hypot(d[0], d[1])
     return n if n @ (a - pose[:2]) >= 0.0 else -n
 
 
-def measurement_noise(z_range: float, landmark_type, ukf: UKFConfig = DEFAULT_UKF) -> np.ndarray:
+def measurement_noise(
+    z_range: float, landmark_type: int, ukf: UKFConfig = DEFAULT_UKF
+) -> np.ndarray:
     """Measurement covariance R (2, 2) of a detection of ``landmark_type`` at ``z_range``."""
     nz = ukf.noise[LandmarkType(int(landmark_type))]
     sigma_r = nz.range_base + nz.range_fraction * z_range
     return np.diag([sigma_r**2, nz.bearing**2])
 
 
-def odometry_noise(mean, odom, ukf: UKFConfig = DEFAULT_UKF) -> np.ndarray:
+def odometry_noise(mean: np.ndarray, odom: Odometry, ukf: UKFConfig = DEFAULT_UKF) -> np.ndarray:
     """Process covariance Q (3, 3) of one odometry step: stds grow with the distance walked
     and the angle turned; the robot-frame xy part is rotated into the world by the heading."""
     dx, dy, dtheta = odom
@@ -123,7 +132,14 @@ def odometry_noise(mean, odom, ukf: UKFConfig = DEFAULT_UKF) -> np.ndarray:
     return Q
 
 
-def unscented_transform(sigmas, Wm, Wc, noise_cov, mean_fn, residual_fn):
+def unscented_transform(
+    sigmas: np.ndarray,
+    Wm: np.ndarray,
+    Wc: np.ndarray,
+    noise_cov: np.ndarray,
+    mean_fn: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    residual_fn: Callable[[np.ndarray, np.ndarray], np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
     """Mean and covariance of transformed sigma points (FilterPy's ``unscented_transform``
     with a named mean and residual)."""
     mean = mean_fn(sigmas, Wm)
@@ -131,14 +147,20 @@ def unscented_transform(sigmas, Wm, Wc, noise_cov, mean_fn, residual_fn):
     return mean, (y.T * Wc) @ y + noise_cov
 
 
-def symmetrised(P) -> np.ndarray:
+def symmetrised(P: np.ndarray) -> np.ndarray:
     """``(P + P^T) / 2``, after checking that ``P`` is positive definite."""
     P = 0.5 * (P + P.T)
     cholesky(P)
     return P
 
 
-def ukf_predict(mean, cov, odom, ukf: UKFConfig = DEFAULT_UKF, process_cov=None):
+def ukf_predict(
+    mean: npt.ArrayLike,
+    cov: npt.ArrayLike,
+    odom: Odometry,
+    ukf: UKFConfig = DEFAULT_UKF,
+    process_cov: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Predict the belief after an odometry step ``odom = (dx, dy, dtheta)`` (robot frame).
 
     ``process_cov`` (3, 3) defaults to :func:`odometry_noise`. Returns ``(mean, cov)``.
@@ -151,7 +173,15 @@ def ukf_predict(mean, cov, odom, ukf: UKFConfig = DEFAULT_UKF, process_cov=None)
     return mean, symmetrised(P)
 
 
-def ukf_update(mean, cov, z, segment, landmark_type, ukf: UKFConfig = DEFAULT_UKF, R=None):
+def ukf_update(
+    mean: npt.ArrayLike,
+    cov: npt.ArrayLike,
+    z: npt.ArrayLike,
+    segment: npt.ArrayLike,
+    landmark_type: int,
+    ukf: UKFConfig = DEFAULT_UKF,
+    R: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Update the belief with one detection ``z = (range, bearing)`` of the landmark
     ``segment`` (2, 2) of type ``landmark_type`` (for a line: the range and bearing of the
     foot of the perpendicular, see the module docstring).
@@ -175,7 +205,14 @@ def ukf_update(mean, cov, z, segment, landmark_type, ukf: UKFConfig = DEFAULT_UK
     return x, symmetrised(cov - K @ S @ K.T)
 
 
-def ukf_update_sequential(mean, cov, zs, segments, types, ukf: UKFConfig = DEFAULT_UKF):
+def ukf_update_sequential(
+    mean: npt.ArrayLike,
+    cov: npt.ArrayLike,
+    zs: Iterable[npt.ArrayLike],
+    segments: Iterable[npt.ArrayLike],
+    types: Iterable[int],
+    ukf: UKFConfig = DEFAULT_UKF,
+) -> tuple[npt.ArrayLike, npt.ArrayLike]:
     """Apply :func:`ukf_update` for each detection in turn (Algorithm 1, lines 5-7), fresh
     sigma points each time. ``zs`` (M, 2), ``segments`` (M, 2, 2), ``types`` (M,)."""
     for z, segment, t in zip(zs, segments, types, strict=True):
@@ -204,12 +241,18 @@ class PoseBelief:
         object.__setattr__(self, "cov", cov)
 
     @classmethod
-    def initial(cls, pose, ukf: UKFConfig = DEFAULT_UKF) -> PoseBelief:
+    def initial(cls, pose: npt.ArrayLike, ukf: UKFConfig = DEFAULT_UKF) -> PoseBelief:
         """Belief centred on ``pose`` with the episode-start covariance."""
-        return cls(pose, ukf.initial_cov)
+        return cls(np.asarray(pose, dtype=np.float64), ukf.initial_cov)
 
-    def predict(self, odom, ukf: UKFConfig = DEFAULT_UKF) -> PoseBelief:
+    def predict(self, odom: Odometry, ukf: UKFConfig = DEFAULT_UKF) -> PoseBelief:
         return PoseBelief(*ukf_predict(self.mean, self.cov, odom, ukf))
 
-    def update(self, z, segment, landmark_type, ukf: UKFConfig = DEFAULT_UKF) -> PoseBelief:
+    def update(
+        self,
+        z: npt.ArrayLike,
+        segment: npt.ArrayLike,
+        landmark_type: int,
+        ukf: UKFConfig = DEFAULT_UKF,
+    ) -> PoseBelief:
         return PoseBelief(*ukf_update(self.mean, self.cov, z, segment, landmark_type, ukf))
