@@ -11,7 +11,7 @@ from gymnasium import spaces
 
 from activevision.envs.actions import check_actions
 from activevision.envs.config import EnvConfig, check_count, resolve_config
-from activevision.envs.simulation import EpisodeBatch
+from activevision.envs.simulation import EpisodeBatch, StepOutcome
 from activevision.localisation import LocalisationConfig
 
 
@@ -114,24 +114,30 @@ class ActiveVisionEnv(gym.Env):
         self._frames = np.zeros(self.observation_space.shape, dtype=np.uint8)
         self._slot = np.zeros(1, dtype=np.int64)
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
+    def reset(
+        self, *, seed: int | None = None, options: dict | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
         self.sim.reset(self._slot, [self.np_random])
         frame = self.sim.render(self._slot)[0]
         self._frames[:] = frame
         return self._frames.copy(), self.sim.info(0, self.max_episode_steps)
 
-    def step(self, action):
+    def step(self, action: object) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         action = check_actions(action, len(self.sim.actions), ())
         return self._after_move(self.sim.step(action.reshape(1)))
 
-    def jump_head(self, pan: float, tilt: float):
+    def jump_head(
+        self, pan: float, tilt: float
+    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Move the head straight to ``(pan, tilt)`` rad in one step (clipped to the limits),
         scored like :meth:`step`. Not part of the Gymnasium API: for baselines that jump the
         head, such as the paper's entropy-based head control."""
         return self._after_move(self.sim.move_head(self._slot, np.array([pan]), np.array([tilt])))
 
-    def _after_move(self, outcome):
+    def _after_move(
+        self, outcome: StepOutcome
+    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         reward, terminated, _, _ = outcome
         if self.config.frame_stack > 1:
             self._frames[:-1] = self._frames[1:]
@@ -139,7 +145,7 @@ class ActiveVisionEnv(gym.Env):
         info = self.sim.info(0, self.max_episode_steps)
         return self._frames.copy(), float(reward[0]), bool(terminated[0]), False, info
 
-    def render(self):
+    def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":
             return None
         from activevision.envs.view import episode_panel  # imports matplotlib: only here

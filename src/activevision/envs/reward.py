@@ -9,14 +9,22 @@ penalises the robot from moving its head away") means ``sign(D - D')``. We imple
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
-def viewpoint_distance_deg(pan, tilt, goal_pan, goal_tilt) -> np.ndarray:
+def viewpoint_distance_deg(
+    pan: ArrayLike, tilt: ArrayLike, goal_pan: np.ndarray, goal_tilt: np.ndarray
+) -> np.ndarray:
     """Euclidean distance between head poses in (pan, tilt) degrees."""
-    return np.degrees(np.hypot(np.asarray(pan) - goal_pan, np.asarray(tilt) - goal_tilt))
+    distance: np.ndarray = np.degrees(
+        np.hypot(np.asarray(pan) - goal_pan, np.asarray(tilt) - goal_tilt)
+    )
+    return distance
 
 
-def approach_reward(dist_before, dist_after, resolution_deg: float = 0.0) -> np.ndarray:
+def approach_reward(
+    dist_before: ArrayLike, dist_after: ArrayLike, resolution_deg: float = 0.0
+) -> np.ndarray:
     """``sign(D - D')``; with ``resolution_deg > 0`` the change is first truncated to whole
     multiples of it (the release: ``sign(int(D - D'))`` in degrees)."""
     change = np.asarray(dist_before, float) - np.asarray(dist_after, float)

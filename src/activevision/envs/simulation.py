@@ -21,6 +21,9 @@ from activevision.geometry.kernels import ball_visible_mask, visible_mask
 from activevision.localisation import LocalisationConfig, best_viewpoints
 from activevision.rendering import Renderer
 
+#: ``(reward, terminated, success, ball_lost)``, each (N,): the outcome of one step.
+StepOutcome = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
 
 class EpisodeBatch:
     """State and dynamics of N episodes at once (true pose, belief, head, ball, goal)."""
@@ -107,10 +110,11 @@ class EpisodeBatch:
         self.ball_lost_step[slots] = -1
         self.episode_reward[slots] = 0.0
         already = self._succeeded(slots)
-        return found & self.desired[slots].any(axis=1) & ~already
+        valid: np.ndarray = found & self.desired[slots].any(axis=1) & ~already
+        return valid
 
     # ------------------------------------------------------------------ dynamics
-    def step(self, actions: np.ndarray, active: np.ndarray | None = None):
+    def step(self, actions: np.ndarray, active: np.ndarray | None = None) -> StepOutcome:
         """Apply one discrete action per slot (only where ``active``).
 
         Returns:
@@ -121,7 +125,7 @@ class EpisodeBatch:
         move = self.actions[actions[idx]]
         return self.move_head(idx, self.pan[idx] + move[:, 0], self.tilt[idx] + move[:, 1])
 
-    def move_head(self, idx: np.ndarray, pan, tilt):
+    def move_head(self, idx: np.ndarray, pan: np.ndarray, tilt: np.ndarray) -> StepOutcome:
         """Move the heads of slots ``idx`` to ``(pan, tilt)`` (clipped to the limits) as one
         step: discrete actions use it, and so do baselines that jump the head to a target.
 
@@ -167,7 +171,8 @@ class EpisodeBatch:
     def _succeeded(self, idx: np.ndarray) -> np.ndarray:
         if self.cfg.success_mode == "landmarks":
             # The release: every landmark of the goal view is in view now.
-            return ~(self.desired[idx] & ~self.observed[idx]).any(axis=1)
+            all_seen: np.ndarray = ~(self.desired[idx] & ~self.observed[idx]).any(axis=1)
+            return all_seen
         dist = viewpoint_distance_deg(
             self.pan[idx], self.tilt[idx], self.goal_pan[idx], self.goal_tilt[idx]
         )

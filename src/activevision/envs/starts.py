@@ -66,7 +66,13 @@ def corrupt_pose(pose: np.ndarray, error: float, rng: np.random.Generator) -> np
 
 
 @njit(cache=True)
-def candidate_kernel(u, low, high, balls, cam):
+def candidate_kernel(
+    u: np.ndarray,
+    low: np.ndarray,
+    high: np.ndarray,
+    balls: tuple[float, ...],
+    cam: tuple[float, float, float, float],
+) -> tuple[np.ndarray, np.ndarray]:
     """Start candidates from uniforms ``u`` (P, CANDIDATE_UNIFORMS); ``balls``, ``cam``: the
     fields of a :class:`BallDraw` and a ``geometry.kernels.CameraModel``.
 
@@ -116,7 +122,7 @@ def draw_starts(rngs: Sequence[np.random.Generator], cfg: EnvConfig) -> dict[str
                            spec.half_width - r, float(r)))
     starts = np.zeros((len(rngs), 7))
     believed = np.zeros((len(rngs), 3))
-    pending = np.arange(len(rngs))
+    pending: np.ndarray = np.arange(len(rngs))
     for _ in range(cfg.max_start_draws):
         if not len(pending):
             return {

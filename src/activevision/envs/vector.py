@@ -59,7 +59,9 @@ class ActiveVisionVectorEnv(VectorEnv):
         self._every_env = np.ones(self.num_envs, dtype=bool)
         self._every_env.flags.writeable = False
 
-    def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
         seeds: list[int | None]
         if seed is None:
             seeds = [None] * self.num_envs
@@ -87,7 +89,9 @@ class ActiveVisionVectorEnv(VectorEnv):
         self._frames[:, -1] = self.sim.render()
         self._frames[started] = self._frames[started, -1:]
 
-    def step(self, actions):
+    def step(
+        self, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         # EpisodeBatch.step checks dtype, shape and range of every action (resetting
         # sub-environments ignore theirs, but it must still lie in the action space).
         resetting = self._needs_reset.copy()

@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from activevision.geometry.camera import (
     CameraConfig,
@@ -31,7 +32,9 @@ _DEFAULT_CAMERA = CameraConfig()
 _DEFAULT_CONFIG = RenderConfig()
 
 
-def _cameras(pose, pan, tilt):
+def _cameras(
+    pose: ArrayLike, pan: ArrayLike, tilt: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     pose = np.atleast_2d(np.asarray(pose, dtype=np.float64))
     n = len(pose)
     pan = np.broadcast_to(np.asarray(pan, dtype=np.float64), (n,))
@@ -40,9 +43,9 @@ def _cameras(pose, pan, tilt):
 
 
 def render_reference(
-    pose,
-    pan,
-    tilt,
+    pose: ArrayLike,
+    pan: ArrayLike,
+    tilt: ArrayLike,
     field: FieldSpec = _DEFAULT_FIELD,
     camera: CameraConfig = _DEFAULT_CAMERA,
     config: RenderConfig = _DEFAULT_CONFIG,
@@ -82,7 +85,7 @@ def render_reference(
     return images
 
 
-def _rect_frames(quads: np.ndarray):
+def _rect_frames(quads: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Centres (Q, 2), unit axes (Q, 2, 2) and half-extents (Q, 2) of rectangles given by
     their corners (Q, 4, 2) in order (every scene quad is a rectangle)."""
     centre = quads.mean(axis=1)
@@ -105,7 +108,13 @@ def _inside_rects(p: np.ndarray, quads: np.ndarray) -> np.ndarray:
     return inside
 
 
-def _trace(origin, rays, scene: SceneArrays, ball, config: RenderConfig) -> np.ndarray:
+def _trace(
+    origin: np.ndarray,
+    rays: np.ndarray,
+    scene: SceneArrays,
+    ball: np.ndarray | None,
+    config: RenderConfig,
+) -> np.ndarray:
     """Grey seen along each ray (K, 3) from ``origin`` (3,); ``ball`` (3,) centre or None."""
     k = len(rays)
     grey = np.full(k, config.background)
@@ -167,10 +176,10 @@ def _trace(origin, rays, scene: SceneArrays, ball, config: RenderConfig) -> np.n
 
 
 def render_supersampled(
-    pose,
-    pan,
-    tilt,
-    ball_xy=None,
+    pose: ArrayLike,
+    pan: ArrayLike,
+    tilt: ArrayLike,
+    ball_xy: ArrayLike | None = None,
     field: FieldSpec = _DEFAULT_FIELD,
     camera: CameraConfig = _DEFAULT_CAMERA,
     config: RenderConfig = _DEFAULT_CONFIG,

@@ -30,7 +30,7 @@ PARALLEL_MIN_BATCH = 4
 _WORK_GARBAGE_SEED = 0
 
 
-def _float_array(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
+def _float_array(name: str, value: ArrayLike, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as a C-contiguous float64 array of exactly ``shape``, or a ValueError."""
     try:
         arr = np.asarray(value, dtype=np.float64)
@@ -43,7 +43,7 @@ def _float_array(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
     return np.ascontiguousarray(arr)
 
 
-def _per_camera(name: str, value, n: int) -> np.ndarray:
+def _per_camera(name: str, value: ArrayLike, n: int) -> np.ndarray:
     """A per-camera scalar: accepts shape (n,), or a scalar / shape (1,) when n == 1."""
     try:
         arr = np.asarray(value, dtype=np.float64)
@@ -139,6 +139,7 @@ class Renderer:
         pose_arr = _float_array("pose", pose_arr, (n, 3))
         pan_arr = _per_camera("pan", pan, n)
         tilt_arr = _per_camera("tilt", tilt, n)
+        ball_arr: np.ndarray
         if ball_xy is None:
             ball_arr = np.zeros((n, 2))
             has_ball = False
@@ -176,7 +177,7 @@ class Renderer:
             # Enough interleaved row sets per camera that every thread gets a fair share.
             row_blocks = max(1, math.ceil(4 * threads / n))
             raster.render_kernel(scene, params, cameras, row_blocks, out, _WORK_GARBAGE_SEED)
-        if self.config.has_noise:
+        if rng is not None and self.config.has_noise:  # with noise, rng is checked above
             apply_noise(out, self.config, rng)
         return out
 
