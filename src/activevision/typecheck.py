@@ -18,9 +18,12 @@ import numbers
 import types
 import typing
 from collections.abc import Mapping
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 #: ``dataclasses.field(metadata=ALLOW_NONFINITE)``: the field's floats may be NaN or infinite.
 ALLOW_NONFINITE: Mapping[str, bool] = types.MappingProxyType({"finite": False})
@@ -120,7 +123,10 @@ def config_to_dict(instance: Any) -> dict[str, Any]:
     return typing.cast(dict[str, Any], plain(instance))
 
 
-def config_from_dict(cls: type, values: Any, where: str = "") -> Any:
+_Config = TypeVar("_Config", bound="DataclassInstance")
+
+
+def config_from_dict(cls: type[_Config], values: Any, where: str = "") -> _Config:
     """Build config dataclass ``cls`` from :func:`config_to_dict`'s output, recursing into
     fields whose type is a dataclass (missing keys take their defaults). ValueError names an
     unknown key by its dotted path."""

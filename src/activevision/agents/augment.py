@@ -29,4 +29,5 @@ def random_shifts(images: np.ndarray, max_shift: int, rng: np.random.Generator) 
     rows = (top[:, None] + np.arange(height))[:, None, :, None]  # (B, 1, H, 1)
     cols = (left[:, None] + np.arange(width))[:, None, None, :]  # (B, 1, 1, W)
     samples = np.arange(batch)[:, None, None, None]
-    return padded[samples, np.arange(channels)[None, :, None, None], rows, cols]
+    shifted: np.ndarray = padded[samples, np.arange(channels)[None, :, None, None], rows, cols]
+    return shifted

@@ -164,7 +164,8 @@ class DDQNLearner:
         if self.channels_last and tensor.dim() == 4:
             tensor = tensor.contiguous(memory_format=torch.channels_last)
         with torch.inference_mode():
-            return self.online(tensor)[0].float().cpu().numpy()
+            q: torch.Tensor = self.online(tensor)[0]  # nn.Module calls return Any
+            return q.float().cpu().numpy()
 
     def update(self, batch: ReplayBatch) -> UpdateResult:
         """One gradient step on a replay batch."""

@@ -72,7 +72,8 @@ def importance_weights(probs: np.ndarray, size: int, beta: float) -> np.ndarray:
     if size < 1 or np.any(probs <= 0.0):
         raise ValueError("importance weights need size >= 1 and positive probabilities")
     weights = (size * probs) ** (-beta)
-    return weights / weights.max()
+    normalised: np.ndarray = weights / weights.max()
+    return normalised
 
 
 def priorities_from_td_errors(td_errors: np.ndarray, eps: float) -> np.ndarray:

@@ -113,10 +113,13 @@ class QNetwork(nn.Module):
         return self._q_values(hidden), self.aux(hidden)
 
     def _q_values(self, hidden: torch.Tensor) -> torch.Tensor:
+        # nn.Module calls are typed as returning Any: the results are tensors
         if not self.dueling:
-            return self.q(hidden)
-        advantage = self.advantage(hidden)
-        return self.value(hidden) + advantage - advantage.mean(dim=1, keepdim=True)
+            q: torch.Tensor = self.q(hidden)
+            return q
+        advantage: torch.Tensor = self.advantage(hidden)
+        value: torch.Tensor = self.value(hidden)
+        return value + advantage - advantage.mean(dim=1, keepdim=True)
 
     def to_channels_last(self) -> QNetwork:
         """Store the convolution weights channels-last (NHWC), which oneDNN runs faster."""

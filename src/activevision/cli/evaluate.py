@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from activevision.cli.args import (
     add_overwrite,
@@ -17,6 +17,9 @@ from activevision.cli.args import (
     seed,
 )
 from activevision.cli.outputs import check_outputs
+
+if TYPE_CHECKING:
+    from activevision.experiments.policies import HeadPolicy
 
 
 def _method_names() -> tuple[str, ...]:
@@ -36,7 +39,9 @@ def _require_run_for_learned(names: list[str], run: Path | None) -> None:
         raise ValueError("the learned policy needs a run directory (--run runs/NAME)")
 
 
-def _policies(names: list[str], args: argparse.Namespace, env_config: Any, error: float = 0.0):
+def _policies(
+    names: list[str], args: argparse.Namespace, env_config: Any, error: float = 0.0
+) -> dict[str, HeadPolicy]:
     from activevision.experiments.methods import make_policy
 
     _require_run_for_learned(names, args.run)

@@ -63,7 +63,8 @@ def _resume(args: argparse.Namespace) -> Path | None:
             trainer.train(args.steps)
     finally:
         trainer.close()
-    return args.resume
+    run_dir: Path = args.resume
+    return run_dir
 
 
 def _given(args: argparse.Namespace, name: str) -> bool:
@@ -91,8 +92,9 @@ def _train_fresh(args: argparse.Namespace) -> Path:
         overrides.append(f"total_timesteps={args.steps}")
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
-    train(apply_overrides(config, overrides), args.out)
-    return args.out
+    run_dir: Path = args.out
+    train(apply_overrides(config, overrides), run_dir)
+    return run_dir
 
 
 def cmd_plot(args: argparse.Namespace) -> None:

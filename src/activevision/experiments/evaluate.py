@@ -6,6 +6,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -111,7 +112,7 @@ def evaluate_policy(
     config: EnvConfig | None = None,
     env: ActiveVisionEnv | None = None,
     measure_latency: bool = False,
-):
+) -> tuple[list[dict], dict[str, Interval], list[float]]:
     """Run ``episodes`` fixed-seed episodes.
 
     Returns:
@@ -148,7 +149,7 @@ def format_table(rows: dict[str, dict[str, Interval]]) -> str:
     return "\n".join(lines)
 
 
-def summary_rows(rows: dict[str, dict[str, Interval]], **extra) -> list[dict]:
+def summary_rows(rows: dict[str, dict[str, Interval]], **extra: Any) -> list[dict]:
     """Flat CSV/JSON rows: method, then ``<metric>``, ``<metric>_low``, ``<metric>_high``."""
     out = []
     for method, summary in rows.items():

@@ -7,10 +7,12 @@ localisation error) and the ball; the oracle the true goal (an upper bound, not 
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from activevision.envs.actions import action_table
 from activevision.envs.config import EnvConfig
@@ -18,6 +20,9 @@ from activevision.envs.starts import corrupt_pose
 from activevision.geometry import field_landmarks
 from activevision.geometry.angles import wrap_angle
 from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
+
+if TYPE_CHECKING:
+    import torch
 
 
 @dataclass(frozen=True)
@@ -41,7 +46,7 @@ class HeadPolicy(Protocol):
         """The next discrete action, or a head target to jump to."""
 
 
-def greedy_action(head, target, table: np.ndarray) -> int:
+def greedy_action(head: ArrayLike, target: ArrayLike, table: np.ndarray) -> int:
     """The action whose move ends closest to ``target`` (pan, tilt rad)."""
     after = np.asarray(head)[None] + table
     return int(np.argmin(np.hypot(*(after - np.asarray(target)[None]).T)))
@@ -158,7 +163,9 @@ class LearnedPolicy:
 
     name = "learned"
 
-    def __init__(self, q_network, device: str = "cpu", num_threads: int | None = 1) -> None:
+    def __init__(
+        self, q_network: torch.nn.Module, device: str = "cpu", num_threads: int | None = 1
+    ) -> None:
         import torch
 
         # Batch-1 inference of this small CNN is fastest on one thread, and a second busy
@@ -172,7 +179,11 @@ class LearnedPolicy:
 
     @classmethod
     def from_run(
-        cls, run_dir, device: str = "cpu", num_threads: int | None = 1, weights: str = "final"
+        cls,
+        run_dir: str | os.PathLike[str],
+        device: str = "cpu",
+        num_threads: int | None = 1,
+        weights: str = "final",
     ) -> LearnedPolicy:
         """The run's final weights, or with ``weights="best"`` its best validated ones."""
         from activevision.training import load_policy
@@ -194,7 +205,7 @@ class OnnxPolicy:
 
     name = "onnx"
 
-    def __init__(self, model_path) -> None:
+    def __init__(self, model_path: str | os.PathLike[str]) -> None:
         from activevision.runtime import HeadController
 
         self.controller = HeadController(model_path, color_order="rgb")

@@ -94,7 +94,8 @@ class _Uint8Policy(nn.Module):
         x = frames.float()  # a float input skips QNetwork's own / 255
         if not self.fold_scaling:
             x = x * (1.0 / 255.0)
-        return self.network(x)
+        q: torch.Tensor = self.network(x)  # nn.Module calls are typed as returning Any
+        return q
 
 
 def policy_metadata(

@@ -58,7 +58,8 @@ def moving_average(values: np.ndarray, window: int) -> np.ndarray:
     shifted_sums = np.where(start >= 0, sums[np.maximum(start, 0)], 0.0)
     shifted_counts = np.where(start >= 0, counts[np.maximum(start, 0)], 0)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return (sums - shifted_sums) / (counts - shifted_counts)
+        means: np.ndarray = (sums - shifted_sums) / (counts - shifted_counts)
+    return means
 
 
 def _draw_validation(ax: Axes, x: np.ndarray, table: Columns, validation: Columns) -> None:

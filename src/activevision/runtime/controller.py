@@ -10,7 +10,7 @@ import hashlib
 import math
 import os
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -33,7 +33,7 @@ class HeadCommand(NamedTuple):
     target_tilt: float  #: current tilt + d_tilt, clipped to the head limits
 
 
-def robot_session_options(num_threads: int = 1):  # -> onnxruntime.SessionOptions
+def robot_session_options(num_threads: int = 1) -> Any:  # onnxruntime.SessionOptions (untyped)
     """onnxruntime settings for a small robot CPU that also runs vision, walking and so on.
 
     * ``intra_op_num_threads = num_threads`` (default 1) and ``inter_op_num_threads = 1``: a
@@ -135,7 +135,7 @@ class HeadController:
     def observe(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
         """Preprocess ``frame`` and push it onto the frame stack; returns the (stack, H, W)
         uint8 network input (a view, valid until the next call)."""
-        frames = self._frames[0]
+        frames: np.ndarray = self._frames[0]
         order = self.color_order if color_order is None else color_order
         if self._stack_empty or frames.shape[0] == 1:
             self._preprocess(frame, order, out=frames[-1])  # validates before writing
@@ -150,7 +150,7 @@ class HeadController:
     def q_values(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
         """Push ``frame`` onto the stack and return the policy's Q-values, shape (A,)."""
         self.observe(frame, color_order)
-        q = self._session.run(self._outputs, self._feed)[0][0]
+        q: np.ndarray = self._session.run(self._outputs, self._feed)[0][0]
         self.last_q_values = q
         return q
 
@@ -222,8 +222,9 @@ def _read_model(path: Path) -> bytes:
         raise PolicyFileError(f"cannot read policy model {path}: {error}") from error
 
 
-def _open_session(path: Path, model_bytes: bytes, num_threads: int):
-    """An onnxruntime CPU session for the model; PolicyFileError if onnxruntime rejects it."""
+def _open_session(path: Path, model_bytes: bytes, num_threads: int) -> Any:
+    """An onnxruntime CPU session (an ``onnxruntime.InferenceSession``; onnxruntime is
+    untyped) for the model; PolicyFileError if onnxruntime rejects it."""
     try:
         import onnxruntime as ort
     except ImportError as error:

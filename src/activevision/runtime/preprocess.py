@@ -218,7 +218,7 @@ class FramePreprocessor:
 
 def _luma(frame: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """(H, W) float32 BT.601 luma of an (H, W, 3) uint8 frame."""
-    grey = frame[:, :, 0] * weights[0]  # float32 (H, W); no BLAS call (see above)
+    grey: np.ndarray = frame[:, :, 0] * weights[0]  # float32 (H, W); no BLAS call (see above)
     grey += frame[:, :, 1] * weights[1]
     grey += frame[:, :, 2] * weights[2]
     return grey

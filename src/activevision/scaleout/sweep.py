@@ -29,9 +29,12 @@ import time
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from activevision.training.config import TrainConfig, apply_overrides
+
+if TYPE_CHECKING:
+    from ray.tune.experiment import Trial
 
 #: Epoch metrics aggregated over seeds.
 METRICS = ("success_rate", "episode_reward", "success_duration", "ball_loss_duration")
@@ -73,7 +76,8 @@ def trial_config(base: TrainConfig, seed: int, point: Mapping[str, Any]) -> Trai
 # ---------------------------------------------------------------------- the trainable
 def _read_state(run_dir: Path) -> dict[str, Any]:
     try:
-        return json.loads((run_dir / STATE_FILE).read_text())
+        state: dict[str, Any] = json.loads((run_dir / STATE_FILE).read_text())
+        return state
     except (OSError, json.JSONDecodeError):
         return {"elapsed_s": 0.0, "sessions": 0}
 
@@ -252,13 +256,19 @@ def _fit(
     class _Recorder(tune.Callback):
         """Final status and restart count of every trial (runs in the driver)."""
 
-        def on_trial_recover(self, iteration, trials, trial, **info):
+        def on_trial_recover(
+            self, iteration: int, trials: list[Trial], trial: Trial, **info: Any
+        ) -> None:
             statuses[trial.config["trial"]["name"]]["restarts"] += 1
 
-        def on_trial_complete(self, iteration, trials, trial, **info):
+        def on_trial_complete(
+            self, iteration: int, trials: list[Trial], trial: Trial, **info: Any
+        ) -> None:
             statuses[trial.config["trial"]["name"]]["status"] = "TERMINATED"
 
-        def on_trial_error(self, iteration, trials, trial, **info):
+        def on_trial_error(
+            self, iteration: int, trials: list[Trial], trial: Trial, **info: Any
+        ) -> None:
             statuses[trial.config["trial"]["name"]]["status"] = "ERROR"
 
     trainable = tune.with_resources(train_trial, {"cpu": cpus_per_trial, "gpu": gpus_per_trial})

@@ -37,7 +37,8 @@ def goal_offset(info: dict[str, Any]) -> np.ndarray:
             "aux_goal_weight needs an environment whose info holds 'goal_viewpoint' and 'head'"
             f" (as ActiveVision-v0's does); missing {error}"
         ) from error
-    return offset.astype(np.float32).reshape(GOAL_OFFSET_DIM)
+    target: np.ndarray = offset.astype(np.float32).reshape(GOAL_OFFSET_DIM)
+    return target
 
 
 def is_active_vision(env_id: str) -> bool:

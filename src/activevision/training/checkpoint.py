@@ -194,7 +194,8 @@ def save_torch_state(path: Path, state: Mapping[str, Any]) -> None:
 def load_torch_state(path: Path) -> dict[str, Any]:
     """Load with ``weights_only=True``: tensors and plain containers, never arbitrary code."""
     try:
-        return torch.load(path, map_location="cpu", weights_only=True)
+        state: dict[str, Any] = torch.load(path, map_location="cpu", weights_only=True)
+        return state
     except Exception as error:  # torch raises several types for damaged files
         raise CheckpointError(f"cannot read {path}: {error}") from error
 

@@ -12,7 +12,7 @@ from activevision.training.config import TrainConfig
 def progress_bar(config: TrainConfig, start: int, end: int) -> Any:
     """A tqdm bar from step ``start`` to ``end``; disabled unless ``run.progress_bar`` is set
     and stderr is a terminal."""
-    from tqdm.auto import tqdm  # type: ignore[import-untyped]
+    from tqdm.auto import tqdm
 
     enabled = config.run.progress_bar and sys.stderr.isatty()
     return tqdm(total=end, initial=start, disable=not enabled, unit="step", dynamic_ncols=True)

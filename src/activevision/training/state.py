@@ -171,7 +171,8 @@ def _generator_state(value: Any) -> dict[str, Any]:
         np.random.PCG64().state = cast(Any, value)
     except (TypeError, ValueError, KeyError, OverflowError) as error:
         raise ValueError(f"is not a PCG64 generator state ({error})") from None
-    return json.loads(json.dumps(value))  # a copy
+    copy: dict[str, Any] = json.loads(json.dumps(value))  # a copy
+    return copy
 
 
 def _epoch_log(value: Any) -> EpochAccumulator:
