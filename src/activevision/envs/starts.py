@@ -71,7 +71,7 @@ def candidate_kernel(
     low: np.ndarray,
     high: np.ndarray,
     balls: tuple[float, ...],
-    cam: tuple[float, float, float, float],
+    cam: tuple[float, ...],
 ) -> tuple[np.ndarray, np.ndarray]:
     """Start candidates from uniforms ``u`` (P, CANDIDATE_UNIFORMS); ``balls``, ``cam``: the
     fields of a :class:`BallDraw` and a ``geometry.kernels.CameraModel``.

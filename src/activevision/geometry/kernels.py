@@ -33,7 +33,7 @@ class CameraModel(NamedTuple):
 
 
 @lru_cache(maxsize=16)
-def camera_fields(cam: CameraConfig) -> tuple[float, float, float, float]:
+def camera_fields(cam: CameraConfig) -> tuple[float, ...]:
     """The fields of ``cam``'s :class:`CameraModel` as a plain tuple, what a kernel called
     from Python takes: numba types a plain tuple in C but a namedtuple in Python (about
     2.5 us per call)."""
@@ -44,7 +44,7 @@ def camera_fields(cam: CameraConfig) -> tuple[float, float, float, float]:
 
 
 @njit(cache=True)
-def camera_rotation(yaw, tilt, rot):
+def camera_rotation(yaw: float, tilt: float, rot: np.ndarray) -> None:
     """Rows: camera right, down, forward (as ``geometry.camera.world_to_camera_rotation``)."""
     cy, sy, ct, st = math.cos(yaw), math.sin(yaw), math.cos(tilt), math.sin(tilt)
     rot[0, 0], rot[0, 1], rot[0, 2] = sy, -cy, 0.0
@@ -53,7 +53,9 @@ def camera_rotation(yaw, tilt, rot):
 
 
 @njit(cache=True)
-def image_halfplanes(x, y, rot, cam, planes):
+def image_halfplanes(
+    x: float, y: float, rot: np.ndarray, cam: CameraModel, planes: np.ndarray
+) -> None:
     """The four image half-planes on the ground (as ``geometry.camera.image_halfplanes``) of
     the :class:`CameraModel` ``cam`` at ``(x, y)`` turned by ``rot``, into ``planes``."""
     focal, width, height, cam_height = cam
@@ -73,7 +75,9 @@ def image_halfplanes(x, y, rot, cam, planes):
 
 
 @njit(cache=True)
-def range_interval(ax, ay, bx, by, cx, cy, max_distance):
+def range_interval(
+    ax: float, ay: float, bx: float, by: float, cx: float, cy: float, max_distance: float
+) -> tuple[bool, float, float]:
     """``(in_range, r0, r1)``: the parameters ``t`` of segment ``a + t (b - a)`` within
     ``max_distance`` of ``(cx, cy)`` (the range-disc part of
     ``geometry.visibility.clip_segments``; it does not depend on the head angles)."""
@@ -90,7 +94,9 @@ def range_interval(ax, ay, bx, by, cx, cy, max_distance):
 
 
 @njit(cache=True)
-def clip_visible(ax, ay, bx, by, planes, r0, r1):
+def clip_visible(
+    ax: float, ay: float, bx: float, by: float, planes: np.ndarray, r0: float, r1: float
+) -> bool:
     """Whether the part ``[r0, r1]`` of segment ``a b`` meets all image half-planes
     (Cyrus-Beck, as ``geometry.visibility.clip_segments``, then ``t0 <= t1``)."""
     t0, t1 = 0.0, 1.0
@@ -107,7 +113,9 @@ def clip_visible(ax, ay, bx, by, planes, r0, r1):
 
 
 @njit(cache=True)
-def ball_in_image(bx, by, radius, x, y, rot, cam):
+def ball_in_image(
+    bx: float, by: float, radius: float, x: float, y: float, rot: np.ndarray, cam: CameraModel
+) -> bool:
     """Whether the ball centre projects into the image of the :class:`CameraModel` ``cam`` at
     ``(x, y)`` turned by ``rot`` (as ``geometry.visibility.ball_visible``)."""
     focal, width, height, cam_height = cam
@@ -117,13 +125,20 @@ def ball_in_image(bx, by, radius, x, y, rot, cam):
     depth = rot[2, 0] * r0 + rot[2, 1] * r1 + rot[2, 2] * r2
     if not depth > 0.0:
         return False
-    u = focal * p0 / depth + width / 2
-    v = focal * p1 / depth + height / 2
+    u: float = focal * p0 / depth + width / 2
+    v: float = focal * p1 / depth + height / 2
     return u >= 0.0 and u <= width and v >= 0.0 and v <= height
 
 
 @njit(cache=True)
-def visibility_kernel(segments, max_distance, poses, pans, tilts, cam):
+def visibility_kernel(
+    segments: np.ndarray,
+    max_distance: np.ndarray,
+    poses: np.ndarray,
+    pans: np.ndarray,
+    tilts: np.ndarray,
+    cam: tuple[float, ...],
+) -> np.ndarray:
     """Visible mask (N, K) of the landmarks for N cameras (``cam``: the fields of a
     :class:`CameraModel`)."""
     cam = CameraModel(*cam)
@@ -143,7 +158,14 @@ def visibility_kernel(segments, max_distance, poses, pans, tilts, cam):
 
 
 @njit(cache=True)
-def ball_kernel(balls, poses, pans, tilts, cam, radius):
+def ball_kernel(
+    balls: np.ndarray,
+    poses: np.ndarray,
+    pans: np.ndarray,
+    tilts: np.ndarray,
+    cam: tuple[float, ...],
+    radius: float,
+) -> np.ndarray:
     """Ball-visible flags (N,) for N cameras (``cam``: the fields of a
     :class:`CameraModel`)."""
     cam = CameraModel(*cam)
@@ -162,7 +184,9 @@ def _per_camera(values: ArrayLike, n: int) -> np.ndarray:
     return out if out.shape == (n,) else np.ascontiguousarray(np.broadcast_to(out, n))
 
 
-def _cameras(pose: ArrayLike, pan: ArrayLike, tilt: ArrayLike) -> tuple[np.ndarray, ...]:
+def _cameras(
+    pose: ArrayLike, pan: ArrayLike, tilt: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(pose (N, 3), pan (N,), tilt (N,))`` as contiguous float64 arrays."""
     pose = np.ascontiguousarray(np.atleast_2d(pose), dtype=np.float64)
     n = len(pose)
