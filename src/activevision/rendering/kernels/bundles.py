@@ -112,16 +112,6 @@ class Optics(NamedTuple):
     height: int
 
 
-class View(NamedTuple):
-    """One camera during its setup pass: its pose and its scratch (slices of
-    :class:`RenderWork`)."""
-
-    rot: np.ndarray  #: (3, 3) world -> camera rotation (rows: right, down, forward)
-    cam: np.ndarray  #: (3,) camera centre in the world
-    pts: np.ndarray  #: (>= 8, 3) a polygon in camera coordinates
-    clip: np.ndarray  #: (2, >= 9, 3) clipping scratch
-
-
 def scene_bundles(
     scene: SceneArrays, camera: CameraConfig, config: RenderConfig
 ) -> tuple[Scene, Params]:

@@ -11,7 +11,7 @@ import math
 from numba import njit
 
 from activevision.geometry.kernels import camera_rotation
-from activevision.rendering.kernels.bundles import JIT, JIT_PART, Z_NEAR, Optics, View
+from activevision.rendering.kernels.bundles import JIT, JIT_PART, Z_NEAR, Optics
 from activevision.rendering.kernels.edges import polygon_edges_and_rows, store_edge, store_empty
 
 
@@ -22,20 +22,21 @@ def setup_camera(n, scene, params, cams, work):
 
     One function, its sections written out: handing the work or scene bundle (arrays) to
     helpers would count references to every array of it on each call."""
+    # Bundle fields into locals once: reading an array field counts a reference to it, and
+    # those counts (atomic) add up to several percent of a frame.
+    pose, pan, tilt, ball_xy, has_ball = cams
+    paint_quads, carpet, polygons, posts, bars = scene
     rot = work.rot[n]
-    camera_rotation(cams.pose[n, 2] + cams.pan[n], cams.tilt[n], rot)
+    camera_rotation(pose[n, 2] + pan[n], tilt[n], rot)
     cam = work.cam[n]
-    cam[0] = cams.pose[n, 0]
-    cam[1] = cams.pose[n, 1]
+    cam[0] = pose[n, 0]
+    cam[1] = pose[n, 1]
     cam[2] = params.cam_h
     pts = work.pts[n]
     clip = work.clip[n]
-    view = View(rot, cam, pts, clip)
     optics = Optics(params.focal, params.cx, params.cy, params.width, params.height)
     quad_edges = work.quad_edges[n]
     quad_rows = work.quad_rows[n]
-    # bundle fields into locals once: reading an array field counts a reference to it
-    paint_quads, carpet, polygons, posts, bars = scene
     n_paint = paint_quads.shape[0]
     n_posts = posts.shape[0]
     n_bars = bars.shape[0]
@@ -47,27 +48,65 @@ def setup_camera(n, scene, params, cams, work):
             _to_camera(rot, cam, src[k, 0], src[k, 1], 0.0, pts[k])
         polygon_edges_and_rows(pts, 4, optics, quad_edges[q], quad_rows[q], clip)
 
-    # posts, then crossbars: the silhouette quad of each cylinder
+    # Posts, then crossbars: the silhouette quad of each cylinder, none when the camera is
+    # inside it. (Written out here: helpers taking the camera's arrays cost ~5% of the setup.)
     for o in range(n_posts + n_bars):
         edges = quad_edges[n_paint + 1 + o]
         rows = quad_rows[n_paint + 1 + o]
         if o < n_posts:
-            drawn = _post_quad(posts[o], optics, view, edges, rows)
+            # a post: the quad through the two vertical generators tangent to the sight lines
+            pr, ph = posts[o, 2], posts[o, 3]
+            outside, ux, uy, cos_b, t1x, t1y, t2x, t2y = _tangents(posts[o, 0], posts[o, 1], pr,
+                                                                   cam[0], cam[1])
+            if not outside:
+                store_empty(edges, 4, rows)
+                continue
+            # The true bottom (top) outline is the near arc of the base (top) circle, which
+            # bulges towards the camera by the sagitta r (1 - cos b) beyond the chord T1 T2. A
+            # straight edge moved 2/3 of the way out covers the same area (parabolic segment).
+            shift = pr * (1.0 - cos_b) * (2.0 / 3.0)
+            sx, sy = shift * ux, shift * uy
+            _to_camera(rot, cam, t1x + sx, t1y + sy, 0.0, pts[0])
+            _to_camera(rot, cam, t2x + sx, t2y + sy, 0.0, pts[1])
+            _to_camera(rot, cam, t2x + sx, t2y + sy, ph, pts[2])
+            _to_camera(rot, cam, t1x + sx, t1y + sy, ph, pts[3])
+            polygon_edges_and_rows(pts, 4, optics, edges, rows, clip)
+            # The sides are the exact tangent generators (the shifted corners are not on them).
+            ix = 0.25 * (pts[0, 0] + pts[1, 0] + pts[2, 0] + pts[3, 0])
+            iy = 0.25 * (pts[0, 1] + pts[1, 1] + pts[2, 1] + pts[3, 1])
+            iz = 0.25 * (pts[0, 2] + pts[1, 2] + pts[2, 2] + pts[3, 2])
+            _to_camera(rot, cam, t2x, t2y, 0.0, pts[5])
+            _to_camera(rot, cam, t2x, t2y, ph, pts[6])
+            store_edge(pts[5], pts[6], (ix, iy, iz), optics, edges[1])
+            _to_camera(rot, cam, t1x, t1y, ph, pts[5])
+            _to_camera(rot, cam, t1x, t1y, 0.0, pts[6])
+            store_edge(pts[5], pts[6], (ix, iy, iz), optics, edges[3])
         else:
-            drawn = _bar_quad(bars[o - n_posts], optics, view, edges, rows)
-        if not drawn:  # the camera is inside the cylinder
-            store_empty(edges, 4, rows)
+            # a crossbar: the same in the vertical x-z plane (its axis runs along y)
+            b = o - n_posts
+            y0, y1 = bars[b, 1], bars[b, 2]
+            outside, _, _, _, t1x, t1z, t2x, t2z = _tangents(bars[b, 0], bars[b, 3], bars[b, 4],
+                                                             cam[0], cam[2])
+            if not outside:
+                store_empty(edges, 4, rows)
+                continue
+            _to_camera(rot, cam, t1x, y0, t1z, pts[0])
+            _to_camera(rot, cam, t2x, y0, t2z, pts[1])
+            _to_camera(rot, cam, t2x, y1, t2z, pts[2])
+            _to_camera(rot, cam, t1x, y1, t1z, pts[3])
+            polygon_edges_and_rows(pts, 4, optics, edges, rows, clip)
 
     # Centre circle: the outer polygon bounds the rows and columns to shade, the inner one
     # marks pixels certainly inside the hole.
     n_sides = polygons.shape[1]
+    ring_edges = work.ring_edges[n]
+    ring_rows = work.ring_rows[n]
     for o in range(2):
         for k in range(n_sides):
             x = params.ring_x + polygons[o, k, 0]
             y = params.ring_y + polygons[o, k, 1]
             _to_camera(rot, cam, x, y, 0.0, pts[k])
-        polygon_edges_and_rows(pts, n_sides, optics, work.ring_edges[n, o], work.ring_rows[n, o],
-                               clip)
+        polygon_edges_and_rows(pts, n_sides, optics, ring_edges[o], ring_rows[o], clip)
     # Pixel -> ground homography: ground point (gx, gy) / gz of the ray through (u, v),
     # with gz = -(ray's world z) > 0 below the horizon.
     cam_h = params.cam_h
@@ -89,7 +128,7 @@ def setup_camera(n, scene, params, cams, work):
     # Ball: the parameters of coverage.ball_shade and its pixel box (empty when there is
     # no ball or it is out of view)
     ball_r = params.ball_r
-    _to_camera(rot, cam, cams.ball_xy[n, 0], cams.ball_xy[n, 1], ball_r, pts[0])
+    _to_camera(rot, cam, ball_xy[n, 0], ball_xy[n, 1], ball_r, pts[0])
     c0, c1, c2 = pts[0, 0], pts[0, 1], pts[0, 2]
     ball_info = work.ball_info[n]
     ball_info[0] = c0
@@ -101,7 +140,7 @@ def setup_camera(n, scene, params, cams, work):
     ball_info[6] = rot[2, 2]
     ball_info[7] = c0 * rot[0, 2] + c1 * rot[1, 2] + c2 * rot[2, 2]  # c . up
     ball_info[8] = 1.0 / ball_r
-    if cams.has_ball and c2 + ball_r > Z_NEAR and ball_info[3] > 0.0:
+    if has_ball and c2 + ball_r > Z_NEAR and ball_info[3] > 0.0:
         i0, i1 = _angular_extent(c0, c2, ball_r, focal, params.cx, params.width)
         j0, j1 = _angular_extent(c1, c2, ball_r, focal, params.cy, params.height)
     else:
@@ -139,10 +178,11 @@ def setup_camera(n, scene, params, cams, work):
             m -= 1
 
     # the paint quads in view, and the first row that shows more than background
+    visible_paint = work.visible_paint[n]
     n_visible = 0
     for q in range(n_paint):
         if quad_rows[q, 1] > quad_rows[q, 0]:
-            work.visible_paint[n, n_visible] = q
+            visible_paint[n_visible] = q
             n_visible += 1
     work.visible_count[n] = n_visible
     first = params.height
@@ -174,56 +214,6 @@ def _tangents(ca, cb, r, pa, pb):
     t2a = ca + r * (ua * cos_b + ub * sin_b)
     t2b = cb + r * (ub * cos_b - ua * sin_b)
     return True, ua, ub, cos_b, t1a, t1b, t2a, t2b
-
-
-@njit(**JIT_PART)
-def _post_quad(post, optics, view, edges, rows):
-    """A post's silhouette quad through the two vertical generators tangent to the sight
-    lines, into ``edges`` and ``rows``; False (nothing written) when the camera is inside
-    the post."""
-    rot, cam, pts = view.rot, view.cam, view.pts
-    pr, ph = post[2], post[3]
-    outside, ux, uy, cos_b, t1x, t1y, t2x, t2y = _tangents(post[0], post[1], pr, cam[0], cam[1])
-    if not outside:
-        return False
-    # The true bottom (top) outline is the near arc of the base (top) circle, which bulges
-    # towards the camera by the sagitta r (1 - cos b) beyond the chord T1 T2. A straight edge
-    # moved 2/3 of the way out covers the same area (parabolic segment).
-    shift = pr * (1.0 - cos_b) * (2.0 / 3.0)
-    sx, sy = shift * ux, shift * uy
-    _to_camera(rot, cam, t1x + sx, t1y + sy, 0.0, pts[0])
-    _to_camera(rot, cam, t2x + sx, t2y + sy, 0.0, pts[1])
-    _to_camera(rot, cam, t2x + sx, t2y + sy, ph, pts[2])
-    _to_camera(rot, cam, t1x + sx, t1y + sy, ph, pts[3])
-    polygon_edges_and_rows(pts, 4, optics, edges, rows, view.clip)
-    # The sides are the exact tangent generators (the shifted corners are not on them).
-    ix = 0.25 * (pts[0, 0] + pts[1, 0] + pts[2, 0] + pts[3, 0])
-    iy = 0.25 * (pts[0, 1] + pts[1, 1] + pts[2, 1] + pts[3, 1])
-    iz = 0.25 * (pts[0, 2] + pts[1, 2] + pts[2, 2] + pts[3, 2])
-    _to_camera(rot, cam, t2x, t2y, 0.0, pts[5])
-    _to_camera(rot, cam, t2x, t2y, ph, pts[6])
-    store_edge(pts[5], pts[6], (ix, iy, iz), optics, edges[1])
-    _to_camera(rot, cam, t1x, t1y, ph, pts[5])
-    _to_camera(rot, cam, t1x, t1y, 0.0, pts[6])
-    store_edge(pts[5], pts[6], (ix, iy, iz), optics, edges[3])
-    return True
-
-
-@njit(**JIT_PART)
-def _bar_quad(bar, optics, view, edges, rows):
-    """A crossbar's silhouette quad, as a post's in the vertical x-z plane (its axis runs
-    along y); False (nothing written) when the camera is inside the bar."""
-    rot, cam, pts = view.rot, view.cam, view.pts
-    y0, y1 = bar[1], bar[2]
-    outside, _, _, _, t1x, t1z, t2x, t2z = _tangents(bar[0], bar[3], bar[4], cam[0], cam[2])
-    if not outside:
-        return False
-    _to_camera(rot, cam, t1x, y0, t1z, pts[0])
-    _to_camera(rot, cam, t2x, y0, t2z, pts[1])
-    _to_camera(rot, cam, t2x, y1, t2z, pts[2])
-    _to_camera(rot, cam, t1x, y1, t1z, pts[3])
-    polygon_edges_and_rows(pts, 4, optics, edges, rows, view.clip)
-    return True
 
 
 @njit(**JIT)
