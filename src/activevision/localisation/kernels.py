@@ -17,7 +17,7 @@ wrapped by :func:`activevision.geometry.angles.wrap_angle`, the package's one co
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -33,6 +33,11 @@ from activevision.geometry.kernels import (
 )
 
 LOG_2PIE = math.log(2.0 * math.pi * math.e)
+
+#: A bundle as the entry points take it from Python: the plain tuple of its fields
+#: (``tuple(bundle)``), rebuilt into the namedtuple inside. (To mypy, ``tuple()`` of a
+#: namedtuple is a homogeneous tuple; the field types are checked where the bundle is made.)
+Fields = tuple[Any, ...]
 
 #: error codes written by :func:`search_kernel`
 OK = 0
@@ -106,7 +111,7 @@ class UKFScratch(NamedTuple):
 
 
 @njit(cache=True)
-def chol3(A, L):
+def chol3(A: np.ndarray, L: np.ndarray) -> bool:
     """Lower Cholesky factor of the 3x3 ``A`` into ``L``; False if ``A`` is not PD."""
     d0 = A[0, 0]
     if not d0 > 0.0:
@@ -129,21 +134,23 @@ def chol3(A, L):
 
 
 @njit(cache=True)
-def point_rb(px, py, pth, ax, ay):
+def point_rb(px: float, py: float, pth: float, ax: float, ay: float) -> tuple[float, float]:
     """Range and bearing of the point ``a`` from pose ``(px, py, pth)``."""
     ex, ey = ax - px, ay - py
     return math.hypot(ex, ey), wrap(math.atan2(ey, ex) - pth)
 
 
 @njit(cache=True)
-def unit_normal(ax, ay, bx, by):
+def unit_normal(ax: float, ay: float, bx: float, by: float) -> tuple[float, float]:
     dx, dy = bx - ax, by - ay
     length = math.hypot(dx, dy)
     return -dy / length, dx / length
 
 
 @njit(cache=True)
-def expected_rb(px, py, pth, ax, ay, bx, by):
+def expected_rb(
+    px: float, py: float, pth: float, ax: float, ay: float, bx: float, by: float
+) -> tuple[float, float]:
     """What pose ``(px, py, pth)`` measures of a landmark (as ``ukf.hx_range_bearing`` with
     the default normal): a point's range-bearing, a line's polar form towards the line."""
     if ax == bx and ay == by:
@@ -155,7 +162,15 @@ def expected_rb(px, py, pth, ax, ay, bx, by):
 
 
 @njit(cache=True)
-def ukf_update_rb(x, P, z, segment, noise, weights, scratch):
+def ukf_update_rb(
+    x: np.ndarray,
+    P: np.ndarray,
+    z: tuple[float, float],
+    segment: tuple[float, float, float, float],
+    noise: tuple[float, float],
+    weights: SigmaWeights,
+    scratch: UKFScratch,
+) -> bool:
     """One UKF range-bearing update of ``x`` (3,) and ``P`` (3, 3) in place (as
     ``ukf.ukf_update``) by the detection ``z = (range, bearing)`` of the landmark ``segment =
     (ax, ay, bx, by)`` with variances ``noise = (var_r, var_b)``, with the
@@ -234,7 +249,7 @@ def ukf_update_rb(x, P, z, segment, noise, weights, scratch):
 
 
 @njit(cache=True)
-def plan_start(s, means, landmarks, plan):
+def plan_start(s: int, means: np.ndarray, landmarks: Landmarks, plan: Plan) -> None:
     """Planning for start ``s`` (believed pose ``means[s]``): the expected detection ``z =
     h(mu)`` of every landmark, its noise and range interval, and the landmark order (closest
     first, ties by id), into row ``s`` of the :class:`Plan` ``plan``."""
@@ -257,7 +272,7 @@ def plan_start(s, means, landmarks, plan):
 
 
 @njit(cache=True)
-def plan_starts(means, landmarks):
+def plan_starts(means: np.ndarray, landmarks: Landmarks) -> Plan:
     """:func:`plan_start` for every start: the :class:`Plan`."""
     n_starts, n_lm = means.shape[0], landmarks.segments.shape[0]
     plan = Plan(
@@ -275,7 +290,17 @@ def plan_starts(means, landmarks):
 
 
 @njit(cache=True)
-def search_block(block, n_blocks, starts, landmarks, weights, views, camera, plan, out):
+def search_block(
+    block: int,
+    n_blocks: int,
+    starts: Starts,
+    landmarks: Landmarks,
+    weights: SigmaWeights,
+    views: Views,
+    camera: CameraModel,
+    plan: Plan,
+    out: SearchOutput,
+) -> None:
     """Block ``block`` of ``n_blocks`` contiguous blocks of the N x V (start, view) pairs:
     ball test, visible landmarks and the sequential UKF updates of each pair (Algorithm 1,
     lines 3-8), written into the :class:`SearchOutput` ``out``. Pairs are independent, so
@@ -340,7 +365,7 @@ def search_block(block, n_blocks, starts, landmarks, weights, views, camera, pla
 
 
 @njit(cache=True)
-def search_outputs(n_starts, n_views, n_lm):
+def search_outputs(n_starts: int, n_views: int, n_lm: int) -> SearchOutput:
     """An empty :class:`SearchOutput` of a search."""
     return SearchOutput(
         np.empty((n_starts, n_views)),
@@ -352,7 +377,13 @@ def search_outputs(n_starts, n_views, n_lm):
 
 
 @njit(cache=True)
-def search_kernel(starts, landmarks, weights, views, camera):
+def search_kernel(
+    starts: Fields,
+    landmarks: Fields,
+    weights: Fields,
+    views: Fields,
+    camera: tuple[float, ...],
+) -> SearchOutput:
     """Algorithm 1 for N starts and V candidate views, on the calling thread. Arguments: the
     fields of a :class:`Starts`, :class:`Landmarks`, :class:`SigmaWeights`, :class:`Views` and
     ``geometry.kernels.CameraModel``.
@@ -368,7 +399,14 @@ def search_kernel(starts, landmarks, weights, views, camera):
 
 
 @njit(cache=True, parallel=True)
-def search_kernel_parallel(starts, landmarks, weights, views, camera, n_blocks):
+def search_kernel_parallel(
+    starts: Fields,
+    landmarks: Fields,
+    weights: Fields,
+    views: Fields,
+    camera: tuple[float, ...],
+    n_blocks: int,
+) -> SearchOutput:
     """:func:`search_kernel` with the (start, view) pairs split into ``n_blocks`` blocks
     spread over the numba threads (identical results)."""
     # Every bundle is made by its class right here: numba's parfor lowering finds the class

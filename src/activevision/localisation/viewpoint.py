@@ -24,6 +24,7 @@ import enum
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -178,10 +179,13 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
-def choose_goal(entropies, ball_visible):
+def choose_goal(
+    entropies: np.ndarray, ball_visible: np.ndarray
+) -> tuple[np.ndarray | np.bool_, np.ndarray]:
     """Least-entropy candidate showing the ball, first in grid order on ties (Algorithm 1,
     lines 9-12). ``entropies``, ``ball_visible``: (N, V). Returns ``(ok (N,), index (N,))``
-    with ``index`` -1 where no candidate shows the ball."""
+    with ``index`` -1 where no candidate shows the ball (for one belief's (V,): a NumPy
+    bool and a 0-d array)."""
     masked = np.where(ball_visible, entropies, np.inf)
     ok = ball_visible.any(axis=-1)
     return ok, np.where(ok, np.argmin(masked, axis=-1), -1)
@@ -205,7 +209,7 @@ def search_args(
     ukf: UKFConfig,
     ball_radius: float,
     ball_views_only: bool,
-) -> tuple[tuple, ...]:
+) -> tuple[kernels.Fields, kernels.Fields, kernels.Fields, kernels.Fields, tuple[float, ...]]:
     """The bundles of :func:`kernels.search_kernel` (``Starts``, ``Landmarks``,
     ``SigmaWeights``, ``Views``, ``CameraModel``) for contiguous float64 ``means`` (N, 3),
     ``covs`` (N, 3, 3) and ``balls`` (N, 2), each as the plain tuple of its fields."""
@@ -214,7 +218,7 @@ def search_args(
 
 
 #: The last :func:`_static_bundles` and what they were made from.
-_last_static: tuple = ((), ())
+_last_static: tuple[tuple[object, ...], tuple[Any, ...]] = ((), ())
 
 
 def _static_bundles(
@@ -223,7 +227,7 @@ def _static_bundles(
     grid: ViewpointGrid,
     ukf: UKFConfig,
     ball_views_only: bool,
-) -> tuple[tuple, ...]:
+) -> tuple[kernels.Fields, kernels.Fields, kernels.Fields, tuple[float, ...]]:
     """The fields of the ``Landmarks``, ``SigmaWeights``, ``Views`` and ``CameraModel`` of a
     search; the last ones are kept for the same (``is``) inputs, which an environment passes
     every time (building them takes about as long as 5% of a single search)."""
@@ -286,9 +290,9 @@ def _search(
 
 
 def best_viewpoints(
-    means,
-    covs,
-    balls,
+    means: ArrayLike,
+    covs: ArrayLike,
+    balls: ArrayLike,
     landmarks: LandmarkSet,
     cam: CameraConfig,
     grid: ViewpointGrid = DEFAULT_GRID,
@@ -313,7 +317,8 @@ def best_viewpoints(
     H, ball_vis, visible, post = _search(
         means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel, ball_views_only
     )
-    ok, index = choose_goal(H, ball_vis)
+    found, index = choose_goal(H, ball_vis)
+    ok = cast(np.ndarray, found)  # (N, V) in, so (N,) out: an array, not a NumPy bool
     pick = np.maximum(index, 0)
     return ViewpointBatch(
         ok=ok,
@@ -330,9 +335,9 @@ def best_viewpoints(
 
 
 def best_viewpoint(
-    belief_mean,
-    belief_cov,
-    ball_xy,
+    belief_mean: ArrayLike,
+    belief_cov: ArrayLike,
+    ball_xy: ArrayLike,
     landmarks: LandmarkSet,
     cam: CameraConfig,
     grid: ViewpointGrid = DEFAULT_GRID,
@@ -354,7 +359,13 @@ def best_viewpoint(
     return _result(H[0], ball_vis[0], visible[0], post[0], grid)
 
 
-def _result(entropies, ball_vis, visible, post, grid) -> ViewpointResult:
+def _result(
+    entropies: np.ndarray,
+    ball_vis: np.ndarray,
+    visible: np.ndarray,
+    post: np.ndarray,
+    grid: ViewpointGrid,
+) -> ViewpointResult:
     ok, index = choose_goal(entropies, ball_vis)
     i = int(index)
     found = bool(ok)
@@ -374,9 +385,9 @@ def _result(entropies, ball_vis, visible, post, grid) -> ViewpointResult:
 
 
 def best_viewpoint_loop(
-    belief_mean,
-    belief_cov,
-    ball_xy,
+    belief_mean: ArrayLike,
+    belief_cov: ArrayLike,
+    ball_xy: ArrayLike,
     landmarks: LandmarkSet,
     cam: CameraConfig,
     grid: ViewpointGrid = DEFAULT_GRID,
@@ -408,7 +419,7 @@ def best_viewpoint_loop(
 
 
 def candidate_footprints(
-    pose,
+    pose: ArrayLike,
     grid: ViewpointGrid,
     cam: CameraConfig,
     max_distance: float = 4.0,
