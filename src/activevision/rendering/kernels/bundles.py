@@ -13,7 +13,7 @@ called per row, edge or pixel take :class:`Params` (scalars only) and single arr
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, Literal, NamedTuple, TypedDict
 
 import numpy as np
 from numba import njit
@@ -22,16 +22,30 @@ from activevision.geometry.camera import CameraConfig
 from activevision.rendering.config import RenderConfig
 from activevision.rendering.scene import SceneArrays
 
+
+class JitFlags(TypedDict, total=False):
+    """The ``numba.njit`` flags the renderer's kernels use (typed for ``njit(**flags)``)."""
+
+    cache: bool
+    fastmath: bool
+    nogil: bool
+    inline: Literal["never", "always"]
+
+
 #: Flags of every renderer kernel (the entry points add ``parallel``).
-JIT = {"cache": True, "fastmath": True, "nogil": True}
+JIT: JitFlags = {"cache": True, "fastmath": True, "nogil": True}
 #: Flags of the parts of one kernel that only it calls: inlined into it by numba (one
 #: compiled function instead of several, each linking and optimising its callees again).
-JIT_PART = {**JIT, "inline": "always"}
+JIT_PART: JitFlags = {**JIT, "inline": "always"}
 #: Depth (m) at which polygons are clipped before projection.
 Z_NEAR = 1e-3
 #: Parameters stored per edge: l0, l1, l2 (unit normal form), hi, lo (trapezoid half-widths),
 #: 1 / (2 hi), 1 / (8 hi lo), 1 / l0 (0 when l0 is 0).
 EDGE_PARAMS = 8
+#: A bundle as the entry points take it from Python: the plain tuple of its fields
+#: (``tuple(bundle)``), rebuilt into the namedtuple inside. (To mypy, ``tuple()`` of a
+#: namedtuple is a homogeneous tuple; the field types are checked where the bundle is made.)
+Fields = tuple[Any, ...]
 
 
 class Scene(NamedTuple):
@@ -149,7 +163,7 @@ def scene_bundles(
 
 
 @njit(**JIT)
-def allocate_work(n_cams, scene):
+def allocate_work(n_cams: int, scene: Scene) -> RenderWork:
     """Per-call :class:`RenderWork` for ``n_cams`` cameras. Uninitialised on purpose (speed):
     for each camera the setup writes every entry that the row pass reads, so an image never
     depends on what the memory held before (:func:`.garbage.fill_garbage` tests exactly

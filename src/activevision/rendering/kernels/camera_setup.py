@@ -8,15 +8,25 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from activevision.geometry.kernels import camera_rotation
-from activevision.rendering.kernels.bundles import JIT, JIT_PART, Z_NEAR, Optics
+from activevision.rendering.kernels.bundles import (
+    JIT,
+    JIT_PART,
+    Z_NEAR,
+    Cameras,
+    Optics,
+    Params,
+    RenderWork,
+    Scene,
+)
 from activevision.rendering.kernels.edges import polygon_edges_and_rows, store_edge, store_empty
 
 
 @njit(**JIT)
-def setup_camera(n, scene, params, cams, work):
+def setup_camera(n: int, scene: Scene, params: Params, cams: Cameras, work: RenderWork) -> None:
     """Per-camera precomputation (see :mod:`activevision.rendering.kernels`) for camera
     ``n`` of ``cams``, into slice ``n`` of every :class:`RenderWork` array.
 
@@ -195,7 +205,9 @@ def setup_camera(n, scene, params, cams, work):
 
 
 @njit(**JIT_PART)
-def _tangents(ca, cb, r, pa, pb):
+def _tangents(
+    ca: float, cb: float, r: float, pa: float, pb: float
+) -> tuple[bool, float, float, float, float, float, float, float]:
     """The circle of centre ``(ca, cb)`` and radius ``r`` seen from ``(pa, pb)``, in one
     plane: ``(outside, ua, ub, cos_b, t1a, t1b, t2a, t2b)``: whether the viewpoint is outside
     (all else 0 if not), the unit vector from the centre towards it, the cosine of the angle
@@ -217,7 +229,9 @@ def _tangents(ca, cb, r, pa, pb):
 
 
 @njit(**JIT)
-def _angular_extent(a, z, r, focal, centre, size):
+def _angular_extent(
+    a: float, z: float, r: float, focal: float, centre: float, size: int
+) -> tuple[int, int]:
     """Pixel interval ``[lo, hi)`` covered by a sphere seen at lateral offset ``a`` and depth
     ``z`` (one image axis), radius ``r``; the whole axis when it is too close to tell."""
     rho = math.sqrt(a * a + z * z)
@@ -235,7 +249,9 @@ def _angular_extent(a, z, r, focal, centre, size):
 
 
 @njit(**JIT)
-def _to_camera(rot, cam, x, y, z, out):
+def _to_camera(
+    rot: np.ndarray, cam: np.ndarray, x: float, y: float, z: float, out: np.ndarray
+) -> None:
     """World point ``(x, y, z)`` in the coordinates of the camera at ``cam`` (3,) turned by
     ``rot`` (3, 3), into ``out`` (3,)."""
     dx = x - cam[0]

@@ -7,9 +7,10 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+import numpy as np
 from numba import njit
 
-from activevision.rendering.kernels.bundles import JIT
+from activevision.rendering.kernels.bundles import JIT, Params
 
 
 class RingRow(NamedTuple):
@@ -31,7 +32,7 @@ class RingRow(NamedTuple):
 
 
 @njit(**JIT)
-def _halfplane_coverage(d, hi, lo, inv_2hi, inv_8hilo):
+def _halfplane_coverage(d: float, hi: float, lo: float, inv_2hi: float, inv_8hilo: float) -> float:
     """Fraction of a unit pixel inside a half-plane; ``d``: signed distance (px) of the pixel
     centre, ``hi >= lo``: half-widths of the pixel's projection onto the normal."""
     r = hi + lo
@@ -49,7 +50,7 @@ def _halfplane_coverage(d, hi, lo, inv_2hi, inv_8hilo):
 
 
 @njit(**JIT)
-def _coverage_at(d, n0, n1):
+def _coverage_at(d: float, n0: float, n1: float) -> float:
     """:func:`_halfplane_coverage` for a unit normal ``(n0, n1)`` known per pixel."""
     a = 0.5 * abs(n0)
     b = 0.5 * abs(n1)
@@ -59,7 +60,7 @@ def _coverage_at(d, n0, n1):
 
 
 @njit(**JIT)
-def fully_inside(edges, n_edges, u, v):
+def fully_inside(edges: np.ndarray, n_edges: int, u: float, v: float) -> bool:
     """Whether the pixel centred at ``(u, v)`` lies entirely inside every edge."""
     for e in range(n_edges):
         if edges[e, 0] * u + edges[e, 1] * v + edges[e, 2] < edges[e, 3] + edges[e, 4]:
@@ -68,7 +69,9 @@ def fully_inside(edges, n_edges, u, v):
 
 
 @njit(**JIT)
-def span(edges, n_edges, v, threshold, width):
+def span(
+    edges: np.ndarray, n_edges: int, v: float, threshold: float, width: int
+) -> tuple[int, int]:
     """Columns ``[lo, hi)`` of row centre ``v`` whose pixel centres are at signed distance
     greater than ``threshold * r`` from every edge (``r``: the pixel's half-extent along the
     edge normal). ``threshold = -1``: pixels touching the polygon; ``+1``: pixels fully
@@ -96,13 +99,13 @@ def span(edges, n_edges, v, threshold, width):
 
 
 @njit(**JIT)
-def _edge_coverage(edge, u, v):
+def _edge_coverage(edge: np.ndarray, u: float, v: float) -> float:
     d = edge[0] * u + edge[1] * v + edge[2]
     return _halfplane_coverage(d, edge[3], edge[4], edge[5], edge[6])
 
 
 @njit(**JIT)
-def quad_coverage(edges, u, v):
+def quad_coverage(edges: np.ndarray, u: float, v: float) -> float:
     """Fraction of the pixel centred at ``(u, v)`` covered by a quad: product of its two
     bands, each ``F1 + F2 - 1``."""
     band_a = _edge_coverage(edges[0], u, v) + _edge_coverage(edges[2], u, v) - 1.0
@@ -115,7 +118,9 @@ def quad_coverage(edges, u, v):
 
 
 @njit(**JIT)
-def paint_quad_pixels(edges, v, i_start, i_end, paint):
+def paint_quad_pixels(
+    edges: np.ndarray, v: float, i_start: int, i_end: int, paint: np.ndarray
+) -> None:
     """Max-combine a quad's coverage of columns ``[i_start, i_end)`` of row ``v`` into
     ``paint``."""
     for i in range(i_start, i_end):
@@ -125,7 +130,7 @@ def paint_quad_pixels(edges, v, i_start, i_end, paint):
 
 
 @njit(**JIT)
-def _ring_pixels(i_start, i_end, g, paint):
+def _ring_pixels(i_start: int, i_end: int, g: RingRow, paint: np.ndarray) -> None:
     """The per-pixel part of :func:`ring_row` for columns ``[i_start, i_end)``; ``g``: the
     row's :class:`RingRow`."""
     gx0, gy0, gz0 = g.gx0, g.gy0, g.gz0
@@ -167,7 +172,14 @@ def _ring_pixels(i_start, i_end, g, paint):
 
 
 @njit(**JIT)
-def ring_row(h, v, columns, hole, params, paint):
+def ring_row(
+    h: np.ndarray,
+    v: float,
+    columns: tuple[int, int],
+    hole: tuple[int, int],
+    params: Params,
+    paint: np.ndarray,
+) -> None:
     """Ring coverage of the pixels ``s0 <= i < s1`` (``columns``) of row centre ``v``,
     skipping the hole ``hole0 <= i < hole1`` (``hole``), max-combined into ``paint``. ``h``:
     pixel-to-ground homography (scaled so ``gz > 0`` below the horizon).
@@ -203,7 +215,7 @@ def ring_row(h, v, columns, hole, params, paint):
 
 
 @njit(**JIT)
-def ball_shade(ball, u, v, params):
+def ball_shade(ball: np.ndarray, u: float, v: float, params: Params) -> tuple[float, float]:
     """``(coverage, grey)`` of the ball at pixel centre ``(u, v)``.
 
     ``ball``: centre ``c`` in camera coordinates, ``|c|^2 - r^2``, the world up axis in camera

@@ -6,13 +6,20 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
-from activevision.rendering.kernels.bundles import JIT, Z_NEAR
+from activevision.rendering.kernels.bundles import JIT, Z_NEAR, Optics
 
 
 @njit(**JIT)
-def store_edge(a, b, inner, optics, out):
+def store_edge(
+    a: np.ndarray,
+    b: np.ndarray,
+    inner: tuple[float, float, float],
+    optics: Optics,
+    out: np.ndarray,
+) -> None:
     """Image line of the 3D segment ``a``-``b`` (camera frame), oriented so that the 3D
     point ``inner = (ix, iy, iz)`` is on its positive side, into ``out`` (EDGE_PARAMS,)."""
     ix, iy, iz = inner
@@ -50,7 +57,9 @@ def store_edge(a, b, inner, optics, out):
 
 
 @njit(**JIT)
-def _clip_plane(src, n_src, dst, a, b, c, e):
+def _clip_plane(
+    src: np.ndarray, n_src: int, dst: np.ndarray, a: float, b: float, c: float, e: float
+) -> int:
     """Sutherland-Hodgman: clip polygon ``src[:n_src]`` to ``a x + b y + c z + e >= 0``
     into ``dst``; returns the new vertex count."""
     n_dst = 0
@@ -74,7 +83,7 @@ def _clip_plane(src, n_src, dst, a, b, c, e):
 
 
 @njit(**JIT)
-def store_empty(edges, n_edges, rows):
+def store_empty(edges: np.ndarray, n_edges: int, rows: np.ndarray) -> None:
     """Mark a shape out of view: no rows, and ``n_edges`` edges that no pixel touches.
 
     The row range alone already tells the row passes to skip the shape; the edges are
@@ -96,7 +105,14 @@ def store_empty(edges, n_edges, rows):
 
 
 @njit(**JIT)
-def polygon_edges_and_rows(pts, n_pts, optics, edges, rows, clip):
+def polygon_edges_and_rows(
+    pts: np.ndarray,
+    n_pts: int,
+    optics: Optics,
+    edges: np.ndarray,
+    rows: np.ndarray,
+    clip: np.ndarray,
+) -> None:
     """Edge lines of the convex 3D polygon ``pts[:n_pts]`` (camera frame) into ``edges`` and
     the image rows ``[rows[0], rows[1])`` its projection touches: the polygon is clipped to
     the view frustum (image borders and depth >= Z_NEAR) and the clipped vertices projected.

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from activevision.rendering.kernels.bundles import EDGE_PARAMS, JIT
+from activevision.rendering.kernels.bundles import EDGE_PARAMS, JIT, RenderWork
 
 #: Kinds of garbage of :func:`fill_garbage`: random mixed values; an edge that takes every
 #: pixel with row ranges over every row (stale data that *looks* valid is what turns a
@@ -24,7 +24,7 @@ _ACCEPT_ALL_EDGE = (0.0, 0.0, 1e30, 0.5, 0.5, 1.0, 0.5, 0.0)
 
 
 @njit(**JIT)
-def _xorshift(x):
+def _xorshift(x: np.uint64) -> np.uint64:
     x ^= x << np.uint64(13)
     x ^= x >> np.uint64(7)
     x ^= x << np.uint64(17)
@@ -32,7 +32,7 @@ def _xorshift(x):
 
 
 @njit(**JIT)
-def garbage_floats(arr, seed):
+def garbage_floats(arr: np.ndarray, seed: int) -> None:
     """Fill the C-contiguous float array ``arr`` with garbage of kind ``seed % GARBAGE_KINDS``
     drawn from ``seed``."""
     flat = arr.reshape(arr.size)
@@ -59,7 +59,7 @@ def garbage_floats(arr, seed):
 
 
 @njit(**JIT)
-def _garbage_ints(arr, seed):
+def _garbage_ints(arr: np.ndarray, seed: int) -> None:
     """Fill the C-contiguous int64 array ``arr`` with garbage of kind ``seed % GARBAGE_KINDS``
     (huge, negative, plausible row, column and object indices) drawn from ``seed``."""
     flat = arr.reshape(arr.size)
@@ -83,7 +83,7 @@ def _garbage_ints(arr, seed):
 
 
 @njit(**JIT)
-def fill_garbage(work, value, seed):
+def fill_garbage(work: RenderWork, value: np.ndarray, seed: int) -> None:
     """Overwrite every buffer of the :class:`.bundles.RenderWork` ``work`` and the row scratch
     ``value`` with garbage of kind ``seed % GARBAGE_KINDS``, as if the memory held anything
     at all (including another camera's data)."""

@@ -19,6 +19,7 @@ from activevision.rendering.kernels.bundles import (
     JIT,
     JIT_PART,
     Cameras,
+    Fields,
     Params,
     RenderWork,
     Scene,
@@ -37,7 +38,9 @@ from activevision.rendering.kernels.garbage import GARBAGE_KINDS, fill_garbage, 
 
 
 @njit(**JIT_PART)
-def _quad_columns(edges, v, width, min_width):
+def _quad_columns(
+    edges: np.ndarray, v: float, width: int, min_width: int
+) -> tuple[int, int, int, int]:
     """Columns of row centre ``v`` that a quad touches, ``[s0, s1)``, and those it covers
     entirely, ``[i0, i1)`` (``(s1, s1)`` when none, or when ``[s0, s1)`` is not wider than
     ``min_width``: not worth looking for). Returns ``(s0, s1, i0, i1)``."""
@@ -51,7 +54,7 @@ def _quad_columns(edges, v, width, min_width):
 
 
 @njit(**JIT_PART)
-def _carpet_row(edges, v, params, value):
+def _carpet_row(edges: np.ndarray, v: float, params: Params, value: np.ndarray) -> None:
     """``value`` (W,) of a row the carpet's ``edges`` reach: background, the carpet and its
     anti-aliased border."""
     width = value.shape[0]
@@ -75,7 +78,7 @@ def _carpet_row(edges, v, params, value):
 
 
 @njit(**JIT_PART)
-def _paint_quad_row(edges, v, paint):
+def _paint_quad_row(edges: np.ndarray, v: float, paint: np.ndarray) -> tuple[int, int]:
     """Max-combine a painted quad's coverage of row centre ``v`` into ``paint``; returns the
     columns ``[s0, s1)`` it touches."""
     # pixels fully inside a quad wider than 4 px: coverage 1 without per-pixel work
@@ -87,7 +90,7 @@ def _paint_quad_row(edges, v, paint):
 
 
 @njit(**JIT_PART)
-def _post_quad_row(edges, v, grey, value):
+def _post_quad_row(edges: np.ndarray, v: float, grey: float, value: np.ndarray) -> None:
     """Composite a post's or crossbar's quad of grey ``grey`` over row centre ``v`` of
     ``value``, with its coverage as alpha."""
     s0, s1, i0, i1 = _quad_columns(edges, v, value.shape[0], 4)
@@ -101,7 +104,16 @@ def _post_quad_row(edges, v, grey, value):
 
 
 @njit(**JIT)
-def render_rows(n, rows, out, scene, params, work, value, paint):
+def render_rows(
+    n: int,
+    rows: tuple[int, int],
+    out: np.ndarray,
+    scene: Scene,
+    params: Params,
+    work: RenderWork,
+    value: np.ndarray,
+    paint: np.ndarray,
+) -> None:
     """Rows ``row0, row0 + row_step, ...`` (``rows = (row0, row_step)``) of image ``n`` into
     ``out`` (N, H, W). ``value`` (W,) float32 scratch; ``paint`` (W,) float32 scratch that is
     all zero on entry and on exit.
@@ -181,14 +193,16 @@ def render_rows(n, rows, out, scene, params, work, value, paint):
 
 
 @njit(**JIT_PART)
-def _check_size(params, out):
+def _check_size(params: Params, out: np.ndarray) -> None:
     """Every kernel takes the image size from ``params``: ``out`` must have it."""
     if out.shape[1] != params.height or out.shape[2] != params.width:
         raise ValueError("render kernels: out does not have the image size of params")
 
 
 @njit(**JIT_PART)
-def _bundles(scene, params, cameras, out):
+def _bundles(
+    scene: Fields, params: Fields, cameras: Fields, out: np.ndarray
+) -> tuple[Scene, Params, Cameras, RenderWork]:
     """An entry point's bundles from the tuples of their fields (size-checked against
     ``out``), and the work memory: ``(scene, params, cameras, work)``."""
     params = Params(*params)
@@ -199,7 +213,14 @@ def _bundles(scene, params, cameras, out):
 
 
 @njit(cache=True, fastmath=True, nogil=True, parallel=True)
-def render_kernel(scene, params, cameras, row_blocks, out, garbage):
+def render_kernel(
+    scene: Fields,
+    params: Fields,
+    cameras: Fields,
+    row_blocks: int,
+    out: np.ndarray,
+    garbage: int,
+) -> None:
     """Render the cameras into ``out`` (N, H, W) uint8, on all numba threads. Each camera's
     rows are split into ``row_blocks`` interleaved sets of work."""
     # As _bundles, written out: numba's parfor lowering finds the class of a namedtuple used
@@ -226,7 +247,9 @@ def render_kernel(scene, params, cameras, row_blocks, out, garbage):
 
 
 @njit(**JIT)
-def render_kernel_serial(scene, params, cameras, out, garbage):
+def render_kernel_serial(
+    scene: Fields, params: Fields, cameras: Fields, out: np.ndarray, garbage: int
+) -> None:
     """:func:`render_kernel` on the calling thread only: no thread hand-off, which matters
     for single frames (and on machines whose cores are busy with other work)."""
     scene, params, cams, work = _bundles(scene, params, cameras, out)
