@@ -127,43 +127,12 @@ class Renderer:
         Returns:
             (N, H, W) uint8 images (``out`` when given).
         """
-        try:
-            pose_arr = np.asarray(pose, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError("pose must be a numeric array of shape (N, 3) or (3,)") from None
-        if pose_arr.ndim == 1:
-            pose_arr = _float_array("pose", pose_arr, (3,))[None]
-        n = pose_arr.shape[0] if pose_arr.ndim == 2 else -1
-        if n < 1:
-            raise ValueError(f"pose must have shape (N, 3) or (3,), got {pose_arr.shape}")
-        pose_arr = _float_array("pose", pose_arr, (n, 3))
+        pose_arr = _poses(pose)
+        n = pose_arr.shape[0]
         pan_arr = _per_camera("pan", pan, n)
         tilt_arr = _per_camera("tilt", tilt, n)
-        ball_arr: np.ndarray
-        if ball_xy is None:
-            ball_arr = np.zeros((n, 2))
-            has_ball = False
-        else:
-            try:
-                ball_arr = np.asarray(ball_xy, dtype=np.float64)
-            except (TypeError, ValueError):
-                raise ValueError(f"ball_xy must be a numeric array of shape ({n}, 2)") from None
-            if n == 1 and ball_arr.shape == (2,):
-                ball_arr = ball_arr[None]
-            ball_arr = _float_array("ball_xy", ball_arr, (n, 2))
-            has_ball = True
-        height, width = self.image_shape
-        if out is None:
-            out = np.empty((n, height, width), dtype=np.uint8)
-        elif not isinstance(out, np.ndarray):
-            raise ValueError("out must be a numpy uint8 array")
-        elif out.shape != (n, height, width) or out.dtype != np.uint8:
-            raise ValueError(
-                f"out must be a uint8 array of shape {(n, height, width)}, got {out.dtype} "
-                f"{out.shape}"
-            )
-        elif not out.flags.c_contiguous or not out.flags.writeable:
-            raise ValueError("out must be C-contiguous and writeable")
+        ball_arr, has_ball = _balls(ball_xy, n)
+        out = _output(out, (n, *self.image_shape))
         if self.config.has_noise and not isinstance(rng, np.random.Generator):
             raise ValueError("rng must be a numpy.random.Generator when noise/jitter is on")
 
@@ -197,3 +166,44 @@ def apply_noise(images: np.ndarray, config: RenderConfig, rng: np.random.Generat
         value += rng.normal(0.0, config.noise_std, value.shape).astype(np.float32)
     np.clip(np.rint(value), 0, 255, out=value)
     images[...] = value
+
+
+def _poses(pose: ArrayLike) -> np.ndarray:
+    """(N, 3) float poses from (N, 3) or one (3,) pose; ValueError naming the shape."""
+    try:
+        pose_arr = np.asarray(pose, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("pose must be a numeric array of shape (N, 3) or (3,)") from None
+    if pose_arr.ndim == 1:
+        pose_arr = _float_array("pose", pose_arr, (3,))[None]
+    n = pose_arr.shape[0] if pose_arr.ndim == 2 else -1
+    if n < 1:
+        raise ValueError(f"pose must have shape (N, 3) or (3,), got {pose_arr.shape}")
+    return _float_array("pose", pose_arr, (n, 3))
+
+
+def _balls(ball_xy: ArrayLike | None, n: int) -> tuple[np.ndarray, bool]:
+    """(N, 2) ball positions and whether there is a ball (None: none in any image)."""
+    if ball_xy is None:
+        return np.zeros((n, 2)), False
+    try:
+        ball_arr = np.asarray(ball_xy, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"ball_xy must be a numeric array of shape ({n}, 2)") from None
+    if n == 1 and ball_arr.shape == (2,):
+        ball_arr = ball_arr[None]
+    return _float_array("ball_xy", ball_arr, (n, 2)), True
+
+
+def _output(out: np.ndarray | None, shape: tuple[int, int, int]) -> np.ndarray:
+    """The array to render into: ``out`` checked, or a new one."""
+    if out is None:
+        return np.empty(shape, dtype=np.uint8)
+    if not isinstance(out, np.ndarray):
+        raise ValueError("out must be a numpy uint8 array")
+    if out.shape != shape or out.dtype != np.uint8:
+        raise ValueError(f"out must be a uint8 array of shape {shape}, got {out.dtype} {out.shape}")
+    if not out.flags.c_contiguous or not out.flags.writeable:
+        raise ValueError("out must be C-contiguous and writeable")
+    return out
+
