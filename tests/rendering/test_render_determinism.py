@@ -14,7 +14,7 @@ import activevision.rendering.renderer as renderer_module
 from activevision.geometry import CameraConfig, FieldSpec
 from activevision.rendering import Renderer
 from activevision.rendering.kernels import raster
-from activevision.rendering.kernels.bundles import allocate_work
+from activevision.rendering.kernels.bundles import allocate_scratch, allocate_work
 from activevision.rendering.kernels.garbage import GARBAGE_KINDS, fill_garbage
 
 CAM = CameraConfig()
@@ -121,15 +121,17 @@ def test_frame_depends_on_its_camera_only(parallel, serial, cameras, has_ball):
 
 @pytest.mark.parametrize("seed", GARBAGE_SEEDS)
 def test_garbage_overwrites_every_work_buffer(seed):
-    # The garbage test above is only as strong as its reach: every buffer of allocate_work
-    # and the row scratch must be overwritten entirely.
-    work = allocate_work(3, Renderer()._kernel_scene)
+    # The garbage test above is only as strong as its reach: every buffer of allocate_work,
+    # allocate_scratch and the row scratch must be overwritten entirely.
+    scene = Renderer()._kernel_scene
+    work, scratch = allocate_work(3, scene), allocate_scratch(3, scene)
     value = np.empty(CAM.width, dtype=np.float32)
     sentinel = 7777
-    for arr in (*work, value):
+    for arr in (*work, *scratch, value):
         arr[...] = sentinel
-    fill_garbage(work, value, seed)
-    for name, arr in (*work._asdict().items(), ("value", value)):
+    fill_garbage(work, scratch, value, seed)
+    buffers = {**work._asdict(), **scratch._asdict(), "value": value}
+    for name, arr in buffers.items():
         assert not (arr == sentinel).any(), f"work buffer {name} keeps entries"
 
 

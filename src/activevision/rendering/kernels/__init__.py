@@ -1,7 +1,8 @@
 """The numba kernels of the fast renderer, split by job:
 
 * :mod:`.bundles` -- the typed bundles the kernels take (:class:`~.bundles.Scene`,
-  :class:`~.bundles.Cameras`, :class:`~.bundles.RenderWork`) and the work memory;
+  :class:`~.bundles.Cameras`, :class:`~.bundles.RenderWork`, :class:`~.bundles.SetupScratch`)
+  and the work memory;
 * :mod:`.coverage` -- pixel coverage: the box filter, row spans, quads, ring and ball;
 * :mod:`.edges` -- image edge lines of 3D polygons, frustum clipping, row ranges;
 * :mod:`.camera_setup` -- the per-camera setup pass;

@@ -93,9 +93,9 @@ class Cameras(NamedTuple):
 
 
 class RenderWork(NamedTuple):
-    """Per-call work memory, one slice per camera (first axis). The setup pass
-    (:func:`.camera_setup.setup_camera`) writes the first eleven for the row pass; the last
-    five are its own scratch."""
+    """Per-call work memory, one slice per camera (first axis): what the setup pass
+    (:func:`.camera_setup.setup_camera`) writes for the row pass
+    (:func:`.raster.render_rows`)."""
 
     quad_edges: np.ndarray  #: (N, Q', 4, EDGE_PARAMS) paint quads, carpet, posts, bars
     quad_rows: np.ndarray  #: (N, Q', 2) image rows [first, end) of each quad
@@ -108,6 +108,13 @@ class RenderWork(NamedTuple):
     first_row: np.ndarray  #: (N,) rows above it show only background
     visible_paint: np.ndarray  #: (N, Q) indices of the paint quads in view
     visible_count: np.ndarray  #: (N,) how many
+
+
+class SetupScratch(NamedTuple):
+    """The setup pass's own per-call scratch, one slice per camera. (Apart from
+    :class:`RenderWork` so that the row pass, handed the work per camera on every thread,
+    counts references to fewer arrays.)"""
+
     rot: np.ndarray  #: (N, 3, 3) world -> camera rotation
     cam: np.ndarray  #: (N, 3) camera centre
     pts: np.ndarray  #: (N, max(8, S), 3) polygon in camera coordinates
@@ -169,10 +176,7 @@ def allocate_work(n_cams: int, scene: Scene) -> RenderWork:
     depends on what the memory held before (:func:`.garbage.fill_garbage` tests exactly
     that)."""
     n_paint = scene.paint_quads.shape[0]
-    n_posts = scene.posts.shape[0]
-    n_bars = scene.bars.shape[0]
-    n_quads = n_paint + 1 + n_posts + n_bars  # the carpet after the paint
-    n_objects = n_posts + n_bars + 1  # the ball last
+    n_quads = n_paint + 1 + scene.posts.shape[0] + scene.bars.shape[0]  # carpet after paint
     n_sides = scene.ring_polygons.shape[1]
     return RenderWork(
         np.empty((n_cams, n_quads, 4, EDGE_PARAMS)),
@@ -182,10 +186,20 @@ def allocate_work(n_cams: int, scene: Scene) -> RenderWork:
         np.empty((n_cams, 3, 3)),
         np.empty((n_cams, 9)),
         np.empty((n_cams, 4), dtype=np.int64),
-        np.empty((n_cams, n_objects), dtype=np.int64),
+        np.empty((n_cams, n_quads - n_paint), dtype=np.int64),  # posts, bars, ball
         np.empty(n_cams, dtype=np.int64),
         np.empty((n_cams, n_paint), dtype=np.int64),
         np.empty(n_cams, dtype=np.int64),
+    )
+
+
+@njit(**JIT)
+def allocate_scratch(n_cams: int, scene: Scene) -> SetupScratch:
+    """Per-call :class:`SetupScratch` for ``n_cams`` cameras (uninitialised, as
+    :func:`allocate_work`)."""
+    n_objects = scene.posts.shape[0] + scene.bars.shape[0] + 1  # the ball last
+    n_sides = scene.ring_polygons.shape[1]
+    return SetupScratch(
         np.empty((n_cams, 3, 3)),
         np.empty((n_cams, 3)),
         np.empty((n_cams, max(8, n_sides), 3)),

@@ -21,14 +21,18 @@ from activevision.rendering.kernels.bundles import (
     Params,
     RenderWork,
     Scene,
+    SetupScratch,
 )
 from activevision.rendering.kernels.edges import polygon_edges_and_rows, store_edge, store_empty
 
 
 @njit(**JIT)
-def setup_camera(n: int, scene: Scene, params: Params, cams: Cameras, work: RenderWork) -> None:
+def setup_camera(
+    n: int, scene: Scene, params: Params, cams: Cameras, work: RenderWork, scratch: SetupScratch
+) -> None:
     """Per-camera precomputation (see :mod:`activevision.rendering.kernels`) for camera
-    ``n`` of ``cams``, into slice ``n`` of every :class:`RenderWork` array.
+    ``n`` of ``cams``, into slice ``n`` of every :class:`RenderWork` array (and of the
+    :class:`SetupScratch`).
 
     One function, its sections written out: handing the work or scene bundle (arrays) to
     helpers would count references to every array of it on each call."""
@@ -36,14 +40,14 @@ def setup_camera(n: int, scene: Scene, params: Params, cams: Cameras, work: Rend
     # those counts (atomic) add up to several percent of a frame.
     pose, pan, tilt, ball_xy, has_ball = cams
     paint_quads, carpet, polygons, posts, bars = scene
-    rot = work.rot[n]
+    rot = scratch.rot[n]
     camera_rotation(pose[n, 2] + pan[n], tilt[n], rot)
-    cam = work.cam[n]
+    cam = scratch.cam[n]
     cam[0] = pose[n, 0]
     cam[1] = pose[n, 1]
     cam[2] = params.cam_h
-    pts = work.pts[n]
-    clip = work.clip[n]
+    pts = scratch.pts[n]
+    clip = scratch.clip[n]
     optics = Optics(params.focal, params.cx, params.cy, params.width, params.height)
     quad_edges = work.quad_edges[n]
     quad_rows = work.quad_rows[n]
@@ -165,7 +169,7 @@ def setup_camera(n: int, scene: Scene, params: Params, cams: Cameras, work: Rend
 
     # Objects far to near (painter's order): posts, crossbars, ball.
     n_objects = n_posts + n_bars + 1
-    keys = work.keys[n]
+    keys = scratch.keys[n]
     order = work.object_order[n]
     for p in range(n_posts):
         dx = posts[p, 0] - cam[0]

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from activevision.rendering.kernels.bundles import EDGE_PARAMS, JIT, RenderWork
+from activevision.rendering.kernels.bundles import EDGE_PARAMS, JIT, RenderWork, SetupScratch
 
 #: Kinds of garbage of :func:`fill_garbage`: random mixed values; an edge that takes every
 #: pixel with row ranges over every row (stale data that *looks* valid is what turns a
@@ -83,10 +83,11 @@ def _garbage_ints(arr: np.ndarray, seed: int) -> None:
 
 
 @njit(**JIT)
-def fill_garbage(work: RenderWork, value: np.ndarray, seed: int) -> None:
-    """Overwrite every buffer of the :class:`.bundles.RenderWork` ``work`` and the row scratch
-    ``value`` with garbage of kind ``seed % GARBAGE_KINDS``, as if the memory held anything
-    at all (including another camera's data)."""
+def fill_garbage(work: RenderWork, scratch: SetupScratch, value: np.ndarray, seed: int) -> None:
+    """Overwrite every buffer of the :class:`.bundles.RenderWork` ``work``, the
+    :class:`.bundles.SetupScratch` ``scratch`` and the row scratch ``value`` with garbage of
+    kind ``seed % GARBAGE_KINDS``, as if the memory held anything at all (including another
+    camera's data)."""
     k = GARBAGE_KINDS  # seed + m k: the same kind, different values per buffer
     garbage_floats(work.quad_edges, seed + k)
     _garbage_ints(work.quad_rows, seed + 2 * k)
@@ -99,9 +100,9 @@ def fill_garbage(work: RenderWork, value: np.ndarray, seed: int) -> None:
     _garbage_ints(work.first_row, seed + 9 * k)
     _garbage_ints(work.visible_paint, seed + 10 * k)
     _garbage_ints(work.visible_count, seed + 11 * k)
-    garbage_floats(work.rot, seed + 12 * k)
-    garbage_floats(work.cam, seed + 13 * k)
-    garbage_floats(work.pts, seed + 14 * k)
-    garbage_floats(work.clip, seed + 15 * k)
-    garbage_floats(work.keys, seed + 16 * k)
+    garbage_floats(scratch.rot, seed + 12 * k)
+    garbage_floats(scratch.cam, seed + 13 * k)
+    garbage_floats(scratch.pts, seed + 14 * k)
+    garbage_floats(scratch.clip, seed + 15 * k)
+    garbage_floats(scratch.keys, seed + 16 * k)
     garbage_floats(value, seed + 17 * k)

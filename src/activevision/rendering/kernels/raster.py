@@ -23,6 +23,8 @@ from activevision.rendering.kernels.bundles import (
     Params,
     RenderWork,
     Scene,
+    SetupScratch,
+    allocate_scratch,
     allocate_work,
 )
 from activevision.rendering.kernels.camera_setup import setup_camera
@@ -108,7 +110,6 @@ def render_rows(
     n: int,
     rows: tuple[int, int],
     out: np.ndarray,
-    scene: Scene,
     params: Params,
     work: RenderWork,
     value: np.ndarray,
@@ -120,13 +121,14 @@ def render_rows(
 
     The per-row helpers take single arrays and :class:`.bundles.Params` (scalars), never the
     work bundle: every call with a bundle of arrays would count references to all of them,
-    once per row."""
+    once per row. (Nor does this function take the scene: the counts it needs are the work
+    arrays' sizes. Every array handed to it is counted on every thread for every camera.)"""
     row0, row_step = rows
     height = out.shape[1]
     width = out.shape[2]
-    n_paint = scene.paint_quads.shape[0]
+    n_paint = work.visible_paint.shape[1]
     carpet = n_paint
-    n_quad_objects = scene.posts.shape[0] + scene.bars.shape[0]
+    n_quad_objects = work.object_order.shape[1] - 1  # posts and bars (the ball last)
     quad_edges = work.quad_edges[n]
     quad_rows = work.quad_rows[n]
     ring_edges = work.ring_edges[n]
@@ -202,14 +204,15 @@ def _check_size(params: Params, out: np.ndarray) -> None:
 @njit(**JIT_PART)
 def _bundles(
     scene: Fields, params: Fields, cameras: Fields, out: np.ndarray
-) -> tuple[Scene, Params, Cameras, RenderWork]:
+) -> tuple[Scene, Params, Cameras, RenderWork, SetupScratch]:
     """An entry point's bundles from the tuples of their fields (size-checked against
-    ``out``), and the work memory: ``(scene, params, cameras, work)``."""
+    ``out``), and the work memory: ``(scene, params, cameras, work, scratch)``."""
     params = Params(*params)
     _check_size(params, out)
     cams = Cameras(*cameras)
     scene = Scene(*scene)
-    return scene, params, cams, allocate_work(cams.pose.shape[0], scene)
+    n_cams = cams.pose.shape[0]
+    return scene, params, cams, allocate_work(n_cams, scene), allocate_scratch(n_cams, scene)
 
 
 @njit(cache=True, fastmath=True, nogil=True, parallel=True)
@@ -229,21 +232,21 @@ def render_kernel(
     params = Params(*params)
     cams = Cameras(*cameras)
     _check_size(params, out)
-    work = RenderWork(*allocate_work(cams.pose.shape[0], scene))
     n_cams = cams.pose.shape[0]
+    work = RenderWork(*allocate_work(n_cams, scene))
+    scratch = SetupScratch(*allocate_scratch(n_cams, scene))
     width = params.width
     if garbage != 0:
-        fill_garbage(work, np.empty(1, dtype=np.float32), garbage)
+        fill_garbage(work, scratch, np.empty(1, dtype=np.float32), garbage)
     for n in prange(n_cams):
-        setup_camera(n, scene, params, cams, work)
+        setup_camera(n, scene, params, cams, work, scratch)
     for item in prange(n_cams * row_blocks):
         n = item // row_blocks
         value = np.empty(width, dtype=np.float32)
         if garbage != 0:
             garbage_floats(value, garbage + GARBAGE_KINDS * item)
         paint = np.zeros(width, dtype=np.float32)
-        render_rows(n, (item - n * row_blocks, row_blocks), out, scene, params, work, value,
-                    paint)
+        render_rows(n, (item - n * row_blocks, row_blocks), out, params, work, value, paint)
 
 
 @njit(**JIT)
@@ -252,12 +255,12 @@ def render_kernel_serial(
 ) -> None:
     """:func:`render_kernel` on the calling thread only: no thread hand-off, which matters
     for single frames (and on machines whose cores are busy with other work)."""
-    scene, params, cams, work = _bundles(scene, params, cameras, out)
+    scene, params, cams, work, scratch = _bundles(scene, params, cameras, out)
     width = params.width
     value = np.empty(width, dtype=np.float32)
     if garbage != 0:
-        fill_garbage(work, value, garbage)
+        fill_garbage(work, scratch, value, garbage)
     paint = np.zeros(width, dtype=np.float32)
     for n in range(cams.pose.shape[0]):
-        setup_camera(n, scene, params, cams, work)
-        render_rows(n, (0, 1), out, scene, params, work, value, paint)
+        setup_camera(n, scene, params, cams, work, scratch)
+        render_rows(n, (0, 1), out, params, work, value, paint)
