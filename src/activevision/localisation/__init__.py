@@ -27,16 +27,18 @@ from activevision.localisation.ukf import (
     ukf_update_sequential,
 )
 from activevision.localisation.viewpoint import (
+    best_viewpoint,
+    best_viewpoint_loop,
+    best_viewpoints,
+    candidate_footprints,
+)
+from activevision.localisation.viewpoint_types import (
     DEFAULT_GRID,
     LocalisationConfig,
     ViewpointBatch,
     ViewpointGrid,
     ViewpointResult,
     ViewpointStatus,
-    best_viewpoint,
-    best_viewpoint_loop,
-    best_viewpoints,
-    candidate_footprints,
 )
 
 __all__ = [

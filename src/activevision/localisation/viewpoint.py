@@ -20,10 +20,6 @@ compiled with numba (:mod:`activevision.localisation.kernels`) and agree with it
 
 from __future__ import annotations
 
-import enum
-import math
-from dataclasses import dataclass
-from functools import cached_property
 from typing import Any, cast
 
 import numpy as np
@@ -35,6 +31,7 @@ from activevision.geometry.kernels import camera_fields
 from activevision.geometry.landmarks import LandmarkSet
 from activevision.geometry.visibility import ball_visible, visible_landmarks
 from activevision.localisation import kernels
+from activevision.localisation.bundles import Landmarks, SigmaWeights, Starts, Views
 from activevision.localisation.config import DEFAULT_UKF, UKFConfig
 from activevision.localisation.entropy import entropy
 from activevision.localisation.sigma_points import (
@@ -42,153 +39,15 @@ from activevision.localisation.sigma_points import (
     merwe_weights,
 )
 from activevision.localisation.ukf import hx_range_bearing, ukf_update_sequential
+from activevision.localisation.viewpoint_types import (
+    DEFAULT_GRID,
+    ViewpointBatch,
+    ViewpointGrid,
+    ViewpointResult,
+    choose_goal,
+    search_result,
+)
 from activevision.threads import numba_threads
-
-
-@dataclass(frozen=True)
-class ViewpointGrid:
-    """Candidate head positions: ``n_pan`` x ``n_tilt`` evenly spaced angles (rad).
-
-    Defaults are the paper's: pan in (-90, 90) deg at 10 points and tilt in (5, 65) deg at 4
-    points. The paper writes open intervals, but its code release uses the endpoints
-    (-90, -70, ..., 90 and 5, 25, 45, 65 deg), and so do we. The 10-point pan grid is
-    symmetric about 0 (and contains no 0). Grid order is pan-major: candidate
-    ``i = i_pan * n_tilt + i_tilt``.
-    """
-
-    pan_min: float = -math.pi / 2  #: rad (paper)
-    pan_max: float = math.pi / 2  #: rad (paper)
-    n_pan: int = 10  #: paper
-    tilt_min: float = math.radians(5.0)  #: rad, positive down (paper)
-    tilt_max: float = math.radians(65.0)  #: rad (paper)
-    n_tilt: int = 4  #: paper
-
-    def __post_init__(self) -> None:
-        for name in ("n_pan", "n_tilt"):
-            value = getattr(self, name)
-            if not isinstance(value, int | np.integer) or value < 1:
-                raise ValueError(f"ViewpointGrid.{name} must be a positive integer, got {value!r}")
-        if not (self.pan_min <= self.pan_max and self.tilt_min <= self.tilt_max):
-            raise ValueError("ViewpointGrid needs pan_min <= pan_max and tilt_min <= tilt_max")
-
-    def __len__(self) -> int:
-        return self.n_pan * self.n_tilt
-
-    @cached_property
-    def pan_values(self) -> np.ndarray:
-        """The distinct pan angles (n_pan,), from ``pan_min`` to ``pan_max``."""
-        return _readonly(_even(self.pan_min, self.pan_max, self.n_pan))
-
-    @cached_property
-    def tilt_values(self) -> np.ndarray:
-        """The distinct tilt angles (n_tilt,), from ``tilt_min`` to ``tilt_max``."""
-        return _readonly(_even(self.tilt_min, self.tilt_max, self.n_tilt))
-
-    @cached_property
-    def pans(self) -> np.ndarray:
-        """Pan of every candidate (V,), grid order."""
-        return _readonly(np.repeat(self.pan_values, self.n_tilt))
-
-    @cached_property
-    def tilts(self) -> np.ndarray:
-        """Tilt of every candidate (V,), grid order."""
-        return _readonly(np.tile(self.tilt_values, self.n_pan))
-
-    def index(self, i_pan: int, i_tilt: int) -> int:
-        return i_pan * self.n_tilt + i_tilt
-
-
-DEFAULT_GRID = ViewpointGrid()
-
-
-class ViewpointStatus(enum.Enum):
-    OK = "ok"  #: a candidate shows the ball; it is the goal
-    NO_VIEWPOINT_SHOWS_BALL = "no_viewpoint_shows_ball"  #: no goal (e.g. ball behind the robot)
-
-
-@dataclass(frozen=True)
-class ViewpointResult:
-    """Outcome of Algorithm 1 for one belief. Without a goal, ``index`` is -1, ``pan``,
-    ``tilt`` and ``entropy`` are NaN and ``landmark_ids`` is empty."""
-
-    status: ViewpointStatus
-    index: int  #: goal candidate in grid order
-    pan: float  #: rad
-    tilt: float  #: rad
-    entropy: float  #: nats, of the expected posterior at the goal
-    landmark_ids: tuple[int, ...]  #: landmarks the goal view shows
-    entropies: np.ndarray  #: (V,) expected posterior entropy of every candidate, grid order
-    ball_visible: np.ndarray  #: (V,) bool
-    visible: np.ndarray  #: (V, K) bool, landmarks each candidate shows
-    covariances: np.ndarray  #: (V, 3, 3) expected posterior covariances
-    grid: ViewpointGrid
-
-    @property
-    def ok(self) -> bool:
-        return self.status is ViewpointStatus.OK
-
-    @property
-    def entropy_grid(self) -> np.ndarray:
-        """Entropies as (n_pan, n_tilt)."""
-        return self.entropies.reshape(self.grid.n_pan, self.grid.n_tilt)
-
-
-@dataclass(frozen=True)
-class ViewpointBatch:
-    """Outcome of Algorithm 1 for N beliefs; ``batch[i]`` is the :class:`ViewpointResult`
-    of start ``i``. ``ok`` is False (and ``index`` -1, angles NaN) where no candidate shows
-    the ball."""
-
-    ok: np.ndarray  #: (N,) bool
-    index: np.ndarray  #: (N,) int
-    pan: np.ndarray  #: (N,) rad
-    tilt: np.ndarray  #: (N,) rad
-    entropy: np.ndarray  #: (N,)
-    entropies: np.ndarray  #: (N, V)
-    ball_visible: np.ndarray  #: (N, V) bool
-    visible: np.ndarray  #: (N, V, K) bool
-    covariances: np.ndarray  #: (N, V, 3, 3)
-    grid: ViewpointGrid
-
-    def __len__(self) -> int:
-        return len(self.ok)
-
-    def __getitem__(self, i: int) -> ViewpointResult:
-        return _result(
-            self.entropies[i],
-            self.ball_visible[i],
-            self.visible[i],
-            self.covariances[i],
-            self.grid,
-        )
-
-
-def _even(lo: float, hi: float, n: int) -> np.ndarray:
-    """``n`` evenly spaced values from ``lo`` to ``hi`` (one value: the midpoint), exactly
-    mirror-symmetric about the midpoint (``np.linspace`` is not: -50 deg and 50 deg would
-    differ in the last bit, breaking the pan -> -pan symmetry)."""
-    mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-    if n == 1:
-        return np.array([mid])
-    k = 2.0 * np.arange(n) - (n - 1)  # exact integers, symmetric about 0
-    return mid + half * (k / (n - 1))
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
-
-
-def choose_goal(
-    entropies: np.ndarray, ball_visible: np.ndarray
-) -> tuple[np.ndarray | np.bool_, np.ndarray]:
-    """Least-entropy candidate showing the ball, first in grid order on ties (Algorithm 1,
-    lines 9-12). ``entropies``, ``ball_visible``: (N, V). Returns ``(ok (N,), index (N,))``
-    with ``index`` -1 where no candidate shows the ball (for one belief's (V,): a NumPy
-    bool and a 0-d array)."""
-    masked = np.where(ball_visible, entropies, np.inf)
-    ok = ball_visible.any(axis=-1)
-    return ok, np.where(ok, np.argmin(masked, axis=-1), -1)
 
 
 def _noise_table(ukf: UKFConfig) -> np.ndarray:
@@ -213,7 +72,7 @@ def search_args(
     """The bundles of :func:`kernels.search_kernel` (``Starts``, ``Landmarks``,
     ``SigmaWeights``, ``Views``, ``CameraModel``) for contiguous float64 ``means`` (N, 3),
     ``covs`` (N, 3, 3) and ``balls`` (N, 2), each as the plain tuple of its fields."""
-    starts = tuple(kernels.Starts(means, covs, balls, float(ball_radius)))
+    starts = tuple(Starts(means, covs, balls, float(ball_radius)))
     return (starts, *_static_bundles(landmarks, cam, grid, ukf, ball_views_only))
 
 
@@ -241,12 +100,12 @@ def _static_bundles(
     Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
     bundles = (
         tuple(
-            kernels.Landmarks(
+            Landmarks(
                 landmarks.segments, landmarks.max_distance, landmarks.types, _noise_table(ukf)
             )
         ),
-        tuple(kernels.SigmaWeights(Wm, Wc, ukf.n + ukf.lambda_)),
-        tuple(kernels.Views(grid.pans, grid.tilts, bool(ball_views_only))),
+        tuple(SigmaWeights(Wm, Wc, ukf.n + ukf.lambda_)),
+        tuple(Views(grid.pans, grid.tilts, bool(ball_views_only))),
         camera_fields(cam),
     )
     _last_static = (made_from, bundles)
@@ -272,8 +131,7 @@ def _search(
     balls = np.ascontiguousarray(np.broadcast_to(balls, (n, 2)), dtype=np.float64)
     if np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
         raise ValueError("best viewpoint search: belief covariances must be symmetric")
-    args = search_args(means, covs, balls, landmarks, cam, grid, ukf, ball_radius,
-                       ball_views_only)
+    args = search_args(means, covs, balls, landmarks, cam, grid, ukf, ball_radius, ball_views_only)
     threads = numba_threads() if parallel and n > 1 else 1  # serial: never start the pool
     if threads > 1:
         # a few blocks per thread evens out views that see many landmarks
@@ -356,32 +214,7 @@ def best_viewpoint(
         ukf,
         ball_radius,
     )
-    return _result(H[0], ball_vis[0], visible[0], post[0], grid)
-
-
-def _result(
-    entropies: np.ndarray,
-    ball_vis: np.ndarray,
-    visible: np.ndarray,
-    post: np.ndarray,
-    grid: ViewpointGrid,
-) -> ViewpointResult:
-    ok, index = choose_goal(entropies, ball_vis)
-    i = int(index)
-    found = bool(ok)
-    return ViewpointResult(
-        status=ViewpointStatus.OK if found else ViewpointStatus.NO_VIEWPOINT_SHOWS_BALL,
-        index=i,
-        pan=float(grid.pans[i]) if found else math.nan,
-        tilt=float(grid.tilts[i]) if found else math.nan,
-        entropy=float(entropies[i]) if found else math.nan,
-        landmark_ids=tuple(np.flatnonzero(visible[i]).tolist()) if found else (),
-        entropies=entropies,
-        ball_visible=ball_vis,
-        visible=visible,
-        covariances=post,
-        grid=grid,
-    )
+    return search_result(H[0], ball_vis[0], visible[0], post[0], grid)
 
 
 def best_viewpoint_loop(
@@ -415,7 +248,7 @@ def best_viewpoint_loop(
             mean, cov, zs[seen], landmarks.segments[seen], landmarks.types[seen], ukf
         )
         entropies[v] = entropy(post[v])
-    return _result(entropies, ball_vis, visible, post, grid)
+    return search_result(entropies, ball_vis, visible, post, grid)
 
 
 def candidate_footprints(
@@ -429,12 +262,3 @@ def candidate_footprints(
     (V, 4 * points_per_side, 2), grid order (for plotting the candidates)."""
     poses = np.broadcast_to(np.asarray(pose, dtype=np.float64), (len(grid), 3))
     return footprint_polygon(poses, grid.pans, grid.tilts, cam, max_distance, points_per_side)
-
-
-@dataclass(frozen=True)
-class LocalisationConfig:
-    """What the environment's goal search and the entropy baseline share: the candidate grid
-    and the UKF (whose ``initial_cov`` is the belief at an episode start)."""
-
-    grid: ViewpointGrid = DEFAULT_GRID  #: 10 x 4 candidates (paper)
-    ukf: UKFConfig = DEFAULT_UKF  #: sensor model and start belief
