@@ -34,17 +34,12 @@ def _compare_method_names() -> tuple[str, ...]:
     return compare_method_names()
 
 
-def _require_run_for_learned(names: list[str], run: Path | None) -> None:
-    if "learned" in names and run is None:
-        raise ValueError("the learned policy needs a run directory (--run runs/NAME)")
-
-
 def _policies(
     names: list[str], args: argparse.Namespace, env_config: Any, error: float = 0.0
 ) -> dict[str, HeadPolicy]:
-    from activevision.experiments.methods import make_policy
+    from activevision.experiments.methods import check_runs, make_policy
 
-    _require_run_for_learned(names, args.run)
+    check_runs(names, args.run)
     return {name: make_policy(name, error, env_config, args.run, args.weights) for name in names}
 
 
@@ -63,7 +58,9 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     files = [out / n for n in ("evaluation.csv", "episodes.csv", "evaluation.json")]
     check_outputs(own=files)
     env_config = env_config_of_run(args.run)
-    names = args.methods or [m for m in _compare_method_names() if m != "learned" or args.run]
+    from activevision.experiments.methods import runnable_methods
+
+    names = args.methods or runnable_methods(_compare_method_names(), args.run)
     policies = _policies(names, args, env_config, args.error)
     env = ActiveVisionEnv(env_config)
     summaries, episodes, latency = {}, [], {}
@@ -94,11 +91,12 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
 
 def cmd_compare(args: argparse.Namespace) -> None:
     """The localisation-error experiment and its figure (on Ray with ``--ray``)."""
+    from activevision.experiments.methods import check_runs
     from activevision.figures.compare import plot_compare
 
     out = args.out or (args.run / "compare" if args.run else Path("compare"))
     check_outputs(own=[out / "compare.csv", out / "compare.png"])
-    _require_run_for_learned(args.methods or [], args.run)
+    check_runs(args.methods or [], args.run)
     if args.overwrite:
         (out / "compare.csv").unlink(missing_ok=True)
     env_config = env_config_of_run(args.run)

@@ -10,7 +10,7 @@ their help from it, so a method added here is everywhere at once::
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -81,6 +81,18 @@ def method(name: str) -> Method:
     return _REGISTRY[name]
 
 
+def runnable_methods(names: Sequence[str], run_dir: str | Path | None) -> list[str]:
+    """``names`` without the methods that need a run when there is none (the defaults)."""
+    return [n for n in names if run_dir is not None or not method(n).needs_run]
+
+
+def check_runs(names: Sequence[str], run_dir: str | Path | None) -> None:
+    """ValueError for a method in ``names`` that needs a run directory when there is none."""
+    for name in names:
+        if method(name).needs_run and run_dir is None:
+            raise ValueError(f"the {name} policy needs a run directory (--run runs/NAME)")
+
+
 def make_policy(
     name: str,
     error: float,
@@ -89,9 +101,8 @@ def make_policy(
     weights: str = "final",
 ) -> HeadPolicy:
     """A fresh policy of method ``name`` (see :class:`MethodContext` for the arguments)."""
+    check_runs([name], run_dir)
     entry = method(name)
-    if entry.needs_run and run_dir is None:
-        raise ValueError(f"the {name} policy needs a run directory (--run runs/NAME)")
     run = Path(run_dir) if run_dir is not None else None
     return entry.factory(MethodContext(config or EnvConfig(), error, run, weights))
 

@@ -15,7 +15,12 @@ from pathlib import Path
 from typing import Any
 
 from activevision.envs import EnvConfig
-from activevision.experiments.methods import compare_method_names, make_policy, method
+from activevision.experiments.methods import (
+    check_runs,
+    compare_method_names,
+    make_policy,
+    runnable_methods,
+)
 
 
 def evaluate_chunk(
@@ -72,10 +77,7 @@ def compare_ray(
 
     if chunk < 1:
         raise ValueError(f"chunk must be positive, got {chunk}")
-    for name in method_names:
-        method(name)  # ValueError naming the choices for an unknown name
-    if "learned" in method_names and run_dir is None:
-        raise ValueError("the learned policy needs --run runs/NAME")
+    check_runs(method_names, run_dir)  # also names the choices for an unknown method
     config = config or EnvConfig()
     csv_path = Path(out_dir) / "compare.csv"
     rows = done_levels(csv_path)
@@ -120,5 +122,5 @@ def compare_ray(
 def default_method_names(run_dir: str | Path | None, selected: Sequence[str] | None) -> list[str]:
     """The methods ``activevision compare`` runs: its default order, filtered by ``selected``
     (the local CLI ignores the order and unknown names of ``--methods``; so does this)."""
-    names = [m for m in compare_method_names() if m != "learned" or run_dir is not None]
+    names = runnable_methods(compare_method_names(), run_dir)
     return [m for m in names if not selected or m in selected]
