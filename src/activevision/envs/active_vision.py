@@ -11,13 +11,15 @@ from gymnasium import spaces
 
 from activevision.envs.actions import check_actions
 from activevision.envs.config import EnvConfig, check_count, resolve_config
+from activevision.envs.observations import (
+    Observation,
+    ObservationBuilder,
+    image_space,
+    observation_space,
+    single,
+)
 from activevision.envs.simulation import EpisodeBatch, StepOutcome
 from activevision.localisation import LocalisationConfig
-
-
-def observation_space(cfg: EnvConfig) -> spaces.Box:
-    shape = (cfg.frame_stack, cfg.camera.height, cfg.camera.width)
-    return spaces.Box(0, 255, shape, dtype=np.uint8)
 
 
 class ActiveVisionEnv(gym.Env):
@@ -48,6 +50,12 @@ class ActiveVisionEnv(gym.Env):
     ## Observation Space
     ``Box(0, 255, (frame_stack, 120, 160), uint8)``: the latest ``frame_stack`` (default 1,
     the paper's input) 160 x 120 grayscale camera images, oldest first, channel-first.
+    With ``observation="image+head"``, ``"image+head+pose"`` or
+    ``"image+head+pose+proposal"`` a ``Dict`` of that image (key ``"image"``) and float32
+    vectors: the head angles, the robot's prior pose, Algorithm 1's proposal from that prior
+    and (``action_history``) the previous actions; :mod:`activevision.envs.observations`
+    lists every entry. The prior pose is the believed pose, or with ``prior_error_range`` the
+    true pose corrupted by an error drawn per episode, quantised to ``prior_grid``.
 
     ## Rewards
     ``+1`` when the action brings the head closer to the goal viewpoint (Euclidean distance in
@@ -74,7 +82,8 @@ class ActiveVisionEnv(gym.Env):
     landmark ids, K the field's landmark count), ``success_rate`` (|observed ∩ desired| /
     |desired|), ``success``, ``ball_lost``, ``steps_to_success`` and ``ball_lost_step`` (20
     if it did not happen), ``episode_score`` (the release's: 1 success, 0 ball lost, else the
-    success rate), ``head``, ``pose``, ``believed_pose``, ``ball``, ``step``. Every value
+    success rate), ``head``, ``pose``, ``believed_pose``, ``ball``, ``step``; with a prior
+    pose in the observation also ``prior_pose`` and ``prior_error``. Every value
     keeps its shape and type at every step (arrays float64 or bool; scalars Python float,
     int or bool), so ``gymnasium.make_vec`` stacks them in every vectorization mode.
 
@@ -109,41 +118,58 @@ class ActiveVisionEnv(gym.Env):
         # Only the info's "did not happen" value: the time limit is gymnasium.make's TimeLimit.
         self.max_episode_steps = check_count("max_episode_steps", max_episode_steps)
         self.sim = EpisodeBatch(config, 1, localisation)
-        self.observation_space = observation_space(config)
         self.action_space = spaces.Discrete(len(self.sim.actions))
-        self._frames = np.zeros(self.observation_space.shape, dtype=np.uint8)
+        self.observation_space = observation_space(config, len(self.sim.actions))
+        self._observations = ObservationBuilder(config, 1, len(self.sim.actions))
+        self._frames = np.zeros(image_space(config).shape, dtype=np.uint8)
         self._slot = np.zeros(1, dtype=np.int64)
 
     def reset(
         self, *, seed: int | None = None, options: dict | None = None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
+    ) -> tuple[Observation, dict[str, Any]]:
         super().reset(seed=seed)
         self.sim.reset(self._slot, [self.np_random])
+        self._observations.start(self._slot)
         frame = self.sim.render(self._slot)[0]
         self._frames[:] = frame
-        return self._frames.copy(), self.sim.info(0, self.max_episode_steps)
+        return self._observe(), self.sim.info(0, self.max_episode_steps)
 
-    def step(self, action: object) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        action = check_actions(action, len(self.sim.actions), ())
-        return self._after_move(self.sim.step(action.reshape(1)))
+    def step(self, action: object) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
+        action = check_actions(action, len(self.sim.actions), ()).reshape(1)
+        self._observations.record(action, self._slot)
+        return self._after_move(self.sim.step(action))
 
     def jump_head(
         self, pan: float, tilt: float
-    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+    ) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         """Move the head straight to ``(pan, tilt)`` rad in one step (clipped to the limits),
         scored like :meth:`step`. Not part of the Gymnasium API: for baselines that jump the
         head, such as the paper's entropy-based head control."""
         return self._after_move(self.sim.move_head(self._slot, np.array([pan]), np.array([tilt])))
 
+    def entropy_regret(self) -> float:
+        """Belief entropy after the current view's landmarks minus the goal view's (nats;
+        see :meth:`EpisodeBatch.entropy_regret`)."""
+        return float(self.sim.entropy_regret(self._slot)[0])
+
+    def _observe(self) -> Observation:
+        if self.config.observation == "image":
+            return self._frames.copy()
+        sim = self.sim
+        batch = self._observations.batch(
+            self._frames[None], sim.head, sim.prior_pose, sim.proposal
+        )
+        return single(batch)
+
     def _after_move(
         self, outcome: StepOutcome
-    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+    ) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         reward, terminated, _, _ = outcome
         if self.config.frame_stack > 1:
             self._frames[:-1] = self._frames[1:]
         self.sim.render(self._slot, out=self._frames[-1:])
         info = self.sim.info(0, self.max_episode_steps)
-        return self._frames.copy(), float(reward[0]), bool(terminated[0]), False, info
+        return self._observe(), float(reward[0]), bool(terminated[0]), False, info
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -15,6 +16,10 @@ from activevision.typecheck import check_dataclass_fields
 
 SuccessMode = Literal["tolerance", "landmarks"]
 ActionSet = Literal["8way", "4way"]
+#: What the agent observes (see ``activevision.envs.observations``): the paper's image, or a
+#: ``Dict`` that adds what a robot knows of itself.
+ObservationKind = Literal["image", "image+head", "image+head+pose", "image+head+pose+proposal"]
+OBSERVATION_KINDS: tuple[str, ...] = typing.get_args(ObservationKind)
 
 
 @dataclass(frozen=True)
@@ -41,6 +46,17 @@ class EnvConfig:
     start_tilt_range_deg: tuple[float, float] = (5.0, 25.0)  #: start head tilt (R); pan: full
     ball_distance_range: tuple[float, float] = (1.0, 3.0)  #: ball 1-3 m from the robot (R)
     max_start_draws: int = 1000  #: rejection-sampling guard for episode starts
+    #: the observation: "image" (P) or a Dict adding the head angles, the robot's prior pose
+    #: and the entropy method's proposal from it (not in P; ``envs.observations``)
+    observation: ObservationKind = "image"
+    #: the prior pose's error, drawn per episode from U(low, high) (m and rad, as
+    #: ``localisation_error`` corrupts); None: the prior is the believed pose (P's future work)
+    prior_error_range: tuple[float, float] | None = None
+    #: the prior pose quantised to (metres, degrees) cells, "a rough representation of the
+    #: robot position" (P's future work); 0: exact
+    prior_grid: tuple[float, float] = (0.0, 0.0)
+    #: the previous actions, one-hot, in a Dict observation (memory; 0: none)
+    action_history: int = 0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "field", _field_spec(self.field))
@@ -79,6 +95,23 @@ class EnvConfig:
             raise bad("ball_distance_range", "must be positive")
         if self.max_start_draws < 1:
             raise bad("max_start_draws", "must be a positive integer")
+        if self.prior_error_range is not None:
+            lo, hi = self.prior_error_range
+            if not 0 <= lo <= hi:
+                raise bad("prior_error_range", "must be an ordered (low, high) pair >= 0")
+        if min(self.prior_grid) < 0:
+            raise bad("prior_grid", "must be >= 0 (metres, degrees)")
+        if not 0 <= self.action_history <= 16:
+            raise bad("action_history", "must lie in 0..16")
+        if self.observation == "image" and self.action_history:
+            raise bad("action_history", "needs a Dict observation (observation='image+head...')")
+        if self.observation != "image" and self.frame_stack != 1:
+            raise bad("observation", "a Dict observation takes frame_stack=1 (use action_history)")
+
+    @property
+    def observes_prior(self) -> bool:
+        """Whether observations carry the prior pose (and so episodes draw one)."""
+        return "pose" in self.observation
 
     @classmethod
     def release(cls, **overrides: Any) -> EnvConfig:

@@ -15,10 +15,17 @@ import numpy as np
 from activevision.envs.actions import action_table, check_actions
 from activevision.envs.config import EnvConfig
 from activevision.envs.reward import approach_reward, viewpoint_distance_deg
-from activevision.envs.starts import StartGenerationError, draw_starts
+from activevision.envs.starts import StartGenerationError, corrupt_pose, draw_starts, quantise_pose
 from activevision.geometry import clip_head, field_landmarks
 from activevision.geometry.kernels import ball_visible_mask, visible_mask
-from activevision.localisation import LocalisationConfig, best_viewpoints
+from activevision.localisation import (
+    LocalisationConfig,
+    ViewpointBatch,
+    best_viewpoints,
+    entropy,
+    hx_range_bearing,
+    ukf_update_sequential,
+)
 from activevision.rendering import Renderer
 
 #: ``(reward, terminated, success, ball_lost)``, each (N,): the outcome of one step.
@@ -57,6 +64,11 @@ class EpisodeBatch:
         self.success_step = np.full(num_envs, -1, dtype=np.int64)
         self.ball_lost_step = np.full(num_envs, -1, dtype=np.int64)
         self.episode_reward = np.zeros(num_envs)
+        # What the robot knows of itself (Dict observations only): a prior pose, its error
+        # and Algorithm 1's view from it, (pan, tilt, found).
+        self.prior_pose = np.zeros((num_envs, 3))
+        self.prior_error = np.zeros(num_envs)
+        self.proposal = np.zeros((num_envs, 3))
 
     # ------------------------------------------------------------------ starts
     def reset(self, indices: np.ndarray, rngs: list[np.random.Generator]) -> None:
@@ -67,6 +79,8 @@ class EpisodeBatch:
         pending = np.arange(len(todo))
         for _ in range(self.cfg.max_start_draws):
             if not len(pending):
+                if self.cfg.observes_prior:
+                    self._draw_priors(todo, rngs)
                 return
             slots = todo[pending]
             starts = draw_starts([rngs[j] for j in pending], self.cfg)
@@ -77,12 +91,31 @@ class EpisodeBatch:
             pending = pending[~self._search_goals(slots)]
         raise StartGenerationError(f"no valid episode start after {self.cfg.max_start_draws} tries")
 
-    def _search_goals(self, slots: np.ndarray) -> np.ndarray:
+    def _draw_priors(self, slots: np.ndarray, rngs: list[np.random.Generator]) -> None:
+        """The prior pose of each new episode (after its start: the start's draws come
+        first, so the images and goals of an episode do not depend on the prior), then the
+        proposal: Algorithm 1 run from the prior."""
+        cfg = self.cfg
+        for j, slot in enumerate(slots):
+            if cfg.prior_error_range is None:
+                self.prior_error[slot] = cfg.localisation_error
+                self.prior_pose[slot] = self.believed_pose[slot]
+            else:
+                lo, hi = cfg.prior_error_range
+                self.prior_error[slot] = lo + (hi - lo) * rngs[j].random()
+                self.prior_pose[slot] = corrupt_pose(self.pose[slot], self.prior_error[slot], rngs[j])
+        self.prior_pose[slots] = quantise_pose(self.prior_pose[slots], *cfg.prior_grid)
+        result = self._viewpoints(self.prior_pose[slots], slots)
+        self.proposal[slots, 0] = np.where(result.ok, result.pan, 0.0)
+        self.proposal[slots, 1] = np.where(result.ok, result.tilt, 0.0)
+        self.proposal[slots, 2] = result.ok
+
+    def _viewpoints(self, means: np.ndarray, slots: np.ndarray) -> ViewpointBatch:
+        """Algorithm 1 from ``means`` (the start covariance) for the balls of ``slots``."""
         cfg, loc = self.cfg, self.localisation
-        cov0 = np.broadcast_to(loc.ukf.initial_cov, (len(slots), 3, 3))
-        result = best_viewpoints(
-            self.believed_pose[slots],
-            cov0,
+        return best_viewpoints(
+            means,
+            np.broadcast_to(loc.ukf.initial_cov, (len(slots), 3, 3)),
             self.ball[slots],
             self.landmarks,
             cfg.camera,
@@ -92,6 +125,10 @@ class EpisodeBatch:
             parallel=self.renderer.parallel and self.n > 1,
             ball_views_only=True,
         )
+
+    def _search_goals(self, slots: np.ndarray) -> np.ndarray:
+        cfg = self.cfg
+        result = self._viewpoints(self.believed_pose[slots], slots)
         found = result.ok
         self.goal_pan[slots] = np.where(found, result.pan, 0.0)
         self.goal_tilt[slots] = np.where(found, result.tilt, cfg.camera.tilt_min)
@@ -212,7 +249,33 @@ class EpisodeBatch:
             "step": self.step_count.copy(),
             "desired_mask": self.desired.copy(),
             "observed_mask": self.observed.copy(),
+            **(
+                {"prior_pose": self.prior_pose.copy(), "prior_error": self.prior_error.copy()}
+                if self.cfg.observes_prior
+                else {}
+            ),
         }
+
+    def entropy_regret(self, idx: np.ndarray) -> np.ndarray:
+        """Per slot of ``idx``: the entropy (nats) of the start belief updated with the
+        landmarks the current view really shows, minus the goal view's entropy (both from
+        the believed pose, as Algorithm 1 scores views). 0 at the goal and at any view as
+        informative; what a head pose costs the robot's localisation."""
+        ukf = self.localisation.ukf
+        out = np.empty(len(idx))
+        for j, i in enumerate(idx):
+            mean = self.believed_pose[i]
+            seen = np.flatnonzero(self.observed[i])
+            segments = self.landmarks.segments[seen]
+            zs = np.array([hx_range_bearing(mean, seg)[0] for seg in segments]).reshape(-1, 2)
+            order = seen[np.argsort(zs[:, 0], kind="stable")] if len(seen) else seen
+            zs = zs[np.argsort(zs[:, 0], kind="stable")]
+            _, cov = ukf_update_sequential(
+                mean, ukf.initial_cov, zs, self.landmarks.segments[order],
+                self.landmarks.types[order], ukf,
+            )
+            out[j] = entropy(cov) - self.goal_entropy[i]
+        return out
 
     def info(self, i: int, max_episode_steps: int) -> dict[str, Any]:
         """The single-environment ``info`` dict of slot ``i``: slot ``i`` of

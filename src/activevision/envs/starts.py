@@ -65,6 +65,18 @@ def corrupt_pose(pose: np.ndarray, error: float, rng: np.random.Generator) -> np
     ])
 
 
+def quantise_pose(poses: np.ndarray, cell_m: float, cell_deg: float) -> np.ndarray:
+    """(N, 3) poses rounded to ``cell_m`` metre cells and ``cell_deg`` degree headings (0:
+    that part exact); headings stay in ``wrap_angle``'s ``(-pi, pi]``."""
+    out = np.array(poses, dtype=np.float64)
+    if cell_m > 0:
+        out[:, :2] = np.round(out[:, :2] / cell_m) * cell_m
+    if cell_deg > 0:
+        step = math.radians(cell_deg)
+        out[:, 2] = wrap_angle(np.round(out[:, 2] / step) * step)
+    return out
+
+
 @njit(cache=True)
 def candidate_kernel(
     u: np.ndarray,

@@ -11,8 +11,13 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from activevision.envs.active_vision import observation_space
 from activevision.envs.config import EnvConfig, check_count, resolve_config
+from activevision.envs.observations import (
+    Observation,
+    ObservationBuilder,
+    image_space,
+    observation_space,
+)
 from activevision.envs.simulation import EpisodeBatch
 from activevision.localisation import LocalisationConfig
 
@@ -45,14 +50,14 @@ class ActiveVisionVectorEnv(VectorEnv):
         self.config = config = resolve_config(config, config_overrides)
         self.max_episode_steps = check_count("max_episode_steps", max_episode_steps)
         self.sim = EpisodeBatch(config, self.num_envs, localisation)
-        self.single_observation_space = observation_space(config)
-        self.single_action_space = spaces.Discrete(len(self.sim.actions))
+        n_actions = len(self.sim.actions)
+        self.single_observation_space = observation_space(config, n_actions)
+        self.single_action_space = spaces.Discrete(n_actions)
+        self._observations = ObservationBuilder(config, self.num_envs, n_actions)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._rngs = [seeding.np_random()[0] for _ in range(self.num_envs)]
-        self._frames = np.zeros(
-            (self.num_envs, *self.single_observation_space.shape), dtype=np.uint8
-        )
+        self._frames = np.zeros((self.num_envs, *image_space(config).shape), dtype=np.uint8)
         self._needs_reset = np.zeros(self.num_envs, dtype=bool)
         self._all = np.arange(self.num_envs)
         # Gymnasium's "_key" masks: every sub-environment reports every key, every step.
@@ -61,7 +66,7 @@ class ActiveVisionVectorEnv(VectorEnv):
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict | None = None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
+    ) -> tuple[Observation, dict[str, Any]]:
         seeds: list[int | None]
         if seed is None:
             seeds = [None] * self.num_envs
@@ -75,9 +80,14 @@ class ActiveVisionVectorEnv(VectorEnv):
             if s is not None or seed is None:
                 self._rngs[i] = seeding.np_random(s)[0]
         self.sim.reset(self._all, self._rngs)
+        self._observations.start(self._all)
         self._render(started=self._all)
         self._needs_reset[:] = False
-        return self._frames.copy(), self._infos()
+        return self._observe(), self._infos()
+
+    def _observe(self) -> Observation:
+        sim = self.sim
+        return self._observations.batch(self._frames, sim.head, sim.prior_pose, sim.proposal)
 
     def _render(self, started: np.ndarray) -> None:
         """Render every sub-environment in one batched call; sub-environments that just
@@ -91,22 +101,24 @@ class ActiveVisionVectorEnv(VectorEnv):
 
     def step(
         self, actions: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+    ) -> tuple[Observation, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         # EpisodeBatch.step checks dtype, shape and range of every action (resetting
         # sub-environments ignore theirs, but it must still lie in the action space).
         resetting = self._needs_reset.copy()
         stepping = ~resetting
         reward, terminated, _, _ = self.sim.step(actions, active=stepping)
+        self._observations.record(np.asarray(actions)[stepping], np.flatnonzero(stepping))
         # Gymnasium's TimeLimit rule, which single envs from gymnasium.make follow: truncated
         # whenever the limit is reached, even on a step that also terminates.
         truncated = stepping & (self.sim.step_count >= self.max_episode_steps)
         started = np.flatnonzero(resetting)
         if len(started):
             self.sim.reset(started, [self._rngs[i] for i in started])
+            self._observations.start(started)
         self._render(started)
         infos = self._infos()
         self._needs_reset = terminated | truncated
-        return self._frames.copy(), reward, terminated, truncated, infos
+        return self._observe(), reward, terminated, truncated, infos
 
     def _infos(self) -> dict[str, Any]:
         infos: dict[str, Any] = self.sim.info_arrays(self.max_episode_steps)

@@ -1,0 +1,138 @@
+"""What the agent observes: the paper's camera image, or a Gymnasium ``Dict`` that adds what
+a robot knows of itself (``EnvConfig.observation``).
+
+| key        | shape            | contents                                                   |
+|------------|------------------|------------------------------------------------------------|
+| "image"    | (1, H, W) uint8  | the camera image (the paper's whole observation)           |
+| "head"     | (2,) float32     | head joint angles (pan, tilt), rad: the robot's encoders   |
+| "pose"     | (4,) float32     | the prior pose (x m, y m, cos theta, sin theta)            |
+| "proposal" | (5,) float32     | Algorithm 1's view from the prior: (pan, tilt) rad, the    |
+|            |                  | move there from the head (d_pan, d_tilt) rad, found (0/1)  |
+| "actions"  | (h * A,) float32 | the last ``action_history`` actions one-hot, oldest first  |
+
+"image+head" has image and head; "image+head+pose" adds pose; "image+head+pose+proposal"
+adds proposal. ``action_history > 0`` adds actions to any of them. The prior pose is the
+believed pose (the true pose corrupted as ``localisation_error`` does), or with
+``prior_error_range`` one corrupted by an error drawn per episode, and is quantised to
+``prior_grid``. Every vector is what a robot computes itself, so a policy trained on them
+runs on a robot (:class:`activevision.runtime.HeadController` takes the same inputs).
+
+SB3's ``MultiInputPolicy`` takes these Dict spaces; the package's networks concatenate the
+vector keys in :func:`vector_keys` order (:func:`flatten_vectors`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from gymnasium import spaces
+
+from activevision.envs.config import EnvConfig
+
+IMAGE_KEY = "image"
+#: Size of each vector key (``"actions"`` is per remembered action).
+VECTOR_SIZES = {"head": 2, "pose": 4, "proposal": 5, "actions": 1}
+#: Bound of every vector entry (angles in rad, positions in m, one-hots, cos/sin).
+_VECTOR_BOUND = 10.0
+
+Observation = np.ndarray | dict[str, np.ndarray]
+
+
+def vector_keys(cfg: EnvConfig) -> tuple[str, ...]:
+    """The Dict observation's vector keys, in the order networks concatenate them."""
+    if cfg.observation == "image":
+        return ()
+    keys = tuple(k for k in ("head", "pose", "proposal") if k in cfg.observation.split("+"))
+    return keys + (("actions",) if cfg.action_history else ())
+
+
+def vector_sizes(cfg: EnvConfig, n_actions: int) -> dict[str, int]:
+    """Length of each vector key."""
+    return {
+        k: cfg.action_history * n_actions if k == "actions" else VECTOR_SIZES[k]
+        for k in vector_keys(cfg)
+    }
+
+
+def image_space(cfg: EnvConfig) -> spaces.Box:
+    shape = (cfg.frame_stack, cfg.camera.height, cfg.camera.width)
+    return spaces.Box(0, 255, shape, dtype=np.uint8)
+
+
+def observation_space(cfg: EnvConfig, n_actions: int) -> spaces.Box | spaces.Dict:
+    """The paper's image Box, or the Dict of :data:`IMAGE_KEY` and the vector keys."""
+    image = image_space(cfg)
+    if cfg.observation == "image":
+        return image
+    vectors = {
+        key: spaces.Box(-_VECTOR_BOUND, _VECTOR_BOUND, (size,), dtype=np.float32)
+        for key, size in vector_sizes(cfg, n_actions).items()
+    }
+    return spaces.Dict({IMAGE_KEY: image, **vectors})
+
+
+def flatten_vectors(obs: Mapping[str, np.ndarray], keys: tuple[str, ...]) -> np.ndarray:
+    """The vector keys of one or a batch of Dict observations, concatenated (float32)."""
+    if not keys:
+        first = np.asarray(obs[IMAGE_KEY])
+        return np.zeros((*first.shape[:-3], 0), dtype=np.float32)
+    return np.concatenate([np.asarray(obs[k], dtype=np.float32) for k in keys], axis=-1)
+
+
+class ObservationBuilder:
+    """Assembles the observations of N episode slots (the env's frames plus the slots' head,
+    prior, proposal and action history)."""
+
+    def __init__(self, cfg: EnvConfig, num_envs: int, n_actions: int) -> None:
+        self.cfg = cfg
+        self.keys = vector_keys(cfg)
+        self.n_actions = n_actions
+        self.history = np.full((num_envs, cfg.action_history), -1, dtype=np.int64)
+
+    def start(self, slots: np.ndarray) -> None:
+        """Slots ``slots`` begin new episodes: no actions remembered."""
+        self.history[slots] = -1
+
+    def record(self, actions: np.ndarray, slots: np.ndarray) -> None:
+        """Slots ``slots`` took ``actions`` (one each)."""
+        if self.cfg.action_history:
+            self.history[slots, :-1] = self.history[slots, 1:]
+            self.history[slots, -1] = actions
+
+    def batch(self, frames: np.ndarray, head: np.ndarray, prior_pose: np.ndarray,
+              proposal: np.ndarray) -> Observation:
+        """Observations of all slots: ``frames`` (N, stack, H, W) and the slots' state."""
+        if not self.keys:
+            return frames.copy()
+        obs: dict[str, np.ndarray] = {IMAGE_KEY: frames.copy()}
+        for key in self.keys:
+            obs[key] = self._vector(key, head, prior_pose, proposal)
+        return obs
+
+    def _vector(self, key: str, head: np.ndarray, prior_pose: np.ndarray,
+                proposal: np.ndarray) -> np.ndarray:
+        if key == "head":
+            values = head
+        elif key == "pose":
+            theta = prior_pose[:, 2]
+            values = np.stack([prior_pose[:, 0], prior_pose[:, 1], np.cos(theta), np.sin(theta)], 1)
+        elif key == "proposal":
+            found = proposal[:, 2:3]
+            values = np.concatenate(
+                [proposal[:, :2], (proposal[:, :2] - head) * found, found], axis=1
+            )
+        else:
+            n = len(self.history)
+            onehot = np.zeros((n, self.cfg.action_history, self.n_actions), dtype=np.float32)
+            rows, cols = np.nonzero(self.history >= 0)
+            onehot[rows, cols, self.history[rows, cols]] = 1.0
+            values = onehot.reshape(n, -1)
+        return np.asarray(values, dtype=np.float32)
+
+
+def single(obs: Observation, i: int = 0) -> Observation:
+    """Slot ``i`` of a batched observation."""
+    if isinstance(obs, dict):
+        return {k: v[i] for k, v in obs.items()}
+    return obs[i]
