@@ -31,7 +31,7 @@ def _preset_help() -> dict[str, str]:
 
 
 def cmd_train(args: argparse.Namespace) -> None:
-    """Train (or resume) a DDQN + PER run."""
+    """Train (or resume) a DDQN + PER or DAgger run."""
     from activevision.training import plot_run
 
     run_dir = _resume(args) if args.resume is not None else _train_fresh(args)
@@ -40,15 +40,16 @@ def cmd_train(args: argparse.Namespace) -> None:
 
 
 def _resume(args: argparse.Namespace) -> Path | None:
-    from activevision.training import Trainer
+    from activevision.training import reopen_run
 
-    given = [f"--{n}" for n in ("config", "preset", "seed", "set", "out") if _given(args, n)]
+    names = ("config", "preset", "seed", "set", "out", "algo")
+    given = [f"--{n}" for n in names if _given(args, n)]
     if given:
         raise ValueError(
             f"--resume continues a run with its own config.json; {', '.join(given)} cannot be"
             " combined with it (start a new run with --out instead)"
         )
-    trainer = Trainer.resume(args.resume)
+    trainer = reopen_run(args.resume)
     try:
         total = trainer.config.run.total_timesteps
         if trainer.step >= total:
@@ -92,6 +93,8 @@ def _train_fresh(args: argparse.Namespace) -> Path:
         overrides.append(f"total_timesteps={args.steps}")
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
+    if args.algo is not None:
+        overrides.append(f"algo={args.algo}")
     run_dir: Path = args.out
     train(apply_overrides(config, overrides), run_dir)
     return run_dir
@@ -144,9 +147,14 @@ def _add_config_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def add_parsers(sub: Any) -> None:
-    p = sub.add_parser("train", help="train a DDQN + PER head controller")
+    p = sub.add_parser("train", help="train a head controller (DDQN + PER, or DAgger)")
     p.set_defaults(func=cmd_train)
     _add_config_arguments(p)
+    p.add_argument(
+        "--algo",
+        choices=("ddqn", "dagger"),
+        help="ddqn: the paper's DDQN + PER; dagger: imitate the oracle (default: the config's)",
+    )
     p.add_argument(
         "--steps",
         type=positive_int,

@@ -95,6 +95,9 @@ class EnvConfig:
             raise bad("ball_distance_range", "must be positive")
         if self.max_start_draws < 1:
             raise bad("max_start_draws", "must be a positive integer")
+        self._check_observation(bad)
+
+    def _check_observation(self, bad: typing.Callable[[str, str], ValueError]) -> None:
         if self.prior_error_range is not None:
             lo, hi = self.prior_error_range
             if not 0 <= lo <= hi:

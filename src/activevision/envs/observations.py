@@ -100,8 +100,18 @@ class ObservationBuilder:
             self.history[slots, :-1] = self.history[slots, 1:]
             self.history[slots, -1] = actions
 
-    def batch(self, frames: np.ndarray, head: np.ndarray, prior_pose: np.ndarray,
-              proposal: np.ndarray) -> Observation:
+    def vectors(
+        self, head: np.ndarray, prior_pose: np.ndarray, proposal: np.ndarray
+    ) -> np.ndarray:
+        """(N, V) float32: the vector keys of all slots, concatenated (V may be 0)."""
+        parts = [self._vector(k, head, prior_pose, proposal) for k in self.keys]
+        if not parts:
+            return np.zeros((len(head), 0), dtype=np.float32)
+        return np.concatenate(parts, axis=1)
+
+    def batch(
+        self, frames: np.ndarray, head: np.ndarray, prior_pose: np.ndarray, proposal: np.ndarray
+    ) -> Observation:
         """Observations of all slots: ``frames`` (N, stack, H, W) and the slots' state."""
         if not self.keys:
             return frames.copy()
@@ -110,8 +120,9 @@ class ObservationBuilder:
             obs[key] = self._vector(key, head, prior_pose, proposal)
         return obs
 
-    def _vector(self, key: str, head: np.ndarray, prior_pose: np.ndarray,
-                proposal: np.ndarray) -> np.ndarray:
+    def _vector(
+        self, key: str, head: np.ndarray, prior_pose: np.ndarray, proposal: np.ndarray
+    ) -> np.ndarray:
         if key == "head":
             values = head
         elif key == "pose":
@@ -135,4 +146,5 @@ def single(obs: Observation, i: int = 0) -> Observation:
     """Slot ``i`` of a batched observation."""
     if isinstance(obs, dict):
         return {k: v[i] for k, v in obs.items()}
-    return obs[i]
+    one: np.ndarray = obs[i]
+    return one

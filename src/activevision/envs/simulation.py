@@ -103,7 +103,9 @@ class EpisodeBatch:
             else:
                 lo, hi = cfg.prior_error_range
                 self.prior_error[slot] = lo + (hi - lo) * rngs[j].random()
-                self.prior_pose[slot] = corrupt_pose(self.pose[slot], self.prior_error[slot], rngs[j])
+                self.prior_pose[slot] = corrupt_pose(
+                    self.pose[slot], self.prior_error[slot], rngs[j]
+                )
         self.prior_pose[slots] = quantise_pose(self.prior_pose[slots], *cfg.prior_grid)
         result = self._viewpoints(self.prior_pose[slots], slots)
         self.proposal[slots, 0] = np.where(result.ok, result.pan, 0.0)
@@ -271,8 +273,12 @@ class EpisodeBatch:
             order = seen[np.argsort(zs[:, 0], kind="stable")] if len(seen) else seen
             zs = zs[np.argsort(zs[:, 0], kind="stable")]
             _, cov = ukf_update_sequential(
-                mean, ukf.initial_cov, zs, self.landmarks.segments[order],
-                self.landmarks.types[order], ukf,
+                mean,
+                ukf.initial_cov,
+                zs,
+                self.landmarks.segments[order],
+                self.landmarks.types[order],
+                ukf,
             )
             out[j] = entropy(cov) - self.goal_entropy[i]
         return out

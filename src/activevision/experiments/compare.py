@@ -3,9 +3,11 @@ self-localisation error grows; :mod:`activevision.figures.compare` draws the fig
 
 At error level ``e`` the entropy-based head control searches its goal from the true pose
 moved ``e`` m in a random direction and turned by ``+-e`` rad, and is scored against the
-true goal with the true pose. The learned policy never sees the belief. Within a level every
-method plays the same episodes; each level draws its own episodes, so the spread of a method
-that ignores the error is the sampling noise the confidence band shows.
+true goal with the true pose. The paper's learned policy never sees the belief; one trained
+on a prior pose (``EnvConfig.observation`` with "pose") gets a prior just as far off.
+Within a level every method plays the same episodes; each level draws its own episodes, so
+the spread of a method that ignores the error is the sampling noise the confidence band
+shows.
 """
 
 from __future__ import annotations
@@ -46,6 +48,14 @@ def _make_at_error(name: str, config: EnvConfig, error: float) -> HeadPolicy:
     return make_policy(name, error, config)
 
 
+def config_at_error(config: EnvConfig, error: float) -> EnvConfig:
+    """The env of error level ``error``: a policy that observes a prior pose gets one
+    ``error`` m and rad off, as the entropy methods' belief is."""
+    if not config.observes_prior:
+        return config
+    return config.replace(prior_error_range=(error, error))
+
+
 def done_levels(csv_path: Path) -> list[dict]:
     if not csv_path.exists():
         return []
@@ -83,7 +93,8 @@ def compare(
     rows = done_levels(csv_path)
     check_resumable(csv_path, rows, episodes, seed)
     done = {(float(r["error"]), r["method"]) for r in rows}
-    env = ActiveVisionEnv(config or EnvConfig())
+    config = config or EnvConfig()
+    env = ActiveVisionEnv(config)
     todo = [
         (li, e) for li, e in enumerate(errors) if any((float(e), m) not in done for m in methods)
     ]
@@ -93,6 +104,8 @@ def compare(
 
         bar = tqdm(total=len(todo) * len(methods), desc="compare", unit="method")
     for level, e in todo:
+        if config.observes_prior:  # the learned policy's prior is as wrong as the belief
+            env = ActiveVisionEnv(config_at_error(config, float(e)))
         for name, factory in methods.items():
             if (float(e), name) in done:
                 continue

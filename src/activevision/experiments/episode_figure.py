@@ -9,14 +9,16 @@ from typing import Any
 import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
+from activevision.envs.observations import IMAGE_KEY, Observation
 from activevision.experiments.policies import HeadPolicy, HeadTarget
 from activevision.figures.episode import EpisodeTrace, Snapshot
 
 
-def _snapshot(obs: np.ndarray, info: dict[str, Any], reward: float) -> Snapshot:
+def _snapshot(obs: Observation, info: dict[str, Any], reward: float) -> Snapshot:
     pan, tilt = info["head"]
+    image: np.ndarray = obs[IMAGE_KEY] if isinstance(obs, dict) else obs
     return Snapshot(
-        obs[-1].copy(),
+        image[-1].copy(),
         float(pan),
         float(tilt),
         np.flatnonzero(info["observed_mask"]),

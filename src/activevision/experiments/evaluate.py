@@ -25,7 +25,13 @@ METRICS = {
     "ball_loss_duration": "mean",  #: steps until the ball was lost, 20 if never (paper)
     "reward": "mean",  #: total episode reward
     "score": "mean",  #: the release's score: 1 success, 0 ball lost, else success rate
+    #: belief entropy after the final view's landmarks minus the goal view's (nats)
+    "entropy_regret": "mean",
+    "regret_within": "proportion",  #: entropy regret <= REGRET_TOLERANCE
+    "oscillating": "proportion",  #: ended, unsolved, swinging between two views
 }
+#: nats: a final view this close to the goal view's entropy counts as good as the goal
+REGRET_TOLERANCE = 0.25
 
 
 @dataclass(frozen=True)
@@ -81,6 +87,7 @@ def run_episode(
     obs, info = env.reset(seed=seed)
     policy.reset(info, np.random.default_rng([seed, 7]))
     total = 0.0
+    heads = [np.array(info["head"])]
     for _ in range(max_steps):
         t0 = time.perf_counter()
         action = policy.act(obs, info)
@@ -91,8 +98,10 @@ def run_episode(
         else:
             obs, reward, terminated, _, info = env.step(action)
         total += reward
+        heads.append(np.array(info["head"]))
         if terminated:
             break
+    regret = env.entropy_regret()
     return {
         "seed": seed,
         "success": bool(info["success"]),
@@ -102,7 +111,20 @@ def run_episode(
         "reward": total,
         "score": float(info["episode_score"]),
         "steps": int(info["step"]),
+        "entropy_regret": regret,
+        "regret_within": bool(regret <= REGRET_TOLERANCE),
+        "oscillating": bool(not info["success"] and swinging(heads)),
     }
+
+
+def swinging(heads: Sequence[np.ndarray], tol: float = 1e-9) -> bool:
+    """Whether the last four head poses alternate between two distinct views (A, B, A, B):
+    the policy's greedy moves undo each other."""
+    if len(heads) < 4:
+        return False
+    a, b, c, d = heads[-4:]
+    same = np.allclose(a, c, atol=tol) and np.allclose(b, d, atol=tol)
+    return bool(same and not np.allclose(c, d, atol=tol))
 
 
 def evaluate_policy(

@@ -7,15 +7,18 @@ localisation error) and the ball; the oracle the true goal (an upper bound, not 
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from activevision.envs.actions import action_table
+from activevision.envs.actions import action_table, greedy_actions
 from activevision.envs.config import EnvConfig
+from activevision.envs.observations import IMAGE_KEY, Observation, flatten_vectors, vector_keys
 from activevision.envs.starts import corrupt_pose
 from activevision.geometry import field_landmarks
 from activevision.geometry.angles import wrap_angle
@@ -42,14 +45,13 @@ class HeadPolicy(Protocol):
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         """A new episode starts; ``rng`` is this episode's own generator."""
 
-    def act(self, obs: np.ndarray, info: dict) -> int | HeadTarget:
+    def act(self, obs: Observation, info: dict) -> int | HeadTarget:
         """The next discrete action, or a head target to jump to."""
 
 
 def greedy_action(head: ArrayLike, target: ArrayLike, table: np.ndarray) -> int:
     """The action whose move ends closest to ``target`` (pan, tilt rad)."""
-    after = np.asarray(head)[None] + table
-    return int(np.argmin(np.hypot(*(after - np.asarray(target)[None]).T)))
+    return int(greedy_actions(np.asarray(head)[None], np.asarray(target)[None], table)[0])
 
 
 class RandomPolicy:
@@ -65,7 +67,7 @@ class RandomPolicy:
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         self._rng = rng
 
-    def act(self, obs: np.ndarray, info: dict) -> int:
+    def act(self, obs: Observation, info: dict) -> int:
         return int(self._rng.integers(self.n_actions))
 
 
@@ -81,7 +83,7 @@ class OraclePolicy:
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         pass
 
-    def act(self, obs: np.ndarray, info: dict) -> int:
+    def act(self, obs: Observation, info: dict) -> int:
         return greedy_action(info["head"], info["goal_viewpoint"], self.table)
 
 
@@ -122,7 +124,7 @@ class EntropyPolicy:
         ok = result.status == ViewpointStatus.OK
         self.target = np.array([result.pan, result.tilt]) if ok else None
 
-    def act(self, obs: np.ndarray, info: dict) -> int | HeadTarget:
+    def act(self, obs: Observation, info: dict) -> int | HeadTarget:
         if self.target is None:
             return 0
         if self.jump:
@@ -148,7 +150,7 @@ class ScanPolicy:
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         self._t = 0
 
-    def act(self, obs: np.ndarray, info: dict) -> int:
+    def act(self, obs: Observation, info: dict) -> int:
         x, y, theta = info["pose"]
         dx, dy = np.asarray(info["ball"]) - (x, y)
         bearing = wrap_angle(np.arctan2(dy, dx) - theta)
@@ -159,12 +161,17 @@ class ScanPolicy:
 
 
 class LearnedPolicy:
-    """A trained Q-network: the greedy action on the camera image."""
+    """A trained network: the greedy action on the observation (a Q-network on the camera
+    image, or a DAgger student on the image and the Dict observation's vectors)."""
 
     name = "learned"
 
     def __init__(
-        self, q_network: torch.nn.Module, device: str = "cpu", num_threads: int | None = 1
+        self,
+        q_network: torch.nn.Module,
+        device: str = "cpu",
+        num_threads: int | None = 1,
+        vector_keys: tuple[str, ...] = (),
     ) -> None:
         import torch
 
@@ -176,6 +183,8 @@ class LearnedPolicy:
         self.torch = torch
         self.net = q_network.to(device).eval()
         self.device = device
+        self.vector_keys = vector_keys
+        self.takes_vector = getattr(q_network, "vector_size", None) is not None
 
     @classmethod
     def from_run(
@@ -186,17 +195,30 @@ class LearnedPolicy:
         weights: str = "final",
     ) -> LearnedPolicy:
         """The run's final weights, or with ``weights="best"`` its best validated ones."""
-        from activevision.training import load_policy
+        from activevision.training import load_config, load_policy
 
-        return cls(load_policy(run_dir, weights=weights), device, num_threads)
+        config = load_config(Path(run_dir) / "config.json")
+        keys = vector_keys(config.env)
+        return cls(load_policy(run_dir, weights=weights), device, num_threads, keys)
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         pass
 
-    def act(self, obs: np.ndarray, info: dict) -> int:
-        with self.torch.inference_mode():
-            x = self.torch.from_numpy(np.ascontiguousarray(obs)[None]).to(self.device)
-            return int(self.net(x).argmax(dim=1).item())
+    def act(self, obs: Observation, info: dict) -> int:
+        torch = self.torch
+        with torch.inference_mode():
+            if not self.takes_vector:
+                x = torch.from_numpy(np.ascontiguousarray(obs)[None]).to(self.device)
+                return int(self.net(x).argmax(dim=1).item())
+            if not isinstance(obs, dict):
+                image, vector = np.asarray(obs), np.zeros(0, np.float32)
+            else:
+                image, vector = obs[IMAGE_KEY], flatten_vectors(obs, self.vector_keys)
+            logits = self.net(
+                torch.from_numpy(np.ascontiguousarray(image)[None]).to(self.device),
+                torch.from_numpy(vector[None]).to(self.device),
+            )
+            return int(logits.argmax(dim=1).item())
 
 
 class OnnxPolicy:
@@ -213,6 +235,14 @@ class OnnxPolicy:
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         self.controller.reset()
 
-    def act(self, obs: np.ndarray, info: dict) -> int:
+    def act(self, obs: Observation, info: dict) -> int:
         pan, tilt = info["head"]
-        return self.controller.act(obs[-1], pan, tilt).action
+        if not isinstance(obs, dict):
+            return self.controller.act(obs[-1], pan, tilt).action
+        inputs = self.controller.inputs
+        pose = info["prior_pose"] if "pose" in inputs else None
+        proposal = None
+        if "proposal" in inputs:
+            p_pan, p_tilt, _, _, found = obs["proposal"]
+            proposal = (p_pan, p_tilt) if found else (math.nan, math.nan)
+        return self.controller.act(obs[IMAGE_KEY][-1], pan, tilt, pose, proposal).action

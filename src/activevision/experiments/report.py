@@ -78,6 +78,12 @@ def write_report(run_dir: str | Path) -> Path:
             "",
             _table(rows, ["success", "success_rate", "success_duration", "ball_loss_duration"]),
             "",
+            _table(rows, ["entropy_regret", "regret_within", "oscillating"]),
+            "",
+            "Entropy regret: the belief's entropy after the final view's landmarks minus the"
+            " goal view's (nats); regret_within: the share of episodes within 0.25 nats;"
+            " oscillating: unsolved episodes that end swinging between two views.",
+            "",
             _table(rows, ["reward", "score"]),
         ]
         if data.get("latency"):

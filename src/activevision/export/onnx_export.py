@@ -36,6 +36,7 @@ from torch import nn
 
 import activevision
 from activevision.agents.q_network import QNetwork
+from activevision.agents.student import StudentNetwork
 from activevision.io import write_bytes, write_text
 from activevision.runtime.metadata import (
     METADATA_FORMAT,
@@ -61,8 +62,13 @@ def check_opset(opset: int) -> int:
             f" {SUPPORTED_OPSETS.stop - 1}, got {opset!r}"
         )
     return opset
+
+
 INPUT_NAME = "frames"
 OUTPUT_NAME = "q_values"
+#: A DAgger student's second input (the Dict observation's vectors) and its output.
+VECTOR_INPUT_NAME = "vector"
+LOGITS_NAME = "logits"
 #: Largest |Q_onnx - Q_torch| accepted by the post-export check.
 VERIFY_ATOL = 1e-4
 
@@ -96,6 +102,18 @@ class _Uint8Policy(nn.Module):
             x = x * (1.0 / 255.0)
         q: torch.Tensor = self.network(x)  # nn.Module calls are typed as returning Any
         return q
+
+
+class _Uint8Student(nn.Module):
+    """uint8 frames (and the float32 vector) -> action logits of a StudentNetwork."""
+
+    def __init__(self, network: StudentNetwork) -> None:
+        super().__init__()
+        self.network = copy.deepcopy(network).cpu().float().eval()
+
+    def forward(self, frames: torch.Tensor, vector: torch.Tensor | None = None) -> torch.Tensor:
+        logits: torch.Tensor = self.network(frames.float() * (1.0 / 255.0), vector)
+        return logits
 
 
 def policy_metadata(
@@ -132,7 +150,7 @@ def policy_metadata(
 
 
 def export_onnx(
-    q_network: QNetwork,
+    q_network: QNetwork | StudentNetwork,
     out_path: str | os.PathLike[str],
     metadata: Mapping[str, Any],
     *,
@@ -164,15 +182,18 @@ def export_onnx(
     check_opset(opset)
     model_path = model_path_of(out_path)
     model_path.parent.mkdir(parents=True, exist_ok=True)
-    stack, (height, width) = q_network.stack, q_network.image_shape
-
-    model_bytes = _onnx_bytes(
-        _Uint8Policy(q_network, fold_scaling), (1, stack, height, width), opset, dynamic_batch
-    )
+    stack, (height, width) = _stack(q_network), q_network.image_shape
+    vector_size = getattr(q_network, "vector_size", 0)
+    module: nn.Module
+    if isinstance(q_network, StudentNetwork):
+        module = _Uint8Student(q_network)
+    else:
+        module = _Uint8Policy(q_network, fold_scaling)
+    model_bytes = _onnx_bytes(module, (1, stack, height, width), opset, dynamic_batch, vector_size)
     document = _metadata_document(q_network, metadata, model_path.name, model_bytes, opset)
     PolicyMetadata.from_dict(document, source="exported metadata")  # the runtime must accept it
     if verify:
-        _verify(q_network, model_bytes, (stack, height, width))
+        _verify(q_network, model_bytes, (stack, height, width), vector_size)
 
     metadata_path = metadata_path_for(model_path)
     text = json.dumps(document, indent=2) + "\n"
@@ -191,12 +212,29 @@ def model_path_of(out_path: str | os.PathLike[str]) -> Path:
 
 
 # ---------------------------------------------------------------------- helpers
+def _stack(network: QNetwork | StudentNetwork) -> int:
+    return int(getattr(network, "stack", 1))  # a student sees one frame
+
+
 def _onnx_bytes(
-    module: nn.Module, input_shape: tuple[int, ...], opset: int, dynamic_batch: bool
+    module: nn.Module,
+    input_shape: tuple[int, ...],
+    opset: int,
+    dynamic_batch: bool,
+    vector_size: int = 0,
 ) -> bytes:
-    example = torch.zeros(input_shape, dtype=torch.uint8)
+    example: tuple[torch.Tensor, ...] = (torch.zeros(input_shape, dtype=torch.uint8),)
+    input_names = [INPUT_NAME]
+    output_name = LOGITS_NAME if isinstance(module, _Uint8Student) else OUTPUT_NAME
+    if vector_size:
+        example += (torch.zeros((1, vector_size), dtype=torch.float32),)
+        input_names.append(VECTOR_INPUT_NAME)
     buffer = io.BytesIO()
-    dynamic_axes = {INPUT_NAME: {0: "batch"}, OUTPUT_NAME: {0: "batch"}} if dynamic_batch else None
+    dynamic_axes = (
+        {**{name: {0: "batch"} for name in input_names}, output_name: {0: "batch"}}
+        if dynamic_batch
+        else None
+    )
     with warnings.catch_warnings(), torch.inference_mode(False), torch.no_grad():
         # The TorchScript exporter is deprecated in favour of torch.export + onnxscript, which
         # is a heavier dependency; for this plain CNN both write the same graph.
@@ -204,10 +242,10 @@ def _onnx_bytes(
         warnings.simplefilter("ignore", category=FutureWarning)
         torch.onnx.export(
             module,
-            (example,),
+            example,
             typing.cast(Any, buffer),  # a file-like object, which its annotation omits
-            input_names=[INPUT_NAME],
-            output_names=[OUTPUT_NAME],
+            input_names=input_names,
+            output_names=[output_name],
             dynamic_axes=dynamic_axes,
             opset_version=opset,
             do_constant_folding=True,
@@ -217,7 +255,7 @@ def _onnx_bytes(
 
 
 def _metadata_document(
-    network: QNetwork,
+    network: QNetwork | StudentNetwork,
     metadata: Mapping[str, Any],
     model_file: str,
     model_bytes: bytes,
@@ -226,7 +264,7 @@ def _metadata_document(
     derived = {
         "image_height": int(network.image_shape[0]),
         "image_width": int(network.image_shape[1]),
-        "stack": int(network.stack),
+        "stack": _stack(network),
         "n_actions": int(network.n_actions),
     }
     for key in _DERIVED_KEYS:
@@ -251,19 +289,42 @@ def _metadata_document(
         "model_sha256": hashlib.sha256(model_bytes).hexdigest(),
         "input_name": INPUT_NAME,
         "input_dtype": "uint8",
-        "output_name": OUTPUT_NAME,
+        "output_name": LOGITS_NAME if isinstance(network, StudentNetwork) else OUTPUT_NAME,
         **derived,
-        "dueling": bool(network.dueling),
+        "dueling": bool(getattr(network, "dueling", False)),
         "preprocessing": "grey (ITU-R BT.601 luma), area-average resize to image_width x "
         "image_height, round half up to uint8; the graph scales by 1/255 itself",
     }
     for key, value in metadata.items():
         document.setdefault(key, value)
     document.setdefault("training_config_sha256", None)
+    if isinstance(network, StudentNetwork):
+        if network.vector_size != sum(_vector_sizes(document)):
+            raise ValueError(
+                f"metadata's vector_keys {document.get('vector_keys')} do not add up to the"
+                f" network's vector input of {network.vector_size}"
+            )
+        if network.vector_size:
+            document["vector_input_name"] = VECTOR_INPUT_NAME
     return document
 
 
-def _verify(network: QNetwork, model_bytes: bytes, input_shape: tuple[int, int, int]) -> None:
+def _vector_sizes(document: Mapping[str, Any]) -> list[int]:
+    from activevision.runtime.metadata import vector_key_size
+
+    keys = document.get("vector_keys", [])
+    return [
+        vector_key_size(k, int(document["n_actions"]), int(document.get("action_history", 0)))
+        for k in keys
+    ]
+
+
+def _verify(
+    network: QNetwork | StudentNetwork,
+    model_bytes: bytes,
+    input_shape: tuple[int, int, int],
+    vector_size: int = 0,
+) -> None:
     import onnx
 
     onnx.checker.check_model(onnx.load_model_from_string(model_bytes))
@@ -271,12 +332,20 @@ def _verify(network: QNetwork, model_bytes: bytes, input_shape: tuple[int, int, 
         import onnxruntime as ort
     except ImportError:
         return
-    frames = np.random.default_rng(0).integers(0, 256, (1, *input_shape), dtype=np.uint8)
+    rng = np.random.default_rng(0)
+    frames = rng.integers(0, 256, (1, *input_shape), dtype=np.uint8)
     session = ort.InferenceSession(model_bytes, providers=["CPUExecutionProvider"])
-    got = session.run([OUTPUT_NAME], {INPUT_NAME: frames})[0]
+    feed: dict[str, np.ndarray] = {INPUT_NAME: frames}
     reference = copy.deepcopy(network).cpu().eval()
     with torch.inference_mode():
-        want = reference(torch.from_numpy(frames)).numpy()
+        if isinstance(reference, StudentNetwork):
+            vector = rng.uniform(-1, 1, (1, vector_size)).astype(np.float32)
+            if vector_size:
+                feed[VECTOR_INPUT_NAME] = vector
+            want = reference(torch.from_numpy(frames), torch.from_numpy(vector)).numpy()
+        else:
+            want = reference(torch.from_numpy(frames)).numpy()
+    got = session.run([session.get_outputs()[0].name], feed)[0]
     error = float(np.abs(got - want).max())
     if not error <= VERIFY_ATOL:
         raise RuntimeError(f"exported ONNX differs from PyTorch by {error:.3g} > {VERIFY_ATOL}")

@@ -32,6 +32,7 @@ def export_run(
         **export_options: passed on to :func:`export_onnx` (``opset``, ``dynamic_batch``...).
     """
     from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
+    from activevision.envs.observations import vector_keys
     from activevision.training import load_config, load_policy
 
     run_dir = Path(run_dir)
@@ -42,9 +43,10 @@ def export_run(
         raise FileNotFoundError(f"{run_dir} is not a training run: no {CONFIG_FILENAME}") from error
     env = load_config(config_path).env
     network = load_policy(run_dir, weights=weights)
-    if network.stack != env.frame_stack:
+    stack = getattr(network, "stack", 1)
+    if stack != env.frame_stack:
         raise ValueError(
-            f"{run_dir}: the network stacks {network.stack} frames but the environment "
+            f"{run_dir}: the network stacks {stack} frames but the environment "
             f"{env.frame_stack}"
         )
     metadata = policy_metadata(
@@ -55,4 +57,7 @@ def export_run(
     )
     metadata["step_deg"] = env.step_deg
     metadata["action_set"] = env.action_set
+    metadata["observation"] = env.observation
+    metadata["vector_keys"] = list(vector_keys(env))
+    metadata["action_history"] = env.action_history
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)

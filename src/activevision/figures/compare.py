@@ -14,21 +14,23 @@ TITLES = {
     "success_rate": "success rate (|observed ∩ desired| / |desired|)",
     "success": "episodes reaching the goal",
     "score": "release score",
+    "regret_within": "entropy regret <= 0.25 nats",
 }
 
 
 def plot_compare(
     csv_path: str | os.PathLike[str],
     out_png: str | os.PathLike[str],
-    metrics: Sequence[str] = ("success_rate", "success"),
+    metrics: Sequence[str] = ("success_rate", "success", "regret_within"),
 ) -> None:
     """Success vs localisation error, one curve per method with its 95% band: a panel per
     ``metrics`` column of ``csv_path`` (with its ``_low`` / ``_high`` bounds)."""
     with Path(csv_path).open() as f:
         rows = list(csv.DictReader(f))
+    metrics = [m for m in metrics if not rows or m in rows[0]]  # older CSVs lack regret
     fig = new_figure(figsize=(5.5 * len(metrics), 4))
     axes = fig.subplots(1, len(metrics), squeeze=False)
-    for ax, metric in zip(axes[0], metrics, strict=True):
+    for ax, metric in zip(axes[0], metrics, strict=False):
         for method in dict.fromkeys(r["method"] for r in rows):
             sel = sorted(
                 (r for r in rows if r["method"] == method), key=lambda r: float(r["error"])

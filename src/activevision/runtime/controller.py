@@ -117,9 +117,20 @@ class HeadController:
         self._frames = np.zeros((1, *meta.input_shape), dtype=np.uint8)
         self._stack_empty = True
         self._feed: dict[str, np.ndarray] = {meta.input_name: self._frames}
+        self._vector = np.zeros((1, meta.vector_size), dtype=np.float32)
+        if meta.vector_size:
+            assert meta.vector_input_name is not None  # _check_signature
+            self._feed[meta.vector_input_name] = self._vector
+        self._history = np.full(meta.action_history, -1, dtype=np.int64)
         self._outputs = [meta.output_name]
         self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
         self.last_q_values: np.ndarray | None = None
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """What :meth:`act` needs besides the frame and head angles: ``"pose"`` and/or
+        ``"proposal"`` (empty for the paper's image-only policy)."""
+        return tuple(k for k in self.metadata.vector_keys if k in ("pose", "proposal"))
 
     # ------------------------------------------------------------------ public API
     @property
@@ -128,9 +139,11 @@ class HeadController:
         return self.metadata.n_actions
 
     def reset(self) -> None:
-        """Forget the frame stack (call when the head was moved by something else, or at the
-        start of a new search). The next frame fills every slot of the stack."""
+        """Forget the frame stack and the remembered actions (call when the head was moved by
+        something else, or at the start of a new search). The next frame fills every slot of
+        the stack."""
         self._stack_empty = True
+        self._history[:] = -1
 
     def observe(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
         """Preprocess ``frame`` and push it onto the frame stack; returns the (stack, H, W)
@@ -148,14 +161,21 @@ class HeadController:
         return frames
 
     def q_values(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
-        """Push ``frame`` onto the stack and return the policy's Q-values, shape (A,)."""
+        """Push ``frame`` onto the stack and return the policy's Q-values (a DAgger policy's
+        action logits), shape (A,), with the vector input of the last :meth:`act`."""
         self.observe(frame, color_order)
         q: np.ndarray = self._session.run(self._outputs, self._feed)[0][0]
         self.last_q_values = q
         return q
 
     def act(
-        self, frame: np.ndarray, pan: float, tilt: float, color_order: ColorOrder | None = None
+        self,
+        frame: np.ndarray,
+        pan: float,
+        tilt: float,
+        pose: tuple[float, float, float] | None = None,
+        proposal: tuple[float, float] | None = None,
+        color_order: ColorOrder | None = None,
     ) -> HeadCommand:
         """The greedy head command for a camera ``frame`` taken at head angles ``(pan, tilt)``.
 
@@ -163,13 +183,62 @@ class HeadController:
             frame: camera image, uint8, (H, W) or (H, W, 1) grey or (H, W, 3) colour, any size.
             pan, tilt: current head joint angles, radians (pan positive left, tilt positive
                 down).
+            pose: the robot's believed pose ``(x m, y m, theta rad)`` on the field, for a
+                policy whose :attr:`inputs` include ``"pose"``.
+            proposal: ``(pan, tilt)`` rad of the view the entropy method proposes from that
+                pose (``activevision.localisation.best_viewpoint``), or ``(nan, nan)`` when
+                no view shows the ball; for a policy whose :attr:`inputs` include it.
             color_order: overrides the controller's ``color_order`` for this frame.
+
+        Raises:
+            ValueError: an input the policy needs is missing, or one it does not take is given.
         """
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
+        self._fill_vector(pan, tilt, pose, proposal)
         action = int(np.argmax(self.q_values(frame, color_order)))
+        if len(self._history):
+            self._history[:-1] = self._history[1:]
+            self._history[-1] = action
         d_pan, d_tilt = self._table[action]
         target_pan, target_tilt = self.metadata.head_limits.clip(pan + d_pan, tilt + d_tilt)
         return HeadCommand(action, d_pan, d_tilt, target_pan, target_tilt)
+
+    def _fill_vector(
+        self,
+        pan: float,
+        tilt: float,
+        pose: tuple[float, float, float] | None,
+        proposal: tuple[float, float] | None,
+    ) -> None:
+        """The vector input, laid out as ``activevision.envs.observations`` builds it."""
+        keys = self.metadata.vector_keys
+        for name, value in (("pose", pose), ("proposal", proposal)):
+            if name in keys and value is None:
+                raise ValueError(
+                    f"this policy ({self.metadata.observation!r}) needs {name}=...; see"
+                    " HeadController.act"
+                )
+            if name not in keys and value is not None:
+                raise ValueError(
+                    f"this policy ({self.metadata.observation!r}) takes no {name}; it was"
+                    f" trained on {', '.join(('image', 'head', *keys)[: 1 + len(keys)])}"
+                )
+        parts: list[np.ndarray] = []
+        for key in keys:
+            if key == "head":
+                parts.append(np.array([pan, tilt]))
+            elif key == "pose":
+                x, y, theta = _finite_vector("pose", pose, 3)
+                parts.append(np.array([x, y, math.cos(theta), math.sin(theta)]))
+            elif key == "proposal":
+                parts.append(_proposal_vector(proposal, pan, tilt))
+            else:
+                onehot = np.zeros((len(self._history), self.n_actions))
+                seen = self._history >= 0
+                onehot[np.flatnonzero(seen), self._history[seen]] = 1.0
+                parts.append(onehot.reshape(-1))
+        if parts:
+            self._vector[0] = np.concatenate(parts)
 
     # ------------------------------------------------------------------ internals
     def _check_signature(self) -> None:
@@ -198,11 +267,42 @@ class HeadController:
                 f"input shape {shape} but metadata says (batch, stack, H, W) = "
                 f"(1, {meta.stack}, {meta.image_height}, {meta.image_width})"
             )
+        if meta.vector_size:
+            vector = inputs.get(meta.vector_input_name or "")
+            if vector is None or list(vector.shape)[-1] != meta.vector_size:
+                raise mismatch(
+                    f"metadata's vector_keys {list(meta.vector_keys)} need a float32 input"
+                    f" {meta.vector_input_name!r} of {meta.vector_size}; model inputs:"
+                    f" {[(i.name, i.shape) for i in inputs.values()]}"
+                )
+        elif len(inputs) != 1:
+            raise mismatch(f"the model takes {list(inputs)} but the metadata lists no vector")
         out_shape = list(outputs[meta.output_name].shape)
         if len(out_shape) != 2 or out_shape[1] != meta.n_actions:
-            raise mismatch(
-                f"output shape {out_shape} but metadata lists {meta.n_actions} actions"
-            )
+            raise mismatch(f"output shape {out_shape} but metadata lists {meta.n_actions} actions")
+
+
+def _finite_vector(name: str, value: Any, size: int) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=np.float64).reshape(size)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name} must be {size} numbers, got {value!r}") from error
+    if not np.isfinite(array).all():
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return array
+
+
+def _proposal_vector(proposal: Any, pan: float, tilt: float) -> np.ndarray:
+    """(pan, tilt, d_pan, d_tilt, found); a (nan, nan) proposal is "none found"."""
+    try:
+        p_pan, p_tilt = (float(v) for v in proposal)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"proposal must be (pan, tilt) radians, got {proposal!r}") from error
+    if math.isnan(p_pan) and math.isnan(p_tilt):
+        return np.zeros(5)
+    if not (math.isfinite(p_pan) and math.isfinite(p_tilt)):
+        raise ValueError(f"proposal must be finite, or (nan, nan) for none, got {proposal!r}")
+    return np.array([p_pan, p_tilt, p_pan - pan, p_tilt - tilt, 1.0])
 
 
 def _finite_angle(name: str, value: float) -> float:
@@ -233,10 +333,9 @@ def _open_session(path: Path, model_bytes: bytes, num_threads: int) -> Any:
         ) from error
     try:
         return ort.InferenceSession(
-            model_bytes, sess_options=robot_session_options(num_threads),
+            model_bytes,
+            sess_options=robot_session_options(num_threads),
             providers=["CPUExecutionProvider"],
         )
     except Exception as error:  # onnxruntime raises its own Fail/InvalidProtobuf types
-        raise PolicyFileError(
-            f"policy model {path} is not a valid ONNX model: {error}"
-        ) from error
+        raise PolicyFileError(f"policy model {path} is not a valid ONNX model: {error}") from error

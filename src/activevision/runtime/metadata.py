@@ -72,6 +72,14 @@ _ACTION_SIGNS = {
 
 #: The env's action names, in its order (activevision.envs.actions.ACTION_NAMES_8WAY).
 STANDARD_ACTION_NAMES = tuple(_ACTION_SIGNS)
+#: The vector inputs a policy may take, in the order the network concatenates them, and the
+#: size of each (activevision.envs.observations; "actions" is per remembered action).
+VECTOR_KEY_SIZES = {"head": 2, "pose": 4, "proposal": 5, "actions": 1}
+
+
+def vector_key_size(key: str, n_actions: int, action_history: int) -> int:
+    """Length of vector input ``key``."""
+    return action_history * n_actions if key == "actions" else VECTOR_KEY_SIZES[key]
 
 
 def _is_sha256(text: str) -> bool:
@@ -126,7 +134,20 @@ class PolicyMetadata:
     model_sha256: str = ""
     training_config_sha256: str | None = None
     action_names: tuple[str, ...] = ()
+    #: the observation the policy was trained on ("image", "image+head", ...)
+    observation: str = "image"
+    #: the vector inputs, in order (empty: the image alone)
+    vector_keys: tuple[str, ...] = ()
+    action_history: int = 0  #: previous actions the vector remembers
+    vector_input_name: str | None = None  #: the graph's vector input (None: none)
     raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def vector_size(self) -> int:
+        """Length of the vector input (0: the policy sees the image alone)."""
+        return sum(
+            vector_key_size(k, self.n_actions, self.action_history) for k in self.vector_keys
+        )
 
     @property
     def n_actions(self) -> int:
@@ -159,6 +180,10 @@ class PolicyMetadata:
             model_sha256=read.model_sha256(),
             training_config_sha256=read.optional_str("training_config_sha256"),
             action_names=read.action_names(table_deg),
+            observation=read.optional_str("observation") or "image",
+            vector_keys=read.vector_keys(),
+            action_history=read.count("action_history"),
+            vector_input_name=read.optional_str("vector_input_name"),
             raw=dict(values),
         )
 
@@ -172,9 +197,7 @@ class _MetadataReader:
             raise self.fail(f"expected a JSON object, got {type(values).__name__}")
         self.values = values
         if values.get("format") != METADATA_FORMAT:
-            raise self.fail(
-                f"'format' must be {METADATA_FORMAT!r}, got {values.get('format')!r}"
-            )
+            raise self.fail(f"'format' must be {METADATA_FORMAT!r}, got {values.get('format')!r}")
         version = values.get("format_version")
         if version != METADATA_FORMAT_VERSION:
             raise self.fail(
@@ -190,6 +213,24 @@ class _MetadataReader:
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise self.fail(f"{key!r} must be a positive integer, got {value!r}")
         return value
+
+    def count(self, key: str) -> int:
+        """A non-negative integer, 0 when absent."""
+        value = self.values.get(key, 0)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise self.fail(f"{key!r} must be a non-negative integer, got {value!r}")
+        return value
+
+    def vector_keys(self) -> tuple[str, ...]:
+        keys = self.values.get("vector_keys", [])
+        order = list(VECTOR_KEY_SIZES)
+        if (
+            not isinstance(keys, list)
+            or any(k not in VECTOR_KEY_SIZES for k in keys)
+            or (keys != sorted(keys, key=order.index) or len(set(keys)) != len(keys))
+        ):
+            raise self.fail(f"'vector_keys' must list some of {order}, in that order, got {keys!r}")
+        return tuple(keys)
 
     def optional_str(self, key: str) -> str | None:
         value = self.values.get(key)

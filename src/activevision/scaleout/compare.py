@@ -36,9 +36,10 @@ def evaluate_chunk(
     (what :func:`~activevision.experiments.evaluate.evaluate_policy` computes for them)."""
     from activevision.envs import ActiveVisionEnv
     from activevision.envs.seeding import episode_seed
+    from activevision.experiments.compare import config_at_error
     from activevision.experiments.evaluate import run_episode
 
-    env = ActiveVisionEnv(config)
+    env = ActiveVisionEnv(config_at_error(config, error))
     policy = make_policy(method, error, config, run_dir, weights)
     try:
         return [

@@ -3,6 +3,7 @@
 Modules: ``config`` (TrainConfig), ``trainer`` (the loop), ``build`` (what a config builds),
 ``state`` (checkpoint state and I/O over ``checkpoint``), ``policy_files`` (``load_policy``),
 ``loggers`` (CSV and TensorBoard), ``aux_targets`` (the auxiliary head's target),
+``dagger`` (imitation of the oracle, ``algo="dagger"``), ``runs`` (a run's trainer),
 ``environment``, ``metrics``, ``validation``, ``plots``.
 
 Typical use::
@@ -33,6 +34,8 @@ _EXPORTS = {
     "save_config": "config",
     "plot_run": "plots",
     "Trainer": "trainer",
+    "DaggerTrainer": "dagger",
+    "reopen_run": "runs",
     "goal_offset": "aux_targets",
     "load_policy": "policy_files",
     "make_env": "environment",
@@ -49,11 +52,13 @@ if TYPE_CHECKING:
         load_config,
         save_config,
     )
+    from activevision.training.dagger import DaggerTrainer
     from activevision.training.environment import make_env
     from activevision.training.loggers import CsvLogger, Logger, TensorBoardLogger
     from activevision.training.plots import plot_run
     from activevision.training.policy_files import load_policy
     from activevision.training.presets import preset
+    from activevision.training.runs import reopen_run
     from activevision.training.state import TrainerState
     from activevision.training.trainer import Trainer, resume, train
 
@@ -67,6 +72,7 @@ def __getattr__(name: str) -> Any:
 __all__ = [
     "CheckpointError",
     "CsvLogger",
+    "DaggerTrainer",
     "Logger",
     "TensorBoardLogger",
     "TrainConfig",
@@ -79,6 +85,7 @@ __all__ = [
     "make_env",
     "plot_run",
     "preset",
+    "reopen_run",
     "resume",
     "save_config",
     "train",

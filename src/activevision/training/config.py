@@ -121,6 +121,34 @@ class RunConfig:
 
 
 @dataclass(frozen=True)
+class DaggerConfig:
+    """DAgger (Ross et al. 2011) with the simulator's oracle as the privileged teacher
+    ("Learning by Cheating", Chen et al. 2019): not in the paper, values tuned here (T).
+    The student's optimiser takes ``learner.learning_rate``, ``learner.batch_size`` and
+    ``learner.max_grad_norm``."""
+
+    num_envs: int = field(default=64, metadata=_AT_LEAST_1)  #: episodes rolled out at once (T)
+    #: probability that the teacher's action is executed at the start (1: behaviour cloning
+    #: first), decayed linearly to 0 over ``teacher_fraction`` of the run (Ross et al.) (T)
+    teacher_initial: float = field(default=1.0, metadata=_FRACTION)
+    teacher_fraction: float = field(default=0.25, metadata=_FRACTION)
+    #: gradient updates after each round of ``num_envs`` episodes (T)
+    updates_per_rollout: int = field(default=16, metadata=_AT_LEAST_1)
+    #: labelled states kept (oldest dropped); states, not images: images are rendered for
+    #: each minibatch, so a million states take ~100 MB
+    dataset_size: int = field(default=1_000_000, metadata=_AT_LEAST_1)
+    downsample: int = field(default=2, metadata=_range(1, 4))  #: image average-pool factor (T)
+    #: weight of the auxiliary goal-view classification (40 classes; 0: none) (T)
+    goal_class_weight: float = field(default=0.5, metadata=_AT_LEAST_0)
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+
+
+Algorithm = typing.Literal["ddqn", "dagger"]
+
+
+@dataclass(frozen=True)
 class TrainConfig:
     """Everything a training run depends on; saved as ``config.json`` beside each run."""
 
@@ -134,11 +162,23 @@ class TrainConfig:
     exploration: ExplorationConfig = field(default_factory=ExplorationConfig)
     replay: ReplayConfig = field(default_factory=ReplayConfig)
     run: RunConfig = field(default_factory=RunConfig)
+    #: "ddqn": the paper's DDQN + PER; "dagger": imitation of the oracle (``dagger``)
+    algo: Algorithm = "ddqn"
+    dagger: DaggerConfig = field(default_factory=DaggerConfig)
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
         if not self.env_id:
             raise ValueError("TrainConfig.env_id: must not be empty")
+        if self.algo == "dagger" and self.env_id != "ActiveVision-v0":
+            raise ValueError("TrainConfig.algo: 'dagger' needs ActiveVision-v0 (its oracle)")
+        if self.algo == "dagger" and self.env.frame_stack != 1:
+            raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")
+        if self.algo == "ddqn" and self.env.observation != "image":
+            raise ValueError(
+                "TrainConfig.env.observation: the DDQN learner takes images only; train Dict"
+                " observations with algo='dagger'"
+            )
 
     def replace(self, **changes: Any) -> TrainConfig:
         """A copy with some values changed, by dotted path or unique field name:
@@ -158,7 +198,7 @@ class TrainConfig:
         return config_from_dict(cls, values)
 
 
-SECTIONS = ("env", "learner", "exploration", "replay", "run")
+SECTIONS = ("env", "learner", "exploration", "replay", "run", "dagger")
 
 
 def field_paths() -> dict[str, str]:

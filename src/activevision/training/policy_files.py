@@ -23,6 +23,7 @@ from typing import Any
 import torch
 
 from activevision.agents.q_network import QNetwork
+from activevision.agents.student import StudentNetwork
 from activevision.io import atomic_path
 from activevision.training import checkpoint as ckpt
 
@@ -32,7 +33,7 @@ BEST_POLICY_FILE = "best_policy.safetensors"  #: best greedy validation score (e
 
 def network_metadata(network: torch.nn.Module, step: int) -> dict[str, Any]:
     """What :func:`load_policy` needs to rebuild ``network`` (a QNetwork), and the step of
-    its weights."""
+    its weights. (A StudentNetwork's come from ``DaggerTrainer.metadata``.)"""
     if not isinstance(network, QNetwork):
         raise TypeError(f"policy files hold QNetwork weights, got a {type(network).__name__}")
     return {
@@ -97,8 +98,9 @@ class BestWeights:
 
 def load_policy(
     path: str | os.PathLike[str], device: str = "cpu", weights: str = "final"
-) -> QNetwork:
-    """A trained QNetwork in eval mode, from a run directory, a checkpoint, or a weights file.
+) -> QNetwork | StudentNetwork:
+    """A trained network in eval mode (a QNetwork, or a DAgger run's StudentNetwork), from a
+    run directory, a checkpoint, or a weights file.
 
     Reads safetensors only (no code is executed). A run directory's ``policy.safetensors``
     holds its newest online weights (``weights="final"``), ``best_policy.safetensors`` those
@@ -110,7 +112,12 @@ def load_policy(
         tensors = {
             k.removeprefix("online."): v for k, v in tensors.items() if k.startswith("online.")
         }
+    network: QNetwork | StudentNetwork
     try:
+        if meta.get("network") == "student":
+            network = StudentNetwork.from_metadata(meta)
+            network.load_state_dict(tensors)
+            return network.to(device).eval()
         network = QNetwork(
             meta["n_actions"],
             meta["stack"],
@@ -119,8 +126,8 @@ def load_policy(
             aux_outputs=meta.get("aux_outputs", 0),
         )
         network.load_state_dict(tensors)
-    except (KeyError, RuntimeError) as error:
-        raise ckpt.CheckpointError(f"{path} does not hold QNetwork weights: {error}") from error
+    except (KeyError, RuntimeError, TypeError, ValueError) as error:
+        raise ckpt.CheckpointError(f"{path} does not hold policy weights: {error}") from error
     return network.to(device).eval()
 
 

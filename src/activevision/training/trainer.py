@@ -370,7 +370,14 @@ def train(
     aux_target: AuxTarget | None = None,
     loggers: Sequence[Logger] | None = None,
 ) -> list[dict[str, float]]:
-    """Train a fresh run to ``config.run.total_timesteps``; returns the per-epoch metrics."""
+    """Train a fresh run to ``config.run.total_timesteps``; returns the per-epoch metrics.
+    A config with ``algo="dagger"`` is trained by :mod:`activevision.training.dagger`."""
+    if config.algo == "dagger":
+        from activevision.training.dagger import train_dagger
+
+        if env_factory is not None or aux_target is not None:
+            raise ValueError("algo='dagger' trains on ActiveVision-v0 itself: no env_factory")
+        return train_dagger(config, run_dir, loggers=loggers)
     trainer = Trainer(config, run_dir, env_factory, aux_target=aux_target, loggers=loggers)
     try:
         return trainer.train()

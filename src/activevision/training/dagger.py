@@ -1,0 +1,458 @@
+"""DAgger with a privileged teacher: the simulator knows the goal view, so the oracle labels
+every state the student visits (Ross et al. 2011; "Learning by Cheating", Chen et al. 2019).
+
+One round: ``dagger.num_envs`` episodes are rolled out together in the native batched
+simulation (:class:`~activevision.envs.simulation.EpisodeBatch`, the vector env's engine).
+At each step the executed action is the teacher's with probability ``beta`` (1 at the start,
+decayed linearly to 0 over ``teacher_fraction`` of the run), else the student's greedy one;
+every visited state is stored with the teacher's action (the greedy 3-degree move to the
+true goal) and the goal view's index. Then ``updates_per_rollout`` minibatches are drawn from
+all states so far: cross-entropy on the teacher's action, plus ``goal_class_weight`` times
+cross-entropy on the goal view (40 classes).
+
+The dataset keeps *states* (pose, head, ball, the observation's vector), not images: each
+minibatch is rendered on the fly by the exact renderer (about 30,000 frames/s), so a million
+states take ~100 MB and a checkpoint stores them whole.
+
+A run directory looks like a DDQN run's: ``config.json``, ``metrics.csv`` (one row per round
+that crosses an ``epoch_steps`` boundary; ``loss`` is the imitation loss, ``epsilon`` the
+teacher's share ``beta``), ``episodes.csv``, ``evaluations.csv`` and ``best_policy`` (with
+``eval_interval``), TensorBoard, ``policy.safetensors`` and ``checkpoints/``. Rounds start
+fresh episodes, so a checkpoint taken between rounds holds everything: resuming continues
+exactly where the run stopped.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from gymnasium.utils import seeding
+from torch.nn import functional as F
+
+from activevision.agents.student import StudentNetwork
+from activevision.envs.actions import greedy_actions
+from activevision.envs.observations import (
+    ObservationBuilder,
+    vector_keys,
+    vector_sizes,
+)
+from activevision.envs.seeding import episode_seed
+from activevision.envs.simulation import EpisodeBatch
+from activevision.training import checkpoint as ckpt
+from activevision.training import state as run_state
+from activevision.training.config import TrainConfig, load_config, save_config
+from activevision.training.cpu import configure_torch_cpu, resolve_device
+from activevision.training.loggers import Logger, LoggerGroup, LogPosition, default_loggers
+from activevision.training.metrics import EpochAccumulator, episode_record
+from activevision.training.policy_files import BestWeights, write_policy
+from activevision.training.validation import summarise_validation
+
+MAX_EPISODE_STEPS = 20  #: the registration's time limit
+
+#: checkpoint contents: the dataset's arrays (``replay.npz``, the name every checkpoint has)
+DATASET_FIELDS = ("pose", "head", "ball", "vector", "action", "goal")
+
+
+class StateDataset:
+    """A ring buffer of labelled states (no images)."""
+
+    def __init__(self, capacity: int, vector_size: int) -> None:
+        self.capacity = capacity
+        self.arrays: dict[str, np.ndarray] = {
+            "pose": np.zeros((capacity, 3)),
+            "head": np.zeros((capacity, 2)),
+            "ball": np.zeros((capacity, 2)),
+            "vector": np.zeros((capacity, vector_size), dtype=np.float32),
+            "action": np.zeros(capacity, dtype=np.int64),
+            "goal": np.zeros(capacity, dtype=np.int64),
+        }
+        self.size = 0
+        self.next = 0
+
+    def add(self, **columns: np.ndarray) -> None:
+        n = len(columns["action"])
+        slots = (self.next + np.arange(n)) % self.capacity
+        for name, values in columns.items():
+            self.arrays[name][slots] = values
+        self.next = int((self.next + n) % self.capacity)
+        self.size = min(self.size + n, self.capacity)
+
+    def state_dict(self) -> dict[str, np.ndarray]:
+        out = {k: v[: self.size] for k, v in self.arrays.items()}
+        out["position"] = np.array([self.next, self.capacity])
+        return out
+
+    def load(self, arrays: dict[str, np.ndarray]) -> None:
+        position, capacity = (int(v) for v in arrays["position"])
+        if capacity != self.capacity or set(arrays) != {*DATASET_FIELDS, "position"}:
+            raise ckpt.CheckpointError("the checkpoint's dataset does not fit this run's config")
+        self.size = len(arrays["action"])
+        for name in DATASET_FIELDS:
+            self.arrays[name][: self.size] = arrays[name]
+        self.next = position
+
+
+def goal_indices(sim: EpisodeBatch) -> np.ndarray:
+    """(N,) the grid index (0..39) of each slot's goal view."""
+    grid = sim.localisation.grid
+    gap = np.abs(grid.pans[None] - sim.goal_pan[:, None]) + np.abs(
+        grid.tilts[None] - sim.goal_tilt[:, None]
+    )
+    index: np.ndarray = np.argmin(gap, axis=1)
+    return index
+
+
+class DaggerTrainer:
+    """Trains a :class:`~activevision.agents.student.StudentNetwork` by DAgger."""
+
+    def __init__(
+        self,
+        config: TrainConfig,
+        run_dir: str | os.PathLike[str],
+        *,
+        loggers: Sequence[Logger] | None = None,
+        _resuming: bool = False,
+    ) -> None:
+        if config.algo != "dagger":
+            raise ValueError(f"DaggerTrainer trains algo='dagger', got {config.algo!r}")
+        self.config = config
+        self.run_dir = Path(run_dir)
+        if not _resuming and ckpt.list_checkpoints(self.run_dir):
+            raise ValueError(f"{self.run_dir} already holds a run; resume it")
+        self.device = resolve_device(config.run.device)
+        cfg, dag = config.env, config.dagger
+        self.sim = EpisodeBatch(cfg, dag.num_envs)
+        self.n_actions = len(self.sim.actions)
+        self.keys = vector_keys(cfg)
+        self.observations = ObservationBuilder(cfg, dag.num_envs, self.n_actions)
+        trainer_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(2)
+        self.rng = np.random.default_rng(int(trainer_seed))
+        vector_size = sum(vector_sizes(cfg, self.n_actions).values())
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(init_seed))
+            self.network = StudentNetwork(
+                self.n_actions,
+                vector_size,
+                (cfg.camera.height, cfg.camera.width),
+                dag.downsample,
+                n_goals=len(self.sim.localisation.grid) if dag.goal_class_weight > 0 else 0,
+            )
+        self.network.to(self.device)
+        self.optimizer = torch.optim.Adam(
+            self.network.parameters(), lr=config.learner.learning_rate
+        )
+        self.dataset = StateDataset(dag.dataset_size, vector_size)
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        ckpt.remove_stale_writes(self.run_dir)
+        configure_torch_cpu(config.run.num_threads)
+        self.step = 0
+        self.episode = 0
+        self.epoch_log = EpochAccumulator()
+        self.best = BestWeights()
+        self._epochs_logged = 0
+        self._validations_logged = 0
+        save_config(config, self.run_dir / run_state.CONFIG_FILE)
+        self.logger = LoggerGroup(default_loggers(config, run_dir) if loggers is None else loggers)
+        if not _resuming:
+            self.logger.start(None)
+
+    @property
+    def teacher_share(self) -> float:
+        """beta: the probability that the teacher's action is executed now."""
+        dag, total = self.config.dagger, self.config.run.total_timesteps
+        span = dag.teacher_fraction * total
+        if span <= 0:
+            return 0.0
+        return dag.teacher_initial * max(0.0, 1.0 - self.step / span)
+
+    # ------------------------------------------------------------------ the loop
+    def train(self, steps: int | None = None) -> list[dict[str, float]]:
+        """Run rounds until ``steps`` more environment steps are done (default: to
+        ``total_timesteps``); returns this call's ``metrics.csv`` rows."""
+        run = self.config.run
+        target = (
+            run.total_timesteps if steps is None else min(self.step + steps, run.total_timesteps)
+        )
+        rows: list[dict[str, float]] = []
+        while self.step < target:
+            before, t0 = self.step, time.perf_counter()
+            self._rollout()
+            for _ in range(self.config.dagger.updates_per_rollout):
+                self.epoch_log.losses.append(self._update())
+            rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
+            if self.step // run.epoch_steps > before // run.epoch_steps:
+                rows.append(self._finish_epoch(rate))
+            if run.eval_interval and self.step // run.eval_interval > before // run.eval_interval:
+                self.validate()
+            interval = run.checkpoint_interval
+            if interval and self.step // interval > before // interval and self.step < target:
+                self.save_checkpoint()
+        self.save_checkpoint()
+        self.logger.flush()
+        return rows
+
+    def _rollout(self) -> None:
+        """One round of ``num_envs`` fresh episodes, every visited state labelled."""
+        sim, n = self.sim, self.sim.n
+        seeds = self.rng.integers(0, 2**31 - 1, size=n)
+        slots = np.arange(n)
+        sim.reset(slots, [seeding.np_random(int(s))[0] for s in seeds])
+        self.observations.start(slots)
+        active = np.ones(n, dtype=bool)
+        goals = goal_indices(sim)
+        beta = self.teacher_share
+        for _ in range(MAX_EPISODE_STEPS):
+            idx = np.flatnonzero(active)
+            image, vector = self._observe(idx)
+            teacher = greedy_actions(sim.head[idx], sim.goal[idx], sim.actions)
+            self.dataset.add(
+                pose=sim.pose[idx],
+                head=sim.head[idx],
+                ball=sim.ball[idx],
+                vector=vector,
+                action=teacher,
+                goal=goals[idx],
+            )
+            actions = np.zeros(n, dtype=np.int64)
+            use_teacher = self.rng.random(len(idx)) < beta
+            actions[idx] = teacher
+            if not use_teacher.all():
+                actions[idx] = np.where(use_teacher, teacher, self.act(image, vector))
+            self.observations.record(actions[idx], idx)
+            _, terminated, _, _ = sim.step(actions, active=active)
+            self.step += len(idx)
+            ended = active & (terminated | (sim.step_count >= MAX_EPISODE_STEPS))
+            for i in np.flatnonzero(ended):
+                self._end_episode(int(i))
+            active &= ~ended
+            if not active.any():
+                break
+
+    def _observe(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        sim = self.sim
+        image = sim.render(idx)[:, None]
+        vector = self.observations.vectors(sim.head, sim.prior_pose, sim.proposal)
+        return image, vector[idx]
+
+    def act(self, image: np.ndarray, vector: np.ndarray) -> np.ndarray:
+        """The student's greedy actions for a batch."""
+        with torch.inference_mode():
+            logits = self.network(
+                torch.from_numpy(image).to(self.device), torch.from_numpy(vector).to(self.device)
+            )
+        actions: np.ndarray = logits.argmax(dim=1).cpu().numpy()
+        return actions
+
+    def _end_episode(self, i: int) -> None:
+        sim = self.sim
+        info = {k: v[i] for k, v in sim.info_arrays(MAX_EPISODE_STEPS).items()}
+        record = episode_record(
+            self.episode, self.step, float(sim.episode_reward[i]), int(sim.step_count[i]), info
+        )
+        self.logger.record_episode(record, self.step)
+        self.epoch_log.episodes.append(record)
+        self.episode += 1
+
+    def _update(self) -> float:
+        """One minibatch of rendered dataset states; returns the imitation loss."""
+        data = self.dataset.arrays
+        b = self.rng.integers(0, self.dataset.size, size=self.config.learner.batch_size)
+        head = data["head"][b]
+        images = self.sim.renderer.render(data["pose"][b], head[:, 0], head[:, 1], data["ball"][b])
+        image = torch.from_numpy(images[:, None]).to(self.device)
+        vector = torch.from_numpy(data["vector"][b]).to(self.device)
+        logits, goal_logits = self.network.forward_with_goal(image, vector)
+        loss = F.cross_entropy(logits, torch.from_numpy(data["action"][b]).to(self.device))
+        if goal_logits is not None:
+            goal = torch.from_numpy(data["goal"][b]).to(self.device)
+            loss = loss + self.config.dagger.goal_class_weight * F.cross_entropy(goal_logits, goal)
+        self.optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(self.network.parameters(), self.config.learner.max_grad_norm)
+        self.optimizer.step()
+        return float(loss.item())
+
+    def _finish_epoch(self, steps_per_s: float) -> dict[str, float]:
+        epoch = self.step // self.config.run.epoch_steps
+        row = self.epoch_log.summary(epoch, self.step, self.teacher_share, 0.0, steps_per_s)
+        self.logger.record_epoch(row, self.step)
+        self._epochs_logged += 1
+        self.epoch_log = EpochAccumulator()
+        return row
+
+    def validate(self) -> dict[str, float]:
+        """The student's greedy episodes on the validation seeds (the episodes of
+        ``activevision evaluate --seed eval_seed``); keeps the best weights."""
+        run = self.config.run
+        seeds = [episode_seed(run.eval_seed, i) for i in range(run.eval_episodes)]
+        records = greedy_student_episodes(self, seeds)
+        row = summarise_validation(self.step, records, self.best.score)
+        self.logger.record_validation(row, self.step)
+        self._validations_logged += 1
+        if row["best"]:
+            self.best.keep(self.network, self.step, row["success_rate"])
+            self.best.write(self.run_dir, self.metadata())
+        return row
+
+    # ------------------------------------------------------------------ files
+    def metadata(self) -> dict[str, Any]:
+        """The policy files' metadata: the network's shape, the step and the observation."""
+        cfg = self.config.env
+        return {
+            **self.network.metadata(),
+            "observation": cfg.observation,
+            "action_history": cfg.action_history,
+            "vector_keys": list(self.keys),
+            "step": self.step,
+        }
+
+    def state_json(self) -> str:
+        return json.dumps(
+            {
+                "algo": "dagger",
+                "step": self.step,
+                "episode": self.episode,
+                "rng": self.rng.bit_generator.state,
+                "epoch_log": self.epoch_log.to_dict(),
+                "metrics_rows": self._epochs_logged,
+                "evaluations_rows": self._validations_logged,
+                "best_eval": self.best.score if self.best.weights is not None else None,
+                "best_step": self.best.step,
+                "config_sha256": run_state.config_digest(self.run_dir),
+            }
+        )
+
+    def save_checkpoint(self) -> Path:
+        """Write a checkpoint (atomically) and ``policy.safetensors``."""
+        metadata = self.metadata()
+        tensors = {f"online.{k}": v for k, v in self.network.state_dict().items()}
+        if self.best.weights is not None:
+            tensors.update({f"best.{k}": v for k, v in self.best.weights.items()})
+
+        def write_files(directory: Path) -> None:
+            ckpt.save_tensors(directory / "model.safetensors", tensors, metadata)
+            ckpt.save_torch_state(directory / "optimizer.pt", self.optimizer.state_dict())
+            ckpt.save_arrays(directory / "replay.npz", self.dataset.state_dict())
+            (directory / run_state.STATE_FILE).write_text(self.state_json())
+
+        path = ckpt.write_checkpoint(
+            self.run_dir, self.step, write_files, self.config.run.keep_checkpoints
+        )
+        write_policy(self.run_dir, self.network.state_dict(), metadata)
+        return path
+
+    @classmethod
+    def resume(
+        cls, run_dir: str | os.PathLike[str], *, loggers: Sequence[Logger] | None = None
+    ) -> DaggerTrainer:
+        """Rebuild the trainer from the run's newest checkpoint."""
+        run_dir = Path(run_dir)
+        path = ckpt.latest_checkpoint(run_dir)
+        ckpt.verify_checkpoint(path)
+        config = load_config(run_dir / run_state.CONFIG_FILE)
+        try:
+            state = json.loads((path / run_state.STATE_FILE).read_text())
+            if state.get("config_sha256") != run_state.config_digest(run_dir):
+                raise ckpt.CheckpointError(
+                    f"{run_dir / run_state.CONFIG_FILE} was changed after checkpoint {path.name}"
+                )
+            trainer = cls(config, run_dir, loggers=loggers, _resuming=True)
+            tensors, _ = ckpt.load_tensors(path / "model.safetensors")
+            weights = {
+                k.removeprefix("online."): v for k, v in tensors.items() if k.startswith("online.")
+            }
+            trainer.network.load_state_dict(weights)
+            trainer.optimizer.load_state_dict(ckpt.load_torch_state(path / "optimizer.pt"))
+            trainer.dataset.load(ckpt.load_arrays(path / "replay.npz"))
+            trainer.step, trainer.episode = int(state["step"]), int(state["episode"])
+            trainer.rng.bit_generator.state = state["rng"]
+            trainer.epoch_log = EpochAccumulator.from_dict(state["epoch_log"])
+            trainer._epochs_logged = int(state["metrics_rows"])
+            trainer._validations_logged = int(state["evaluations_rows"])
+            if state["best_eval"] is not None:
+                best = {
+                    k.removeprefix("best."): v for k, v in tensors.items() if k.startswith("best.")
+                }
+                trainer.best.keep_weights(best, int(state["best_step"]), float(state["best_eval"]))
+        except (KeyError, TypeError, ValueError, RuntimeError) as error:
+            if isinstance(error, ckpt.CheckpointError):
+                raise
+            raise ckpt.CheckpointError(
+                f"checkpoint {path} does not fit this run ({type(error).__name__}: {error})"
+            ) from error
+        trainer.logger.start(
+            LogPosition(
+                trainer.step, trainer._epochs_logged, trainer.episode, trainer._validations_logged
+            )
+        )
+        return trainer
+
+    def close(self) -> None:
+        self.logger.close()
+
+
+def greedy_student_episodes(trainer: DaggerTrainer, seeds: Sequence[int]) -> list[dict[str, float]]:
+    """One greedy episode of the student from each seed (each equal to
+    ``ActiveVision-v0`` reset with that seed), played as one batch."""
+    cfg = trainer.config.env
+    sim = EpisodeBatch(cfg, len(seeds))
+    observations = ObservationBuilder(cfg, len(seeds), trainer.n_actions)
+    slots = np.arange(len(seeds))
+    sim.reset(slots, [seeding.np_random(int(s))[0] for s in seeds])
+    observations.start(slots)
+    active = np.ones(len(seeds), dtype=bool)
+    records: list[dict[str, float]] = [{} for _ in seeds]
+    for _ in range(MAX_EPISODE_STEPS):
+        idx = np.flatnonzero(active)
+        image = sim.render(idx)[:, None]
+        vector = observations.vectors(sim.head, sim.prior_pose, sim.proposal)[idx]
+        actions = np.zeros(len(seeds), dtype=np.int64)
+        actions[idx] = trainer.act(image, vector)
+        observations.record(actions[idx], idx)
+        _, terminated, _, _ = sim.step(actions, active=active)
+        ended = active & (terminated | (sim.step_count >= MAX_EPISODE_STEPS))
+        infos = sim.info_arrays(MAX_EPISODE_STEPS)
+        for i in np.flatnonzero(ended):
+            info = {k: v[i] for k, v in infos.items()}
+            records[i] = episode_record(
+                int(i), 0, float(sim.episode_reward[i]), int(sim.step_count[i]), info
+            )
+        active &= ~ended
+        if not active.any():
+            break
+    return records
+
+
+def train_dagger(
+    config: TrainConfig,
+    run_dir: str | os.PathLike[str],
+    *,
+    loggers: Sequence[Logger] | None = None,
+) -> list[dict[str, float]]:
+    """Train a fresh DAgger run to ``config.run.total_timesteps``."""
+    trainer = DaggerTrainer(config, run_dir, loggers=loggers)
+    try:
+        return trainer.train()
+    finally:
+        trainer.close()
+
+
+def resume_dagger(
+    run_dir: str | os.PathLike[str],
+    steps: int | None = None,
+    *,
+    loggers: Sequence[Logger] | None = None,
+) -> list[dict[str, float]]:
+    """Continue a DAgger run from its newest checkpoint."""
+    trainer = DaggerTrainer.resume(run_dir, loggers=loggers)
+    try:
+        return trainer.train(steps)
+    finally:
+        trainer.close()
