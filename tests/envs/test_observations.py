@@ -114,7 +114,7 @@ def test_vector_env_slots_equal_single_envs(kind):
             for key in obs:
                 np.testing.assert_array_equal(obs[key][i], single_obs[i][key])
         actions = rng.integers(0, 9, 3)
-        obs, _, term, trunc, _ = venv.step(actions)
+        obs, *_ = venv.step(actions)
         for i, env in enumerate(singles):
             single_obs[i], _, t, _, _ = env.step(int(actions[i]))
             if t:  # NEXT_STEP autoreset: compare again once both restarted

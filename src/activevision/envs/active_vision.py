@@ -156,9 +156,7 @@ class ActiveVisionEnv(gym.Env):
         if self.config.observation == "image":
             return self._frames.copy()
         sim = self.sim
-        batch = self._observations.batch(
-            self._frames[None], sim.head, sim.prior_pose, sim.proposal
-        )
+        batch = self._observations.batch(self._frames[None], sim)
         return single(batch)
 
     def _after_move(

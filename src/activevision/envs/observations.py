@@ -6,6 +6,8 @@ a robot knows of itself (``EnvConfig.observation``).
 | "image"    | (1, H, W) uint8  | the camera image (the paper's whole observation)           |
 | "head"     | (2,) float32     | head joint angles (pan, tilt), rad: the robot's encoders   |
 | "pose"     | (4,) float32     | the prior pose (x m, y m, cos theta, sin theta)            |
+| "pose_error" | (1,) float32   | the prior's error scale e (m and rad): what a consistent   |
+|            |                  | filter reports as its uncertainty; comes with "pose"       |
 | "proposal" | (5,) float32     | Algorithm 1's view from the prior: (pan, tilt) rad, the    |
 |            |                  | move there from the head (d_pan, d_tilt) rad, found (0/1)  |
 | "actions"  | (h * A,) float32 | the last ``action_history`` actions one-hot, oldest first  |
@@ -29,10 +31,11 @@ import numpy as np
 from gymnasium import spaces
 
 from activevision.envs.config import EnvConfig
+from activevision.envs.simulation import EpisodeBatch
 
 IMAGE_KEY = "image"
 #: Size of each vector key (``"actions"`` is per remembered action).
-VECTOR_SIZES = {"head": 2, "pose": 4, "proposal": 5, "actions": 1}
+VECTOR_SIZES = {"head": 2, "pose": 4, "pose_error": 1, "proposal": 5, "actions": 1}
 #: Bound of every vector entry (angles in rad, positions in m, one-hots, cos/sin).
 _VECTOR_BOUND = 10.0
 
@@ -43,7 +46,9 @@ def vector_keys(cfg: EnvConfig) -> tuple[str, ...]:
     """The Dict observation's vector keys, in the order networks concatenate them."""
     if cfg.observation == "image":
         return ()
-    keys = tuple(k for k in ("head", "pose", "proposal") if k in cfg.observation.split("+"))
+    parts = cfg.observation.split("+")
+    keys = ("head",) + (("pose", "pose_error") if "pose" in parts else ())
+    keys += ("proposal",) if "proposal" in parts else ()
     return keys + (("actions",) if cfg.action_history else ())
 
 
@@ -100,31 +105,29 @@ class ObservationBuilder:
             self.history[slots, :-1] = self.history[slots, 1:]
             self.history[slots, -1] = actions
 
-    def vectors(
-        self, head: np.ndarray, prior_pose: np.ndarray, proposal: np.ndarray
-    ) -> np.ndarray:
+    def vectors(self, sim: EpisodeBatch) -> np.ndarray:
         """(N, V) float32: the vector keys of all slots, concatenated (V may be 0)."""
-        parts = [self._vector(k, head, prior_pose, proposal) for k in self.keys]
+        parts = [self._vector(k, sim) for k in self.keys]
         if not parts:
-            return np.zeros((len(head), 0), dtype=np.float32)
+            return np.zeros((sim.n, 0), dtype=np.float32)
         return np.concatenate(parts, axis=1)
 
-    def batch(
-        self, frames: np.ndarray, head: np.ndarray, prior_pose: np.ndarray, proposal: np.ndarray
-    ) -> Observation:
+    def batch(self, frames: np.ndarray, sim: EpisodeBatch) -> Observation:
         """Observations of all slots: ``frames`` (N, stack, H, W) and the slots' state."""
         if not self.keys:
             return frames.copy()
         obs: dict[str, np.ndarray] = {IMAGE_KEY: frames.copy()}
         for key in self.keys:
-            obs[key] = self._vector(key, head, prior_pose, proposal)
+            obs[key] = self._vector(key, sim)
         return obs
 
-    def _vector(
-        self, key: str, head: np.ndarray, prior_pose: np.ndarray, proposal: np.ndarray
-    ) -> np.ndarray:
+    def _vector(self, key: str, sim: EpisodeBatch) -> np.ndarray:
+        head, prior_pose, proposal = sim.head, sim.prior_pose, sim.proposal
+        values: np.ndarray
         if key == "head":
             values = head
+        elif key == "pose_error":
+            values = sim.prior_error[:, None]
         elif key == "pose":
             theta = prior_pose[:, 2]
             values = np.stack([prior_pose[:, 0], prior_pose[:, 1], np.cos(theta), np.sin(theta)], 1)

@@ -87,7 +87,7 @@ class ActiveVisionVectorEnv(VectorEnv):
 
     def _observe(self) -> Observation:
         sim = self.sim
-        return self._observations.batch(self._frames, sim.head, sim.prior_pose, sim.proposal)
+        return self._observations.batch(self._frames, sim)
 
     def _render(self, started: np.ndarray) -> None:
         """Render every sub-environment in one batched call; sub-environments that just

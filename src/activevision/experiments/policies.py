@@ -241,8 +241,10 @@ class OnnxPolicy:
             return self.controller.act(obs[-1], pan, tilt).action
         inputs = self.controller.inputs
         pose = info["prior_pose"] if "pose" in inputs else None
+        pose_error = info["prior_error"] if "pose_error" in inputs else None
         proposal = None
         if "proposal" in inputs:
             p_pan, p_tilt, _, _, found = obs["proposal"]
             proposal = (p_pan, p_tilt) if found else (math.nan, math.nan)
-        return self.controller.act(obs[IMAGE_KEY][-1], pan, tilt, pose, proposal).action
+        image = obs[IMAGE_KEY][-1]
+        return self.controller.act(image, pan, tilt, pose, proposal, pose_error=pose_error).action

@@ -128,9 +128,10 @@ class HeadController:
 
     @property
     def inputs(self) -> tuple[str, ...]:
-        """What :meth:`act` needs besides the frame and head angles: ``"pose"`` and/or
-        ``"proposal"`` (empty for the paper's image-only policy)."""
-        return tuple(k for k in self.metadata.vector_keys if k in ("pose", "proposal"))
+        """What :meth:`act` needs besides the frame and head angles: some of ``"pose"``,
+        ``"pose_error"`` and ``"proposal"`` (none for the paper's image-only policy)."""
+        keys = ("pose", "pose_error", "proposal")
+        return tuple(k for k in self.metadata.vector_keys if k in keys)
 
     # ------------------------------------------------------------------ public API
     @property
@@ -176,6 +177,7 @@ class HeadController:
         pose: tuple[float, float, float] | None = None,
         proposal: tuple[float, float] | None = None,
         color_order: ColorOrder | None = None,
+        pose_error: float | None = None,
     ) -> HeadCommand:
         """The greedy head command for a camera ``frame`` taken at head angles ``(pan, tilt)``.
 
@@ -185,6 +187,9 @@ class HeadController:
                 down).
             pose: the robot's believed pose ``(x m, y m, theta rad)`` on the field, for a
                 policy whose :attr:`inputs` include ``"pose"``.
+            pose_error: with ``pose``: how far off the belief may be (m and rad; e.g. the
+                filter's position standard deviation). Policies trained across errors learn
+                from it when to trust the pose.
             proposal: ``(pan, tilt)`` rad of the view the entropy method proposes from that
                 pose (``activevision.localisation.best_viewpoint``), or ``(nan, nan)`` when
                 no view shows the ball; for a policy whose :attr:`inputs` include it.
@@ -194,7 +199,7 @@ class HeadController:
             ValueError: an input the policy needs is missing, or one it does not take is given.
         """
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
-        self._fill_vector(pan, tilt, pose, proposal)
+        self._fill_vector(pan, tilt, pose, proposal, pose_error)
         action = int(np.argmax(self.q_values(frame, color_order)))
         if len(self._history):
             self._history[:-1] = self._history[1:]
@@ -209,10 +214,12 @@ class HeadController:
         tilt: float,
         pose: tuple[float, float, float] | None,
         proposal: tuple[float, float] | None,
+        pose_error: float | None,
     ) -> None:
         """The vector input, laid out as ``activevision.envs.observations`` builds it."""
         keys = self.metadata.vector_keys
-        for name, value in (("pose", pose), ("proposal", proposal)):
+        given = (("pose", pose), ("pose_error", pose_error), ("proposal", proposal))
+        for name, value in given:
             if name in keys and value is None:
                 raise ValueError(
                     f"this policy ({self.metadata.observation!r}) needs {name}=...; see"
@@ -230,6 +237,8 @@ class HeadController:
             elif key == "pose":
                 x, y, theta = _finite_vector("pose", pose, 3)
                 parts.append(np.array([x, y, math.cos(theta), math.sin(theta)]))
+            elif key == "pose_error":
+                parts.append(_finite_vector("pose_error", pose_error, 1))
             elif key == "proposal":
                 parts.append(_proposal_vector(proposal, pan, tilt))
             else:

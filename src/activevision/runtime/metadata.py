@@ -74,7 +74,7 @@ _ACTION_SIGNS = {
 STANDARD_ACTION_NAMES = tuple(_ACTION_SIGNS)
 #: The vector inputs a policy may take, in the order the network concatenates them, and the
 #: size of each (activevision.envs.observations; "actions" is per remembered action).
-VECTOR_KEY_SIZES = {"head": 2, "pose": 4, "proposal": 5, "actions": 1}
+VECTOR_KEY_SIZES = {"head": 2, "pose": 4, "pose_error": 1, "proposal": 5, "actions": 1}
 
 
 def vector_key_size(key: str, n_actions: int, action_history: int) -> int:

@@ -154,6 +154,7 @@ class DaggerTrainer:
         configure_torch_cpu(config.run.num_threads)
         self.step = 0
         self.episode = 0
+        self._round_share = 1.0
         self.epoch_log = EpochAccumulator()
         self.best = BestWeights()
         self._epochs_logged = 0
@@ -207,7 +208,7 @@ class DaggerTrainer:
         self.observations.start(slots)
         active = np.ones(n, dtype=bool)
         goals = goal_indices(sim)
-        beta = self.teacher_share
+        beta = self._round_share = self.teacher_share
         for _ in range(MAX_EPISODE_STEPS):
             idx = np.flatnonzero(active)
             image, vector = self._observe(idx)
@@ -238,7 +239,7 @@ class DaggerTrainer:
     def _observe(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         sim = self.sim
         image = sim.render(idx)[:, None]
-        vector = self.observations.vectors(sim.head, sim.prior_pose, sim.proposal)
+        vector = self.observations.vectors(sim)
         return image, vector[idx]
 
     def act(self, image: np.ndarray, vector: np.ndarray) -> np.ndarray:
@@ -281,7 +282,8 @@ class DaggerTrainer:
 
     def _finish_epoch(self, steps_per_s: float) -> dict[str, float]:
         epoch = self.step // self.config.run.epoch_steps
-        row = self.epoch_log.summary(epoch, self.step, self.teacher_share, 0.0, steps_per_s)
+        # epsilon: the teacher's share in the round just played
+        row = self.epoch_log.summary(epoch, self.step, self._round_share, 0.0, steps_per_s)
         self.logger.record_epoch(row, self.step)
         self._epochs_logged += 1
         self.epoch_log = EpochAccumulator()
@@ -412,7 +414,7 @@ def greedy_student_episodes(trainer: DaggerTrainer, seeds: Sequence[int]) -> lis
     for _ in range(MAX_EPISODE_STEPS):
         idx = np.flatnonzero(active)
         image = sim.render(idx)[:, None]
-        vector = observations.vectors(sim.head, sim.prior_pose, sim.proposal)[idx]
+        vector = observations.vectors(sim)[idx]
         actions = np.zeros(len(seeds), dtype=np.int64)
         actions[idx] = trainer.act(image, vector)
         observations.record(actions[idx], idx)

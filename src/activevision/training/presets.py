@@ -46,11 +46,14 @@ def dagger(
 ) -> TrainConfig:
     """DAgger on ``observation``: batch 256 at a learning rate of 1e-3 (tuned here), 64
     episodes a round, 16 updates after each (about 20 states per update), validated four
-    times on 300 episodes. With ``prior_error_range`` the prior's error is drawn per
-    episode, so the student learns when to trust it."""
+    times on 300 episodes; the last two actions in the observation, so that the student can
+    tell when it undoes its own move. With ``prior_error_range`` the prior's error is drawn
+    per episode, so the student learns when to trust it."""
     return TrainConfig(
         algo="dagger",
-        env=EnvConfig(observation=observation, prior_error_range=prior_error_range),
+        env=EnvConfig(
+            observation=observation, prior_error_range=prior_error_range, action_history=2
+        ),
         learner=LearnerConfig(batch_size=256, learning_rate=1e-3),
         dagger=DaggerConfig(),
         run=RunConfig(
