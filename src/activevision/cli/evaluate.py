@@ -57,9 +57,11 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     out = args.out or (args.run / "evaluation" if args.run else Path("evaluation"))
     files = [out / n for n in ("evaluation.csv", "episodes.csv", "evaluation.json")]
     check_outputs(own=files)
-    env_config = env_config_of_run(args.run)
+    from activevision.experiments.compare import config_at_error
     from activevision.experiments.methods import runnable_methods
 
+    # a policy that observes a prior pose gets one --error off, as the entropy methods do
+    env_config = config_at_error(env_config_of_run(args.run), args.error)
     names = args.methods or runnable_methods(_compare_method_names(), args.run)
     policies = _policies(names, args, env_config, args.error)
     env = ActiveVisionEnv(env_config)
@@ -136,7 +138,9 @@ def cmd_episode(args: argparse.Namespace) -> None:
 
     gif = args.out.with_suffix(".gif")
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
-    env_config = env_config_of_run(args.run)
+    from activevision.experiments.compare import config_at_error
+
+    env_config = config_at_error(env_config_of_run(args.run), 0.0)
     names = args.policies or (["learned", "random"] if args.run else ["oracle", "random"])
     policies = _policies(names, args, env_config)
     traces = [trace_episode(p, args.seed, env_config) for p in policies.values()]
@@ -169,7 +173,8 @@ def add_parsers(sub: Any) -> None:
         "--error",
         type=non_negative_float,
         default=0.0,
-        help="localisation error of the entropy methods (m and rad)",
+        help="localisation error of the entropy methods' belief and of a learned policy's"
+        " prior pose (m and rad)",
     )
     p.add_argument("--out", type=Path)
 

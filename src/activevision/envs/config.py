@@ -52,6 +52,9 @@ class EnvConfig:
     #: the prior pose's error, drawn per episode from U(low, high) (m and rad, as
     #: ``localisation_error`` corrupts); None: the prior is the believed pose (P's future work)
     prior_error_range: tuple[float, float] | None = None
+    #: with ``prior_error_range``: the share of episodes whose prior is exact (error 0), so
+    #: that a policy trained across errors sees the prior it can trust often enough
+    prior_exact_share: float = 0.0
     #: the prior pose quantised to (metres, degrees) cells, "a rough representation of the
     #: robot position" (P's future work); 0: exact
     prior_grid: tuple[float, float] = (0.0, 0.0)
@@ -102,6 +105,8 @@ class EnvConfig:
             lo, hi = self.prior_error_range
             if not 0 <= lo <= hi:
                 raise bad("prior_error_range", "must be an ordered (low, high) pair >= 0")
+        if not 0 <= self.prior_exact_share <= 1:
+            raise bad("prior_exact_share", "must lie in [0, 1]")
         if min(self.prior_grid) < 0:
             raise bad("prior_grid", "must be >= 0 (metres, degrees)")
         if not 0 <= self.action_history <= 16:

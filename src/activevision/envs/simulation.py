@@ -102,7 +102,10 @@ class EpisodeBatch:
                 self.prior_pose[slot] = self.believed_pose[slot]
             else:
                 lo, hi = cfg.prior_error_range
-                self.prior_error[slot] = lo + (hi - lo) * rngs[j].random()
+                error = lo + (hi - lo) * rngs[j].random()
+                if cfg.prior_exact_share and rngs[j].random() < cfg.prior_exact_share:
+                    error = 0.0  # the extra draw happens only when asked for
+                self.prior_error[slot] = error
                 self.prior_pose[slot] = corrupt_pose(
                     self.pose[slot], self.prior_error[slot], rngs[j]
                 )

@@ -1,0 +1,81 @@
+"""A DAgger student through ONNX and HeadController: the same actions as in PyTorch, with the
+vector built by the runtime from the head angles, pose, its error and the proposal; and one
+clear error for inputs that do not fit the policy."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("onnxruntime")
+
+from activevision.agents.student import StudentNetwork  # noqa: E402
+from activevision.envs import ActiveVisionEnv, EnvConfig  # noqa: E402
+from activevision.envs.observations import vector_keys, vector_sizes  # noqa: E402
+from activevision.experiments.policies import LearnedPolicy, OnnxPolicy  # noqa: E402
+from activevision.export import export_onnx, policy_metadata  # noqa: E402
+from activevision.runtime import HeadController  # noqa: E402
+
+KIND = "image+head+pose+proposal"
+
+
+def exported(tmp_path, observation: str = KIND, history: int = 2):
+    config = EnvConfig(
+        observation=observation, action_history=history, prior_error_range=(0.0, 1.0)
+    )
+    keys = vector_keys(config)
+    torch.manual_seed(0)
+    network = StudentNetwork(9, sum(vector_sizes(config, 9).values()), n_goals=40).eval()
+    env = ActiveVisionEnv(config)
+    metadata = policy_metadata(env.sim.actions, config.camera)
+    metadata.update(observation=observation, vector_keys=list(keys), action_history=history)
+    paths = export_onnx(network, tmp_path / "policy.onnx", metadata)
+    return network, paths, config, keys
+
+
+def test_onnx_student_plays_like_pytorch(tmp_path):
+    network, paths, config, keys = exported(tmp_path)
+    torch_policy = LearnedPolicy(network, vector_keys=keys)
+    onnx_policy = OnnxPolicy(paths.model_path)
+    env_a, env_b = ActiveVisionEnv(config), ActiveVisionEnv(config)
+    decisions = 0
+    for seed in range(6):
+        obs_a, info_a = env_a.reset(seed=seed)
+        obs_b, info_b = env_b.reset(seed=seed)
+        onnx_policy.reset(info_b, np.random.default_rng(0))
+        for _ in range(20):
+            a, b = torch_policy.act(obs_a, info_a), onnx_policy.act(obs_b, info_b)
+            assert a == b
+            decisions += 1
+            obs_a, _, done, _, info_a = env_a.step(a)
+            obs_b, _, _, _, info_b = env_b.step(b)
+            if done:
+                break
+    assert decisions >= 30
+
+
+def test_controller_names_the_inputs_it_needs(tmp_path):
+    _, paths, _, _ = exported(tmp_path)
+    controller = HeadController(paths.model_path)
+    assert controller.inputs == ("pose", "pose_error", "proposal")
+    frame = np.zeros((120, 160), np.uint8)
+    with pytest.raises(ValueError, match="needs pose"):
+        controller.act(frame, 0.1, 0.3)
+    with pytest.raises(ValueError, match="proposal"):
+        controller.act(frame, 0.1, 0.3, pose=(0.0, 0.0, 0.0), pose_error=0.0, proposal=(1.0,))
+    command = controller.act(
+        frame, 0.1, 0.3, pose=(1.0, -0.5, 2.0), pose_error=0.3, proposal=(math.nan, math.nan)
+    )
+    assert 0 <= command.action < 9
+
+
+def test_image_policy_refuses_a_pose(tmp_path):
+    _, paths, _, _ = exported(tmp_path, "image+head", history=0)
+    controller = HeadController(paths.model_path)
+    assert controller.inputs == ()
+    with pytest.raises(ValueError, match="takes no pose"):
+        controller.act(np.zeros((120, 160), np.uint8), 0.0, 0.3, pose=(0.0, 0.0, 0.0))
+    controller.act(np.zeros((120, 160), np.uint8), 0.0, 0.3)
