@@ -86,9 +86,7 @@ def in_range(
     """Field metadata that bounds a number: ``field(default=32, metadata=in_range(1))``.
     :func:`check_dataclass_fields` checks it after the type, so each field's range is
     written beside the field."""
-    return types.MappingProxyType(
-        {"range": (low, high, low_open, high_open)}
-    )
+    return types.MappingProxyType({"range": (low, high, low_open, high_open)})
 
 
 def _out_of_range(value: Any, metadata: Mapping[str, Any]) -> str:

@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from activevision.runtime.goal_evidence import greedy_actions
+
 ACTION_NAMES_8WAY = (
     "stay",
     "pan_left",
@@ -32,15 +34,6 @@ def action_table(step_deg: float, action_set: str = "8way") -> np.ndarray:
     return np.asarray(moves[:count], dtype=np.float64)
 
 
-def greedy_actions(head: np.ndarray, target: np.ndarray, table: np.ndarray) -> np.ndarray:
-    """(N,) the action of ``table`` whose move ends closest to ``target`` for each of N
-    heads ((N, 2) pan, tilt rad): the oracle's move, and DAgger's label."""
-    after = np.asarray(head)[:, None, :] + table[None]
-    gap = after - np.asarray(target)[:, None, :]
-    best: np.ndarray = np.argmin(np.hypot(gap[..., 0], gap[..., 1]), axis=1)
-    return best
-
-
 def check_actions(actions: object, n_actions: int, shape: tuple[int, ...]) -> np.ndarray:
     """``actions`` as an integer array of ``shape`` with values in ``0..n_actions - 1``.
 
@@ -63,3 +56,6 @@ def check_actions(actions: object, n_actions: int, shape: tuple[int, ...]) -> np
         where = "" if shape == () else f" {int(array[bad].flat[0])} in"
         raise ValueError(f"invalid action{where} {actions!r}: expects {expects}")
     return array
+
+
+__all__ = ["ACTION_NAMES_8WAY", "action_table", "check_actions", "greedy_actions"]

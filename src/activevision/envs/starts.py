@@ -58,11 +58,13 @@ def corrupt_pose(pose: np.ndarray, error: float, rng: np.random.Generator) -> np
     heading = theta + error * sign
     if not -math.pi < heading <= math.pi:
         heading = float(wrap_angle(heading))
-    return np.array([
-        x + error * math.cos(direction),
-        y + error * math.sin(direction),
-        heading,
-    ])
+    return np.array(
+        [
+            x + error * math.cos(direction),
+            y + error * math.sin(direction),
+            heading,
+        ]
+    )
 
 
 def quantise_pose(poses: np.ndarray, cell_m: float, cell_deg: float) -> np.ndarray:
@@ -110,8 +112,10 @@ def candidate_kernel(
             bearing = (theta + pan) + hfov * (u[i, 5 + n + j] - 0.5)
             bx = x + dist * math.cos(bearing)
             by = y + dist * math.sin(bearing)
-            if abs(bx) <= x_lim and abs(by) <= y_lim and ball_in_image(
-                bx, by, radius, x, y, rot, cam
+            if (
+                abs(bx) <= x_lim
+                and abs(by) <= y_lim
+                and ball_in_image(bx, by, radius, x, y, rot, cam)
             ):
                 found[i] = True
                 starts[i, 5], starts[i, 6] = bx, by
@@ -130,8 +134,16 @@ def draw_starts(rngs: Sequence[np.random.Generator], cfg: EnvConfig) -> dict[str
     high = np.array([cfg.robot_x_range[1], cfg.robot_y_range[1], np.pi, cam.pan_max, tilt_hi])
     r = spec.ball_radius
     d_lo, d_hi = cfg.ball_distance_range
-    balls = tuple(BallDraw(float(d_lo), float(d_hi), float(cam.hfov), spec.half_length - r,
-                           spec.half_width - r, float(r)))
+    balls = tuple(
+        BallDraw(
+            float(d_lo),
+            float(d_hi),
+            float(cam.hfov),
+            spec.half_length - r,
+            spec.half_width - r,
+            float(r),
+        )
+    )
     starts = np.zeros((len(rngs), 7))
     believed = np.zeros((len(rngs), 3))
     pending: np.ndarray = np.arange(len(rngs))

@@ -11,7 +11,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,9 +23,12 @@ from activevision.envs.starts import corrupt_pose
 from activevision.geometry import field_landmarks
 from activevision.geometry.angles import wrap_angle
 from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
+from activevision.runtime.goal_evidence import GoalEvidence
 
 if TYPE_CHECKING:
     import torch
+
+    from activevision.agents.student import StudentNetwork
 
 
 @dataclass(frozen=True)
@@ -172,6 +175,7 @@ class LearnedPolicy:
         device: str = "cpu",
         num_threads: int | None = 1,
         vector_keys: tuple[str, ...] = (),
+        goal_evidence: GoalEvidence | None = None,
     ) -> None:
         import torch
 
@@ -185,6 +189,8 @@ class LearnedPolicy:
         self.device = device
         self.vector_keys = vector_keys
         self.takes_vector = getattr(q_network, "vector_size", None) is not None
+        #: with a DAgger student that acts by its goal head (``dagger.act_by="goal"``)
+        self.goal_evidence = goal_evidence
 
     @classmethod
     def from_run(
@@ -199,10 +205,16 @@ class LearnedPolicy:
 
         config = load_config(Path(run_dir) / "config.json")
         keys = vector_keys(config.env)
-        return cls(load_policy(run_dir, weights=weights), device, num_threads, keys)
+        evidence = None
+        if config.algo == "dagger" and config.dagger.act_by == "goal":
+            grid = LocalisationConfig().grid  # the candidate views the goal head names
+            table = action_table(config.env.step_deg, config.env.action_set)
+            evidence = GoalEvidence(1, np.column_stack([grid.pans, grid.tilts]), table)
+        return cls(load_policy(run_dir, weights=weights), device, num_threads, keys, evidence)
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
-        pass
+        if self.goal_evidence is not None:
+            self.goal_evidence.reset()
 
     def act(self, obs: Observation, info: dict) -> int:
         torch = self.torch
@@ -214,11 +226,15 @@ class LearnedPolicy:
                 image, vector = np.asarray(obs), np.zeros(0, np.float32)
             else:
                 image, vector = obs[IMAGE_KEY], flatten_vectors(obs, self.vector_keys)
-            logits = self.net(
+            student = cast("StudentNetwork", self.net)
+            logits, goal_logits = student.forward_with_goal(
                 torch.from_numpy(np.ascontiguousarray(image)[None]).to(self.device),
                 torch.from_numpy(vector[None]).to(self.device),
             )
-            return int(logits.argmax(dim=1).item())
+            if self.goal_evidence is None or goal_logits is None:
+                return int(logits.argmax(dim=1).item())
+            head = np.asarray(info["head"], dtype=np.float64)[None]
+            return int(self.goal_evidence.act(goal_logits.cpu().numpy(), head, np.zeros(1, int))[0])
 
 
 class OnnxPolicy:

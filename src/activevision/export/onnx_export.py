@@ -69,6 +69,7 @@ OUTPUT_NAME = "q_values"
 #: A DAgger student's second input (the Dict observation's vectors) and its output.
 VECTOR_INPUT_NAME = "vector"
 LOGITS_NAME = "logits"
+GOAL_LOGITS_NAME = "goal_logits"
 #: Largest |Q_onnx - Q_torch| accepted by the post-export check.
 VERIFY_ATOL = 1e-4
 
@@ -111,9 +112,11 @@ class _Uint8Student(nn.Module):
         super().__init__()
         self.network = copy.deepcopy(network).cpu().float().eval()
 
-    def forward(self, frames: torch.Tensor, vector: torch.Tensor | None = None) -> torch.Tensor:
-        logits: torch.Tensor = self.network(frames.float() * (1.0 / 255.0), vector)
-        return logits
+    def forward(
+        self, frames: torch.Tensor, vector: torch.Tensor | None = None
+    ) -> torch.Tensor | tuple[torch.Tensor, torch.Tensor]:
+        logits, goal = self.network.forward_with_goal(frames.float() * (1.0 / 255.0), vector)
+        return logits if goal is None else (logits, goal)
 
 
 def policy_metadata(
@@ -225,15 +228,15 @@ def _onnx_bytes(
 ) -> bytes:
     example: tuple[torch.Tensor, ...] = (torch.zeros(input_shape, dtype=torch.uint8),)
     input_names = [INPUT_NAME]
-    output_name = LOGITS_NAME if isinstance(module, _Uint8Student) else OUTPUT_NAME
+    output_names = [LOGITS_NAME] if isinstance(module, _Uint8Student) else [OUTPUT_NAME]
+    if isinstance(module, _Uint8Student) and module.network.n_goals:
+        output_names.append(GOAL_LOGITS_NAME)
     if vector_size:
         example += (torch.zeros((1, vector_size), dtype=torch.float32),)
         input_names.append(VECTOR_INPUT_NAME)
     buffer = io.BytesIO()
     dynamic_axes = (
-        {**{name: {0: "batch"} for name in input_names}, output_name: {0: "batch"}}
-        if dynamic_batch
-        else None
+        {name: {0: "batch"} for name in input_names + output_names} if dynamic_batch else None
     )
     with warnings.catch_warnings(), torch.inference_mode(False), torch.no_grad():
         # The TorchScript exporter is deprecated in favour of torch.export + onnxscript, which
@@ -245,7 +248,7 @@ def _onnx_bytes(
             example,
             typing.cast(Any, buffer),  # a file-like object, which its annotation omits
             input_names=input_names,
-            output_names=[output_name],
+            output_names=output_names,
             dynamic_axes=dynamic_axes,
             opset_version=opset,
             do_constant_folding=True,
@@ -306,6 +309,8 @@ def _metadata_document(
             )
         if network.vector_size:
             document["vector_input_name"] = VECTOR_INPUT_NAME
+        if network.n_goals:
+            document["goal_output_name"] = GOAL_LOGITS_NAME
     return document
 
 
@@ -345,7 +350,7 @@ def _verify(
             want = reference(torch.from_numpy(frames), torch.from_numpy(vector)).numpy()
         else:
             want = reference(torch.from_numpy(frames)).numpy()
-    got = session.run([session.get_outputs()[0].name], feed)[0]
+    got = session.run([session.get_outputs()[0].name], feed)[0]  # the action scores
     error = float(np.abs(got - want).max())
     if not error <= VERIFY_ATOL:
         raise RuntimeError(f"exported ONNX differs from PyTorch by {error:.3g} > {VERIFY_ATOL}")

@@ -7,6 +7,8 @@ import os
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from activevision.export.onnx_export import ExportedPolicy, export_onnx, policy_metadata
 from activevision.runtime.metadata import MODEL_FILENAME
 
@@ -46,8 +48,7 @@ def export_run(
     stack = getattr(network, "stack", 1)
     if stack != env.frame_stack:
         raise ValueError(
-            f"{run_dir}: the network stacks {stack} frames but the environment "
-            f"{env.frame_stack}"
+            f"{run_dir}: the network stacks {stack} frames but the environment {env.frame_stack}"
         )
     metadata = policy_metadata(
         action_table(env.step_deg, env.action_set),
@@ -60,4 +61,11 @@ def export_run(
     metadata["observation"] = env.observation
     metadata["vector_keys"] = list(vector_keys(env))
     metadata["action_history"] = env.action_history
+    config = load_config(config_path)
+    if config.algo == "dagger":
+        from activevision.localisation import LocalisationConfig
+
+        grid = LocalisationConfig().grid  # the views the student's goal head names
+        metadata["act_by"] = config.dagger.act_by
+        metadata["goal_views_deg"] = np.degrees(np.column_stack([grid.pans, grid.tilts])).tolist()
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)

@@ -31,4 +31,3 @@ def wrap_angle(angle: float) -> float:
     if wrapped <= -PI:
         wrapped += TWO_PI
     return wrapped
-

@@ -187,8 +187,7 @@ def ball_kernel(
     rot = np.empty((3, 3))
     for i in range(poses.shape[0]):
         camera_rotation(poses[i, 2] + pans[i], tilts[i], rot)
-        out[i] = ball_in_image(balls[i, 0], balls[i, 1], radius, poses[i, 0], poses[i, 1], rot,
-                               cam)
+        out[i] = ball_in_image(balls[i, 0], balls[i, 1], radius, poses[i, 0], poses[i, 1], rot, cam)
     return out
 
 

@@ -65,8 +65,9 @@ def render_reference(
     half_mark = field.penalty_mark_size / 2
     images = np.empty((len(pose), h, w), dtype=np.uint8)
     for n in range(len(pose)):
-        xy, valid = pixel_to_ground(centres, pose[n : n + 1], pan[n : n + 1], tilt[n : n + 1],
-                                    camera)
+        xy, valid = pixel_to_ground(
+            centres, pose[n : n + 1], pan[n : n + 1], tilt[n : n + 1], camera
+        )
         x = np.where(valid[0], xy[0, :, 0], 1e6)
         y = np.where(valid[0], xy[0, :, 1], 1e6)
         on_line = np.zeros(len(x), dtype=bool)
@@ -79,8 +80,7 @@ def render_reference(
         on_line |= np.abs(np.hypot(x, y) - radius) <= half_w
         on_line |= (np.abs(np.abs(x) - mark_x) <= half_mark) & (np.abs(y) <= half_mark)
         on_carpet = (np.abs(x) <= bx) & (np.abs(y) <= by)
-        grey = np.where(on_carpet, np.where(on_line, config.line, config.grass),
-                        config.background)
+        grey = np.where(on_carpet, np.where(on_line, config.line, config.grass), config.background)
         images[n] = np.rint(grey).reshape(h, w)
     return images
 
@@ -168,9 +168,7 @@ def _trace(
             t = (-b - np.sqrt(disc)) / (2 * a)
         hit = (disc > 0) & (t > 0) & (t < nearest)
         normal_z = (origin[2] + t * rays[:, 2] - ball[2]) / scene.ball_radius
-        shade = config.ball_shadow + (config.ball_lit - config.ball_shadow) * (
-            0.5 + 0.5 * normal_z
-        )
+        shade = config.ball_shadow + (config.ball_lit - config.ball_shadow) * (0.5 + 0.5 * normal_z)
         grey = np.where(hit, shade, grey)
     return grey
 

@@ -160,8 +160,9 @@ def apply_noise(images: np.ndarray, config: RenderConfig, rng: np.random.Generat
         gain = rng.uniform(1 - config.contrast_jitter, 1 + config.contrast_jitter, (n, 1, 1))
         value = (value - 128.0) * gain.astype(np.float32) + 128.0
     if config.brightness_jitter > 0:
-        value += rng.uniform(-config.brightness_jitter, config.brightness_jitter,
-                             (n, 1, 1)).astype(np.float32)
+        value += rng.uniform(-config.brightness_jitter, config.brightness_jitter, (n, 1, 1)).astype(
+            np.float32
+        )
     if config.noise_std > 0:
         value += rng.normal(0.0, config.noise_std, value.shape).astype(np.float32)
     np.clip(np.rint(value), 0, 255, out=value)
@@ -206,4 +207,3 @@ def _output(out: np.ndarray | None, shape: tuple[int, int, int]) -> np.ndarray:
     if not out.flags.c_contiguous or not out.flags.writeable:
         raise ValueError("out must be C-contiguous and writeable")
     return out
-

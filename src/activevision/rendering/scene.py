@@ -71,22 +71,26 @@ def build_scene(spec: FieldSpec) -> SceneArrays:
     quads = [_line_quad(seg[0], seg[1], w) for seg in painted_lines(spec)]
     hl = spec.half_length
     for s in (1.0, -1.0):
-        quads.append(_square_quad((s * (hl - spec.penalty_mark_distance), 0.0),
-                                  spec.penalty_mark_size))
+        quads.append(
+            _square_quad((s * (hl - spec.penalty_mark_distance), 0.0), spec.penalty_mark_size)
+        )
     # Centre mark: a short line across the halfway line, as long as a penalty mark is wide.
     half_mark = spec.penalty_mark_size / 2
-    quads.append(_line_quad(np.array([-half_mark + w / 2, 0.0]),
-                            np.array([half_mark - w / 2, 0.0]), w))
+    quads.append(
+        _line_quad(np.array([-half_mark + w / 2, 0.0]), np.array([half_mark - w / 2, 0.0]), w)
+    )
     bx, by = spec.carpet_half_extent
     carpet = np.array([[-bx, -by], [bx, -by], [bx, by], [-bx, by]], dtype=np.float64)
 
     radius = spec.centre_circle_diameter / 2
     r_in, r_out = radius - w / 2, radius + w / 2
     # The outer polygon contains the ring; the inner one lies inside its hole.
-    polygons = np.stack([
-        _regular_polygon(r_out / math.cos(math.pi / RING_POLYGON_SIDES)),
-        _regular_polygon(r_in),
-    ])
+    polygons = np.stack(
+        [
+            _regular_polygon(r_out / math.cos(math.pi / RING_POLYGON_SIDES)),
+            _regular_polygon(r_in),
+        ]
+    )
 
     post_y = (spec.goal_width + spec.post_diameter) / 2
     post_r = spec.post_diameter / 2

@@ -14,6 +14,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from activevision.runtime.goal_evidence import GoalEvidence
 from activevision.runtime.metadata import (
     PolicyFileError,
     PolicyMetadata,
@@ -123,8 +124,14 @@ class HeadController:
             self._feed[meta.vector_input_name] = self._vector
         self._history = np.full(meta.action_history, -1, dtype=np.int64)
         self._outputs = [meta.output_name]
+        self._evidence: GoalEvidence | None = None
+        if meta.act_by == "goal":
+            assert meta.goal_output_name is not None and meta.goal_views is not None
+            self._outputs.append(meta.goal_output_name)
+            self._evidence = GoalEvidence(1, meta.goal_views, meta.action_table)
         self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
         self.last_q_values: np.ndarray | None = None
+        self.last_goal_logits: np.ndarray | None = None
 
     @property
     def inputs(self) -> tuple[str, ...]:
@@ -145,6 +152,8 @@ class HeadController:
         the stack."""
         self._stack_empty = True
         self._history[:] = -1
+        if self._evidence is not None:
+            self._evidence.reset()
 
     def observe(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
         """Preprocess ``frame`` and push it onto the frame stack; returns the (stack, H, W)
@@ -165,8 +174,10 @@ class HeadController:
         """Push ``frame`` onto the stack and return the policy's Q-values (a DAgger policy's
         action logits), shape (A,), with the vector input of the last :meth:`act`."""
         self.observe(frame, color_order)
-        q: np.ndarray = self._session.run(self._outputs, self._feed)[0][0]
+        outputs = self._session.run(self._outputs, self._feed)
+        q: np.ndarray = outputs[0][0]
         self.last_q_values = q
+        self.last_goal_logits = outputs[1][0] if len(outputs) > 1 else None
         return q
 
     def act(
@@ -201,6 +212,11 @@ class HeadController:
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
         self._fill_vector(pan, tilt, pose, proposal, pose_error)
         action = int(np.argmax(self.q_values(frame, color_order)))
+        goal_logits = self.last_goal_logits
+        if self._evidence is not None and goal_logits is not None:
+            # move towards the goal view with the most evidence so far
+            head = np.array([[pan, tilt]])
+            action = int(self._evidence.act(goal_logits[None], head, np.zeros(1, int))[0])
         if len(self._history):
             self._history[:-1] = self._history[1:]
             self._history[-1] = action

@@ -140,6 +140,11 @@ class PolicyMetadata:
     vector_keys: tuple[str, ...] = ()
     action_history: int = 0  #: previous actions the vector remembers
     vector_input_name: str | None = None  #: the graph's vector input (None: none)
+    #: "action": the argmax of the action scores; "goal": moves towards the goal view with
+    #: the most evidence (``runtime.goal_evidence``), read from output ``goal_output_name``
+    act_by: str = "action"
+    goal_output_name: str | None = None
+    goal_views: np.ndarray | None = field(default=None, repr=False)  #: (V, 2) rad
     raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -184,6 +189,9 @@ class PolicyMetadata:
             vector_keys=read.vector_keys(),
             action_history=read.count("action_history"),
             vector_input_name=read.optional_str("vector_input_name"),
+            act_by=read.act_by(),
+            goal_output_name=read.optional_str("goal_output_name"),
+            goal_views=read.goal_views(),
             raw=dict(values),
         )
 
@@ -213,6 +221,29 @@ class _MetadataReader:
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise self.fail(f"{key!r} must be a positive integer, got {value!r}")
         return value
+
+    def act_by(self) -> str:
+        value = self.values.get("act_by", "action")
+        if value not in ("action", "goal"):
+            raise self.fail(f"'act_by' must be 'action' or 'goal', got {value!r}")
+        if value == "goal" and not isinstance(self.values.get("goal_output_name"), str):
+            raise self.fail("'act_by' is 'goal' but no 'goal_output_name' is given")
+        return str(value)
+
+    def goal_views(self) -> np.ndarray | None:
+        """(V, 2) candidate views in radians, required with ``act_by == "goal"``."""
+        views = self.values.get("goal_views_deg")
+        if views is None:
+            if self.values.get("act_by") == "goal":
+                raise self.fail("'act_by' is 'goal' but 'goal_views_deg' is missing")
+            return None
+        try:
+            array = np.asarray(views, dtype=np.float64)
+        except (TypeError, ValueError):
+            array = np.zeros((0, 0))
+        if array.ndim != 2 or array.shape[1] != 2 or not len(array) or not np.isfinite(array).all():
+            raise self.fail("'goal_views_deg' must be a non-empty list of [pan, tilt] degrees")
+        return np.radians(array)
 
     def count(self, key: str) -> int:
         """A non-negative integer, 0 when absent."""

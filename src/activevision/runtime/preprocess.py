@@ -165,12 +165,23 @@ class FramePreprocessor:
         plan = self._plans.get((in_height, in_width))
         if plan is None:
             if in_height % self.height == 0 and in_width % self.width == 0:
-                plan = _ResizePlan(in_height, in_width, in_height // self.height,
-                                   in_width // self.width, None, None)
+                plan = _ResizePlan(
+                    in_height,
+                    in_width,
+                    in_height // self.height,
+                    in_width // self.width,
+                    None,
+                    None,
+                )
             else:
-                plan = _ResizePlan(in_height, in_width, 0, 0,
-                                   area_weights(in_height, self.height),
-                                   area_weights(in_width, self.width))
+                plan = _ResizePlan(
+                    in_height,
+                    in_width,
+                    0,
+                    0,
+                    area_weights(in_height, self.height),
+                    area_weights(in_width, self.width),
+                )
             self._plans[(in_height, in_width)] = plan
         return plan
 

@@ -138,11 +138,17 @@ class DaggerConfig:
     #: each minibatch, so a million states take ~100 MB
     dataset_size: int = field(default=1_000_000, metadata=_AT_LEAST_1)
     downsample: int = field(default=2, metadata=_range(1, 4))  #: image average-pool factor (T)
-    #: weight of the auxiliary goal-view classification (40 classes; 0: none) (T)
+    #: weight of the goal-view classification head (40 classes; 0: none) (T)
     goal_class_weight: float = field(default=0.5, metadata=_AT_LEAST_0)
+    #: how the student acts: "action", the argmax of its action head; "goal", greedy moves
+    #: towards the view its goal head supports most, evidence summed over the episode
+    #: (``runtime.goal_evidence``: ends the swinging between two views) (T)
+    act_by: typing.Literal["action", "goal"] = "goal"
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
+        if self.act_by == "goal" and not self.goal_class_weight > 0:
+            raise ValueError("DaggerConfig.act_by: 'goal' needs goal_class_weight > 0")
 
 
 Algorithm = typing.Literal["ddqn", "dagger"]

@@ -45,6 +45,7 @@ from activevision.envs.observations import (
 )
 from activevision.envs.seeding import episode_seed
 from activevision.envs.simulation import EpisodeBatch
+from activevision.runtime.goal_evidence import GoalEvidence
 from activevision.training import checkpoint as ckpt
 from activevision.training import state as run_state
 from activevision.training.config import TrainConfig, load_config, save_config
@@ -149,6 +150,7 @@ class DaggerTrainer:
             self.network.parameters(), lr=config.learner.learning_rate
         )
         self.dataset = StateDataset(dag.dataset_size, vector_size)
+        self.evidence = self._goal_evidence(dag.num_envs)
         self.run_dir.mkdir(parents=True, exist_ok=True)
         ckpt.remove_stale_writes(self.run_dir)
         configure_torch_cpu(config.run.num_threads)
@@ -163,6 +165,12 @@ class DaggerTrainer:
         self.logger = LoggerGroup(default_loggers(config, run_dir) if loggers is None else loggers)
         if not _resuming:
             self.logger.start(None)
+
+    def _goal_evidence(self, n: int) -> GoalEvidence | None:
+        if self.config.dagger.act_by != "goal":
+            return None
+        grid = self.sim.localisation.grid
+        return GoalEvidence(n, np.column_stack([grid.pans, grid.tilts]), self.sim.actions)
 
     @property
     def teacher_share(self) -> float:
@@ -206,6 +214,8 @@ class DaggerTrainer:
         slots = np.arange(n)
         sim.reset(slots, [seeding.np_random(int(s))[0] for s in seeds])
         self.observations.start(slots)
+        if self.evidence is not None:
+            self.evidence.reset(slots)
         active = np.ones(n, dtype=bool)
         goals = goal_indices(sim)
         beta = self._round_share = self.teacher_share
@@ -223,9 +233,9 @@ class DaggerTrainer:
             )
             actions = np.zeros(n, dtype=np.int64)
             use_teacher = self.rng.random(len(idx)) < beta
-            actions[idx] = teacher
-            if not use_teacher.all():
-                actions[idx] = np.where(use_teacher, teacher, self.act(image, vector))
+            # the student sees every frame (its goal evidence must), even where it does not act
+            student = self.act(image, vector, idx, self.evidence)
+            actions[idx] = np.where(use_teacher, teacher, student)
             self.observations.record(actions[idx], idx)
             _, terminated, _, _ = sim.step(actions, active=active)
             self.step += len(idx)
@@ -242,14 +252,26 @@ class DaggerTrainer:
         vector = self.observations.vectors(sim)
         return image, vector[idx]
 
-    def act(self, image: np.ndarray, vector: np.ndarray) -> np.ndarray:
-        """The student's greedy actions for a batch."""
+    def act(
+        self,
+        image: np.ndarray,
+        vector: np.ndarray,
+        slots: np.ndarray,
+        evidence: GoalEvidence | None,
+        sim: EpisodeBatch | None = None,
+    ) -> np.ndarray:
+        """The student's actions for slots ``slots`` of ``sim`` (default: the training
+        batch): its action head's argmax, or with ``evidence`` the move its goal evidence
+        picks."""
         with torch.inference_mode():
-            logits = self.network(
+            logits, goal_logits = self.network.forward_with_goal(
                 torch.from_numpy(image).to(self.device), torch.from_numpy(vector).to(self.device)
             )
-        actions: np.ndarray = logits.argmax(dim=1).cpu().numpy()
-        return actions
+        if evidence is None or goal_logits is None:
+            actions: np.ndarray = logits.argmax(dim=1).cpu().numpy()
+            return actions
+        heads = (sim or self.sim).head[slots]
+        return evidence.act(goal_logits.cpu().numpy(), heads, slots)
 
     def _end_episode(self, i: int) -> None:
         sim = self.sim
@@ -306,12 +328,14 @@ class DaggerTrainer:
     # ------------------------------------------------------------------ files
     def metadata(self) -> dict[str, Any]:
         """The policy files' metadata: the network's shape, the step and the observation."""
-        cfg = self.config.env
+        cfg, grid = self.config.env, self.sim.localisation.grid
         return {
             **self.network.metadata(),
             "observation": cfg.observation,
             "action_history": cfg.action_history,
             "vector_keys": list(self.keys),
+            "act_by": self.config.dagger.act_by,
+            "goal_views_deg": np.degrees(np.column_stack([grid.pans, grid.tilts])).tolist(),
             "step": self.step,
         }
 
@@ -409,6 +433,7 @@ def greedy_student_episodes(trainer: DaggerTrainer, seeds: Sequence[int]) -> lis
     slots = np.arange(len(seeds))
     sim.reset(slots, [seeding.np_random(int(s))[0] for s in seeds])
     observations.start(slots)
+    evidence = trainer._goal_evidence(len(seeds))
     active = np.ones(len(seeds), dtype=bool)
     records: list[dict[str, float]] = [{} for _ in seeds]
     for _ in range(MAX_EPISODE_STEPS):
@@ -416,7 +441,7 @@ def greedy_student_episodes(trainer: DaggerTrainer, seeds: Sequence[int]) -> lis
         image = sim.render(idx)[:, None]
         vector = observations.vectors(sim)[idx]
         actions = np.zeros(len(seeds), dtype=np.int64)
-        actions[idx] = trainer.act(image, vector)
+        actions[idx] = trainer.act(image, vector, idx, evidence, sim)
         observations.record(actions[idx], idx)
         _, terminated, _, _ = sim.step(actions, active=active)
         ended = active & (terminated | (sim.step_count >= MAX_EPISODE_STEPS))

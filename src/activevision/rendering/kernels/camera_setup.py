@@ -70,8 +70,9 @@ def setup_camera(
         if o < n_posts:
             # a post: the quad through the two vertical generators tangent to the sight lines
             pr, ph = posts[o, 2], posts[o, 3]
-            outside, ux, uy, cos_b, t1x, t1y, t2x, t2y = _tangents(posts[o, 0], posts[o, 1], pr,
-                                                                   cam[0], cam[1])
+            outside, ux, uy, cos_b, t1x, t1y, t2x, t2y = _tangents(
+                posts[o, 0], posts[o, 1], pr, cam[0], cam[1]
+            )
             if not outside:
                 store_empty(edges, 4, rows)
                 continue
@@ -99,8 +100,9 @@ def setup_camera(
             # a crossbar: the same in the vertical x-z plane (its axis runs along y)
             b = o - n_posts
             y0, y1 = bars[b, 1], bars[b, 2]
-            outside, _, _, _, t1x, t1z, t2x, t2z = _tangents(bars[b, 0], bars[b, 3], bars[b, 4],
-                                                             cam[0], cam[2])
+            outside, _, _, _, t1x, t1z, t2x, t2z = _tangents(
+                bars[b, 0], bars[b, 3], bars[b, 4], cam[0], cam[2]
+            )
             if not outside:
                 store_empty(edges, 4, rows)
                 continue

@@ -260,7 +260,6 @@ def ball_shade(ball: np.ndarray, u: float, v: float, params: Params) -> tuple[fl
         nx = t * ex - c0
         ny = t * ey - c1
         nz = t * ez - c2
-        up = (nx * up_x + ny * up_y + nz * up_z) / (math.sqrt(nx * nx + ny * ny + nz * nz)
-                                                     + 1e-300)
+        up = (nx * up_x + ny * up_y + nz * up_z) / (math.sqrt(nx * nx + ny * ny + nz * nz) + 1e-300)
     shadow = params.ball_shadow
     return coverage, shadow + (params.ball_lit - shadow) * (0.5 + 0.5 * up)

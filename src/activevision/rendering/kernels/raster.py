@@ -190,8 +190,9 @@ def render_rows(
                     if a > 0.0:
                         value[i] += a * (grey - value[i])
         for i in range(width):
-            out[n, j, i] = np.uint8(min(max(value[i] + np.float32(0.5), np.float32(0.0)),
-                                        np.float32(255.0)))
+            out[n, j, i] = np.uint8(
+                min(max(value[i] + np.float32(0.5), np.float32(0.0)), np.float32(255.0))
+            )
 
 
 @njit(**JIT_PART)
