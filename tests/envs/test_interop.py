@@ -12,6 +12,28 @@ def test_stable_baselines3_check_env_passes():
     check_env(gym.make("ActiveVision-v0"), warn=True, skip_render_check=True)
 
 
+def test_dict_observations_pass_check_env_and_feed_multi_input_policy():
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_checker import check_env
+
+    env = gym.make(
+        "ActiveVision-v0",
+        observation="image+head+pose+proposal",
+        action_history=2,
+        prior_error_range=(0.0, 1.0),
+    )
+    check_env(env, warn=True, skip_render_check=True)
+    torch.manual_seed(0)
+    model = PPO(
+        "MultiInputPolicy", env, n_steps=32, batch_size=16, n_epochs=1, seed=0, device="cpu"
+    )
+    model.learn(64)
+    obs, _ = env.reset(seed=1)
+    action, _ = model.predict(obs, deterministic=True)
+    assert env.action_space.contains(int(action))
+
+
 def test_stable_baselines3_dqn_trains_a_few_hundred_steps():
     import torch
     from stable_baselines3 import DQN

@@ -53,7 +53,7 @@ def config_at_error(config: EnvConfig, error: float) -> EnvConfig:
     ``error`` m and rad off, as the entropy methods' belief is."""
     if not config.observes_prior:
         return config
-    return config.replace(prior_error_range=(error, error))
+    return config.replace(prior_error_range=(error, error), prior_exact_share=0.0)
 
 
 def done_levels(csv_path: Path) -> list[dict]:
