@@ -45,20 +45,28 @@ def vector_env_steps_per_s(n: int, batches: int) -> float:
 def main() -> None:
     single_env_steps_per_s(300)  # compile / load numba caches
     single, reset_fraction = max(single_env_steps_per_s() for _ in range(3))
-    print(f"single env: {single:,.0f} steps/s (resets in {reset_fraction:.0%} of steps), "
-          f"{single * PAPER_STEP_S:,.0f}x the paper's simulator")
+    print(
+        f"single env: {single:,.0f} steps/s (resets in {reset_fraction:.0%} of steps), "
+        f"{single * PAPER_STEP_S:,.0f}x the paper's simulator"
+    )
     batched = {}
     for n, batches in ((1, 3000), (16, 600), (64, 300)):
         batched[n] = max(vector_env_steps_per_s(n, batches) for _ in range(3))
-        print(f"vector env N={n:3d}: {batched[n]:,.0f} steps/s, "
-              f"{batched[n] * PAPER_STEP_S:,.0f}x the paper's simulator")
-    print(json.dumps({
-        "single_env_steps_per_s": round(single, 1),
-        "batched_env_steps_per_s": round(batched[64], 1),
-        "batched_env_steps_per_s_n1": round(batched[1], 1),
-        "batched_env_steps_per_s_n16": round(batched[16], 1),
-        "speedup_vs_paper_simulator": round(batched[64] * PAPER_STEP_S, 1),
-    }))
+        print(
+            f"vector env N={n:3d}: {batched[n]:,.0f} steps/s, "
+            f"{batched[n] * PAPER_STEP_S:,.0f}x the paper's simulator"
+        )
+    print(
+        json.dumps(
+            {
+                "single_env_steps_per_s": round(single, 1),
+                "batched_env_steps_per_s": round(batched[64], 1),
+                "batched_env_steps_per_s_n1": round(batched[1], 1),
+                "batched_env_steps_per_s_n16": round(batched[16], 1),
+                "speedup_vs_paper_simulator": round(batched[64] * PAPER_STEP_S, 1),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -78,8 +78,11 @@ class TorchController:
             action = int(self.network(self.input).argmax())
         d_pan, d_tilt = self.table[action]
         cam = self.camera
-        return (action, min(max(pan + d_pan, cam.pan_min), cam.pan_max),
-                min(max(tilt + d_tilt, cam.tilt_min), cam.tilt_max))
+        return (
+            action,
+            min(max(pan + d_pan, cam.pan_min), cam.pan_max),
+            min(max(tilt + d_tilt, cam.tilt_min), cam.tilt_max),
+        )
 
 
 def time_calls(call: Callable[[], object], iterations: int) -> np.ndarray:
@@ -109,8 +112,13 @@ def interleaved(
 
 def summary(times: np.ndarray) -> dict[str, float]:
     p50, p90, p99 = np.percentile(times, [50, 90, 99])
-    return {"p50": float(p50), "p90": float(p90), "p99": float(p99), "min": float(times.min()),
-            "mean": float(times.mean())}
+    return {
+        "p50": float(p50),
+        "p90": float(p90),
+        "p99": float(p99),
+        "min": float(times.min()),
+        "mean": float(times.mean()),
+    }
 
 
 def variant_sessions(network: QNetwork, directory: Path) -> dict[str, ort.InferenceSession]:
@@ -125,22 +133,28 @@ def variant_sessions(network: QNetwork, directory: Path) -> dict[str, ort.Infere
     for name, options in exports.items():
         path = export_onnx(network, directory / name / "policy.onnx", metadata, **options)
         sessions[f"{name},opt=all"] = ort.InferenceSession(
-            str(path.model_path), robot_session_options(1), providers=["CPUExecutionProvider"])
+            str(path.model_path), robot_session_options(1), providers=["CPUExecutionProvider"]
+        )
     base = directory / "fold,static" / "policy.onnx"
-    levels = {"none": "ORT_DISABLE_ALL", "basic": "ORT_ENABLE_BASIC",
-              "extended": "ORT_ENABLE_EXTENDED"}
+    levels = {
+        "none": "ORT_DISABLE_ALL",
+        "basic": "ORT_ENABLE_BASIC",
+        "extended": "ORT_ENABLE_EXTENDED",
+    }
     for name, level in levels.items():
         options = robot_session_options(1)
         options.graph_optimization_level = getattr(ort.GraphOptimizationLevel, level)
         sessions[f"fold,static,opt={name}"] = ort.InferenceSession(
-            str(base), options, providers=["CPUExecutionProvider"])
+            str(base), options, providers=["CPUExecutionProvider"]
+        )
     spinning = ort.SessionOptions()  # robot_session_options(1) but with spinning allowed
     spinning.intra_op_num_threads = spinning.inter_op_num_threads = 1
     spinning.add_session_config_entry("session.intra_op.allow_spinning", "1")
     spinning.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
     spinning.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
     sessions["fold,static,opt=all,spinning"] = ort.InferenceSession(
-        str(base), spinning, providers=["CPUExecutionProvider"])
+        str(base), spinning, providers=["CPUExecutionProvider"]
+    )
     return sessions
 
 
@@ -153,9 +167,15 @@ def conditions() -> dict[str, object]:
                 break
     except OSError:
         pass
-    return {"cpu": cpu, "cores": os.cpu_count(), "loadavg_1min": os.getloadavg()[0],
-            "torch": torch.__version__, "onnxruntime": ort.__version__,
-            "numpy": np.__version__, "activevision": activevision.__version__}
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "loadavg_1min": os.getloadavg()[0],
+        "torch": torch.__version__,
+        "onnxruntime": ort.__version__,
+        "numpy": np.__version__,
+        "activevision": activevision.__version__,
+    }
 
 
 def main() -> None:
@@ -164,8 +184,11 @@ def main() -> None:
     parser.add_argument("--iterations", type=int, default=2000, help="timed decisions per case")
     parser.add_argument("--warmup", type=int, default=200)
     parser.add_argument("--rounds", type=int, default=4, help="alternating blocks per case")
-    parser.add_argument("--variants", action="store_true",
-                        help="also time ONNX export/session variants (network only)")
+    parser.add_argument(
+        "--variants",
+        action="store_true",
+        help="also time ONNX export/session variants (network only)",
+    )
     args = parser.parse_args()
 
     torch.set_num_threads(1)
@@ -185,8 +208,9 @@ def main() -> None:
             metadata = policy_metadata(eight_way_table(), CameraConfig())
             model_path = export_onnx(network, tmp_dir / "policy.onnx", metadata).model_path
         controller = HeadController(model_path, num_threads=1)
-        torch_controller = TorchController(network, controller.metadata.action_table,
-                                           CameraConfig())
+        torch_controller = TorchController(
+            network, controller.metadata.action_table, CameraConfig()
+        )
         frames = camera_frames(rng)
         net_input = np.zeros((1, *controller.metadata.input_shape), dtype=np.uint8)
         torch_input = torch.from_numpy(net_input)
@@ -206,21 +230,29 @@ def main() -> None:
         if args.variants:
             for name, variant in variant_sessions(network, tmp_dir / "variants").items():
                 calls[f"variant/{name}"] = lambda s=variant: s.run(None, {"frames": net_input})
-        results = {name: summary(t) for name, t in
-                   interleaved(calls, args.iterations, args.warmup, args.rounds).items()}
+        results = {
+            name: summary(t)
+            for name, t in interleaved(calls, args.iterations, args.warmup, args.rounds).items()
+        }
 
     after = conditions()
     print(f"{'case':48s} {'p50 ms':>8s} {'p90 ms':>8s} {'p99 ms':>8s} {'min ms':>8s}")
     for name, stats in results.items():
-        print(f"{name:48s} {stats['p50']:8.3f} {stats['p90']:8.3f} {stats['p99']:8.3f} "
-              f"{stats['min']:8.3f}")
+        print(
+            f"{name:48s} {stats['p50']:8.3f} {stats['p90']:8.3f} {stats['p99']:8.3f} "
+            f"{stats['min']:8.3f}"
+        )
     onnx, torch_eager = results["onnx/rgb640x480"], results["torch/rgb640x480"]
-    print(f"paper: {PAPER_MS} ms/inference (GTX 1060); onnxruntime on one core, 640x480 RGB "
-          f"frame to command: {onnx['p50']:.3f} ms median ({PAPER_MS / onnx['p50']:.1f}x "
-          f"faster), PyTorch eager {torch_eager['p50']:.3f} ms")
-    print(f"conditions: {before['cpu']}, {before['cores']} cores, load average "
-          f"{before['loadavg_1min']:.2f} -> {after['loadavg_1min']:.2f}; "
-          f"{args.iterations} decisions per case after {args.warmup} warm-up")
+    print(
+        f"paper: {PAPER_MS} ms/inference (GTX 1060); onnxruntime on one core, 640x480 RGB "
+        f"frame to command: {onnx['p50']:.3f} ms median ({PAPER_MS / onnx['p50']:.1f}x "
+        f"faster), PyTorch eager {torch_eager['p50']:.3f} ms"
+    )
+    print(
+        f"conditions: {before['cpu']}, {before['cores']} cores, load average "
+        f"{before['loadavg_1min']:.2f} -> {after['loadavg_1min']:.2f}; "
+        f"{args.iterations} decisions per case after {args.warmup} warm-up"
+    )
     record = {
         "onnx_p50_ms": onnx["p50"],
         "onnx_p99_ms": onnx["p99"],
@@ -242,9 +274,11 @@ def main() -> None:
         "versions": {k: before[k] for k in ("torch", "onnxruntime", "numpy", "activevision")},
     }
     if args.variants:
-        record["variants_p50_ms"] = {name.removeprefix("variant/"): stats["p50"]
-                                     for name, stats in results.items()
-                                     if name.startswith("variant/")}
+        record["variants_p50_ms"] = {
+            name.removeprefix("variant/"): stats["p50"]
+            for name, stats in results.items()
+            if name.startswith("variant/")
+        }
     print(json.dumps(record))
 
 

@@ -92,15 +92,26 @@ def main() -> None:
     for row in rows:
         key = f"{row['method']}@{row['error']}"
         table[key] = {"success_rate": float(row["success_rate"]), "goal": float(row["success"])}
-        print(f"{key:<12} success rate {row['success_rate']:.3f}  goal reached {row['success']:.3f}")
+        print(
+            f"{key:<12} success rate {row['success_rate']:.3f}  goal reached {row['success']:.3f}"
+        )
     ratios = {}
     if args.dagger:
         for e in ERRORS:
             ppo, dagger = table[f"ppo@{e}"]["goal"], table[f"dagger@{e}"]["goal"]
             ratios[str(e)] = dagger / ppo if ppo > 0 else float("inf")
             print(f"goal reached, DAgger / PPO at e = {e}: {ratios[str(e)]:.2f}x")
-    print(json.dumps({"bench": "reference_ppo", "ppo_steps": steps, "ppo_train_s": trained_s,
-                      "results": table, "goal_ratio_dagger_over_ppo": ratios}))
+    print(
+        json.dumps(
+            {
+                "bench": "reference_ppo",
+                "ppo_steps": steps,
+                "ppo_train_s": trained_s,
+                "results": table,
+                "goal_ratio_dagger_over_ppo": ratios,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -86,8 +86,9 @@ def main() -> None:
 
         def batch() -> None:
             s = starts[0] = (starts[0] + n) % (pool - n)
-            renderer.render(pose[s : s + n], pan[s : s + n], tilt[s : s + n],
-                            ball[s : s + n], out=out)
+            renderer.render(
+                pose[s : s + n], pan[s : s + n], tilt[s : s + n], ball[s : s + n], out=out
+            )
 
         return batch
 
@@ -111,13 +112,17 @@ def main() -> None:
         "single_frame_ms_median": single_med * 1e3,
         "single_frames_per_s": 1.0 / single_best,
     }
-    print(f"fast renderer, single frame : {single_best * 1e3:8.4f} ms  "
-          f"({1 / single_best:9.0f} frames/s; median {single_med * 1e3:.4f} ms)")
+    print(
+        f"fast renderer, single frame : {single_best * 1e3:8.4f} ms  "
+        f"({1 / single_best:9.0f} frames/s; median {single_med * 1e3:.4f} ms)"
+    )
     batched = {n: n / best[n] for n in sizes}
     batched_median = {n: n / float(np.median(medians[n])) for n in sizes}
     for n in sizes:
-        print(f"fast renderer, batch N={n:<4d}: {batched[n]:9.0f} frames/s "
-              f"({1e6 / batched[n]:6.2f} us/frame; median {batched_median[n]:9.0f} frames/s)")
+        print(
+            f"fast renderer, batch N={n:<4d}: {batched[n]:9.0f} frames/s "
+            f"({1e6 / batched[n]:6.2f} us/frame; median {batched_median[n]:9.0f} frames/s)"
+        )
 
     # The same batches on the calling thread only (Renderer(parallel=False)).
     serial = Renderer(camera=camera, parallel=False)
@@ -126,8 +131,9 @@ def main() -> None:
 
     def serial_batch() -> None:
         s = serial_start[0] = (serial_start[0] + 64) % (pool - 64)
-        serial.render(pose[s : s + 64], pan[s : s + 64], tilt[s : s + 64], ball[s : s + 64],
-                      out=serial_out)
+        serial.render(
+            pose[s : s + 64], pan[s : s + 64], tilt[s : s + 64], ball[s : s + 64], out=serial_out
+        )
 
     serial_best = min(time_calls(serial_batch, args.seconds)[0] for _ in range(args.rounds))
     serial_fps = 64 / serial_best

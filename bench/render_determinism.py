@@ -30,8 +30,9 @@ from activevision.rendering.kernels.garbage import GARBAGE_KINDS
 def random_cameras(n: int, rng: np.random.Generator, camera: CameraConfig, field: FieldSpec):
     """``(pose, pan, tilt, ball_xy)`` of ``n`` random cameras."""
     half_x, half_y = field.carpet_half_extent
-    xy = np.stack([rng.uniform(-half_x - 1, half_x + 1, n),
-                   rng.uniform(-half_y - 1, half_y + 1, n)], 1)
+    xy = np.stack(
+        [rng.uniform(-half_x - 1, half_x + 1, n), rng.uniform(-half_y - 1, half_y + 1, n)], 1
+    )
     near_centre = rng.random(n) < 1 / 3  # where the hole polygon leaves the image first
     xy[near_centre] = rng.uniform(-1.5, 1.5, (int(near_centre.sum()), 2))
     pose = np.column_stack([xy, rng.uniform(-np.pi, np.pi, n)])
@@ -44,19 +45,28 @@ def random_cameras(n: int, rng: np.random.Generator, camera: CameraConfig, field
 
 
 def alone(renderer, pose, pan, tilt, ball) -> np.ndarray:
-    return np.concatenate([
-        renderer.render(pose[k], pan[k], tilt[k], None if ball is None else ball[k])
-        for k in range(len(pose))
-    ])
+    return np.concatenate(
+        [
+            renderer.render(pose[k], pan[k], tilt[k], None if ball is None else ball[k])
+            for k in range(len(pose))
+        ]
+    )
 
 
 def chunks(size: int):
     def render(renderer, pose, pan, tilt, ball) -> np.ndarray:
-        return np.concatenate([
-            renderer.render(pose[s : s + size], pan[s : s + size], tilt[s : s + size],
-                            None if ball is None else ball[s : s + size])
-            for s in range(0, len(pose), size)
-        ])
+        return np.concatenate(
+            [
+                renderer.render(
+                    pose[s : s + size],
+                    pan[s : s + size],
+                    tilt[s : s + size],
+                    None if ball is None else ball[s : s + size],
+                )
+                for s in range(0, len(pose), size)
+            ]
+        )
+
     return render
 
 
@@ -67,8 +77,9 @@ def batch(renderer, pose, pan, tilt, ball) -> np.ndarray:
 def shuffled(renderer, pose, pan, tilt, ball) -> np.ndarray:
     order = np.random.default_rng(len(pose)).permutation(len(pose))
     images = np.empty((len(pose), *renderer.image_shape), dtype=np.uint8)
-    images[order] = renderer.render(pose[order], pan[order], tilt[order],
-                                    None if ball is None else ball[order])
+    images[order] = renderer.render(
+        pose[order], pan[order], tilt[order], None if ball is None else ball[order]
+    )
     return images
 
 
@@ -79,6 +90,7 @@ def with_garbage(seed: int, path):
             return path(renderer, *cameras)
         finally:
             renderer_module._WORK_GARBAGE_SEED = 0
+
     return render
 
 
@@ -91,8 +103,9 @@ def main() -> None:
     camera, field = CameraConfig(), FieldSpec()
     threaded = Renderer(field, camera)
     serial = Renderer(field, camera, parallel=False)
-    pose, pan, tilt, ball = random_cameras(args.cameras, np.random.default_rng(args.seed),
-                                           camera, field)
+    pose, pan, tilt, ball = random_cameras(
+        args.cameras, np.random.default_rng(args.seed), camera, field
+    )
     paths = {
         "batch": (threaded, batch),
         "shuffled batch": (threaded, shuffled),
@@ -122,19 +135,25 @@ def main() -> None:
     for name in paths:
         print(f"  {name:20s}: {frames[name]:6d} frames, {pixels[name]:8d} pixels differ")
     total_frames, total_pixels = sum(frames.values()), sum(pixels.values())
-    print(f"all paths: {total_frames} differing frames, {total_pixels} differing pixels "
-          f"({seconds:.1f} s, {numba.get_num_threads()} threads)")
-    print(json.dumps({
-        "cameras": args.cameras,
-        "cameras_with_ball": half,
-        "paths": len(paths),
-        "differing_frames": total_frames,
-        "differing_pixels": total_pixels,
-        "differing_frames_by_path": frames,
-        "differing_pixels_by_path": pixels,
-        "threads": numba.get_num_threads(),
-        "seconds": seconds,
-    }))
+    print(
+        f"all paths: {total_frames} differing frames, {total_pixels} differing pixels "
+        f"({seconds:.1f} s, {numba.get_num_threads()} threads)"
+    )
+    print(
+        json.dumps(
+            {
+                "cameras": args.cameras,
+                "cameras_with_ball": half,
+                "paths": len(paths),
+                "differing_frames": total_frames,
+                "differing_pixels": total_pixels,
+                "differing_frames_by_path": frames,
+                "differing_pixels_by_path": pixels,
+                "threads": numba.get_num_threads(),
+                "seconds": seconds,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

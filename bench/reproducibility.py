@@ -39,7 +39,9 @@ def runs(threads: int, onednn_off: bool, repeats: int) -> tuple[int, float]:
         t0 = time.perf_counter()
         out = subprocess.run(
             [sys.executable, "-c", RUN, str(threads), "1" if onednn_off else "0"],
-            capture_output=True, text=True, check=True,
+            capture_output=True,
+            text=True,
+            check=True,
         )
         seconds.append(time.perf_counter() - t0)
         hashes.add(out.stdout.split()[-1])
@@ -59,8 +61,10 @@ def main() -> None:
         distinct, seconds = runs(threads, onednn_off, args.repeats)
         results[f"{name}_distinct_results"] = distinct
         results[f"{name}_s_per_run"] = round(seconds, 1)
-        print(f"{name:18s}: {distinct} distinct result(s) in {args.repeats} processes, "
-              f"{seconds:.1f} s per run")
+        print(
+            f"{name:18s}: {distinct} distinct result(s) in {args.repeats} processes, "
+            f"{seconds:.1f} s per run"
+        )
     results["repeats"] = args.repeats
     results["onednn_off_slowdown_vs_1_thread"] = round(
         results["onednn_off_1_thread_s_per_run"] / results["default_1_thread_s_per_run"], 2

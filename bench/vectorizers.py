@@ -72,12 +72,19 @@ def compare(got: list[Batch], want: list[Batch]) -> dict[str, Any]:
         not all(same(a, b) for a, b in zip(g[1:4], w[1:4], strict=True))
         for g, w in zip(got, want, strict=True)
     )
-    keys = sorted({
-        k for g, w in zip(got, want, strict=True) for k in w[4] | g[4]
-        if k not in g[4] or k not in w[4] or not same(g[4][k], w[4][k])
-    })
-    return {"frames_differing": frames, "steps_rewards_dones_differing": others,
-            "info_keys_differing": keys}
+    keys = sorted(
+        {
+            k
+            for g, w in zip(got, want, strict=True)
+            for k in w[4] | g[4]
+            if k not in g[4] or k not in w[4] or not same(g[4][k], w[4][k])
+        }
+    )
+    return {
+        "frames_differing": frames,
+        "steps_rewards_dones_differing": others,
+        "info_keys_differing": keys,
+    }
 
 
 def main() -> None:
@@ -92,17 +99,29 @@ def main() -> None:
         t0 = time.perf_counter()
         results[mode] = compare(vector_rollout(mode, actions), reference)
         r = results[mode]
-        print(f"make_vec {mode:>18}: {time.perf_counter() - t0:5.1f} s; frames differing "
-              f"{r['frames_differing']}/{N * (STEPS + 1)}, steps with rewards/dones differing "
-              f"{r['steps_rewards_dones_differing']}, info keys differing "
-              f"{r['info_keys_differing'] or 'none'}")
+        print(
+            f"make_vec {mode:>18}: {time.perf_counter() - t0:5.1f} s; frames differing "
+            f"{r['frames_differing']}/{N * (STEPS + 1)}, steps with rewards/dones differing "
+            f"{r['steps_rewards_dones_differing']}, info keys differing "
+            f"{r['info_keys_differing'] or 'none'}"
+        )
     identical = all(
         r["frames_differing"] == r["steps_rewards_dones_differing"] == 0
-        and not r["info_keys_differing"] for r in results.values()
+        and not r["info_keys_differing"]
+        for r in results.values()
     )
     print("all byte-identical" if identical else "NOT all byte-identical")
-    print(json.dumps({"num_envs": N, "steps": STEPS, "episodes_ended": episodes,
-                      "byte_identical": identical, **results}))
+    print(
+        json.dumps(
+            {
+                "num_envs": N,
+                "steps": STEPS,
+                "episodes_ended": episodes,
+                "byte_identical": identical,
+                **results,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -45,7 +45,8 @@ def cmd_demo(args: argparse.Namespace) -> None:
     gif = args.out.with_suffix(".gif")
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
     policy = OnnxPolicy(args.policy or pretrained_policy_path())
-    traces = [trace_episode(p, args.seed) for p in (policy, RandomPolicy())]
+    config = policy.env_config()  # the observation the policy takes; an exact prior pose
+    traces = [trace_episode(p, args.seed, config) for p in (policy, RandomPolicy(config))]
     plot_episodes(traces, args.out)
     animate_episode(traces[0], gif)
     print(f"wrote {args.out} and {gif}")

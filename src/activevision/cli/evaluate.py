@@ -59,11 +59,16 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     check_outputs(own=files)
     from activevision.experiments.compare import config_at_error
     from activevision.experiments.methods import runnable_methods
+    from activevision.experiments.policies import OnnxPolicy
 
     # a policy that observes a prior pose gets one --error off, as the entropy methods do
     env_config = config_at_error(env_config_of_run(args.run), args.error)
     names = args.methods or runnable_methods(_compare_method_names(), args.run)
     policies = _policies(names, args, env_config, args.error)
+    shipped = policies.get("shipped")
+    if args.run is None and isinstance(shipped, OnnxPolicy):
+        # every method plays the shipped policy's observation (the others read only info)
+        env_config = config_at_error(shipped.env_config(env_config), args.error)
     env = ActiveVisionEnv(env_config)
     summaries, episodes, latency = {}, [], {}
     for name, policy in policies.items():

@@ -248,6 +248,14 @@ class OnnxPolicy:
 
         self.controller = HeadController(model_path, color_order="rgb")
 
+    def env_config(self, base: EnvConfig | None = None) -> EnvConfig:
+        """``base`` (default: the paper's env) observing what this policy was trained on."""
+        meta = self.controller.metadata
+        base = base or EnvConfig()
+        if meta.observation == base.observation and meta.action_history == base.action_history:
+            return base
+        return base.replace(observation=meta.observation, action_history=meta.action_history)
+
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         self.controller.reset()
 

@@ -4,6 +4,7 @@ reads them)."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -104,21 +105,27 @@ def plot_training(
     out_dir: str | os.PathLike[str],
     title: str,
     validation: Columns | None = None,
+    loss_title: str | None = None,
 ) -> Path:
     """Each of :data:`CURVES` as its own PNG in ``out_dir`` and all of them in
     ``training.png`` (titled "Training: ``title``"); returns the latter. ``tables`` maps each
-    curve source ("episodes", "metrics") to its columns."""
+    curve source ("episodes", "metrics") to its columns; ``loss_title`` renames the loss
+    curve (a DAgger run's is an imitation loss, not a TD loss)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     validation = validation or {}
-    for curve in CURVES:
+    curves = tuple(
+        dataclasses.replace(c, title=loss_title) if loss_title and c.y == "loss" else c
+        for c in CURVES
+    )
+    for curve in curves:
         fig = new_figure(figsize=(6, 4), layout="constrained")
         draw_curve(fig.subplots(), curve, tables[curve.source], validation)
         save_figure(fig, out_dir / curve.file, dpi=120)
 
     fig = new_figure(figsize=(15, 8), layout="constrained")
     axes = fig.subplots(2, 3)
-    for ax, curve in zip(axes.flat, CURVES, strict=False):
+    for ax, curve in zip(axes.flat, curves, strict=False):
         draw_curve(ax, curve, tables[curve.source], validation)
     axes.flat[-1].set_axis_off()
     fig.suptitle(f"Training: {title}")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from activevision.training.config import load_config
 from activevision.training.metrics import read_csv_columns
 
 
@@ -24,4 +25,8 @@ def plot_run(
     evaluations_csv = run_dir / "evaluations.csv"
     validation = read_csv_columns(evaluations_csv) if evaluations_csv.exists() else {}
     out = Path(out_dir) if out_dir is not None else run_dir / "plots"
-    return plot_training(tables, out, title=run_dir.name, validation=validation)
+    algo = load_config(run_dir / "config.json").algo if (run_dir / "config.json").exists() else ""
+    loss_title = "imitation loss (cross-entropy)" if algo == "dagger" else None
+    return plot_training(
+        tables, out, title=run_dir.name, validation=validation, loss_title=loss_title
+    )
