@@ -18,7 +18,6 @@ import time
 from pathlib import Path
 
 import gymnasium as gym
-import numpy as np
 import torch
 
 import activevision  # noqa: F401  (registers ActiveVision-v0)
@@ -83,7 +82,8 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     model.save(args.out / "ppo.zip")
 
-    methods = {"ppo": lambda e, p=PPOPolicy(model): p}
+    ppo = PPOPolicy(model)
+    methods = {"ppo": lambda e: ppo}
     if args.dagger:
         learned = LearnedPolicy.from_run(args.dagger)
         methods["dagger"] = lambda e: learned
