@@ -52,9 +52,7 @@ def test_more_episodes_keep_the_papers_update_budget(name, factor):
     # exploration spans the same fraction of the run; the learner itself is the paper's
     for path in ("learning_rate", "gamma", "batch_size"):
         assert getattr(more.learner, path) == getattr(paper.learner, path)
-    assert (more.exploration, more.replay, more.env) == (
-        paper.exploration, paper.replay, paper.env
-    )
+    assert (more.exploration, more.replay, more.env) == (paper.exploration, paper.replay, paper.env)
 
 
 def test_drq_aux_is_the_paper_run_with_two_training_aids():
@@ -65,7 +63,10 @@ def test_drq_aux_is_the_paper_run_with_two_training_aids():
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_every_preset_round_trips_through_json(tmp_path, name):
-    config = preset(name).replace(**{"seed": 3, "env.frame_stack": 2, "env.field": "paper2019"})
+    changes = {"seed": 3, "env.field": "paper2019"}
+    if preset(name).algo == "ddqn":  # DAgger takes one frame
+        changes["env.frame_stack"] = 2
+    config = preset(name).replace(**changes)
     save_config(config, tmp_path / "config.json")
     loaded = load_config(tmp_path / "config.json")
     assert loaded == config and isinstance(loaded.env.field, FieldSpec)

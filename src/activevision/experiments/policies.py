@@ -262,6 +262,11 @@ class OnnxPolicy:
     def act(self, obs: Observation, info: dict) -> int:
         pan, tilt = info["head"]
         if not isinstance(obs, dict):
+            if self.controller.metadata.vector_keys:
+                raise ValueError(
+                    f"this policy observes {self.controller.metadata.observation!r}; play it on"
+                    " an env with that observation (OnnxPolicy.env_config())"
+                )
             return self.controller.act(obs[-1], pan, tilt).action
         inputs = self.controller.inputs
         pose = info["prior_pose"] if "pose" in inputs else None

@@ -58,7 +58,7 @@ def dagger(
             # 0-2 m/rad never learns to follow a prior it can trust (README: 33% against
             # 96% goal reached at e = 0)
             prior_exact_share=0.5 if prior_error_range is not None else 0.0,
-            action_history=2,
+            action_history=2 if observation != "image" else 0,  # the Box has no room
         ),
         learner=LearnerConfig(batch_size=256, learning_rate=1e-3),
         dagger=DaggerConfig(),
