@@ -114,7 +114,7 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     ),
     "dagger_head": (lambda: dagger("image+head", 400_000), "DAgger on the image + head angles"),
     "dagger_prior": (
-        lambda: dagger("image+head+pose+proposal", 200_000, (0.0, 2.0)),
+        lambda: dagger("image+head+pose+proposal", 400_000, (0.0, 2.0)),
         "DAgger on image, head, a prior pose 0-2 m/rad off and its proposal (the shipped one)",
     ),
 }
