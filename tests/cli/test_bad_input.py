@@ -17,7 +17,7 @@ from activevision.cli import main
 TINY_TRAIN = [
     "train",
     "--preset",
-    "quickstart",
+    "quickstart_ddqn",
     "--steps",
     "60",
     "--set",

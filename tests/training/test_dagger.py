@@ -109,3 +109,26 @@ def test_ddqn_refuses_dict_observations():
         TrainConfig().replace(**{"env.observation": "image+head"})
     with pytest.raises(ValueError, match="frame_stack"):
         TrainConfig().replace(**{"algo": "dagger", "env.frame_stack": 4})
+
+
+def test_tampered_dagger_checkpoints_are_refused(tmp_path, capsys):
+    from activevision.cli import main
+
+    config = tiny(steps=400, **{"run.checkpoint_interval": 100})
+    trainer = DaggerTrainer(config, tmp_path / "run")
+    trainer.train(150)
+    trainer.close()
+    run = tmp_path / "run"
+    text = (run / "config.json").read_text()
+    (run / "config.json").write_text(text.replace('"seed": 0', '"seed": 1'))
+    assert main(["train", "--resume", str(run)]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and "config.json" in err[0] and "changed" in err[0]
+    (run / "config.json").write_text(text)
+    checkpoint = sorted((run / "checkpoints").iterdir())[-1]
+    data = bytearray((checkpoint / "replay.npz").read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    (checkpoint / "replay.npz").write_bytes(bytes(data))
+    assert main(["train", "--resume", str(run)]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and "replay.npz" in err[0]
