@@ -51,7 +51,8 @@ def write_report(run_dir: str | Path) -> Path:
         f"# activevision report: `{run.name}`",
         "",
         f"activevision {activevision.__version__}, Python {platform.python_version()}, "
-        f"training seed {config.get('seed')}, {config.get('total_timesteps')} steps.",
+        f"training seed {config.get('seed')}, {config.get('algo', 'ddqn')},"
+        f" {config.get('run', {}).get('total_timesteps')} steps.",
         "",
         "## Training",
     ]
