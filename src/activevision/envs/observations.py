@@ -32,10 +32,12 @@ from gymnasium import spaces
 
 from activevision.envs.config import EnvConfig
 from activevision.envs.simulation import EpisodeBatch
+from activevision.runtime.metadata import VECTOR_KEY_SIZES
 
 IMAGE_KEY = "image"
-#: Size of each vector key (``"actions"`` is per remembered action).
-VECTOR_SIZES = {"head": 2, "pose": 4, "pose_error": 1, "proposal": 5, "actions": 1}
+#: Size of each vector key (``"actions"`` is per remembered action): the runtime's table,
+#: so that HeadController builds exactly this layout on the robot.
+VECTOR_SIZES = VECTOR_KEY_SIZES
 #: Bound of every vector entry (angles in rad, positions in m, one-hots, cos/sin).
 _VECTOR_BOUND = 10.0
 
