@@ -135,7 +135,7 @@ class DaggerConfig:
     #: gradient updates after each round of ``num_envs`` episodes (T)
     updates_per_rollout: int = field(default=16, metadata=_AT_LEAST_1)
     #: labelled states kept (oldest dropped); states, not images: images are rendered for
-    #: each minibatch, so a million states take ~100 MB
+    #: each minibatch, so a million states take ~200 MB
     dataset_size: int = field(default=1_000_000, metadata=_AT_LEAST_1)
     downsample: int = field(default=2, metadata=_range(1, 4))  #: image average-pool factor (T)
     #: weight of the goal-view classification head (40 classes; 0: none) (T)

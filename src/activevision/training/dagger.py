@@ -12,7 +12,7 @@ cross-entropy on the goal view (40 classes).
 
 The dataset keeps *states* (pose, head, ball, the observation's vector), not images: each
 minibatch is rendered on the fly by the exact renderer (about 30,000 frames/s), so a million
-states take ~100 MB and a checkpoint stores them whole.
+states take ~200 MB and a checkpoint stores them whole.
 
 A run directory looks like a DDQN run's: ``config.json``, ``metrics.csv`` (one row per round
 that crosses an ``epoch_steps`` boundary; ``loss`` is the imitation loss, ``epsilon`` the
