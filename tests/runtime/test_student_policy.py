@@ -37,7 +37,7 @@ def exported(tmp_path, observation: str = KIND, history: int = 2, act_by: str = 
         grid = env.sim.localisation.grid
         metadata.update(
             act_by="goal",
-            goal_views_deg=np.degrees(np.column_stack([grid.pans, grid.tilts])).tolist(),
+            goal_views_deg=np.degrees(grid.views).tolist(),
         )
     paths = export_onnx(network, tmp_path / "policy.onnx", metadata)
     return network, paths, config, keys
@@ -49,7 +49,7 @@ def test_onnx_student_plays_like_pytorch(tmp_path, act_by):
     evidence = None
     if act_by == "goal":
         grid = ActiveVisionEnv(config).sim.localisation.grid
-        views = np.column_stack([grid.pans, grid.tilts])
+        views = grid.views
         evidence = GoalEvidence(1, views, ActiveVisionEnv(config).sim.actions)
     torch_policy = LearnedPolicy(network, vector_keys=keys, goal_evidence=evidence)
     onnx_policy = OnnxPolicy(paths.model_path)

@@ -269,18 +269,18 @@ class EpisodeBatch:
         ukf = self.localisation.ukf
         out = np.empty(len(idx))
         for j, i in enumerate(idx):
+            # Algorithm 1's update: z = h(mu) for each landmark in view, closest first
             mean = self.believed_pose[i]
             seen = np.flatnonzero(self.observed[i])
-            segments = self.landmarks.segments[seen]
-            zs = np.array([hx_range_bearing(mean, seg)[0] for seg in segments]).reshape(-1, 2)
-            order = seen[np.argsort(zs[:, 0], kind="stable")] if len(seen) else seen
-            zs = zs[np.argsort(zs[:, 0], kind="stable")]
+            zs = np.array([hx_range_bearing(mean, seg)[0] for seg in self.landmarks.segments[seen]])
+            order = np.argsort(zs[:, 0], kind="stable") if len(seen) else seen
+            seen, zs = seen[order], zs.reshape(-1, 2)[order]
             _, cov = ukf_update_sequential(
                 mean,
                 ukf.initial_cov,
                 zs,
-                self.landmarks.segments[order],
-                self.landmarks.types[order],
+                self.landmarks.segments[seen],
+                self.landmarks.types[seen],
                 ukf,
             )
             out[j] = entropy(cov) - self.goal_entropy[i]

@@ -209,7 +209,7 @@ class LearnedPolicy:
         if config.algo == "dagger" and config.dagger.act_by == "goal":
             grid = LocalisationConfig().grid  # the candidate views the goal head names
             table = action_table(config.env.step_deg, config.env.action_set)
-            evidence = GoalEvidence(1, np.column_stack([grid.pans, grid.tilts]), table)
+            evidence = GoalEvidence(1, grid.views, table)
         return cls(load_policy(run_dir, weights=weights), device, num_threads, keys, evidence)
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:

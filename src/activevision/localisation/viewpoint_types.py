@@ -62,6 +62,12 @@ class ViewpointGrid:
         """Tilt of every candidate (V,), grid order."""
         return _readonly(np.tile(self.tilt_values, self.n_pan))
 
+    @cached_property
+    def views(self) -> np.ndarray:
+        """Every candidate as a (pan, tilt) row (V, 2), grid order: the goal-view classes of a
+        DAgger student."""
+        return _readonly(np.column_stack([self.pans, self.tilts]))
+
     def index(self, i_pan: int, i_tilt: int) -> int:
         return i_pan * self.n_tilt + i_tilt
 

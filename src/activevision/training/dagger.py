@@ -27,7 +27,7 @@ from __future__ import annotations
 import json
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -170,7 +170,7 @@ class DaggerTrainer:
         if self.config.dagger.act_by != "goal":
             return None
         grid = self.sim.localisation.grid
-        return GoalEvidence(n, np.column_stack([grid.pans, grid.tilts]), self.sim.actions)
+        return GoalEvidence(n, grid.views, self.sim.actions)
 
     @property
     def teacher_share(self) -> float:
@@ -209,19 +209,11 @@ class DaggerTrainer:
 
     def _rollout(self) -> None:
         """One round of ``num_envs`` fresh episodes, every visited state labelled."""
-        sim, n = self.sim, self.sim.n
-        seeds = self.rng.integers(0, 2**31 - 1, size=n)
-        slots = np.arange(n)
-        sim.reset(slots, [seeding.np_random(int(s))[0] for s in seeds])
-        self.observations.start(slots)
-        if self.evidence is not None:
-            self.evidence.reset(slots)
-        active = np.ones(n, dtype=bool)
-        goals = goal_indices(sim)
+        sim = self.sim
+        seeds = self.rng.integers(0, 2**31 - 1, size=sim.n)
         beta = self._round_share = self.teacher_share
-        for _ in range(MAX_EPISODE_STEPS):
-            idx = np.flatnonzero(active)
-            image, vector = self._observe(idx)
+
+        def choose(idx: np.ndarray, image: np.ndarray, vector: np.ndarray) -> np.ndarray:
             teacher = greedy_actions(sim.head[idx], sim.goal[idx], sim.actions)
             self.dataset.add(
                 pose=sim.pose[idx],
@@ -229,28 +221,15 @@ class DaggerTrainer:
                 ball=sim.ball[idx],
                 vector=vector,
                 action=teacher,
-                goal=goals[idx],
+                goal=goal_indices(sim)[idx],
             )
-            actions = np.zeros(n, dtype=np.int64)
             use_teacher = self.rng.random(len(idx)) < beta
             # the student sees every frame (its goal evidence must), even where it does not act
             student = self.act(image, vector, idx, self.evidence)
-            actions[idx] = np.where(use_teacher, teacher, student)
-            self.observations.record(actions[idx], idx)
-            _, terminated, _, _ = sim.step(actions, active=active)
             self.step += len(idx)
-            ended = active & (terminated | (sim.step_count >= MAX_EPISODE_STEPS))
-            for i in np.flatnonzero(ended):
-                self._end_episode(int(i))
-            active &= ~ended
-            if not active.any():
-                break
+            return np.where(use_teacher, teacher, student)
 
-    def _observe(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        sim = self.sim
-        image = sim.render(idx)[:, None]
-        vector = self.observations.vectors(sim)
-        return image, vector[idx]
+        play_episodes(sim, self.observations, self.evidence, seeds, choose, self._end_episode)
 
     def act(
         self,
@@ -335,7 +314,7 @@ class DaggerTrainer:
             "action_history": cfg.action_history,
             "vector_keys": list(self.keys),
             "act_by": self.config.dagger.act_by,
-            "goal_views_deg": np.degrees(np.column_stack([grid.pans, grid.tilts])).tolist(),
+            "goal_views_deg": np.degrees(grid.views).tolist(),
             "step": self.step,
         }
 
@@ -424,36 +403,61 @@ class DaggerTrainer:
         self.logger.close()
 
 
+def play_episodes(
+    sim: EpisodeBatch,
+    observations: ObservationBuilder,
+    evidence: GoalEvidence | None,
+    seeds: Sequence[int] | np.ndarray,
+    choose: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray],
+    on_end: Callable[[int], None],
+) -> None:
+    """One episode in each slot of ``sim``, slot ``i`` reset as ``ActiveVision-v0`` with
+    ``seeds[i]``: every step ``choose(slots, images, vectors)`` gives the actions of the
+    slots still playing, and ``on_end(slot)`` is called when a slot's episode ends."""
+    slots = np.arange(sim.n)
+    sim.reset(slots, [seeding.np_random(int(s))[0] for s in seeds])
+    observations.start(slots)
+    if evidence is not None:
+        evidence.reset(slots)
+    active = np.ones(sim.n, dtype=bool)
+    for _ in range(MAX_EPISODE_STEPS):
+        idx = np.flatnonzero(active)
+        image = sim.render(idx)[:, None]
+        vector = observations.vectors(sim)[idx]
+        actions = np.zeros(sim.n, dtype=np.int64)
+        actions[idx] = choose(idx, image, vector)
+        observations.record(actions[idx], idx)
+        _, terminated, _, _ = sim.step(actions, active=active)
+        ended = active & (terminated | (sim.step_count >= MAX_EPISODE_STEPS))
+        for i in np.flatnonzero(ended):
+            on_end(int(i))
+        active &= ~ended
+        if not active.any():
+            return
+
+
 def greedy_student_episodes(trainer: DaggerTrainer, seeds: Sequence[int]) -> list[dict[str, float]]:
     """One greedy episode of the student from each seed (each equal to
     ``ActiveVision-v0`` reset with that seed), played as one batch."""
     cfg = trainer.config.env
     sim = EpisodeBatch(cfg, len(seeds))
     observations = ObservationBuilder(cfg, len(seeds), trainer.n_actions)
-    slots = np.arange(len(seeds))
-    sim.reset(slots, [seeding.np_random(int(s))[0] for s in seeds])
-    observations.start(slots)
     evidence = trainer._goal_evidence(len(seeds))
-    active = np.ones(len(seeds), dtype=bool)
     records: list[dict[str, float]] = [{} for _ in seeds]
-    for _ in range(MAX_EPISODE_STEPS):
-        idx = np.flatnonzero(active)
-        image = sim.render(idx)[:, None]
-        vector = observations.vectors(sim)[idx]
-        actions = np.zeros(len(seeds), dtype=np.int64)
-        actions[idx] = trainer.act(image, vector, idx, evidence, sim)
-        observations.record(actions[idx], idx)
-        _, terminated, _, _ = sim.step(actions, active=active)
-        ended = active & (terminated | (sim.step_count >= MAX_EPISODE_STEPS))
-        infos = sim.info_arrays(MAX_EPISODE_STEPS)
-        for i in np.flatnonzero(ended):
-            info = {k: v[i] for k, v in infos.items()}
-            records[i] = episode_record(
-                int(i), 0, float(sim.episode_reward[i]), int(sim.step_count[i]), info
-            )
-        active &= ~ended
-        if not active.any():
-            break
+
+    def record(i: int) -> None:
+        info = {k: v[i] for k, v in sim.info_arrays(MAX_EPISODE_STEPS).items()}
+        steps = int(sim.step_count[i])
+        records[i] = episode_record(i, 0, float(sim.episode_reward[i]), steps, info)
+
+    play_episodes(
+        sim,
+        observations,
+        evidence,
+        seeds,
+        lambda idx, image, vector: trainer.act(image, vector, idx, evidence, sim),
+        record,
+    )
     return records
 
 
