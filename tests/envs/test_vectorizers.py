@@ -114,9 +114,7 @@ def test_async_close_returns() -> None:
         envs.close()
         print("closed")
     """)
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300
-    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["closed"]
 
@@ -172,3 +170,34 @@ def test_success_on_the_last_step_is_also_truncated_everywhere() -> None:
         _, _, v_term, v_trunc, _ = vector.step(np.array([a]))
         assert (s_term, s_trunc) == (v_term[0], v_trunc[0])
     assert s_term and s_trunc
+
+
+DICT_KWARGS = {
+    "observation": "image+head+pose+proposal",
+    "action_history": 2,
+    "prior_error_range": (0.0, 1.0),
+    "prior_exact_share": 0.5,
+}
+
+
+def test_dict_observations_agree_in_every_mode() -> None:
+    # sync and async stack the single envs' Dict observations; the native env builds them
+    actions = random_actions(60)
+    got = {}
+    for mode in ("sync", "async", "vector_entry_point"):
+        envs = gym.make_vec("ActiveVision-v0", num_envs=N, vectorization_mode=mode, **DICT_KWARGS)
+        try:
+            got[mode] = vector_rollout(envs, SEED, actions)
+        finally:
+            envs.close()
+    for mode in ("async", "vector_entry_point"):
+        for t, (a, b) in enumerate(zip(got["sync"], got[mode], strict=True)):
+            assert a[0].keys() == b[0].keys()
+            for key in a[0]:
+                assert_same_bytes(a[0][key], b[0][key], f"{mode} step {t}: obs[{key!r}]")
+            for name, x, y in zip(
+                ("rewards", "terminated", "truncated"), a[1:4], b[1:4], strict=True
+            ):
+                assert_same_bytes(x, y, f"{mode} step {t}: {name}")
+            for key in a[4]:
+                assert_same_bytes(a[4][key], b[4][key], f"{mode} step {t}: info[{key!r}]")
