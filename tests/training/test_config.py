@@ -6,7 +6,7 @@ import sys
 import pytest
 
 from activevision.envs import EnvConfig
-from activevision.geometry import FieldSpec
+from activevision.geometry import CameraConfig, FieldSpec
 from activevision.training.config import (
     LearnerConfig,
     RunConfig,
@@ -160,6 +160,28 @@ def test_cli_overrides_by_path_leaf_and_old_name():
         apply_overrides(config, ["bogus=1"])
     with pytest.raises(ValueError, match="total_timesteps"):
         apply_overrides(config, ["total_timesteps=-5"])
+
+
+def test_cli_overrides_of_a_nested_config_field():
+    """``--set env.camera.hfov=1.2`` changes that field and keeps the others (train for a
+    team's own camera)."""
+    base = apply_overrides(TrainConfig(), ["env.camera.camera_height=0.6"])
+    config = apply_overrides(
+        base, ["env.camera.hfov=1.2", "env.camera.tilt_max=1.0", "env.field.ball_radius=0.1"]
+    )
+    assert config.env.camera == CameraConfig(hfov=1.2, camera_height=0.6, tilt_max=1.0)
+    assert config.env.field.ball_radius == 0.1
+    assert load_config_round_trip(config) == config
+    whole = apply_overrides(base, ['env.camera={"hfov": 1.2}'])  # a whole object: defaults
+    assert whole.env.camera == CameraConfig(hfov=1.2)
+    with pytest.raises(ValueError, match=r"unknown TrainConfig key 'env\.camera\.fov'"):
+        apply_overrides(config, ["env.camera.fov=1.2"])
+    with pytest.raises(ValueError, match="hfov"):
+        apply_overrides(config, ["env.camera.hfov=4"])
+
+
+def load_config_round_trip(config: TrainConfig) -> TrainConfig:
+    return TrainConfig.from_dict(json.loads(json.dumps(config.to_dict())))
 
 
 def test_every_field_has_a_key_and_a_source_comment():

@@ -10,7 +10,8 @@ Writes two files side by side, each atomically (temporary file + ``os.replace``)
   Relu -> Gemm``.
 * ``policy.json`` — what the runtime needs besides the graph (see
   :mod:`activevision.runtime.metadata`): input size and stack, the action table in degrees,
-  head limits, SHA-256 of the model and of the run's ``config.json``, package version, opset.
+  head limits, the camera the policy was trained with, SHA-256 of the model and of the run's
+  ``config.json``, package version, opset.
 
 Needs torch and onnx (``pip install activevision[export]``); onnxruntime, when installed, is
 used to check the exported graph against PyTorch.
@@ -43,6 +44,7 @@ from activevision.runtime.metadata import (
     METADATA_FORMAT_VERSION,
     MODEL_FILENAME,
     STANDARD_ACTION_NAMES,
+    CameraModel,
     PolicyMetadata,
     metadata_path_for,
 )
@@ -124,6 +126,7 @@ def policy_metadata(
     head_limits: Mapping[str, float] | Any,
     training_config_sha256: str | None = None,
     action_names: Sequence[str] | None = None,
+    camera: Any | None = None,
 ) -> dict[str, Any]:
     """The caller's part of policy.json, from radians.
 
@@ -135,6 +138,11 @@ def policy_metadata(
         training_config_sha256: SHA-256 of the training run's ``config.json``, if any.
         action_names: name per action; default: the env's (``ACTION_NAMES_8WAY``, cut to the
             table's length). The runtime checks each row moves the way its name says.
+        camera: the camera the policy was trained with (the run's ``env.camera``, a
+            :class:`activevision.geometry.CameraConfig` or
+            :class:`activevision.runtime.CameraModel`), recorded as policy.json's ``camera``
+            so that ``HeadController(..., camera=...)`` can compare a robot's camera with it.
+            None: not recorded.
     """
     table = np.asarray(action_table, dtype=np.float64)
     if table.ndim != 2 or table.shape[1] != 2:
@@ -144,12 +152,15 @@ def policy_metadata(
         value = head_limits[key] if isinstance(head_limits, Mapping) else getattr(head_limits, key)
         return math.degrees(float(value))
 
-    return {
+    values: dict[str, Any] = {
         "action_table_deg": np.degrees(table).tolist(),
         "head_limits_deg": {k: limit(k) for k in ("pan_min", "pan_max", "tilt_min", "tilt_max")},
-        "training_config_sha256": training_config_sha256,
-        "action_names": list((action_names or STANDARD_ACTION_NAMES)[: len(table)]),
     }
+    if camera is not None:
+        values["camera"] = CameraModel.of(camera).to_json()
+    values["training_config_sha256"] = training_config_sha256
+    values["action_names"] = list((action_names or STANDARD_ACTION_NAMES)[: len(table)])
+    return values
 
 
 def export_onnx(

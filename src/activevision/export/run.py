@@ -24,9 +24,9 @@ def export_run(
     """Export a training run's policy as ``policy.onnx`` + ``policy.json``: its newest
     weights, or with ``weights="best"`` those with the best validation score.
 
-    Reads the weights with :func:`activevision.training.load_policy`, the action table and
-    head limits from the run's environment settings (``config.json``'s ``env``) and
-    records the SHA-256 of ``config.json`` in the metadata.
+    Reads the weights with :func:`activevision.training.load_policy`, the action table,
+    head limits and camera from the run's environment settings (``config.json``'s ``env``)
+    and records the SHA-256 of ``config.json`` in the metadata.
 
     Args:
         run_dir: a run directory written by :mod:`activevision.training`.
@@ -55,6 +55,7 @@ def export_run(
         env.camera,
         training_config_sha256=hashlib.sha256(config_bytes).hexdigest(),
         action_names=ACTION_NAMES_8WAY,
+        camera=env.camera,
     )
     metadata["step_deg"] = env.step_deg
     metadata["action_set"] = env.action_set

@@ -8,13 +8,22 @@ Typical use::
     command = controller.act(frame, pan, tilt)          # any-size uint8 grey/RGB frame
     neck.move_to(command.target_pan, command.target_tilt)
 
+Pass ``camera=CameraModel(...)`` (the robot's camera) to be warned
+(:class:`CameraMismatchWarning`) when it differs from the one the policy was trained for.
+
 Export a trained run with :func:`activevision.export.export_run` (needs torch and onnx).
 """
 
-from activevision.runtime.controller import HeadCommand, HeadController, robot_session_options
+from activevision.runtime.controller import (
+    CameraMismatchWarning,
+    HeadCommand,
+    HeadController,
+    robot_session_options,
+)
 from activevision.runtime.metadata import (
     METADATA_FILENAME,
     MODEL_FILENAME,
+    CameraModel,
     HeadLimits,
     PolicyFileError,
     PolicyMetadata,
@@ -28,6 +37,8 @@ __all__ = [
     "BT601_LUMA_RGB",
     "METADATA_FILENAME",
     "MODEL_FILENAME",
+    "CameraMismatchWarning",
+    "CameraModel",
     "FramePreprocessor",
     "HeadCommand",
     "HeadController",

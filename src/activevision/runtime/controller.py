@@ -9,6 +9,8 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import warnings
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -16,12 +18,18 @@ import numpy as np
 
 from activevision.runtime.goal_evidence import GoalEvidence
 from activevision.runtime.metadata import (
+    CameraModel,
     PolicyFileError,
     PolicyMetadata,
     load_metadata,
     metadata_path_for,
 )
 from activevision.runtime.preprocess import ColorOrder, FramePreprocessor, luma_weights
+
+
+class CameraMismatchWarning(UserWarning):
+    """The robot's camera (``HeadController(..., camera=...)``) differs from the one the
+    policy was trained for: the policy may not transfer."""
 
 
 class HeadCommand(NamedTuple):
@@ -75,6 +83,13 @@ class HeadController:
         color_order: channel order of 3-channel frames, ``"rgb"`` or ``"bgr"`` (OpenCV).
         verify_checksum: check the model file against the SHA-256 in the metadata, so a
             model and a metadata file from different exports are caught at load time.
+        camera: the robot's camera, a :class:`~activevision.runtime.CameraModel` (or an
+            ``activevision.geometry.CameraConfig``). If its field of view, height, pan or tilt
+            range, or aspect ratio differs from the camera the policy was trained for
+            (:attr:`trained_camera`) beyond :data:`~activevision.runtime.metadata.
+            CAMERA_TOLERANCES`, one :class:`CameraMismatchWarning` names each difference
+            and how to retrain. Resolution alone does not matter: frames are resized. No
+            check when the policy.json predates the camera record (``trained_camera`` None).
 
     Raises:
         PolicyFileError: (a ValueError) the model or metadata is missing, unreadable,
@@ -90,8 +105,10 @@ class HeadController:
         num_threads: int = 1,
         color_order: ColorOrder = "rgb",
         verify_checksum: bool = True,
+        camera: CameraModel | Any | None = None,
     ) -> None:
         luma_weights(color_order)  # validates color_order
+        self.robot_camera = None if camera is None else CameraModel.of(camera)
         if isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 1:
             raise ValueError(f"num_threads must be a positive integer, got {num_threads!r}")
         self.color_order: ColorOrder = color_order
@@ -112,6 +129,7 @@ class HeadController:
                 )
         self._session = _open_session(self.model_path, model_bytes, num_threads)
         self._check_signature()
+        self._check_camera()
 
         meta = self.metadata
         self._preprocess = FramePreprocessor(meta.image_height, meta.image_width)
@@ -132,6 +150,12 @@ class HeadController:
         self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
         self.last_q_values: np.ndarray | None = None
         self.last_goal_logits: np.ndarray | None = None
+
+    @property
+    def trained_camera(self) -> CameraModel | None:
+        """The camera the policy was trained with (policy.json's ``camera``), or None for a
+        policy exported before the record existed."""
+        return self.metadata.camera
 
     @property
     def inputs(self) -> tuple[str, ...]:
@@ -266,6 +290,19 @@ class HeadController:
             self._vector[0] = np.concatenate(parts)
 
     # ------------------------------------------------------------------ internals
+    def _check_camera(self) -> None:
+        """One CameraMismatchWarning when the robot's camera is not the trained one."""
+        trained, robot = self.trained_camera, self.robot_camera
+        if trained is None or robot is None:
+            return
+        differences = trained.differences(robot)
+        if differences:
+            warnings.warn(
+                camera_mismatch_message(self.model_path, robot, differences),
+                CameraMismatchWarning,
+                stacklevel=3,  # the caller of HeadController(...)
+            )
+
     def _check_signature(self) -> None:
         """The ONNX graph's input and output must agree with the metadata."""
         meta = self.metadata
@@ -305,6 +342,24 @@ class HeadController:
         out_shape = list(outputs[meta.output_name].shape)
         if len(out_shape) != 2 or out_shape[1] != meta.n_actions:
             raise mismatch(f"output shape {out_shape} but metadata lists {meta.n_actions} actions")
+
+
+def camera_mismatch_message(
+    model_path: Path, robot: CameraModel, differences: Mapping[str, str]
+) -> str:
+    """The warning for a robot whose camera differs (``CameraModel.differences``): each
+    difference, and the ``activevision train`` settings of the robot's camera."""
+    fields = [
+        f for key in differences for f in (("width", "height") if key == "aspect" else (key,))
+    ]
+    settings = " ".join(f"--set env.camera.{name}={getattr(robot, name):.6g}" for name in fields)
+    lines = "\n".join(f"  - {line}" for line in differences.values())
+    return (
+        f"the robot's camera differs from the one {model_path} was trained for:\n{lines}\n"
+        "The policy may not transfer to this camera. Retrain it for the robot's camera (angles"
+        f" in radians, height in metres): activevision train ... {settings}; then"
+        " `activevision export RUN_DIR` and load that policy.onnx."
+    )
 
 
 def _finite_vector(name: str, value: Any, size: int) -> np.ndarray:

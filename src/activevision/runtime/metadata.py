@@ -22,12 +22,21 @@ Example ``policy.json`` (abridged)::
       "action_names": ["stay", "pan_left", ...],
       "action_table_deg": [[0.0, 0.0], [3.0, 0.0], ...],
       "head_limits_deg": {"pan_min": -90.0, "pan_max": 90.0, "tilt_min": 5.0, "tilt_max": 65.0},
+      "camera": {"width_px": 160, "height_px": 120, "hfov_deg": 58.0, "camera_height_m": 0.5,
+                 "pan_min_deg": -90.0, "pan_max_deg": 90.0, "tilt_min_deg": 5.0,
+                 "tilt_max_deg": 65.0},
       "training_config_sha256": "9a0b..."
     }
 
 Angles are stored in degrees for people to read; :class:`PolicyMetadata` hands them out in
 radians. ``action_table_deg[a] = (d_pan, d_tilt)``: pan positive to the left, tilt positive
 *down* (the conventions of :mod:`activevision.geometry.camera`).
+
+``camera`` is the camera the policy was trained with (the run's ``env.camera``; see
+:class:`CameraModel`). Files written before it existed lack it: the trained camera is then
+unknown and :class:`~activevision.runtime.HeadController` cannot compare the robot's with it.
+``head_limits_deg`` is what the controller clips its commands to; export writes the trained
+camera's pan and tilt range to both.
 """
 
 from __future__ import annotations
@@ -36,7 +45,7 @@ import json
 import math
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -77,6 +86,27 @@ STANDARD_ACTION_NAMES = tuple(_ACTION_SIGNS)
 VECTOR_KEY_SIZES = {"head": 2, "pose": 4, "pose_error": 1, "proposal": 5, "actions": 1}
 
 
+#: Keys of policy.json's ``camera`` record -> :class:`CameraModel` field (the suffix says the
+#: unit: pixels, degrees or metres).
+_CAMERA_KEYS = {
+    "width_px": "width",
+    "height_px": "height",
+    "hfov_deg": "hfov",
+    "camera_height_m": "camera_height",
+    "pan_min_deg": "pan_min",
+    "pan_max_deg": "pan_max",
+    "tilt_min_deg": "tilt_min",
+    "tilt_max_deg": "tilt_max",
+}
+#: How far a robot's camera may differ from the trained one before HeadController warns.
+CAMERA_TOLERANCES = {
+    "hfov": math.radians(1.0),  #: rad
+    "camera_height": 0.02,  #: m
+    "angle": math.radians(1.0),  #: rad, each pan and tilt limit
+    "aspect": 0.01,  #: relative difference of width / height
+}
+
+
 def vector_key_size(key: str, n_actions: int, action_history: int) -> int:
     """Length of vector input ``key``."""
     return action_history * n_actions if key == "actions" else VECTOR_KEY_SIZES[key]
@@ -84,6 +114,16 @@ def vector_key_size(key: str, n_actions: int, action_history: int) -> int:
 
 def _is_sha256(text: str) -> bool:
     return len(text) == 64 and all(c in "0123456789abcdef" for c in text)
+
+
+def _real(value: Any) -> float | None:
+    """``value`` as a float (inf when too large for one), None unless a real number."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        return None
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf
 
 
 class PolicyFileError(ValueError):
@@ -118,6 +158,148 @@ class HeadLimits:
 
 
 @dataclass(frozen=True)
+class CameraModel:
+    """A head camera and neck: the one a policy was trained for (``policy.json``'s
+    ``camera``, the run's :class:`activevision.geometry.CameraConfig`) or the robot's, to
+    compare with it (``HeadController(..., camera=CameraModel(...))``).
+
+    Same fields and units as ``CameraConfig``: pixels, radians (pan positive left, tilt
+    positive down from horizontal) and metres. Torch-free; :meth:`from_degrees` takes angles
+    in degrees. ValueError names a field out of range.
+    """
+
+    width: int  #: image width (px)
+    height: int  #: image height (px)
+    hfov: float  #: horizontal field of view (rad)
+    camera_height: float  #: camera above the ground (m)
+    pan_min: float  #: neck yaw limits (rad)
+    pan_max: float
+    tilt_min: float  #: head pitch limits, down from horizontal (rad)
+    tilt_max: float
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+                raise ValueError(f"{name} must be a positive integer (px), got {value!r}")
+            object.__setattr__(self, name, int(value))
+        for name in ("hfov", "camera_height", *_HEAD_LIMIT_KEYS):
+            value = _real(getattr(self, name))
+            if value is None or not math.isfinite(value):
+                raise ValueError(f"{name} must be a finite number, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, value)
+        if not 0 < self.hfov < math.pi:
+            raise ValueError(
+                f"hfov must lie in (0, 180) degrees, got {math.degrees(self.hfov):.6g}"
+            )
+        if not self.camera_height > 0:
+            raise ValueError(f"camera_height must be positive (m), got {self.camera_height}")
+        for key, bound in _HEAD_LIMIT_BOUNDS_DEG.items():
+            degrees = math.degrees(getattr(self, key))
+            if not -bound <= degrees <= bound:
+                raise ValueError(f"{key} = {degrees:.6g} degrees lies outside +-{bound:g} degrees")
+        if not (self.pan_min <= self.pan_max and self.tilt_min <= self.tilt_max):
+            raise ValueError(
+                "pan and tilt limits must be ordered (min <= max), got pan "
+                f"{self._range_deg('pan')} and tilt {self._range_deg('tilt')} degrees"
+            )
+
+    @classmethod
+    def of(cls, camera: Any) -> CameraModel:
+        """``camera`` itself if it is a CameraModel, else one with its fields, read as
+        attributes (an :class:`activevision.geometry.CameraConfig`) or keys."""
+        if isinstance(camera, cls):
+            return camera
+        names = [f.name for f in fields(cls)]
+        try:
+            if isinstance(camera, Mapping):
+                values = {name: camera[name] for name in names}
+            else:
+                values = {name: getattr(camera, name) for name in names}
+        except (KeyError, AttributeError) as error:
+            raise TypeError(
+                f"a camera needs the fields {names} (a CameraModel or CameraConfig), got {camera!r}"
+            ) from error
+        return cls(**values)
+
+    @classmethod
+    def from_degrees(
+        cls,
+        width: int,
+        height: int,
+        hfov_deg: float,
+        camera_height: float,
+        pan_deg: tuple[float, float],
+        tilt_deg: tuple[float, float],
+    ) -> CameraModel:
+        """A camera with its angles in degrees: ``pan_deg`` and ``tilt_deg`` are the
+        ``(min, max)`` head limits (pan positive left, tilt positive down)."""
+        pan_min, pan_max = pan_deg
+        tilt_min, tilt_max = tilt_deg
+        return cls(
+            width=width,
+            height=height,
+            hfov=math.radians(hfov_deg),
+            camera_height=camera_height,
+            pan_min=math.radians(pan_min),
+            pan_max=math.radians(pan_max),
+            tilt_min=math.radians(tilt_min),
+            tilt_max=math.radians(tilt_max),
+        )
+
+    @property
+    def aspect(self) -> float:
+        """width / height."""
+        return self.width / self.height
+
+    def to_json(self) -> dict[str, int | float]:
+        """The record as policy.json stores it (degrees and metres)."""
+        values: dict[str, int | float] = {}
+        for key, name in _CAMERA_KEYS.items():
+            value = getattr(self, name)
+            values[key] = math.degrees(value) if key.endswith("_deg") else value
+        return values
+
+    def differences(
+        self, robot: CameraModel, tolerances: Mapping[str, float] = CAMERA_TOLERANCES
+    ) -> dict[str, str]:
+        """How ``robot`` differs from this (trained) camera beyond ``tolerances``: field
+        (``"aspect"``, ``"hfov"``, ``"camera_height"``, ``"pan_min"``...) -> a line naming
+        both values; empty for the policy's camera. Resolution alone does not count (the
+        controller resizes frames to the policy's input), the aspect ratio does."""
+        found = {}
+        if abs(robot.aspect / self.aspect - 1) > tolerances["aspect"]:
+            found["aspect"] = (
+                f"aspect ratio (width/height): robot {robot.width}x{robot.height} px ="
+                f" {robot.aspect:.3f}, trained {self.width}x{self.height} px ="
+                f" {self.aspect:.3f} (frames are resized to the policy's input, so the image"
+                " is stretched)"
+            )
+        if abs(robot.hfov - self.hfov) > tolerances["hfov"]:
+            found["hfov"] = (
+                f"hfov: robot {math.degrees(robot.hfov):.1f} deg, trained"
+                f" {math.degrees(self.hfov):.1f} deg"
+            )
+        if abs(robot.camera_height - self.camera_height) > tolerances["camera_height"]:
+            found["camera_height"] = (
+                f"camera_height: robot {robot.camera_height:.3f} m, trained"
+                f" {self.camera_height:.3f} m"
+            )
+        for name in _HEAD_LIMIT_KEYS:
+            mine, theirs = getattr(self, name), getattr(robot, name)
+            if abs(theirs - mine) > tolerances["angle"]:
+                found[name] = (
+                    f"{name}: robot {math.degrees(theirs):.1f} deg, trained"
+                    f" {math.degrees(mine):.1f} deg"
+                )
+        return found
+
+    def _range_deg(self, axis: str) -> str:
+        low, high = getattr(self, f"{axis}_min"), getattr(self, f"{axis}_max")
+        return f"{math.degrees(low):g}..{math.degrees(high):g}"
+
+
+@dataclass(frozen=True)
 class PolicyMetadata:
     """Parsed and validated ``policy.json`` (see the module docstring for the file layout)."""
 
@@ -145,6 +327,8 @@ class PolicyMetadata:
     act_by: str = "action"
     goal_output_name: str | None = None
     goal_views: np.ndarray | None = field(default=None, repr=False)  #: (V, 2) rad
+    #: the camera the policy was trained with (None: a policy.json from before it was kept)
+    camera: CameraModel | None = None
     raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -192,6 +376,7 @@ class PolicyMetadata:
             act_by=read.act_by(),
             goal_output_name=read.optional_str("goal_output_name"),
             goal_views=read.goal_views(),
+            camera=read.camera(),
             raw=dict(values),
         )
 
@@ -296,9 +481,30 @@ class _MetadataReader:
             )
         return table
 
+    def camera(self) -> CameraModel | None:
+        """The trained camera, None when the file predates the record."""
+        record = self.values.get("camera")
+        if record is None:
+            return None
+        if not isinstance(record, Mapping) or not set(_CAMERA_KEYS) <= set(record):
+            raise self.fail(f"'camera' must be an object with keys {list(_CAMERA_KEYS)}")
+        values: dict[str, Any] = {}
+        for key, name in _CAMERA_KEYS.items():
+            value = record[key]
+            if key.endswith("_deg"):
+                degrees = _real(value)
+                if degrees is None:
+                    raise self.fail(f"'camera' {key} must be a number, got {value!r}")
+                value = math.radians(degrees)
+            values[name] = value
+        try:
+            return CameraModel(**values)
+        except ValueError as error:
+            raise self.fail(f"'camera' is invalid: {error}") from error
+
     def head_limits(self) -> HeadLimits:
         limits_deg = self.values.get("head_limits_deg")
-        if not isinstance(limits_deg, Mapping) or set(limits_deg) < set(_HEAD_LIMIT_KEYS):
+        if not isinstance(limits_deg, Mapping) or not set(_HEAD_LIMIT_KEYS) <= set(limits_deg):
             raise self.fail(
                 f"'head_limits_deg' must be an object with keys {list(_HEAD_LIMIT_KEYS)}"
             )

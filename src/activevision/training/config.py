@@ -209,21 +209,38 @@ SECTIONS = ("env", "learner", "exploration", "replay", "run", "dagger")
 
 def field_paths() -> dict[str, str]:
     """Every settable key: dotted path -> itself, plus each unique leaf name -> its path
-    (``learning_rate`` -> ``learner.learning_rate``)."""
+    (``learning_rate`` -> ``learner.learning_rate``). Fields of a section's nested configs
+    are settable one by one by their full path (``env.camera.hfov``), or whole as an object
+    (``env.camera={"hfov": 1.2}``, the other fields taking their defaults)."""
     paths = {f.name: f.name for f in dataclasses.fields(TrainConfig) if f.name not in SECTIONS}
     leaves: dict[str, list[str]] = {}
     hints = typing.get_type_hints(TrainConfig)
     for section in SECTIONS:
+        section_hints = typing.get_type_hints(hints[section])
         for f in dataclasses.fields(hints[section]):
             path = f"{section}.{f.name}"
             paths[path] = path
             leaves.setdefault(f.name, []).append(path)
+            paths.update({p: p for p in _nested_paths(path, section_hints[f.name])})
     for leaf, found in leaves.items():
         if len(found) == 1 and leaf not in paths:
             paths[leaf] = found[0]
     for old, new in _LEGACY_KEYS.items():
         paths.setdefault(old, new)
     return paths
+
+
+def _nested_paths(path: str, hint: Any) -> list[str]:
+    """The dotted paths of the fields inside a nested config dataclass ``hint`` (none for a
+    plain value): ``env.camera`` -> ``env.camera.width``, ``env.camera.hfov``, ..."""
+    if not (isinstance(hint, type) and dataclasses.is_dataclass(hint)):
+        return []
+    hints = typing.get_type_hints(hint)
+    found = []
+    for f in dataclasses.fields(hint):
+        found.append(f"{path}.{f.name}")
+        found.extend(_nested_paths(f"{path}.{f.name}", hints[f.name]))
+    return found
 
 
 def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:

@@ -1,0 +1,273 @@
+"""policy.json's trained camera: written by export, validated on read, compared by
+HeadController with the robot's camera (one CameraMismatchWarning naming each difference)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import shutil
+import warnings
+
+import numpy as np
+import pytest
+
+from activevision.export import export_onnx, policy_metadata
+from activevision.geometry import CameraConfig
+from activevision.runtime import (
+    CameraMismatchWarning,
+    CameraModel,
+    HeadController,
+    PolicyFileError,
+    load_metadata,
+    pretrained_policy_path,
+)
+
+#: The camera the test policies are recorded as trained with (not the default one).
+TRAINED = CameraConfig(hfov=1.1, camera_height=0.55, tilt_min=math.radians(10.0))
+
+
+def assert_same_camera(got: CameraModel | None, want) -> None:
+    assert got is not None
+    for f in dataclasses.fields(CameraModel):
+        assert getattr(got, f.name) == pytest.approx(getattr(want, f.name), abs=1e-12), f.name
+
+
+@pytest.fixture
+def camera_policy(policy, tmp_path):
+    """A copy of the session policy whose policy.json records TRAINED as its camera."""
+    model = tmp_path / "policy.onnx"
+    shutil.copy(policy.model_path, model)
+    values = json.loads(policy.metadata_path.read_text())
+    assert "camera" not in values  # exported without camera=: a file from before the record
+    values["camera"] = CameraModel.of(TRAINED).to_json()
+    model.with_suffix(".json").write_text(json.dumps(values))
+    return model
+
+
+def rewrite_camera(model, **changes) -> None:
+    path = model.with_suffix(".json")
+    values = json.loads(path.read_text())
+    values["camera"] = {**values["camera"], **changes}
+    path.write_text(json.dumps(values))
+
+
+# ---------------------------------------------------------------- the record
+def test_record_in_degrees_and_round_trip(camera_policy):
+    record = CameraModel.of(TRAINED).to_json()
+    assert record == pytest.approx(
+        {
+            "width_px": 160,
+            "height_px": 120,
+            "hfov_deg": math.degrees(1.1),
+            "camera_height_m": 0.55,
+            "pan_min_deg": -90.0,
+            "pan_max_deg": 90.0,
+            "tilt_min_deg": 10.0,
+            "tilt_max_deg": 65.0,
+        }
+    )
+    assert isinstance(record["width_px"], int) and isinstance(record["height_px"], int)
+    assert_same_camera(load_metadata(camera_policy.with_suffix(".json")).camera, TRAINED)
+    by_degrees = CameraModel.from_degrees(160, 120, math.degrees(1.1), 0.55, (-90, 90), (10, 65))
+    assert_same_camera(by_degrees, TRAINED)
+
+
+def test_export_onnx_writes_the_camera(tmp_path, helpers):
+    metadata = policy_metadata(helpers.eight_way_table(), TRAINED, camera=TRAINED)
+    paths = export_onnx(helpers.make_network(seed=3), tmp_path, metadata, verify=False)
+    assert json.loads(paths.metadata_path.read_text())["camera"]["camera_height_m"] == 0.55
+    assert_same_camera(load_metadata(paths.metadata_path).camera, TRAINED)
+    assert_same_camera(HeadController(paths.model_path).trained_camera, TRAINED)
+
+
+def test_export_run_writes_the_runs_camera(tmp_path):
+    try:
+        from activevision.training import TrainConfig, apply_overrides, save_config
+        from activevision.training.checkpoint import save_tensors
+    except Exception as error:  # another subpackage is broken or absent
+        pytest.skip(f"activevision.training not importable: {error}")
+    from activevision.agents.q_network import QNetwork
+    from activevision.export import export_run
+
+    # the settings `activevision train --set env.camera.hfov=1.2 ...` applies
+    config = apply_overrides(
+        TrainConfig(),
+        ["env.camera.hfov=1.2", "env.camera.camera_height=0.62", "env.camera.tilt_max=1.0"],
+    )
+    assert config.env.camera == CameraConfig(hfov=1.2, camera_height=0.62, tilt_max=1.0)
+    run = tmp_path / "run"
+    run.mkdir()
+    save_config(config, run / "config.json")
+    network = QNetwork(9).eval()
+    shape = {"n_actions": 9, "stack": 1, "image_shape": [120, 160], "dueling": False}
+    save_tensors(run / "policy.safetensors", network.state_dict(), shape)
+
+    paths = export_run(run, tmp_path / "out", verify=False)
+    record = json.loads(paths.metadata_path.read_text())["camera"]
+    assert record["hfov_deg"] == pytest.approx(math.degrees(1.2))
+    assert record["camera_height_m"] == 0.62
+    assert record["tilt_max_deg"] == pytest.approx(math.degrees(1.0))
+    assert_same_camera(load_metadata(paths.metadata_path).camera, config.env.camera)
+
+
+def test_shipped_policy_records_the_default_camera():
+    path = pretrained_policy_path()
+    assert_same_camera(load_metadata(path.with_suffix(".json")).camera, CameraConfig())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the checksum still matches; the camera is the same
+        controller = HeadController(path, camera=CameraConfig(width=640, height=480))
+    assert_same_camera(controller.trained_camera, CameraConfig())
+
+
+def test_metadata_without_the_record_loads(policy):
+    assert load_metadata(policy.metadata_path).camera is None
+    robot = CameraModel.from_degrees(1280, 720, 90.0, 1.2, (-30, 30), (0, 20))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing to compare with: no warning
+        controller = HeadController(policy.model_path, camera=robot)
+    assert controller.trained_camera is None and controller.robot_camera == robot
+
+
+def assert_rejected(model, record, message) -> None:
+    path = model.with_suffix(".json")
+    values = json.loads(path.read_text())
+    values["camera"] = record
+    path.write_text(json.dumps(values))
+    with pytest.raises(PolicyFileError, match=message) as error:
+        load_metadata(path)
+    assert str(path) in str(error.value)  # names the file
+    with pytest.raises(PolicyFileError, match=message):
+        HeadController(model)
+
+
+@pytest.mark.parametrize("record", [[160, 120], "160x120", {"width_px": 160, "height_px": 120}])
+def test_malformed_record_is_a_policy_file_error(camera_policy, record):
+    assert_rejected(camera_policy, record, "'camera' must be an object with keys")
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"width_px": 0}, "width must be a positive integer"),
+        ({"height_px": 12.5}, "height must be a positive integer"),
+        ({"width_px": True}, "width must be a positive integer"),
+        ({"hfov_deg": "58"}, "hfov_deg must be a number"),
+        ({"hfov_deg": 0.0}, "hfov must lie in"),
+        ({"hfov_deg": 200.0}, "hfov must lie in"),
+        ({"hfov_deg": float("nan")}, "hfov must be a finite number"),
+        ({"hfov_deg": 10**400}, "hfov must be a finite number"),
+        ({"camera_height_m": -0.5}, "camera_height must be positive"),
+        ({"camera_height_m": None}, "camera_height must be a finite number"),
+        ({"tilt_max_deg": 120.0}, "tilt_max = 120"),
+        ({"pan_min_deg": 90.0, "pan_max_deg": -90.0}, "must be ordered"),
+    ],
+)
+def test_invalid_value_is_a_policy_file_error(camera_policy, changes, message):
+    record = {**CameraModel.of(TRAINED).to_json(), **changes}
+    assert_rejected(camera_policy, record, f"'camera' .*{message}")
+
+
+def test_robot_camera_must_be_a_camera(camera_policy):
+    with pytest.raises(TypeError, match="CameraModel or CameraConfig"):
+        HeadController(camera_policy, camera={"hfov": 1.0})
+    with pytest.raises(ValueError, match="hfov"):
+        CameraModel.from_degrees(160, 120, 190.0, 0.5, (-90, 90), (5, 65))
+    with pytest.raises(ValueError, match="ordered"):
+        CameraModel.from_degrees(160, 120, 60.0, 0.5, (-90, 90), (65, 5))
+
+
+# ---------------------------------------------------------------- the warning
+def build(camera_policy, robot) -> list[warnings.WarningMessage]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        HeadController(camera_policy, camera=robot)
+    return caught
+
+
+@pytest.mark.parametrize(
+    "robot",
+    [
+        TRAINED,  # the trained camera itself
+        CameraModel.of(TRAINED),
+        dataclasses.replace(TRAINED, width=640, height=480),  # same 4:3, any resolution
+        dataclasses.replace(TRAINED, width=320, height=240),
+        dataclasses.replace(TRAINED, width=333, height=250),  # 1.332 vs 1.333
+        dataclasses.replace(TRAINED, hfov=TRAINED.hfov + math.radians(0.9)),  # within 1 deg
+        dataclasses.replace(TRAINED, camera_height=0.565),  # within 2 cm
+        dataclasses.replace(TRAINED, tilt_max=TRAINED.tilt_max - math.radians(0.5)),
+    ],
+)
+def test_no_warning_for_the_trained_camera(camera_policy, robot):
+    assert build(camera_policy, robot) == []
+
+
+@pytest.mark.parametrize(
+    ("changes", "lines"),
+    [
+        ({"hfov": 1.2}, ["hfov: robot 68.8 deg, trained 63.0 deg"]),
+        ({"camera_height": 0.62}, ["camera_height: robot 0.620 m, trained 0.550 m"]),
+        (
+            {"tilt_min": math.radians(2.0), "tilt_max": math.radians(60.0)},
+            [
+                "tilt_min: robot 2.0 deg, trained 10.0 deg",
+                "tilt_max: robot 60.0 deg, trained 65.0 deg",
+            ],
+        ),
+        (
+            {"pan_min": -1.0, "pan_max": 1.0},
+            [
+                "pan_min: robot -57.3 deg, trained -90.0 deg",
+                "pan_max: robot 57.3 deg, trained 90.0 deg",
+            ],
+        ),
+        (
+            {"width": 1280, "height": 720},
+            ["aspect ratio (width/height): robot 1280x720 px = 1.778, trained 160x120 px = 1.333"],
+        ),
+    ],
+)
+def test_warning_names_each_difference(camera_policy, changes, lines):
+    robot = dataclasses.replace(TRAINED, **changes)
+    caught = build(camera_policy, robot)
+    assert len(caught) == 1 and caught[0].category is CameraMismatchWarning
+    assert issubclass(CameraMismatchWarning, UserWarning)
+    assert caught[0].filename == __file__  # points at the caller's HeadController(...)
+    message = str(caught[0].message)
+    for line in lines:
+        assert f"  - {line}" in message
+    assert message.count("\n  - ") == len(lines)  # nothing else is reported
+    assert "may not transfer" in message and "activevision export" in message
+    for name in changes:  # the settings that train for the robot's camera
+        assert f"--set env.camera.{name}={getattr(robot, name):.6g}" in message
+
+
+def test_one_warning_for_many_differences(camera_policy):
+    robot = CameraModel.from_degrees(640, 360, 90.0, 0.40, (-90, 90), (0, 45))
+    caught = build(camera_policy, robot)
+    assert [w.category for w in caught] == [CameraMismatchWarning]
+    message = str(caught[0].message)
+    assert message.count("\n  - ") == 5  # aspect, hfov, camera_height, tilt_min, tilt_max
+    for name in ("aspect ratio", "hfov", "camera_height", "tilt_min", "tilt_max"):
+        assert f"  - {name}" in message
+    assert "pan_" not in message
+    settings = message.split("activevision train ... ")[1]
+    assert settings.startswith(
+        "--set env.camera.width=640 --set env.camera.height=360 --set env.camera.hfov=1.5708"
+        " --set env.camera.camera_height=0.4 --set env.camera.tilt_min=0"
+    )
+
+
+def test_warning_can_be_made_an_error(camera_policy):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CameraMismatchWarning)
+        with pytest.raises(CameraMismatchWarning, match="hfov"):
+            HeadController(camera_policy, camera=dataclasses.replace(TRAINED, hfov=0.8))
+
+
+def test_the_controller_still_acts_after_warning(camera_policy):
+    robot = dataclasses.replace(TRAINED, width=640, height=360)
+    with pytest.warns(CameraMismatchWarning):
+        controller = HeadController(camera_policy, camera=robot)
+    command = controller.act(np.zeros((360, 640, 3), np.uint8), 0.0, 0.3)
+    assert 0 <= command.action < controller.n_actions
