@@ -124,7 +124,7 @@ def test_garbage_overwrites_every_work_buffer(seed):
     # The garbage test above is only as strong as its reach: every buffer of allocate_work,
     # allocate_scratch and the row scratch must be overwritten entirely.
     scene = Renderer()._kernel_scene
-    work, scratch = allocate_work(3, scene), allocate_scratch(3, scene)
+    work, scratch = allocate_work(3, scene, 2), allocate_scratch(3, scene, 2)
     value = np.empty(CAM.width, dtype=np.float32)
     sentinel = 7777
     for arr in (*work, *scratch, value):

@@ -15,7 +15,7 @@ from activevision.rendering import (
     render_reference,
     render_supersampled,
 )
-from activevision.rendering.kernels.bundles import Cameras, allocate_scratch, allocate_work
+from activevision.rendering.kernels.bundles import Cameras, Looks, allocate_scratch, allocate_work
 from activevision.rendering.kernels.camera_setup import setup_camera
 from activevision.rendering.kernels.garbage import GARBAGE_KINDS
 
@@ -155,10 +155,11 @@ def ring_row_ranges(renderer, pose, pan, tilt) -> np.ndarray:
     """The setup pass's ``[first, end)`` image rows of the centre circle's outer polygon
     (``[0]``) and hole polygon (``[1]``) for one camera."""
     scene = renderer._kernel_scene
-    work, scratch = allocate_work(1, scene), allocate_scratch(1, scene)
+    work, scratch = allocate_work(1, scene, 0), allocate_scratch(1, scene, 0)
     cameras = Cameras(np.array([pose]), np.array([pan]), np.array([tilt]), np.zeros((1, 2)),
                       False)
-    setup_camera(0, scene, renderer._kernel_params, cameras, work, scratch)
+    looks = Looks(*renderer._looks(1, None, None, None))
+    setup_camera(0, scene, renderer._kernel_params, cameras, looks, work, scratch)
     return work.ring_rows[0]
 
 

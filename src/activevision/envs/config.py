@@ -10,8 +10,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from activevision.envs.robots import RobotsConfig
 from activevision.geometry import CameraConfig, FieldSpec, field_preset
 from activevision.geometry.field import FIELD_PRESETS
+from activevision.rendering.appearance import AppearanceConfig
 from activevision.typecheck import check_dataclass_fields
 
 SuccessMode = Literal["tolerance", "landmarks"]
@@ -60,6 +62,11 @@ class EnvConfig:
     prior_grid: tuple[float, float] = (0.0, 0.0)
     #: the previous actions, one-hot, in a Dict observation (memory; 0: none)
     action_history: int = 0
+    #: randomised appearance drawn per episode (not in P: domain randomisation; off = P's
+    #: clean render, ``rendering.appearance``)
+    appearance: AppearanceConfig = dataclasses.field(default_factory=AppearanceConfig)
+    #: other robots on the field, occluding (not in P: none; ``envs.robots``)
+    robots: RobotsConfig = dataclasses.field(default_factory=RobotsConfig)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "field", _field_spec(self.field))

@@ -15,9 +15,11 @@ import numpy as np
 from activevision.envs.actions import action_table, check_actions
 from activevision.envs.config import EnvConfig
 from activevision.envs.reward import approach_reward, viewpoint_distance_deg
+from activevision.envs.robots import draw_robots
 from activevision.envs.starts import StartGenerationError, corrupt_pose, draw_starts, quantise_pose
 from activevision.geometry import clip_head, field_landmarks
 from activevision.geometry.kernels import ball_visible_mask, visible_mask
+from activevision.geometry.occlusion import hidden_landmarks, robot_cylinders
 from activevision.localisation import (
     LocalisationConfig,
     ViewpointBatch,
@@ -27,6 +29,13 @@ from activevision.localisation import (
     ukf_update_sequential,
 )
 from activevision.rendering import Renderer
+from activevision.rendering.appearance import (
+    LOOK,
+    draw_looks,
+    identity_tone,
+    neutral_looks,
+    tone_curves,
+)
 
 #: ``(reward, terminated, success, ball_lost)``, each (N,): the outcome of one step.
 StepOutcome = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -69,6 +78,13 @@ class EpisodeBatch:
         self.prior_pose = np.zeros((num_envs, 3))
         self.prior_error = np.zeros(num_envs)
         self.proposal = np.zeros((num_envs, 3))
+        # The world beyond the paper's (off by default): other robots (x, y, height, grey),
+        # the landmarks they hide, and each episode's look (rendering.appearance).
+        self.robots = np.zeros((num_envs, cfg.robots.max_count, 4))
+        self.hidden = np.zeros((num_envs, k), dtype=bool)
+        self.looks = neutral_looks(num_envs)
+        self.tone = np.repeat(identity_tone()[None], num_envs, axis=0)
+        self.last_move = np.zeros((num_envs, 2))
 
     # ------------------------------------------------------------------ starts
     def reset(self, indices: np.ndarray, rngs: list[np.random.Generator]) -> None:
@@ -81,6 +97,11 @@ class EpisodeBatch:
             if not len(pending):
                 if self.cfg.observes_prior:
                     self._draw_priors(todo, rngs)
+                if self.cfg.appearance.enabled:
+                    for j, slot in enumerate(todo):
+                        self.looks[slot] = draw_looks(self.cfg.appearance, rngs[j])
+                    self.tone[todo] = tone_curves(self.looks[todo])
+                self.last_move[todo] = 0.0
                 return
             slots = todo[pending]
             starts = draw_starts([rngs[j] for j in pending], self.cfg)
@@ -88,8 +109,36 @@ class EpisodeBatch:
             self.believed_pose[slots] = starts["believed_pose"]
             self.head[slots] = starts["head"]
             self.ball[slots] = starts["ball"]
+            if self.cfg.robots.max_count:
+                self._draw_robots(slots, [rngs[j] for j in pending])
             pending = pending[~self._search_goals(slots)]
         raise StartGenerationError(f"no valid episode start after {self.cfg.max_start_draws} tries")
+
+    def _draw_robots(self, slots: np.ndarray, rngs: list[np.random.Generator]) -> None:
+        """Other robots for the starts of ``slots`` (after the start's own draws), and the
+        landmarks they hide from the camera (``geometry.occlusion``)."""
+        cfg = self.cfg
+        half = (cfg.field.half_length, cfg.field.half_width)
+        for slot, rng in zip(slots, rngs, strict=True):
+            self.robots[slot] = draw_robots(
+                cfg.robots,
+                rng,
+                half,
+                self.pose[slot, :2],
+                self.ball[slot],
+                cfg.field.ball_radius,
+                cfg.camera.camera_height,
+            )
+        camera = np.column_stack(
+            [self.pose[slots, :2], np.full(len(slots), cfg.camera.camera_height)]
+        )
+        self.hidden[slots] = hidden_landmarks(
+            self.landmarks, camera, self.cylinders(slots)
+        )
+
+    def cylinders(self, idx: np.ndarray) -> np.ndarray:
+        """The other robots of slots ``idx`` as the renderer's cylinders (len(idx), 2R, 6)."""
+        return robot_cylinders(self.robots[idx], self.cfg.robots.radius)
 
     def _draw_priors(self, slots: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """The prior pose of each new episode (after its start: the start's draws come
@@ -129,6 +178,7 @@ class EpisodeBatch:
             ball_radius=cfg.field.ball_radius,
             parallel=self.renderer.parallel and self.n > 1,
             ball_views_only=True,
+            hidden=self.hidden[slots] if cfg.robots.max_count else None,
         )
 
     def _search_goals(self, slots: np.ndarray) -> np.ndarray:
@@ -145,7 +195,7 @@ class EpisodeBatch:
             self.goal_pan[slots],
             self.goal_tilt[slots],
             cfg.camera,
-        )
+        ) & ~self.hidden[slots]
         self._observe(slots)
         self.step_count[slots] = 0
         self.success_step[slots] = -1
@@ -183,7 +233,9 @@ class EpisodeBatch:
         before = viewpoint_distance_deg(
             self.pan[idx], self.tilt[idx], self.goal_pan[idx], self.goal_tilt[idx]
         )
+        old_head = self.head[idx]
         self.pan[idx], self.tilt[idx] = clip_head(pan, tilt, cam)
+        self.last_move[idx] = self.head[idx] - old_head
         after = viewpoint_distance_deg(
             self.pan[idx], self.tilt[idx], self.goal_pan[idx], self.goal_tilt[idx]
         )
@@ -208,7 +260,7 @@ class EpisodeBatch:
     def _observe(self, idx: np.ndarray) -> None:
         self.observed[idx] = visible_mask(
             self.landmarks, self.pose[idx], self.pan[idx], self.tilt[idx], self.cfg.camera
-        )
+        ) & ~self.hidden[idx]
 
     def _succeeded(self, idx: np.ndarray) -> np.ndarray:
         if self.cfg.success_mode == "landmarks":
@@ -224,8 +276,54 @@ class EpisodeBatch:
     def render(self, idx: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
         """Camera images (len(idx), H, W) uint8 of the true pose and head."""
         idx = np.arange(self.n) if idx is None else idx
+        looks = self.frame_looks(idx)
+        return self.render_states(
+            self.pose[idx],
+            self.head[idx],
+            self.ball[idx],
+            looks,
+            self.robots[idx],
+            out=out,
+            tone=None if looks is None else self.tone[idx],
+        )
+
+    def frame_looks(self, idx: np.ndarray) -> np.ndarray | None:
+        """The look rows (len(idx), len(LOOK_FIELDS)) of the current frames of slots ``idx``
+        (the episode's draw, this step's head move and frame counter); None when the config
+        has no randomised appearance."""
+        if not self.cfg.appearance.enabled:
+            return None
+        looks: np.ndarray = self.looks[idx]
+        looks[:, LOOK["move_pan"]] = self.last_move[idx, 0]
+        looks[:, LOOK["move_tilt"]] = self.last_move[idx, 1]
+        looks[:, LOOK["frame"]] = self.step_count[idx]
+        return looks
+
+    def render_states(
+        self,
+        pose: np.ndarray,
+        head: np.ndarray,
+        ball: np.ndarray,
+        looks: np.ndarray | None,
+        robots: np.ndarray,
+        out: np.ndarray | None = None,
+        tone: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Camera images of stored states (a learner's dataset) in this batch's world: poses
+        (M, 3), heads (M, 2), balls (M, 2), look rows (:meth:`frame_looks`, None: clean) and
+        other robots (M, R, 4). ``tone``: the looks' tone curves when known."""
+        cfg = self.cfg
+        if looks is not None and tone is None:
+            tone = tone_curves(looks)
         return self.renderer.render(
-            self.pose[idx], self.pan[idx], self.tilt[idx], self.ball[idx], out=out
+            pose,
+            head[:, 0],
+            head[:, 1],
+            ball,
+            out=out,
+            looks=looks,
+            tone=tone,
+            cylinders=robot_cylinders(robots, cfg.robots.radius) if cfg.robots.max_count else None,
         )
 
     def info_arrays(self, max_episode_steps: int) -> dict[str, np.ndarray]:
@@ -257,6 +355,11 @@ class EpisodeBatch:
             **(
                 {"prior_pose": self.prior_pose.copy(), "prior_error": self.prior_error.copy()}
                 if self.cfg.observes_prior
+                else {}
+            ),
+            **(
+                {"robots": self.robots.copy(), "hidden_mask": self.hidden.copy()}
+                if self.cfg.robots.max_count
                 else {}
             ),
         }

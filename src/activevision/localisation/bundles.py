@@ -15,6 +15,7 @@ class Starts(NamedTuple):
     covs: np.ndarray  #: (N, 3, 3) their covariances
     balls: np.ndarray  #: (N, 2) ball positions on the ground
     ball_radius: float
+    hidden: np.ndarray  #: (N, K) bool: landmarks hidden from each start (by other robots)
 
 
 class Landmarks(NamedTuple):

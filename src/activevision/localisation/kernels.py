@@ -215,8 +215,9 @@ def plan_start(s: int, means: np.ndarray, landmarks: Landmarks, plan: Plan) -> N
 
 
 @njit(cache=True)
-def plan_starts(means: np.ndarray, landmarks: Landmarks) -> Plan:
-    """:func:`plan_start` for every start: the :class:`Plan`."""
+def plan_starts(means: np.ndarray, hidden: np.ndarray, landmarks: Landmarks) -> Plan:
+    """:func:`plan_start` for every start: the :class:`Plan`. A landmark ``hidden[s]`` from
+    start ``s`` counts as out of range (never seen, whatever the view)."""
     n_starts, n_lm = means.shape[0], landmarks.segments.shape[0]
     plan = Plan(
         np.empty((n_starts, n_lm, 2)),
@@ -229,6 +230,9 @@ def plan_starts(means: np.ndarray, landmarks: Landmarks) -> Plan:
     )
     for s in range(n_starts):
         plan_start(s, means, landmarks, plan)
+        for k in range(n_lm):
+            if hidden[s, k]:
+                plan.in_range[s, k] = False
     return plan
 
 
@@ -252,7 +256,7 @@ def search_block(
     landmarks."""
     # Fields into locals once: reading an array field of a bundle counts a reference to it,
     # which costs in the inner loops.
-    means, covs, balls, ball_radius = starts
+    means, covs, balls, ball_radius, _ = starts
     segments = landmarks.segments
     pans, tilts, ball_views_only = views
     zs, var_r, var_b, in_range, r_lo, r_hi, order = plan
@@ -336,7 +340,7 @@ def search_kernel(
     starts, landmarks, weights = Starts(*starts), Landmarks(*landmarks), SigmaWeights(*weights)
     views, camera = Views(*views), CameraModel(*camera)
     out = search_outputs(starts.means.shape[0], views.pans.shape[0], landmarks.segments.shape[0])
-    plan = plan_starts(starts.means, landmarks)
+    plan = plan_starts(starts.means, starts.hidden, landmarks)
     search_block(0, 1, starts, landmarks, weights, views, camera, plan, out)
     return out
 
@@ -358,7 +362,7 @@ def search_kernel_parallel(
     views, camera = Views(*views), CameraModel(*camera)
     n_starts, n_views = starts.means.shape[0], views.pans.shape[0]
     out = SearchOutput(*search_outputs(n_starts, n_views, landmarks.segments.shape[0]))
-    plan = Plan(*plan_starts(starts.means, landmarks))
+    plan = Plan(*plan_starts(starts.means, starts.hidden, landmarks))
     n_blocks = max(1, min(n_blocks, n_starts * n_views))
     for block in prange(n_blocks):
         search_block(block, n_blocks, starts, landmarks, weights, views, camera, plan, out)

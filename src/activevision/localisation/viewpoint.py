@@ -68,11 +68,15 @@ def search_args(
     ukf: UKFConfig,
     ball_radius: float,
     ball_views_only: bool,
+    hidden: np.ndarray | None = None,
 ) -> tuple[kernels.Fields, kernels.Fields, kernels.Fields, kernels.Fields, tuple[float, ...]]:
     """The bundles of :func:`kernels.search_kernel` (``Starts``, ``Landmarks``,
     ``SigmaWeights``, ``Views``, ``CameraModel``) for contiguous float64 ``means`` (N, 3),
-    ``covs`` (N, 3, 3) and ``balls`` (N, 2), each as the plain tuple of its fields."""
-    starts = tuple(Starts(means, covs, balls, float(ball_radius)))
+    ``covs`` (N, 3, 3), ``balls`` (N, 2) and bool ``hidden`` (N, K) (None: nothing hidden),
+    each as the plain tuple of its fields."""
+    if hidden is None:
+        hidden = np.zeros((len(means), len(landmarks)), dtype=bool)
+    starts = tuple(Starts(means, covs, balls, float(ball_radius), hidden))
     return (starts, *_static_bundles(landmarks, cam, grid, ukf, ball_views_only))
 
 
@@ -123,15 +127,21 @@ def _search(
     ball_radius: float,
     parallel: bool = False,
     ball_views_only: bool = False,
+    hidden: ArrayLike | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Validate and run the compiled search: ``(entropies, ball_visible, visible, post)``."""
     means = np.ascontiguousarray(np.atleast_2d(means), dtype=np.float64)
     n = len(means)
+    hidden_arr = None
+    if hidden is not None:
+        hidden_arr = np.ascontiguousarray(np.broadcast_to(hidden, (n, len(landmarks))), dtype=bool)
     covs = np.ascontiguousarray(np.broadcast_to(covs, (n, 3, 3)), dtype=np.float64)
     balls = np.ascontiguousarray(np.broadcast_to(balls, (n, 2)), dtype=np.float64)
     if np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
         raise ValueError("best viewpoint search: belief covariances must be symmetric")
-    args = search_args(means, covs, balls, landmarks, cam, grid, ukf, ball_radius, ball_views_only)
+    args = search_args(
+        means, covs, balls, landmarks, cam, grid, ukf, ball_radius, ball_views_only, hidden_arr
+    )
     threads = numba_threads() if parallel and n > 1 else 1  # serial: never start the pool
     if threads > 1:
         # a few blocks per thread evens out views that see many landmarks
@@ -158,6 +168,7 @@ def best_viewpoints(
     ball_radius: float = 0.07,
     parallel: bool = False,
     ball_views_only: bool = False,
+    hidden: ArrayLike | None = None,
 ) -> ViewpointBatch:
     """Algorithm 1 for N beliefs at once (compiled), e.g. every episode start of a
     vectorised environment.
@@ -171,9 +182,21 @@ def best_viewpoints(
         ball_views_only: run the filter only for candidates that show the ball, the only
             possible goals (the environment's episode starts); the others get NaN entropies
             and posteriors and no visible landmarks. The goal is the same either way.
+        hidden: (N, K) bool, or (K,) shared: landmarks that no view of a start shows, hidden
+            behind other robots (``geometry.occlusion``); None: none.
     """
     H, ball_vis, visible, post = _search(
-        means, covs, balls, landmarks, cam, grid, ukf, ball_radius, parallel, ball_views_only
+        means,
+        covs,
+        balls,
+        landmarks,
+        cam,
+        grid,
+        ukf,
+        ball_radius,
+        parallel,
+        ball_views_only,
+        hidden,
     )
     found, index = choose_goal(H, ball_vis)
     ok = cast(np.ndarray, found)  # (N, V) in, so (N,) out: an array, not a NumPy bool

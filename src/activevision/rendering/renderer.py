@@ -10,7 +10,9 @@ from numpy.typing import ArrayLike
 
 from activevision.geometry.camera import CameraConfig
 from activevision.geometry.field import FieldSpec
+from activevision.rendering.appearance import LOOK_FIELDS, identity_tone, neutral_looks
 from activevision.rendering.config import RenderConfig
+from activevision.rendering.kernels import looks as looks_kernels
 from activevision.rendering.kernels import raster
 from activevision.rendering.kernels.bundles import Cameras, scene_bundles
 from activevision.rendering.scene import build_scene
@@ -112,6 +114,10 @@ class Renderer:
         ball_xy: ArrayLike | None,
         out: np.ndarray | None = None,
         rng: np.random.Generator | None = None,
+        *,
+        looks: ArrayLike | None = None,
+        tone: ArrayLike | None = None,
+        cylinders: ArrayLike | None = None,
     ) -> np.ndarray:
         """Render N cameras.
 
@@ -123,6 +129,13 @@ class Renderer:
             out: optional preallocated C-contiguous (N, H, W) uint8 array to render into.
             rng: numpy Generator for the noise/jitter of ``config``; required when they are
                 on, unused otherwise.
+            looks: (N, len(LOOK_FIELDS)) randomised appearance of each camera
+                (:mod:`.appearance`: ``draw_looks`` per episode, the per-frame columns set by
+                the caller); None: the clean render.
+            tone: (N, 256) uint8 tone curves (``appearance.tone_curve``), with ``looks``;
+                None: none.
+            cylinders: (N, C, 6) vertical cylinders (other robots' bodies) per camera: x, y,
+                radius, bottom z, top z (m), grey; radius 0 marks an unused slot.
 
         Returns:
             (N, H, W) uint8 images (``out`` when given).
@@ -138,17 +151,69 @@ class Renderer:
 
         scene, params = self._kernel_fields
         cameras = tuple(Cameras(pose_arr, pan_arr, tilt_arr, ball_arr, has_ball))
+        looks_fields = self._looks(n, looks, tone, cylinders)
         # small batches run serially and never start numba's thread pool
         threads = numba_threads() if self.parallel and n >= PARALLEL_MIN_BATCH else 1
+        garbage = _WORK_GARBAGE_SEED
         if threads == 1:
-            raster.render_kernel_serial(scene, params, cameras, out, _WORK_GARBAGE_SEED)
+            raster.render_kernel_serial(scene, params, cameras, looks_fields, out, garbage)
         else:
             # Enough interleaved row sets per camera that every thread gets a fair share.
             row_blocks = max(1, math.ceil(4 * threads / n))
-            raster.render_kernel(scene, params, cameras, row_blocks, out, _WORK_GARBAGE_SEED)
+            raster.render_kernel(scene, params, cameras, looks_fields, row_blocks, out, garbage)
+        if looks_fields[-1]:
+            finish = looks_kernels.finish_kernel_serial
+            if threads > 1:
+                finish = looks_kernels.finish_kernel
+            finish(out, looks_fields[0], looks_fields[1], self.camera.focal, _NOISE_TABLE)
         if rng is not None and self.config.has_noise:  # with noise, rng is checked above
             apply_noise(out, self.config, rng)
         return out
+
+
+    def _looks(
+        self,
+        n: int,
+        looks: ArrayLike | None,
+        tone: ArrayLike | None,
+        cylinders: ArrayLike | None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
+        """The kernels' :class:`~.kernels.bundles.Looks` fields of one call, checked."""
+        if looks is None and tone is not None:
+            raise ValueError("tone needs looks")
+        cyl = _NO_CYLINDERS if cylinders is None else _cylinders(cylinders, n)
+        if looks is None:
+            return _NEUTRAL_ROWS, _NEUTRAL_TONE, cyl, _NOISE_TABLE, False
+        rows = _float_array("looks", looks, (n, len(LOOK_FIELDS)))
+        if tone is None:
+            tone_arr = np.broadcast_to(identity_tone(), (n, 256))
+        else:
+            tone_arr = np.asarray(tone)
+            if tone_arr.shape != (n, 256) or tone_arr.dtype != np.uint8:
+                raise ValueError(f"tone must be a uint8 array of shape ({n}, 256)")
+        return rows, np.ascontiguousarray(tone_arr), cyl, _NOISE_TABLE, True
+
+
+def _cylinders(value: ArrayLike, n: int) -> np.ndarray:
+    """(N, C, 6) cylinders, checked: radius >= 0, bottom <= top."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"cylinders must be a numeric array of shape ({n}, C, 6)") from None
+    if arr.ndim != 3 or arr.shape[0] != n or arr.shape[2] != 6:
+        raise ValueError(f"cylinders must have shape ({n}, C, 6), got {arr.shape}")
+    arr = _float_array("cylinders", arr, arr.shape)
+    if (arr[..., 2] < 0).any() or (arr[..., 3] > arr[..., 4]).any():
+        raise ValueError("cylinders need radius >= 0 and bottom z <= top z")
+    return arr
+
+
+#: The fixed table of standard normal numbers the looks read patterns and noise from (a
+#: constant of the package: its seed never changes, so frames keep their bytes).
+_NOISE_TABLE = np.random.default_rng(20170320).standard_normal(1 << 19).astype(np.float32)
+_NEUTRAL_ROWS = neutral_looks(1)
+_NEUTRAL_TONE = identity_tone()[None]
+_NO_CYLINDERS = np.zeros((1, 0, 6))
 
 
 def apply_noise(images: np.ndarray, config: RenderConfig, rng: np.random.Generator) -> None:

@@ -36,6 +36,13 @@ def _line_quad(a: np.ndarray, b: np.ndarray, width: float) -> np.ndarray:
     return np.array([a + half, b + half, b - half, a - half])
 
 
+def _line_expand(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """How the corners (4, 2) of :func:`_line_quad` move per metre of line width."""
+    along = (b - a) / np.linalg.norm(b - a)
+    normal = np.array([-along[1], along[0]])
+    return 0.5 * np.array([normal - along, along + normal, along - normal, -along - normal])
+
+
 def _square_quad(centre: tuple[float, float], side: float) -> np.ndarray:
     x, y = centre
     h = side / 2
@@ -57,6 +64,8 @@ class SceneArrays:
     """The static scene of one field (all float64, metres)."""
 
     paint_quads: np.ndarray  #: (Q, 4, 2) painted lines, penalty marks, centre mark
+    #: (Q, 4, 2) how each corner moves per metre of extra line width (0 for the marks)
+    paint_expand: np.ndarray
     carpet_quad: np.ndarray  #: (4, 2) the green carpet (field plus border strip)
     ring: np.ndarray  #: (4,) centre x, centre y, inner radius, outer radius
     ring_polygons: np.ndarray  #: (2, S, 2) polygons around the outer and inside the inner edge
@@ -68,17 +77,20 @@ class SceneArrays:
 def build_scene(spec: FieldSpec) -> SceneArrays:
     """The renderable scene of ``spec``."""
     w = spec.line_width
-    quads = [_line_quad(seg[0], seg[1], w) for seg in painted_lines(spec)]
+    lines = painted_lines(spec)
+    quads = [_line_quad(seg[0], seg[1], w) for seg in lines]
+    expand = [_line_expand(seg[0], seg[1]) for seg in lines]
     hl = spec.half_length
     for s in (1.0, -1.0):
         quads.append(
             _square_quad((s * (hl - spec.penalty_mark_distance), 0.0), spec.penalty_mark_size)
         )
+        expand.append(np.zeros((4, 2)))
     # Centre mark: a short line across the halfway line, as long as a penalty mark is wide.
     half_mark = spec.penalty_mark_size / 2
-    quads.append(
-        _line_quad(np.array([-half_mark + w / 2, 0.0]), np.array([half_mark - w / 2, 0.0]), w)
-    )
+    mark_ends = np.array([-half_mark + w / 2, 0.0]), np.array([half_mark - w / 2, 0.0])
+    quads.append(_line_quad(*mark_ends, w))
+    expand.append(_line_expand(*mark_ends))
     bx, by = spec.carpet_half_extent
     carpet = np.array([[-bx, -by], [bx, -by], [bx, by], [-bx, by]], dtype=np.float64)
 
@@ -102,6 +114,7 @@ def build_scene(spec: FieldSpec) -> SceneArrays:
         bars.append((s * hl, -post_y, post_y, spec.goal_height + post_r, post_r))
     return SceneArrays(
         paint_quads=np.ascontiguousarray(np.asarray(quads, dtype=np.float64)),
+        paint_expand=np.ascontiguousarray(np.asarray(expand, dtype=np.float64)),
         carpet_quad=carpet,
         ring=np.array([0.0, 0.0, r_in, r_out]),
         ring_polygons=np.ascontiguousarray(polygons),

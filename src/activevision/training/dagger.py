@@ -45,6 +45,7 @@ from activevision.envs.observations import (
 )
 from activevision.envs.seeding import episode_seed
 from activevision.envs.simulation import EpisodeBatch
+from activevision.rendering.appearance import LOOK_FIELDS
 from activevision.runtime.goal_evidence import GoalEvidence
 from activevision.training import checkpoint as ckpt
 from activevision.training import state as run_state
@@ -57,14 +58,14 @@ from activevision.training.validation import summarise_validation
 
 MAX_EPISODE_STEPS = 20  #: the registration's time limit
 
-#: checkpoint contents: the dataset's arrays (``replay.npz``, the name every checkpoint has)
-DATASET_FIELDS = ("pose", "head", "ball", "vector", "action", "goal")
 
 
 class StateDataset:
     """A ring buffer of labelled states (no images)."""
 
-    def __init__(self, capacity: int, vector_size: int) -> None:
+    def __init__(
+        self, capacity: int, vector_size: int, look_size: int = 0, robots: int = 0
+    ) -> None:
         self.capacity = capacity
         self.arrays: dict[str, np.ndarray] = {
             "pose": np.zeros((capacity, 3)),
@@ -74,6 +75,11 @@ class StateDataset:
             "action": np.zeros(capacity, dtype=np.int64),
             "goal": np.zeros(capacity, dtype=np.int64),
         }
+        # a randomised world: each state's look and other robots, to render it again
+        if look_size:
+            self.arrays["looks"] = np.zeros((capacity, look_size))
+        if robots:
+            self.arrays["robots"] = np.zeros((capacity, robots, 4))
         self.size = 0
         self.next = 0
 
@@ -92,10 +98,10 @@ class StateDataset:
 
     def load(self, arrays: dict[str, np.ndarray]) -> None:
         position, capacity = (int(v) for v in arrays["position"])
-        if capacity != self.capacity or set(arrays) != {*DATASET_FIELDS, "position"}:
+        if capacity != self.capacity or set(arrays) != {*self.arrays, "position"}:
             raise ckpt.CheckpointError("the checkpoint's dataset does not fit this run's config")
         self.size = len(arrays["action"])
-        for name in DATASET_FIELDS:
+        for name in self.arrays:
             self.arrays[name][: self.size] = arrays[name]
         self.next = position
 
@@ -149,7 +155,13 @@ class DaggerTrainer:
         self.optimizer = torch.optim.Adam(
             self.network.parameters(), lr=config.learner.learning_rate
         )
-        self.dataset = StateDataset(dag.dataset_size, vector_size)
+        env = config.env
+        self.dataset = StateDataset(
+            dag.dataset_size,
+            vector_size,
+            look_size=len(LOOK_FIELDS) if env.appearance.enabled else 0,
+            robots=env.robots.max_count,
+        )
         self.evidence = self._goal_evidence(dag.num_envs)
         self.run_dir.mkdir(parents=True, exist_ok=True)
         ckpt.remove_stale_writes(self.run_dir)
@@ -215,6 +227,12 @@ class DaggerTrainer:
 
         def choose(idx: np.ndarray, image: np.ndarray, vector: np.ndarray) -> np.ndarray:
             teacher = greedy_actions(sim.head[idx], sim.goal[idx], sim.actions)
+            world: dict[str, np.ndarray] = {}
+            looks = sim.frame_looks(idx)
+            if looks is not None:
+                world["looks"] = looks
+            if "robots" in self.dataset.arrays:
+                world["robots"] = sim.robots[idx]
             self.dataset.add(
                 pose=sim.pose[idx],
                 head=sim.head[idx],
@@ -222,6 +240,7 @@ class DaggerTrainer:
                 vector=vector,
                 action=teacher,
                 goal=goal_indices(sim)[idx],
+                **world,
             )
             use_teacher = self.rng.random(len(idx)) < beta
             # the student sees every frame (its goal evidence must), even where it does not act
@@ -266,8 +285,11 @@ class DaggerTrainer:
         """One minibatch of rendered dataset states; returns the imitation loss."""
         data = self.dataset.arrays
         b = self.rng.integers(0, self.dataset.size, size=self.config.learner.batch_size)
-        head = data["head"][b]
-        images = self.sim.renderer.render(data["pose"][b], head[:, 0], head[:, 1], data["ball"][b])
+        looks = data["looks"][b] if "looks" in data else None
+        robots = data["robots"][b] if "robots" in data else np.zeros((len(b), 0, 4))
+        images = self.sim.render_states(
+            data["pose"][b], data["head"][b], data["ball"][b], looks, robots
+        )
         image = torch.from_numpy(images[:, None]).to(self.device)
         vector = torch.from_numpy(data["vector"][b]).to(self.device)
         logits, goal_logits = self.network.forward_with_goal(image, vector)

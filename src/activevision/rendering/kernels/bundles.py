@@ -37,6 +37,8 @@ JIT: JitFlags = {"cache": True, "fastmath": True, "nogil": True}
 #: Flags of the parts of one kernel that only it calls: inlined into it by numba (one
 #: compiled function instead of several, each linking and optimising its callees again).
 JIT_PART: JitFlags = {**JIT, "inline": "always"}
+#: Distance (m) from the carpet's edge to the walls of the hall around it.
+HALL_MARGIN = 1.5
 #: Depth (m) at which polygons are clipped before projection.
 Z_NEAR = 1e-3
 #: Parameters stored per edge: l0, l1, l2 (unit normal form), hi, lo (trapezoid half-widths),
@@ -56,6 +58,8 @@ class Scene(NamedTuple):
     ring_polygons: np.ndarray  #: (2, S, 2) around the centre circle, inside its hole
     posts: np.ndarray  #: (P, 4) axis x, axis y, radius, height
     bars: np.ndarray  #: (B, 5) axis x, y start, y end, axis height, radius
+    #: (Q, 4, 2) how each paint quad corner moves per metre of extra line width
+    paint_expand: np.ndarray
 
 
 class Params(NamedTuple):
@@ -80,6 +84,8 @@ class Params(NamedTuple):
     post: float
     ball_lit: float
     ball_shadow: float
+    hall_x: float  #: half extents (m) of the hall whose walls stand beyond the carpet
+    hall_y: float
 
 
 class Cameras(NamedTuple):
@@ -92,6 +98,17 @@ class Cameras(NamedTuple):
     has_ball: bool  #: whether the ball is drawn at all
 
 
+class Looks(NamedTuple):
+    """Per-camera appearance (:mod:`activevision.rendering.appearance`) and other robots."""
+
+    rows: np.ndarray  #: (N, len(LOOK_FIELDS)) float64 look rows
+    tone: np.ndarray  #: (N, 256) uint8 tone curves
+    #: (N, C, 6) vertical cylinders x, y, radius, bottom z, top z, grey; radius 0: none
+    cylinders: np.ndarray
+    noise: np.ndarray  #: (T,) float32 standard normal table (patterns and sensor noise)
+    enabled: bool  #: False: the clean render (rows and tone unread)
+
+
 class RenderWork(NamedTuple):
     """Per-call work memory, one slice per camera (first axis): what the setup pass
     (:func:`.camera_setup.setup_camera`) writes for the row pass
@@ -102,9 +119,12 @@ class RenderWork(NamedTuple):
     ring_edges: np.ndarray  #: (N, 2, S, EDGE_PARAMS) outer and hole polygon of the ring
     ring_rows: np.ndarray  #: (N, 2, 2) their rows
     homography: np.ndarray  #: (N, 3, 3) pixel -> ground
-    ball_info: np.ndarray  #: (N, 9) see :func:`.coverage.ball_shade`
+    #: (N, 3, 4) pixel -> world ray direction (3, 3), then the camera centre (the hall)
+    ray: np.ndarray
+    ball_info: np.ndarray  #: (N, 10) see :func:`.coverage.ball_shade`
     ball_box: np.ndarray  #: (N, 4) ball columns [i0, i1), rows [j0, j1)
-    object_order: np.ndarray  #: (N, P + B + 1) posts, bars, ball far to near
+    object_order: np.ndarray  #: (N, P + B + C + 1) posts, bars, cylinders, ball far to near
+    object_grey: np.ndarray  #: (N, P + B + C) grey of each post, bar and cylinder
     first_row: np.ndarray  #: (N,) rows above it show only background
     visible_paint: np.ndarray  #: (N, Q) indices of the paint quads in view
     visible_count: np.ndarray  #: (N,) how many
@@ -119,7 +139,7 @@ class SetupScratch(NamedTuple):
     cam: np.ndarray  #: (N, 3) camera centre
     pts: np.ndarray  #: (N, max(8, S), 3) polygon in camera coordinates
     clip: np.ndarray  #: (N, 2, S + 8, 3) clipping scratch
-    keys: np.ndarray  #: (N, P + B + 1) distances for the painter's order
+    keys: np.ndarray  #: (N, P + B + C + 1) distances for the painter's order
 
 
 class Optics(NamedTuple):
@@ -146,6 +166,7 @@ def scene_bundles(
         ring_polygons=scene.ring_polygons,
         posts=scene.posts,
         bars=scene.crossbars,
+        paint_expand=scene.paint_expand,
     )
     params = Params(
         width=int(camera.width),
@@ -165,18 +186,21 @@ def scene_bundles(
         post=float(config.post),
         ball_lit=float(config.ball_lit),
         ball_shadow=float(config.ball_shadow),
+        hall_x=float(np.abs(scene.carpet_quad[:, 0]).max()) + HALL_MARGIN,
+        hall_y=float(np.abs(scene.carpet_quad[:, 1]).max()) + HALL_MARGIN,
     )
     return arrays, params
 
 
 @njit(**JIT)
-def allocate_work(n_cams: int, scene: Scene) -> RenderWork:
+def allocate_work(n_cams: int, scene: Scene, n_cyl: int) -> RenderWork:
     """Per-call :class:`RenderWork` for ``n_cams`` cameras. Uninitialised on purpose (speed):
     for each camera the setup writes every entry that the row pass reads, so an image never
     depends on what the memory held before (:func:`.garbage.fill_garbage` tests exactly
     that)."""
     n_paint = scene.paint_quads.shape[0]
-    n_quads = n_paint + 1 + scene.posts.shape[0] + scene.bars.shape[0]  # carpet after paint
+    # carpet after paint, then posts, bars and cylinders
+    n_quads = n_paint + 1 + scene.posts.shape[0] + scene.bars.shape[0] + n_cyl
     n_sides = scene.ring_polygons.shape[1]
     return RenderWork(
         np.empty((n_cams, n_quads, 4, EDGE_PARAMS)),
@@ -184,9 +208,11 @@ def allocate_work(n_cams: int, scene: Scene) -> RenderWork:
         np.empty((n_cams, 2, n_sides, EDGE_PARAMS)),
         np.empty((n_cams, 2, 2), dtype=np.int64),
         np.empty((n_cams, 3, 3)),
-        np.empty((n_cams, 9)),
+        np.empty((n_cams, 3, 4)),
+        np.empty((n_cams, 10)),
         np.empty((n_cams, 4), dtype=np.int64),
-        np.empty((n_cams, n_quads - n_paint), dtype=np.int64),  # posts, bars, ball
+        np.empty((n_cams, n_quads - n_paint), dtype=np.int64),  # posts, bars, cyls, ball
+        np.empty((n_cams, n_quads - n_paint - 1)),
         np.empty(n_cams, dtype=np.int64),
         np.empty((n_cams, n_paint), dtype=np.int64),
         np.empty(n_cams, dtype=np.int64),
@@ -194,10 +220,10 @@ def allocate_work(n_cams: int, scene: Scene) -> RenderWork:
 
 
 @njit(**JIT)
-def allocate_scratch(n_cams: int, scene: Scene) -> SetupScratch:
+def allocate_scratch(n_cams: int, scene: Scene, n_cyl: int) -> SetupScratch:
     """Per-call :class:`SetupScratch` for ``n_cams`` cameras (uninitialised, as
     :func:`allocate_work`)."""
-    n_objects = scene.posts.shape[0] + scene.bars.shape[0] + 1  # the ball last
+    n_objects = scene.posts.shape[0] + scene.bars.shape[0] + n_cyl + 1  # the ball last
     n_sides = scene.ring_polygons.shape[1]
     return SetupScratch(
         np.empty((n_cams, 3, 3)),

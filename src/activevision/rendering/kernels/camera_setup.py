@@ -12,11 +12,13 @@ import numpy as np
 from numba import njit
 
 from activevision.geometry.kernels import camera_rotation
+from activevision.rendering.appearance import LOOK
 from activevision.rendering.kernels.bundles import (
     JIT,
     JIT_PART,
     Z_NEAR,
     Cameras,
+    Looks,
     Optics,
     Params,
     RenderWork,
@@ -25,10 +27,21 @@ from activevision.rendering.kernels.bundles import (
 )
 from activevision.rendering.kernels.edges import polygon_edges_and_rows, store_edge, store_empty
 
+MOUNT_HEIGHT = LOOK["mount_height"]
+MOUNT_TILT = LOOK["mount_tilt"]
+MOUNT_FOV = LOOK["mount_fov"]
+LINE_WIDTH = LOOK["line_width"]
+
 
 @njit(**JIT)
 def setup_camera(
-    n: int, scene: Scene, params: Params, cams: Cameras, work: RenderWork, scratch: SetupScratch
+    n: int,
+    scene: Scene,
+    params: Params,
+    cams: Cameras,
+    looks: Looks,
+    work: RenderWork,
+    scratch: SetupScratch,
 ) -> None:
     """Per-camera precomputation (see :mod:`activevision.rendering.kernels`) for camera
     ``n`` of ``cams``, into slice ``n`` of every :class:`RenderWork` array (and of the
@@ -39,41 +52,65 @@ def setup_camera(
     # Bundle fields into locals once: reading an array field counts a reference to it, and
     # those counts (atomic) add up to several percent of a frame.
     pose, pan, tilt, ball_xy, has_ball = cams
-    paint_quads, carpet, polygons, posts, bars = scene
+    paint_quads, carpet, polygons, posts, bars, paint_expand = scene
+    look_rows, _, cylinders, _, looks_on = looks
+    cam_h = params.cam_h
+    focal = params.focal
+    head_tilt = tilt[n]
+    widen = 0.0
+    if looks_on:
+        # the camera mount as built, not as the robot's model has it (image only)
+        look = look_rows[n]
+        cam_h += look[MOUNT_HEIGHT]
+        head_tilt += look[MOUNT_TILT]
+        focal = params.cx / math.tan((1.0 + look[MOUNT_FOV]) * math.atan(params.cx / focal))
+        widen = look[LINE_WIDTH]
     rot = scratch.rot[n]
-    camera_rotation(pose[n, 2] + pan[n], tilt[n], rot)
+    camera_rotation(pose[n, 2] + pan[n], head_tilt, rot)
     cam = scratch.cam[n]
     cam[0] = pose[n, 0]
     cam[1] = pose[n, 1]
-    cam[2] = params.cam_h
+    cam[2] = cam_h
     pts = scratch.pts[n]
     clip = scratch.clip[n]
-    optics = Optics(params.focal, params.cx, params.cy, params.width, params.height)
+    optics = Optics(focal, params.cx, params.cy, params.width, params.height)
     quad_edges = work.quad_edges[n]
     quad_rows = work.quad_rows[n]
+    object_grey = work.object_grey[n]
     n_paint = paint_quads.shape[0]
     n_posts = posts.shape[0]
     n_bars = bars.shape[0]
+    n_cyl = cylinders.shape[1]
 
     # painted quads, then the carpet
     for q in range(n_paint + 1):
         src = paint_quads[q] if q < n_paint else carpet
         for k in range(4):
-            _to_camera(rot, cam, src[k, 0], src[k, 1], 0.0, pts[k])
+            x, y = src[k, 0], src[k, 1]
+            if widen != 0.0 and q < n_paint:
+                x += widen * paint_expand[q, k, 0]
+                y += widen * paint_expand[q, k, 1]
+            _to_camera(rot, cam, x, y, 0.0, pts[k])
         polygon_edges_and_rows(pts, 4, optics, quad_edges[q], quad_rows[q], clip)
 
-    # Posts, then crossbars: the silhouette quad of each cylinder, none when the camera is
-    # inside it. (Written out here: helpers taking the camera's arrays cost ~5% of the setup.)
-    for o in range(n_posts + n_bars):
+    # Posts, crossbars and other robots' cylinders: the silhouette quad of each, none when
+    # the camera is inside it. (Written out here: helpers taking the camera's arrays cost ~5%
+    # of the setup.)
+    for o in range(n_posts + n_bars + n_cyl):
         edges = quad_edges[n_paint + 1 + o]
         rows = quad_rows[n_paint + 1 + o]
-        if o < n_posts:
-            # a post: the quad through the two vertical generators tangent to the sight lines
-            pr, ph = posts[o, 2], posts[o, 3]
-            outside, ux, uy, cos_b, t1x, t1y, t2x, t2y = _tangents(
-                posts[o, 0], posts[o, 1], pr, cam[0], cam[1]
-            )
-            if not outside:
+        object_grey[o] = params.post
+        if o < n_posts or o >= n_posts + n_bars:
+            # a post or cylinder: the quad through the two vertical generators tangent to the
+            # sight lines, from z0 to z1
+            if o < n_posts:
+                px, py, pr, z0, z1 = posts[o, 0], posts[o, 1], posts[o, 2], 0.0, posts[o, 3]
+            else:
+                cyl = cylinders[n, o - n_posts - n_bars]
+                px, py, pr, z0, z1 = cyl[0], cyl[1], cyl[2], cyl[3], cyl[4]
+                object_grey[o] = cyl[5]
+            outside, ux, uy, cos_b, t1x, t1y, t2x, t2y = _tangents(px, py, pr, cam[0], cam[1])
+            if not outside or not pr > 0.0:
                 store_empty(edges, 4, rows)
                 continue
             # The true bottom (top) outline is the near arc of the base (top) circle, which
@@ -81,20 +118,20 @@ def setup_camera(
             # straight edge moved 2/3 of the way out covers the same area (parabolic segment).
             shift = pr * (1.0 - cos_b) * (2.0 / 3.0)
             sx, sy = shift * ux, shift * uy
-            _to_camera(rot, cam, t1x + sx, t1y + sy, 0.0, pts[0])
-            _to_camera(rot, cam, t2x + sx, t2y + sy, 0.0, pts[1])
-            _to_camera(rot, cam, t2x + sx, t2y + sy, ph, pts[2])
-            _to_camera(rot, cam, t1x + sx, t1y + sy, ph, pts[3])
+            _to_camera(rot, cam, t1x + sx, t1y + sy, z0, pts[0])
+            _to_camera(rot, cam, t2x + sx, t2y + sy, z0, pts[1])
+            _to_camera(rot, cam, t2x + sx, t2y + sy, z1, pts[2])
+            _to_camera(rot, cam, t1x + sx, t1y + sy, z1, pts[3])
             polygon_edges_and_rows(pts, 4, optics, edges, rows, clip)
             # The sides are the exact tangent generators (the shifted corners are not on them).
             ix = 0.25 * (pts[0, 0] + pts[1, 0] + pts[2, 0] + pts[3, 0])
             iy = 0.25 * (pts[0, 1] + pts[1, 1] + pts[2, 1] + pts[3, 1])
             iz = 0.25 * (pts[0, 2] + pts[1, 2] + pts[2, 2] + pts[3, 2])
-            _to_camera(rot, cam, t2x, t2y, 0.0, pts[5])
-            _to_camera(rot, cam, t2x, t2y, ph, pts[6])
+            _to_camera(rot, cam, t2x, t2y, z0, pts[5])
+            _to_camera(rot, cam, t2x, t2y, z1, pts[6])
             store_edge(pts[5], pts[6], (ix, iy, iz), optics, edges[1])
-            _to_camera(rot, cam, t1x, t1y, ph, pts[5])
-            _to_camera(rot, cam, t1x, t1y, 0.0, pts[6])
+            _to_camera(rot, cam, t1x, t1y, z1, pts[5])
+            _to_camera(rot, cam, t1x, t1y, z0, pts[6])
             store_edge(pts[5], pts[6], (ix, iy, iz), optics, edges[3])
         else:
             # a crossbar: the same in the vertical x-z plane (its axis runs along y)
@@ -125,8 +162,6 @@ def setup_camera(
         polygon_edges_and_rows(pts, n_sides, optics, ring_edges[o], ring_rows[o], clip)
     # Pixel -> ground homography: ground point (gx, gy) / gz of the ray through (u, v),
     # with gz = -(ray's world z) > 0 below the horizon.
-    cam_h = params.cam_h
-    focal = params.focal
     homography = work.homography[n]
     for r in range(3):
         if r < 2:
@@ -140,6 +175,13 @@ def setup_camera(
         homography[r, 0] = g0 / focal
         homography[r, 1] = g1 / focal
         homography[r, 2] = g2 - (g0 * params.cx + g1 * params.cy) / focal
+    # Pixel -> world ray direction, rot^T K^-1, and the camera centre (the hall).
+    ray = work.ray[n]
+    for r in range(3):
+        ray[r, 0] = rot[0, r] / focal
+        ray[r, 1] = rot[1, r] / focal
+        ray[r, 2] = rot[2, r] - (rot[0, r] * params.cx + rot[1, r] * params.cy) / focal
+        ray[r, 3] = cam[r]
 
     # Ball: the parameters of coverage.ball_shade and its pixel box (empty when there is
     # no ball or it is out of view)
@@ -156,6 +198,7 @@ def setup_camera(
     ball_info[6] = rot[2, 2]
     ball_info[7] = c0 * rot[0, 2] + c1 * rot[1, 2] + c2 * rot[2, 2]  # c . up
     ball_info[8] = 1.0 / ball_r
+    ball_info[9] = focal
     if has_ball and c2 + ball_r > Z_NEAR and ball_info[3] > 0.0:
         i0, i1 = _angular_extent(c0, c2, ball_r, focal, params.cx, params.width)
         j0, j1 = _angular_extent(c1, c2, ball_r, focal, params.cy, params.height)
@@ -169,8 +212,8 @@ def setup_camera(
     ball_box[2] = j0
     ball_box[3] = j1
 
-    # Objects far to near (painter's order): posts, crossbars, ball.
-    n_objects = n_posts + n_bars + 1
+    # Objects far to near (painter's order): posts, crossbars, cylinders, ball.
+    n_objects = n_posts + n_bars + n_cyl + 1
     keys = scratch.keys[n]
     order = work.object_order[n]
     for p in range(n_posts):
@@ -182,6 +225,10 @@ def setup_camera(
         dy = min(max(cam[1], bars[b, 1]), bars[b, 2]) - cam[1]
         dz = bars[b, 3] - cam[2]
         keys[n_posts + b] = dx * dx + dy * dy + dz * dz
+    for c in range(n_cyl):
+        dx = cylinders[n, c, 0] - cam[0]
+        dy = cylinders[n, c, 1] - cam[1]
+        keys[n_posts + n_bars + c] = dx * dx + dy * dy
     keys[n_objects - 1] = c0 * c0 + c1 * c1 + c2 * c2
     for k in range(n_objects):
         order[k] = k
@@ -202,7 +249,7 @@ def setup_camera(
             n_visible += 1
     work.visible_count[n] = n_visible
     first = params.height
-    for q in range(n_paint, n_paint + 1 + n_posts + n_bars):
+    for q in range(n_paint, n_paint + 1 + n_posts + n_bars + n_cyl):
         if quad_rows[q, 1] > quad_rows[q, 0]:
             first = min(first, quad_rows[q, 0])
     if ball_box[3] > ball_box[2]:

@@ -225,7 +225,7 @@ def ball_shade(ball: np.ndarray, u: float, v: float, params: Params) -> tuple[fl
     at the surface point hit by the ray (or nearest to it, for rim pixels the centre misses)."""
     ex = u - params.cx
     ey = v - params.cy
-    ez = params.focal
+    ez = ball[9]
     c0 = ball[0]
     c1 = ball[1]
     c2 = ball[2]

@@ -97,6 +97,8 @@ def fill_garbage(work: RenderWork, scratch: SetupScratch, value: np.ndarray, see
     garbage_floats(work.ball_info, seed + 6 * k)
     _garbage_ints(work.ball_box, seed + 7 * k)
     _garbage_ints(work.object_order, seed + 8 * k)
+    garbage_floats(work.ray, seed + 18 * k)
+    garbage_floats(work.object_grey, seed + 19 * k)
     _garbage_ints(work.first_row, seed + 9 * k)
     _garbage_ints(work.visible_paint, seed + 10 * k)
     _garbage_ints(work.visible_count, seed + 11 * k)

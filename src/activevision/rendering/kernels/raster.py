@@ -15,11 +15,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from activevision.rendering.appearance import LOOK
 from activevision.rendering.kernels.bundles import (
     JIT,
     JIT_PART,
     Cameras,
     Fields,
+    Looks,
     Params,
     RenderWork,
     Scene,
@@ -37,6 +39,12 @@ from activevision.rendering.kernels.coverage import (
     span,
 )
 from activevision.rendering.kernels.garbage import GARBAGE_KINDS, fill_garbage, garbage_floats
+from activevision.rendering.kernels.looks import illuminate_row, texture_row, worn_paint
+
+STRIPES = LOOK["stripes"]
+GRAIN = LOOK["grain"]
+CLUTTER = LOOK["clutter"]
+WEAR = LOOK["line_wear"]
 
 
 @njit(**JIT_PART)
@@ -112,6 +120,7 @@ def render_rows(
     out: np.ndarray,
     params: Params,
     work: RenderWork,
+    looks: Looks,
     value: np.ndarray,
     paint: np.ndarray,
 ) -> None:
@@ -128,7 +137,8 @@ def render_rows(
     width = out.shape[2]
     n_paint = work.visible_paint.shape[1]
     carpet = n_paint
-    n_quad_objects = work.object_order.shape[1] - 1  # posts and bars (the ball last)
+    n_quad_objects = work.object_order.shape[1] - 1  # posts, bars, cylinders (the ball last)
+    object_grey = work.object_grey[n]
     quad_edges = work.quad_edges[n]
     quad_rows = work.quad_rows[n]
     ring_edges = work.ring_edges[n]
@@ -143,8 +153,14 @@ def render_rows(
     n_sides = ring_edges.shape[1]
     line_minus_grass = params.line - params.grass
     bg_u8 = np.uint8(int(params.background + 0.5))
+    looks_on = looks.enabled
+    look = looks.rows[n] if looks_on else looks.rows[0]
+    noise = looks.noise
+    ray = work.ray[n]
+    textured = looks_on and (look[STRIPES] != 0.0 or look[GRAIN] != 0.0 or look[CLUTTER] != 0.0)
+    worn = looks_on and look[WEAR] > 0.0
     for j in range(row0, height, row_step):
-        if j < first_row:
+        if j < first_row and not looks_on:
             out[n, j, :] = bg_u8
             continue
         v = j + 0.5
@@ -153,6 +169,8 @@ def render_rows(
             _carpet_row(quad_edges[carpet], v, params, value)
         else:
             value[:] = params.background
+        if textured:
+            texture_row(v, value, homography, ray, look, params, noise)
         # --- paint: lines, marks, centre circle (coverages combine with max)
         touched_lo = width
         touched_hi = 0
@@ -174,6 +192,8 @@ def render_rows(
             if s1 > s0:
                 touched_lo = min(touched_lo, s0)
                 touched_hi = max(touched_hi, s1)
+        if worn and touched_hi > touched_lo:
+            worn_paint(v, touched_lo, touched_hi, paint, homography, look, noise)
         for i in range(touched_lo, touched_hi):
             value[i] += paint[i] * line_minus_grass
             paint[i] = 0.0
@@ -183,12 +203,14 @@ def render_rows(
             if o < n_quad_objects:
                 q = n_paint + 1 + o
                 if quad_rows[q, 0] <= j < quad_rows[q, 1]:
-                    _post_quad_row(quad_edges[q], v, params.post, value)
+                    _post_quad_row(quad_edges[q], v, object_grey[o], value)
             elif ball_box[2] <= j < ball_box[3]:
                 for i in range(ball_box[0], ball_box[1]):
                     a, grey = ball_shade(ball_info, i + 0.5, v, params)
                     if a > 0.0:
                         value[i] += a * (grey - value[i])
+        if looks_on:
+            illuminate_row(v, value, look, params)
         for i in range(width):
             out[n, j, i] = np.uint8(
                 min(max(value[i] + np.float32(0.5), np.float32(0.0)), np.float32(255.0))
@@ -204,16 +226,25 @@ def _check_size(params: Params, out: np.ndarray) -> None:
 
 @njit(**JIT_PART)
 def _bundles(
-    scene: Fields, params: Fields, cameras: Fields, out: np.ndarray
-) -> tuple[Scene, Params, Cameras, RenderWork, SetupScratch]:
+    scene: Fields, params: Fields, cameras: Fields, looks: Fields, out: np.ndarray
+) -> tuple[Scene, Params, Cameras, Looks, RenderWork, SetupScratch]:
     """An entry point's bundles from the tuples of their fields (size-checked against
-    ``out``), and the work memory: ``(scene, params, cameras, work, scratch)``."""
+    ``out``), and the work memory: ``(scene, params, cameras, looks, work, scratch)``."""
     params = Params(*params)
     _check_size(params, out)
     cams = Cameras(*cameras)
     scene = Scene(*scene)
+    looks = Looks(*looks)
     n_cams = cams.pose.shape[0]
-    return scene, params, cams, allocate_work(n_cams, scene), allocate_scratch(n_cams, scene)
+    n_cyl = looks.cylinders.shape[1]
+    return (
+        scene,
+        params,
+        cams,
+        looks,
+        allocate_work(n_cams, scene, n_cyl),
+        allocate_scratch(n_cams, scene, n_cyl),
+    )
 
 
 @njit(cache=True, fastmath=True, nogil=True, parallel=True)
@@ -221,6 +252,7 @@ def render_kernel(
     scene: Fields,
     params: Fields,
     cameras: Fields,
+    looks: Fields,
     row_blocks: int,
     out: np.ndarray,
     garbage: int,
@@ -232,36 +264,40 @@ def render_kernel(
     scene = Scene(*scene)
     params = Params(*params)
     cams = Cameras(*cameras)
+    looks = Looks(*looks)
     _check_size(params, out)
     n_cams = cams.pose.shape[0]
-    work = RenderWork(*allocate_work(n_cams, scene))
-    scratch = SetupScratch(*allocate_scratch(n_cams, scene))
+    n_cyl = looks.cylinders.shape[1]
+    work = RenderWork(*allocate_work(n_cams, scene, n_cyl))
+    scratch = SetupScratch(*allocate_scratch(n_cams, scene, n_cyl))
     width = params.width
     if garbage != 0:
         fill_garbage(work, scratch, np.empty(1, dtype=np.float32), garbage)
     for n in prange(n_cams):
-        setup_camera(n, scene, params, cams, work, scratch)
+        setup_camera(n, scene, params, cams, looks, work, scratch)
     for item in prange(n_cams * row_blocks):
         n = item // row_blocks
         value = np.empty(width, dtype=np.float32)
         if garbage != 0:
             garbage_floats(value, garbage + GARBAGE_KINDS * item)
         paint = np.zeros(width, dtype=np.float32)
-        render_rows(n, (item - n * row_blocks, row_blocks), out, params, work, value, paint)
+        render_rows(
+            n, (item - n * row_blocks, row_blocks), out, params, work, looks, value, paint
+        )
 
 
 @njit(**JIT)
 def render_kernel_serial(
-    scene: Fields, params: Fields, cameras: Fields, out: np.ndarray, garbage: int
+    scene: Fields, params: Fields, cameras: Fields, looks: Fields, out: np.ndarray, garbage: int
 ) -> None:
     """:func:`render_kernel` on the calling thread only: no thread hand-off, which matters
     for single frames (and on machines whose cores are busy with other work)."""
-    scene, params, cams, work, scratch = _bundles(scene, params, cameras, out)
+    scene, params, cams, looks, work, scratch = _bundles(scene, params, cameras, looks, out)
     width = params.width
     value = np.empty(width, dtype=np.float32)
     if garbage != 0:
         fill_garbage(work, scratch, value, garbage)
     paint = np.zeros(width, dtype=np.float32)
     for n in range(cams.pose.shape[0]):
-        setup_camera(n, scene, params, cams, work, scratch)
-        render_rows(n, (0, 1), out, params, work, value, paint)
+        setup_camera(n, scene, params, cams, looks, work, scratch)
+        render_rows(n, (0, 1), out, params, work, looks, value, paint)
