@@ -1,6 +1,7 @@
 """The ``activevision`` command line: ``main`` and ``build_parser``; one module per command
-group (``train``, ``evaluate``, ``deploy``, ``scene``, ``quickstart``), shared argument types
-in :mod:`activevision.cli.args` and the output-path check in :mod:`activevision.cli.outputs`.
+group (``train``, ``evaluate``, ``robustness``, ``deploy``, ``scene``, ``quickstart``), shared
+argument types in :mod:`activevision.cli.args` and the output-path check in
+:mod:`activevision.cli.outputs`.
 
 Heavy imports (torch, matplotlib) happen inside the command that needs them, so
 ``activevision --help`` is instant. The command is the only place a matplotlib backend is
@@ -13,10 +14,10 @@ from __future__ import annotations
 import os
 import sys
 
-from activevision.cli import deploy, evaluate, quickstart, scene, train
+from activevision.cli import deploy, evaluate, quickstart, robustness, scene, train
 from activevision.cli.args import ArgumentParser
 
-_COMMAND_GROUPS = (train, evaluate, deploy, quickstart, scene)
+_COMMAND_GROUPS = (train, evaluate, robustness, deploy, quickstart, scene)
 
 
 def build_parser() -> ArgumentParser:

@@ -10,6 +10,7 @@
 * :mod:`~activevision.figures.training` — a run's training curves.
 * :mod:`~activevision.figures.compare` — success vs localisation error.
 * :mod:`~activevision.figures.sweep` — success rate vs step over a sweep's grid points.
+* :mod:`~activevision.figures.robustness` — success per perturbation of the robustness suite.
 
 **Layer.** ``figures`` is a low layer: it imports only :mod:`activevision.geometry` and
 :mod:`activevision.io` (beside numpy, matplotlib and Pillow), so every layer above geometry

@@ -43,6 +43,7 @@ _KEY = LOOK["key"]
 _MOVE_PAN = LOOK["move_pan"]
 _MOVE_TILT = LOOK["move_tilt"]
 _FRAME = LOOK["frame"]
+_GAMMA = LOOK["gamma"]
 
 #: Cell sizes (m) of the patterns: carpet grain, paint wear patches, hall floor tiles,
 #: advertising boards, spectators (width, height) and the wall above them.
@@ -55,6 +56,11 @@ WALL_CELL = 3.0
 #: Heights (m) on the hall's walls: boards below the first, spectators up to the second.
 BOARD_TOP = 0.8
 STANDS_TOP = 2.6
+#: Patterns read the first PATTERN_CELLS numbers of the table (a table that stays in the
+#: L1 cache: random reads from the whole one would miss it at nearly every pattern cell).
+PATTERN_CELLS = 4096
+#: Patterns are evaluated every KNOT pixels of a row and interpolated between.
+KNOT = 8
 #: Worn paint keeps this share of its coverage.
 WORN_KEEP = 0.2
 #: Blur below these sizes (px) is not applied (it would change no pixel by more than ~1 grey).
@@ -81,7 +87,7 @@ def _hall(
     """Grey offset (unit amplitude) of what the world ray ``(dx, dy, dz)`` from the camera
     meets beyond the carpet: the hall's floor (tiles), or its walls (advertising boards,
     spectators, plain wall above)."""
-    mask = noise.shape[0] - 1
+    mask = PATTERN_CELLS - 1
     px, py, pz = ray[0, 3], ray[1, 3], ray[2, 3]
     wx = params.hall_x if dx > 0.0 else -params.hall_x
     wy = params.hall_y if dy > 0.0 else -params.hall_y
@@ -124,37 +130,76 @@ def texture_row(
     look: np.ndarray,
     params: Params,
     noise: np.ndarray,
+    knots: np.ndarray,
 ) -> None:
     """Carpet stripes and grain on the carpet's share of each pixel of row centre ``v`` of
     ``value`` (W,), the hall on the rest. The share is read off the ground pass's grey
-    (background -> 0, grass -> 1), so the carpet's anti-aliased border stays exact."""
+    (background -> 0, grass -> 1), so the carpet's anti-aliased border stays exact.
+
+    Patterns are evaluated every :data:`KNOT` pixels (into ``knots`` (2, W // KNOT + 2):
+    carpet, hall) and interpolated linearly between: a pixel costs a few multiply-adds, not
+    a division and a hash (grain cells farther than a few metres are smaller than a pixel
+    anyway)."""
     stripes = look[_STRIPES]
     grain = look[_GRAIN]
     clutter = look[_CLUTTER]
     width = look[_STRIPE_WIDTH]
     key = int(look[_KEY])
-    mask = noise.shape[0] - 1
-    bg = params.background
-    span = params.grass - bg
-    inv_span = 1.0 / span if abs(span) >= 1.0 else 0.0
+    mask = PATTERN_CELLS - 1
     h = homography
+    carpet = knots[0]
+    hall = knots[1]
+    n_knots = value.shape[0] // KNOT + 2
+    # rows all carpet (or all beyond it) need only one of the patterns
+    grass = np.float32(params.grass)
+    background = np.float32(params.background)
+    any_carpet = False
+    any_hall = False
     for i in range(value.shape[0]):
-        u = i + 0.5
-        share = 1.0 if inv_span == 0.0 else min(max((value[i] - bg) * inv_span, 0.0), 1.0)
-        if share > 0.0 and (stripes != 0.0 or grain != 0.0):
-            gz = h[2, 0] * u + h[2, 1] * v + h[2, 2]
-            if gz > 0.0:
-                gx = (h[0, 0] * u + h[0, 1] * v + h[0, 2]) / gz
-                gy = (h[1, 0] * u + h[1, 1] * v + h[1, 2]) / gz
-                tex = stripes * _stripe(gx, width)
-                if grain != 0.0:
-                    tex += grain * noise[_cell(key, gx / GRAIN_CELL, gy / GRAIN_CELL, 0, mask)]
-                value[i] += share * tex
-        if share < 1.0 and clutter != 0.0:
+        any_carpet |= value[i] != background
+        any_hall |= value[i] != grass
+    if not any_hall:
+        clutter = 0.0
+    if not any_carpet:
+        stripes = 0.0
+        grain = 0.0
+    if stripes == 0.0 and grain == 0.0 and clutter == 0.0:
+        return
+    for m in range(n_knots):
+        u = float(m * KNOT)
+        tex = 0.0
+        gz = h[2, 0] * u + h[2, 1] * v + h[2, 2]
+        if gz > 0.0 and (stripes != 0.0 or grain != 0.0):
+            gx = (h[0, 0] * u + h[0, 1] * v + h[0, 2]) / gz
+            gy = (h[1, 0] * u + h[1, 1] * v + h[1, 2]) / gz
+            tex = stripes * _stripe(gx, width)
+            if grain != 0.0:
+                tex += grain * float(noise[_cell(key, gx / GRAIN_CELL, gy / GRAIN_CELL, 0, mask)])
+        carpet[m] = tex
+        wall = 0.0
+        if clutter != 0.0:
             dx = ray[0, 0] * u + ray[0, 1] * v + ray[0, 2]
             dy = ray[1, 0] * u + ray[1, 1] * v + ray[1, 2]
             dz = ray[2, 0] * u + ray[2, 1] * v + ray[2, 2]
-            value[i] += (1.0 - share) * clutter * _hall(dx, dy, dz, ray, params, key, noise)
+            wall = clutter * _hall(dx, dy, dz, ray, params, key, noise)
+        hall[m] = wall
+    bg = np.float32(params.background)
+    span = params.grass - params.background
+    inv_span = np.float32(1.0 / span if abs(span) >= 1.0 else 0.0)
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    step = np.float32(1.0 / KNOT)
+    width_px = value.shape[0]
+    for m in range(n_knots - 1):
+        c0 = carpet[m]
+        dc = (carpet[m + 1] - c0) * step
+        h0 = hall[m]
+        dh = (hall[m + 1] - h0) * step
+        for q in range(min(KNOT, width_px - m * KNOT)):
+            i = m * KNOT + q
+            f = np.float32(q) + np.float32(0.5)
+            share = min(max((value[i] - bg) * inv_span, zero), one)
+            value[i] += share * (c0 + f * dc) + (one - share) * (h0 + f * dh)
 
 
 @njit(**JIT)
@@ -167,7 +212,7 @@ def worn_paint(
     look's ``line_wear``)."""
     threshold = 4.0 * look[_WEAR] - 2.0  # a share ~ Phi(threshold) of the cells is worn
     key = int(look[_KEY])
-    mask = noise.shape[0] - 1
+    mask = PATTERN_CELLS - 1
     h = homography
     for i in range(lo, hi):
         if paint[i] == 0.0:
@@ -186,64 +231,97 @@ def worn_paint(
 def illuminate_row(v: float, value: np.ndarray, look: np.ndarray, params: Params) -> None:
     """Illumination of row centre ``v``: ``value * gain * (1 - vignetting r^2) + offset``,
     ``r`` the distance from the image centre relative to the corner's."""
-    gain = look[_GAIN]
-    offset = look[_OFFSET]
-    vig = look[_VIGNETTING] / (params.cx * params.cx + params.cy * params.cy)
+    gain = np.float32(look[_GAIN])
+    offset = np.float32(look[_OFFSET])
+    vig = np.float32(look[_VIGNETTING] / (params.cx * params.cx + params.cy * params.cy))
     dv = v - params.cy
-    base = dv * dv
+    base = np.float32(dv * dv)
+    cx = np.float32(params.cx - 0.5)
+    one = np.float32(1.0)
     for i in range(value.shape[0]):
-        du = i + 0.5 - params.cx
-        value[i] = value[i] * gain * (1.0 - vig * (base + du * du)) + offset
+        du = np.float32(i) - cx
+        value[i] = value[i] * gain * (one - vig * (base + du * du)) + offset
+
+
+#: Most taps of the blur filter along one axis (defocus and motion blur convolved).
+MAX_TAPS = 15
 
 
 @njit(**JIT_PART)
-def _gaussian_taps(sigma: float, taps: np.ndarray) -> int:
-    """Normalised Gaussian weights of ``sigma`` into ``taps``; returns the radius."""
-    radius: int = min(math.ceil(2.5 * sigma), (taps.shape[0] - 1) // 2)
-    total = 0.0
-    for k in range(-radius, radius + 1):
-        w = math.exp(-0.5 * (k / sigma) ** 2)
-        taps[k + radius] = w
-        total += w
-    for k in range(2 * radius + 1):
-        taps[k] /= total
-    return radius
+def _blur_taps(sigma: float, move: float, taps: np.ndarray) -> int:
+    """The blur filter along one image axis into ``taps`` (MAX_TAPS,): a Gaussian of
+    ``sigma`` px (defocus; none below MIN_DEFOCUS) convolved with a box as long as ``move``
+    px (motion blur; none below MIN_MOTION). Returns the radius ``r`` (taps ``0..2r``),
+    weights normalised."""
+    g_r = min(math.ceil(2.5 * sigma), 3) if sigma >= MIN_DEFOCUS else 0
+    length = abs(move) if abs(move) >= MIN_MOTION else 0.0
+    b_r = min(math.ceil(0.5 * length - 0.5), (MAX_TAPS - 1) // 2 - g_r) if length > 0.0 else 0
+    r = g_r + b_r
+    taps[: 2 * r + 1] = 0.0
+    for k in range(-g_r, g_r + 1):
+        w = math.exp(-0.5 * (k / sigma) ** 2) if g_r > 0 else 1.0
+        for b in range(-b_r, b_r + 1):
+            # box of width `length` centred on 0: the end taps hold the fraction they cover
+            cover = 1.0
+            if b_r > 0 and abs(b) == b_r:
+                cover = 0.5 * (length - (2 * b_r - 1))
+            taps[k + b + r] += w * cover
+    total = taps[: 2 * r + 1].sum()
+    taps[: 2 * r + 1] /= total
+    return r
 
 
 @njit(**JIT)
-def _blur(buf: np.ndarray, tmp: np.ndarray, sigma: float, bx: float, by: float) -> None:
-    """Defocus (separable Gaussian of ``sigma`` px) and motion blur (the mean along the
-    segment ``(bx, by)`` px centred on each pixel) of ``buf`` (H, W) in place; image edges
-    repeat their border pixels."""
-    height, width = buf.shape
-    if sigma >= MIN_DEFOCUS:
-        taps = np.empty(11)
-        r = _gaussian_taps(sigma, taps)
-        for j in range(height):
+def _filter_rows(src: np.ndarray, dst: np.ndarray, taps: np.ndarray, r: int) -> None:
+    """``dst = src`` filtered along each row (axis 1) by ``taps`` of radius ``r``; the edges
+    repeat their border pixels (each row is copied into a padded one, so that every tap is
+    one plain, vectorised loop)."""
+    height, width = src.shape
+    pad = np.empty(width + 2 * r, dtype=np.float32)
+    for j in range(height):
+        s = src[j]
+        d = dst[j]
+        pad[r : r + width] = s
+        pad[:r] = s[0]
+        pad[r + width :] = s[width - 1]
+        w0 = np.float32(taps[0])
+        for i in range(width):
+            d[i] = w0 * pad[i]
+        for k in range(1, 2 * r + 1):
+            w = np.float32(taps[k])
+            shifted = pad[k : k + width]
             for i in range(width):
-                acc = 0.0
-                for k in range(-r, r + 1):
-                    acc += taps[k + r] * buf[j, min(max(i + k, 0), width - 1)]
-                tmp[j, i] = acc
-        for j in range(height):
-            for i in range(width):
-                acc = 0.0
-                for k in range(-r, r + 1):
-                    acc += taps[k + r] * tmp[min(max(j + k, 0), height - 1), i]
-                buf[j, i] = acc
-    length = math.sqrt(bx * bx + by * by)
-    if length >= MIN_MOTION:
-        samples = math.ceil(length) + 1
-        tmp[:, :] = buf
-        for j in range(height):
-            for i in range(width):
-                acc = 0.0
-                for s in range(samples):
-                    f = s / (samples - 1) - 0.5
-                    jj = min(max(math.floor(j + 0.5 + f * by), 0), height - 1)
-                    ii = min(max(math.floor(i + 0.5 + f * bx), 0), width - 1)
-                    acc += tmp[jj, ii]
-                buf[j, i] = acc / samples
+                d[i] += w * shifted[i]
+
+
+@njit(**JIT)
+def _filter_columns(src: np.ndarray, dst: np.ndarray, taps: np.ndarray, r: int) -> None:
+    """:func:`_filter_rows` along the columns (axis 0)."""
+    height = src.shape[0]
+    dst[:, :] = 0.0
+    for j in range(height):
+        d = dst[j]
+        for k in range(2 * r + 1):
+            w = np.float32(taps[k])
+            s = src[min(max(j + k - r, 0), height - 1)]
+            for i in range(d.shape[0]):
+                d[i] += w * s[i]
+
+
+@njit(**JIT)
+def _blurred(img: np.ndarray, sigma: float, bx: float, by: float) -> np.ndarray:
+    """``img`` (H, W) as float32, blurred along its rows and columns (see
+    :func:`finish_frame`)."""
+    height, width = img.shape
+    buf = np.empty((height, width), dtype=np.float32)
+    for j in range(height):
+        for i in range(width):
+            buf[j, i] = img[j, i]
+    taps = np.empty(MAX_TAPS)
+    tmp = np.empty((height, width), dtype=np.float32)
+    _filter_rows(buf, tmp, taps, _blur_taps(sigma, bx, taps))
+    _filter_columns(tmp, buf, taps, _blur_taps(sigma, by, taps))
+    return buf
 
 
 @njit(**JIT)
@@ -251,29 +329,46 @@ def finish_frame(
     img: np.ndarray, look: np.ndarray, tone: np.ndarray, focal: float, noise: np.ndarray
 ) -> None:
     """Blur, sensor noise and tone curve of one rendered frame ``img`` (H, W) uint8, in
-    place. Noise std ``sqrt(read^2 + shot * value)`` grey levels, the normal numbers read
-    from ``noise`` at an offset hashed from the episode's key and the frame counter."""
+    place.
+
+    Blur is separable: along each image axis, the defocus Gaussian convolved with a box as
+    long as the head's move on that axis in this step (motion blur; a diagonal move blurs a
+    box, not a line). Noise std ``sqrt(read^2 + shot * value)`` grey levels, its normal
+    numbers read from ``noise`` at an offset hashed from the episode's key and the frame
+    counter. A frame with none of them is left as it is."""
     height, width = img.shape
+    sigma = look[_DEFOCUS]
     bx = look[_MOTION] * focal * look[_MOVE_PAN]
     by = look[_MOTION] * focal * look[_MOVE_TILT]
     read2 = look[_READ] * look[_READ]
     shot = look[_SHOT]
-    buf = np.empty((height, width), dtype=np.float32)
-    for j in range(height):
-        for i in range(width):
-            buf[j, i] = img[j, i]
-    if look[_DEFOCUS] >= MIN_DEFOCUS or bx * bx + by * by >= MIN_MOTION * MIN_MOTION:
-        _blur(buf, np.empty((height, width), dtype=np.float32), look[_DEFOCUS], bx, by)
     noisy = read2 > 0.0 or shot > 0.0
+    toned = look[_GAMMA] != 1.0
+    blurred = sigma >= MIN_DEFOCUS or abs(bx) >= MIN_MOTION or abs(by) >= MIN_MOTION
+    if not (noisy or toned or blurred):
+        return
     mask = noise.shape[0] - 1
-    start = _cell(int(look[_KEY]), look[_FRAME], 0.0, 6, mask)
+    # a contiguous run of the table (the start leaves room for the whole frame)
+    start = _cell(int(look[_KEY]), look[_FRAME], 0.0, 6, mask) % (mask + 1 - height * width)
+    zero = np.float32(0.0)
+    row = np.empty(width, dtype=np.float32)
+    buf = _blurred(img, sigma, bx, by) if blurred else np.empty((0, 0), dtype=np.float32)
     for j in range(height):
-        for i in range(width):
-            value = buf[j, i]
-            if noisy:
-                std = math.sqrt(read2 + shot * max(value, 0.0))
-                value += std * noise[(start + j * width + i) & mask]
-            img[j, i] = tone[min(max(int(value + 0.5), 0), 255)]
+        if blurred:
+            row[:] = buf[j]
+        else:
+            for i in range(width):
+                row[i] = img[j, i]
+        if noisy:
+            table = noise[start + j * width : start + (j + 1) * width]
+            for i in range(width):
+                row[i] += np.float32(math.sqrt(read2 + shot * max(row[i], zero))) * table[i]
+        if toned:
+            for i in range(width):
+                img[j, i] = tone[min(max(int(row[i] + np.float32(0.5)), 0), 255)]
+        else:
+            for i in range(width):
+                img[j, i] = np.uint8(min(max(row[i] + np.float32(0.5), zero), np.float32(255.0)))
 
 
 @njit(cache=True, fastmath=True, nogil=True, parallel=True)

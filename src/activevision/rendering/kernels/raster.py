@@ -39,7 +39,7 @@ from activevision.rendering.kernels.coverage import (
     span,
 )
 from activevision.rendering.kernels.garbage import GARBAGE_KINDS, fill_garbage, garbage_floats
-from activevision.rendering.kernels.looks import illuminate_row, texture_row, worn_paint
+from activevision.rendering.kernels.looks import KNOT, illuminate_row, texture_row, worn_paint
 
 STRIPES = LOOK["stripes"]
 GRAIN = LOOK["grain"]
@@ -123,10 +123,12 @@ def render_rows(
     looks: Looks,
     value: np.ndarray,
     paint: np.ndarray,
+    knots: np.ndarray,
 ) -> None:
     """Rows ``row0, row0 + row_step, ...`` (``rows = (row0, row_step)``) of image ``n`` into
     ``out`` (N, H, W). ``value`` (W,) float32 scratch; ``paint`` (W,) float32 scratch that is
-    all zero on entry and on exit.
+    all zero on entry and on exit; ``knots`` (2, W // KNOT + 2) float32 scratch of the
+    looks' patterns (:func:`.looks.texture_row`).
 
     The per-row helpers take single arrays and :class:`.bundles.Params` (scalars), never the
     work bundle: every call with a bundle of arrays would count references to all of them,
@@ -170,7 +172,7 @@ def render_rows(
         else:
             value[:] = params.background
         if textured:
-            texture_row(v, value, homography, ray, look, params, noise)
+            texture_row(v, value, homography, ray, look, params, noise, knots)
         # --- paint: lines, marks, centre circle (coverages combine with max)
         touched_lo = width
         touched_hi = 0
@@ -281,8 +283,9 @@ def render_kernel(
         if garbage != 0:
             garbage_floats(value, garbage + GARBAGE_KINDS * item)
         paint = np.zeros(width, dtype=np.float32)
+        knots = np.empty((2, width // KNOT + 2), dtype=np.float32)
         render_rows(
-            n, (item - n * row_blocks, row_blocks), out, params, work, looks, value, paint
+            n, (item - n * row_blocks, row_blocks), out, params, work, looks, value, paint, knots
         )
 
 
@@ -298,6 +301,7 @@ def render_kernel_serial(
     if garbage != 0:
         fill_garbage(work, scratch, value, garbage)
     paint = np.zeros(width, dtype=np.float32)
+    knots = np.empty((2, width // KNOT + 2), dtype=np.float32)
     for n in range(cams.pose.shape[0]):
         setup_camera(n, scene, params, cams, looks, work, scratch)
-        render_rows(n, (0, 1), out, params, work, looks, value, paint)
+        render_rows(n, (0, 1), out, params, work, looks, value, paint, knots)

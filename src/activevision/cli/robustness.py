@@ -1,0 +1,160 @@
+"""``activevision robustness``: a policy on fixed-seed episodes under named perturbations
+(:mod:`activevision.experiments.robustness`)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from activevision.cli.args import (
+    add_overwrite,
+    add_weights,
+    choice_list,
+    env_config_of_run,
+    non_negative_float,
+    positive_int,
+    seed,
+)
+from activevision.cli.outputs import OutputError, check_outputs, is_training_run
+
+if TYPE_CHECKING:
+    from activevision.envs import EnvConfig
+    from activevision.experiments.policies import HeadPolicy
+
+
+def _perturbation_names() -> tuple[str, ...]:
+    from activevision.experiments.robustness import perturbation_names
+
+    return perturbation_names()
+
+
+def _method_names() -> tuple[str, ...]:
+    from activevision.experiments.methods import method_names
+
+    return method_names()
+
+
+def _method(args: argparse.Namespace) -> str:
+    """The policy to score: ``--method``, ``--shipped``, or the learned one of ``--run``."""
+    if args.shipped and args.method not in (None, "shipped"):
+        raise ValueError(f"--shipped and --method {args.method} name two policies; pick one")
+    name: str | None = "shipped" if args.shipped else args.method
+    if name is None:
+        if args.run is None:
+            raise ValueError("name the policy: --run runs/NAME, --shipped or --method NAME")
+        name = "learned"
+    return name
+
+
+def _policy(name: str, args: argparse.Namespace) -> tuple[HeadPolicy, EnvConfig]:
+    """The policy and the env it was trained on, as ``evaluate`` plays it: a policy that
+    observes a prior pose gets one ``--error`` off."""
+    from activevision.experiments.compare import config_at_error
+    from activevision.experiments.methods import make_policy
+    from activevision.experiments.policies import OnnxPolicy
+
+    clean = config_at_error(env_config_of_run(args.run), args.error)
+    policy = make_policy(name, args.error, clean, args.run, args.weights)
+    if isinstance(policy, OnnxPolicy) and args.run is None:
+        # the packaged policy's observation (its policy.json keeps no appearance or robots:
+        # it is scored as trained on the clean world)
+        clean = config_at_error(policy.env_config(clean), args.error)
+    return policy, clean
+
+
+def _outputs(args: argparse.Namespace, method: str) -> tuple[Path, Path]:
+    out = args.out or (args.run / "robustness" if args.run else Path(f"robustness-{method}"))
+    if is_training_run(out):
+        raise OutputError(f"refusing to write into the training run {out}; choose another --out")
+    files = (out / "robustness.csv", out / "robustness.png")
+    check_outputs(named=files, overwrite=args.overwrite)
+    return files
+
+
+def cmd_robustness(args: argparse.Namespace) -> None:
+    """Score one policy under every (or the chosen) perturbation: table, CSV, figure."""
+    from activevision.experiments.robustness import list_table
+
+    if args.list:
+        print(list_table())
+        return
+    method = _method(args)
+    csv_path, png_path = _outputs(args, method)
+    from activevision.experiments.robustness import (
+        format_row,
+        perturbations,
+        score_perturbations,
+        table_header,
+        worst_drops,
+    )
+    from activevision.figures.robustness import plot_robustness
+    from activevision.io import write_csv
+
+    policy, clean = _policy(method, args)
+    rows = perturbations(clean, args.perturbations)
+    what = f"{method} ({args.run})" if args.run else method
+    print(
+        f"robustness of {what}: {len(rows)} rows x {args.episodes} episodes"
+        f" from seed {args.seed}, localisation error {args.error:g}"
+    )
+    print(table_header(), flush=True)
+    scored = score_perturbations(
+        policy,
+        clean,
+        rows,
+        args.episodes,
+        args.seed,
+        progress=lambda row: print(format_row(row), flush=True),
+    )
+    print(worst_drops(scored))
+    write_csv(csv_path, [{"method": method, "error": args.error, **r} for r in scored])
+    plot_robustness(
+        scored,
+        png_path,
+        title=f"{what}: {args.episodes} episodes a row, seed {args.seed},"
+        f" localisation error {args.error:g}",
+    )
+    print(f"wrote {csv_path} and {png_path}")
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser(
+        "robustness",
+        help="score a policy under named appearance, robot and camera-mount perturbations",
+        description="Score one policy on the same fixed-seed episodes under each named"
+        " perturbation of its training env (see --list); writes robustness.csv and"
+        " robustness.png.",
+    )
+    p.set_defaults(func=cmd_robustness)
+    p.add_argument("--run", type=Path, help="a training run: scores its learned policy")
+    p.add_argument("--shipped", action="store_true", help="score the policy shipped in the package")
+    p.add_argument(
+        "--method",
+        type=choice_list(_method_names),
+        help="score another method instead (" + " ".join(_method_names()) + ")",
+    )
+    add_weights(p)
+    p.add_argument(
+        "--perturbations",
+        nargs="+",
+        type=choice_list(_perturbation_names),
+        metavar="NAME",
+        help="play only these (clean is always played); default: all (see --list)",
+    )
+    p.add_argument("--episodes", type=positive_int, default=200)
+    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument(
+        "--error",
+        type=non_negative_float,
+        default=0.0,
+        help="localisation error of a policy's prior pose (and of the entropy methods'"
+        " belief), m and rad, in every row",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        help="output directory (default: RUN/robustness, or ./robustness-METHOD)",
+    )
+    add_overwrite(p)
+    p.add_argument("--list", action="store_true", help="print the perturbation table and exit")

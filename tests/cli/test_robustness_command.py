@@ -1,0 +1,180 @@
+"""``activevision robustness``: the tiny real command, its outputs, and bad input."""
+
+import csv
+import hashlib
+import shutil
+from pathlib import Path
+
+import pytest
+
+from activevision.cli import main
+
+
+def read_rows(path: Path) -> list[dict]:
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+def one_clear_line(capsys, *needles: str) -> str:
+    captured = capsys.readouterr()
+    lines = [line for line in captured.err.splitlines() if line.strip()]
+    assert len(lines) == 1, captured.err
+    assert "Traceback" not in captured.err + captured.out
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+    return lines[0]
+
+
+TINY = [
+    "robustness",
+    "--method",
+    "oracle",
+    "--episodes",
+    "4",
+    "--perturbations",
+    "robots-2",
+    "gain-dark-strong",
+    "defocus-strong",
+]
+
+
+def test_tiny_run_writes_its_rows_and_figure(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main([*TINY, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    rows = read_rows(out / "robustness.csv")
+    # clean first, then the chosen rows in table order, each on 4 episodes of seed 0
+    assert [r["name"] for r in rows] == ["clean", "gain-dark-strong", "defocus-strong", "robots-2"]
+    assert {r["method"] for r in rows} == {"oracle"}
+    assert {(r["n"], r["seed"]) for r in rows} == {("4", "0")}
+    for column in ("success_rate", "goal_reached"):
+        for suffix in ("", "_low", "_high", "_drop_pts"):
+            assert all(r[column + suffix] for r in rows)
+    by = {r["name"]: r for r in rows}
+    # the oracle reads the true goal, never the image: the look changes nothing
+    for name in ("clean", "gain-dark-strong", "defocus-strong"):
+        assert float(by[name]["goal_reached"]) == 1.0
+        assert float(by[name]["goal_reached_drop_pts"]) == 0.0
+    assert by["gain-dark-strong"]["setting"] == "gain=0.45"
+    assert by["gain-dark-strong"]["in_training_range"] == "False"
+    assert by["robots-2"]["in_robust_range"] == "True"
+    assert (out / "robustness.png").read_bytes().startswith(b"\x89PNG")
+    lines = printed.splitlines()
+    assert any(line.startswith("gain-dark-strong") for line in lines)
+    assert any(line.startswith("worst change vs clean:") for line in lines)
+
+
+def test_existing_outputs_need_overwrite(tmp_path, capsys):
+    out = tmp_path / "r"
+    out.mkdir()
+    (out / "robustness.csv").write_text("my earlier results\n")
+    argv = [
+        "robustness",
+        "--method",
+        "oracle",
+        "--episodes",
+        "1",
+        "--perturbations",
+        "robots-1",
+        "--out",
+        str(out),
+    ]
+    assert main(argv) == 2
+    one_clear_line(capsys, "robustness.csv", "--overwrite")
+    assert (out / "robustness.csv").read_text() == "my earlier results\n"
+    assert main([*argv, "--overwrite"]) == 0
+    assert [r["name"] for r in read_rows(out / "robustness.csv")] == ["clean", "robots-1"]
+
+
+def test_list_prints_the_table(capsys):
+    from activevision.experiments.robustness import perturbation_names
+
+    assert main(["robustness", "--list"]) == 0
+    out = capsys.readouterr().out
+    names = [line.split()[0] for line in out.splitlines()[2:]]
+    assert names == list(perturbation_names())
+    assert "no (beyond)" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["--method", "oracle", "--perturbations", "nope"], "'nope'"),
+        (["--method", "oracle", "--perturbations"], "--perturbations"),
+        (["--method", "oracle", "--episodes", "0"], "--episodes"),
+        (["--method", "oracle", "--seed", "-1"], "'-1'"),
+        (["--method", "nope"], "'nope'"),
+        (["--method", "learned"], "--run"),
+        (["--shipped", "--method", "scan"], "--shipped"),
+        ([], "--run"),
+    ],
+    ids=" ".join,
+)
+def test_bad_input_is_one_clear_line(tmp_path, capsys, argv, needle):
+    out = tmp_path / "r"
+    assert main(["robustness", *argv, "--out", str(out)]) == 2
+    one_clear_line(capsys, needle)
+    assert not out.exists()
+
+
+TINY_TRAIN = [
+    "train",
+    "--preset",
+    "quickstart_ddqn",
+    "--steps",
+    "60",
+    "--set",
+    "learning_starts=20",
+    "--set",
+    "batch_size=8",
+    "--set",
+    "buffer_size=500",
+    "--set",
+    "epoch_steps=30",
+    "--set",
+    "checkpoint_interval=30",
+    "--set",
+    "tensorboard=false",
+    "--set",
+    "num_threads=1",
+]
+
+
+def digests(directory: Path) -> dict[str, str]:
+    return {
+        str(p.relative_to(directory)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(directory.rglob("*"))
+        if p.is_file()
+    }
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory) -> Path:
+    run = tmp_path_factory.mktemp("runs") / "tiny"
+    assert main([*TINY_TRAIN, "--out", str(run)]) == 0
+    return run
+
+
+def test_a_run_is_scored_beside_its_files_never_over_them(trained, tmp_path, capsys):
+    run = Path(shutil.copytree(trained, tmp_path / "run"))
+    before = digests(run)
+    argv = [
+        "robustness",
+        "--run",
+        str(run),
+        "--episodes",
+        "2",
+        "--perturbations",
+        "line-wear-strong",
+    ]
+    assert main([*argv, "--out", str(run)]) == 2
+    one_clear_line(capsys, "training run", "--out")
+    assert main(argv) == 0
+    rows = read_rows(run / "robustness" / "robustness.csv")
+    assert [(r["method"], r["name"]) for r in rows] == [
+        ("learned", "clean"),
+        ("learned", "line-wear-strong"),
+    ]
+    after = digests(run)
+    assert {k: after[k] for k in before} == before  # the run's own files untouched
+    assert set(after) - set(before) == {"robustness/robustness.csv", "robustness/robustness.png"}

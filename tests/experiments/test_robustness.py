@@ -1,0 +1,191 @@
+"""The robustness suite: its table of perturbations and its scoring loop."""
+
+import csv
+import dataclasses
+
+import numpy as np
+import pytest
+
+from activevision.envs import EnvConfig
+from activevision.envs.robots import RobotsConfig
+from activevision.experiments.policies import OraclePolicy
+from activevision.experiments.robustness import (
+    CLEAN,
+    PAPER_CLEAN,
+    PERTURBATIONS,
+    ROBUST_APPEARANCE,
+    ROBUST_ROBOTS,
+    format_table,
+    neutral_config,
+    perturbation_names,
+    perturbations,
+    score_perturbations,
+    within,
+    worst_drops,
+)
+from activevision.figures.robustness import plot_robustness
+from activevision.rendering.appearance import AppearanceConfig
+
+RANDOMISED = EnvConfig(appearance=AppearanceConfig.randomised(), robots=RobotsConfig(count=(0, 4)))
+BY_NAME = {p.name: p for p in PERTURBATIONS}
+
+
+def changed_fields(a, b, prefix=""):
+    """Dotted paths of the (nested) dataclass fields where ``a`` and ``b`` differ."""
+    out = set()
+    for f in dataclasses.fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if dataclasses.is_dataclass(x) and type(x) is type(y):
+            out |= changed_fields(x, y, f"{prefix}{f.name}.")
+        elif x != y:
+            out.add(prefix + f.name)
+    return out
+
+
+def test_names_are_unique_and_cover_every_kind():
+    names = perturbation_names()
+    assert len(names) == len(set(names))
+    assert names[0] == CLEAN
+    for expected in (
+        "gain-dark-mild",
+        "gain-bright-strong",
+        "defocus-strong",
+        "robots-4",
+        "mount-tilt+4deg",
+        "mount-height+5cm",
+        "mount-fov+10%",
+        PAPER_CLEAN,
+    ):
+        assert expected in names
+    appearance = {f.name for f in dataclasses.fields(AppearanceConfig)}
+    # every drawn appearance factor is perturbed (the stripe width only with the stripes)
+    played = {p.factor for p in PERTURBATIONS}
+    assert appearance - played == {"stripe_width"}
+
+
+@pytest.mark.parametrize("clean", [EnvConfig(), RANDOMISED], ids=["clean-trained", "randomised"])
+def test_each_row_changes_its_factor_alone(clean):
+    neutral = neutral_config(clean)
+    if clean == EnvConfig():
+        assert neutral == clean  # a clean-trained policy: rows differ from clean itself
+    for p in PERTURBATIONS:
+        config = p.config(clean)
+        changed = changed_fields(neutral, config)
+        if p.name == CLEAN:
+            assert config == clean
+        elif p.name == PAPER_CLEAN:
+            assert changed == set()
+        elif p.factor == "robots":
+            assert changed == {"robots.count"}
+            assert config.robots.count == (int(p.value), int(p.value))
+        elif p.factor == "stripes":
+            assert changed == {"appearance.stripes", "appearance.stripe_width"}
+        else:
+            assert changed == {f"appearance.{p.factor}"}, p.name
+            assert getattr(config.appearance, p.factor) == (p.value, p.value)  # exact level
+
+
+def test_mild_levels_lie_inside_the_robust_ranges_and_strong_ones_beyond():
+    robust = EnvConfig(appearance=ROBUST_APPEARANCE, robots=RobotsConfig(count=ROBUST_ROBOTS))
+    for p in PERTURBATIONS:
+        inside = within(p.config(EnvConfig()), robust)
+        if p.level in ("mild", "trained", "neutral") or p.factor == "robots":
+            assert inside, p.name
+        else:
+            assert p.level == "strong" and not inside, p.name
+    # a clean-trained policy saw none of them
+    assert not any(
+        within(p.config(EnvConfig()), EnvConfig()) for p in PERTURBATIONS if p.factor != "none"
+    )
+
+
+def test_robust_ranges_are_the_robust_presets():
+    from activevision.training.presets import preset
+
+    env = preset("dagger_robust").env
+    assert env.appearance == ROBUST_APPEARANCE
+    assert env.robots.count == ROBUST_ROBOTS
+
+
+def test_selection_always_starts_with_clean_and_paper_clean_only_when_randomised():
+    assert PAPER_CLEAN not in [p.name for p in perturbations(EnvConfig())]
+    assert [p.name for p in perturbations(RANDOMISED)][:2] == [CLEAN, PAPER_CLEAN]
+    chosen = perturbations(EnvConfig(), ["robots-2", "gain-dark-mild"])
+    assert [p.name for p in chosen] == [CLEAN, "gain-dark-mild", "robots-2"]  # table order
+    with pytest.raises(ValueError, match="'nope'"):
+        perturbations(EnvConfig(), ["nope"])
+
+
+class Watcher:
+    """Stays put; remembers each episode's start and the brightness of its first image."""
+
+    name = "watcher"
+
+    def __init__(self):
+        self.starts, self.brightness = [], []
+
+    def reset(self, info, rng):
+        self.starts.append((info["pose"].copy(), info["ball"].copy(), info["head"].copy()))
+        self.brightness.append(None)
+
+    def act(self, obs, info):
+        if self.brightness[-1] is None:
+            self.brightness[-1] = float(np.mean(obs))
+        return 0
+
+
+def test_appearance_rows_play_the_clean_starts_in_another_light():
+    rows = perturbations(EnvConfig(), ["gain-dark-strong", "gain-bright-strong"])
+    watcher = Watcher()
+    scored = score_perturbations(watcher, EnvConfig(), rows, episodes=3, seed=5)
+    assert [r["name"] for r in scored] == [CLEAN, "gain-dark-strong", "gain-bright-strong"]
+    clean, dark, bright = (watcher.starts[i : i + 3] for i in (0, 3, 6))
+    for a, b, c in zip(clean, dark, bright, strict=True):
+        for x, y, z in zip(a, b, c, strict=True):
+            np.testing.assert_array_equal(x, y)
+            np.testing.assert_array_equal(x, z)
+    light = np.array(watcher.brightness).reshape(3, 3)  # row x episode
+    assert (light[1] < 0.7 * light[0]).all()  # gain 0.45
+    assert (light[2] > light[0]).all()  # gain 1.8
+
+
+def test_oracle_reaches_every_goal_whatever_the_look(tmp_path):
+    clean = EnvConfig()
+    rows = perturbations(clean, ["defocus-strong", "read-noise-strong", "clutter-strong"])
+    progress = []
+    scored = score_perturbations(OraclePolicy(clean), clean, rows, 4, 0, progress.append)
+    assert progress == scored
+    for row in scored:
+        assert row["n"] == 4 and row["seed"] == 0
+        assert row["goal_reached"] == 1.0
+        assert row["goal_reached_drop_pts"] == 0.0 and row["success_rate_drop_pts"] == 0.0
+        assert 0.0 <= row["goal_reached_low"] < 1.0 == row["goal_reached_high"]  # Wilson
+        assert row["in_training_range"] == (row["name"] == CLEAN)
+    assert "no drop" in worst_drops(scored)
+    table = format_table(scored)
+    assert all(row["name"] in table for row in scored)
+    # the figure, also from the CSV's text values
+    path = tmp_path / "rows.csv"
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(scored[0]))
+        writer.writeheader()
+        writer.writerows(scored)
+    with path.open() as f:
+        plot_robustness(list(csv.DictReader(f)), tmp_path / "r.png", title="oracle")
+    assert (tmp_path / "r.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_drops_are_points_below_clean():
+    rows = [
+        {"name": CLEAN, "success_rate_drop_pts": 0.0, "goal_reached_drop_pts": 0.0},
+        {"name": "a", "success_rate_drop_pts": 12.5, "goal_reached_drop_pts": -3.0},
+        {"name": "b", "success_rate_drop_pts": 2.0, "goal_reached_drop_pts": 40.0},
+    ]
+    assert worst_drops(rows) == (
+        "worst change vs clean: success rate -12.5 pts (a), goal reached -40.0 pts (b)"
+    )
+
+
+def test_the_clean_row_comes_first():
+    with pytest.raises(ValueError, match="clean"):
+        score_perturbations(OraclePolicy(), EnvConfig(), [BY_NAME["robots-1"]], 1, 0)

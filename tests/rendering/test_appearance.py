@@ -1,0 +1,203 @@
+"""Randomised appearance: neutral looks are the clean render byte for byte, each factor does
+what it says (checked against the clean frame), and a frame's bytes depend on its own camera
+and look only (not on the batch, its order, the thread path or the work memory)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import activevision.rendering.renderer as renderer_module
+from activevision.geometry.occlusion import robot_cylinders
+from activevision.rendering import Renderer
+from activevision.rendering.appearance import (
+    LOOK,
+    LOOK_FIELDS,
+    AppearanceConfig,
+    draw_looks,
+    neutral_looks,
+    tone_curves,
+)
+
+N = 6
+
+
+@pytest.fixture(scope="module")
+def renderer() -> Renderer:
+    return Renderer()
+
+
+@pytest.fixture(scope="module")
+def states():
+    rng = np.random.default_rng(3)
+    pose = np.column_stack(
+        [rng.uniform(-3, 3, N), rng.uniform(-2, 2, N), rng.uniform(-np.pi, np.pi, N)]
+    )
+    pan = rng.uniform(-1.2, 1.2, N)
+    tilt = rng.uniform(0.1, 0.9, N)
+    bearing = pose[:, 2] + pan
+    ball = pose[:, :2] + 1.5 * np.column_stack([np.cos(bearing), np.sin(bearing)])
+    return pose, pan, tilt, ball
+
+
+def only(name: str, value: float) -> np.ndarray:
+    rows = neutral_looks(N)
+    rows[:, LOOK[name]] = value
+    return rows
+
+
+def test_neutral_looks_are_the_clean_render(renderer, states):
+    clean = renderer.render(*states)
+    rows = neutral_looks(N)
+    rows[:, LOOK["key"]] = 12345.0  # patterns off: the key changes nothing
+    rows[:, LOOK["frame"]] = 7.0
+    looked = renderer.render(*states, looks=rows, tone=tone_curves(rows))
+    np.testing.assert_array_equal(looked, clean)
+
+
+def test_gain_and_offset_scale_the_clean_grey(renderer, states):
+    clean = renderer.render(*states).astype(float)
+    rows = only("gain", 0.6)
+    rows[:, LOOK["offset"]] = 10.0
+    out = renderer.render(*states, looks=rows).astype(float)
+    # the clean frame is rounded once, the lit one from the unrounded grey: within 1 level
+    assert np.abs(out - np.clip(0.6 * clean + 10.0, 0, 255)).max() <= 1.0
+
+
+def test_gamma_is_the_tone_curve_of_the_clean_frame(renderer, states):
+    clean = renderer.render(*states)
+    rows = only("gamma", 1.8)
+    tone = tone_curves(rows)
+    out = renderer.render(*states, looks=rows, tone=tone)
+    np.testing.assert_array_equal(out, tone[0][clean])
+    assert tone[0][128] == round(255 * (128 / 255) ** 1.8)
+
+
+def test_vignetting_darkens_corners_not_the_centre(renderer, states):
+    clean = renderer.render(*states).astype(float)
+    out = renderer.render(*states, looks=only("vignetting", 0.5)).astype(float)
+    centre = (slice(58, 62), slice(78, 82))
+    assert np.abs(out[:, centre[0], centre[1]] - clean[:, centre[0], centre[1]]).max() <= 1
+    kept = 1 - 0.5 * (79.5**2 + 59.5**2) / (80**2 + 60**2)  # corner pixel centre
+    np.testing.assert_allclose(out[:, 0, 0], np.round(clean[:, 0, 0] * kept), atol=1)
+
+
+def test_read_noise_has_its_standard_deviation(renderer, states):
+    clean = renderer.render(*states).astype(float)
+    out = renderer.render(*states, looks=only("read_noise", 5.0)).astype(float)
+    inside = (clean > 30) & (clean < 225)  # no clipping
+    diff = (out - clean)[inside]
+    assert abs(diff.std() - 5.0) < 0.3 and abs(diff.mean()) < 0.2
+
+
+def test_noise_differs_between_frames_of_an_episode(renderer, states):
+    a = only("read_noise", 5.0)
+    b = a.copy()
+    b[:, LOOK["frame"]] = 1.0
+    assert (renderer.render(*states, looks=a) != renderer.render(*states, looks=b)).mean() > 0.5
+
+
+@pytest.mark.parametrize("name", ["defocus", "motion_blur"])
+def test_blur_smooths_and_keeps_the_mean(renderer, states, name):
+    clean = renderer.render(*states).astype(float)
+    rows = only(name, 1.2 if name == "defocus" else 0.5)
+    rows[:, LOOK["move_pan"]] = np.radians(3.0)  # the head's move this step
+    out = renderer.render(*states, looks=rows).astype(float)
+
+    def edge_energy(img):  # blur spreads each edge: its squared steps shrink
+        return (np.diff(img, axis=-1) ** 2).sum()
+
+    assert edge_energy(out) < 0.8 * edge_energy(clean)
+    assert np.abs(out.mean() - clean.mean()) < 1.0
+
+
+def test_motion_blur_needs_a_head_move(renderer, states):
+    clean = renderer.render(*states)
+    np.testing.assert_array_equal(renderer.render(*states, looks=only("motion_blur", 0.5)), clean)
+
+
+@pytest.mark.parametrize(
+    "name, value",
+    [("stripes", 15.0), ("grain", 10.0), ("line_width", 0.03), ("line_wear", 0.8),
+     ("clutter", 50.0), ("mount_height", 0.05), ("mount_tilt", 0.05), ("mount_fov", 0.1)],
+)
+def test_each_scene_factor_changes_the_frame(renderer, states, name, value):
+    if name == "clutter":  # views of the horizon: the hall beyond the carpet in every one
+        states = (*states[:2], np.full(N, 0.09), states[3])
+    clean = renderer.render(*states)
+    out = renderer.render(*states, looks=only(name, value))
+    changed = (out != clean).any(axis=(1, 2))
+    # every view shows the carpet; the hall only where the view has background
+    shows = (clean == 160).all(axis=2).any(axis=1) if name == "clutter" else np.ones(N, bool)
+    assert shows.sum() >= 2 and changed[shows].sum() >= shows.sum() - 1
+
+
+def test_wider_lines_paint_more(renderer, states):
+    clean = renderer.render(*states).astype(float)
+    wide = renderer.render(*states, looks=only("line_width", 0.03)).astype(float)
+    assert wide.sum() > clean.sum()  # lines are the brightest ground
+
+
+def test_robot_cylinder_has_its_projected_width():
+    r = Renderer()
+    d, radius = 2.0, 0.15
+    camera = np.array([-3.0, 0.8, 0.0])  # looking along +x, nothing else near
+    robots = np.array([[[camera[0] + d, camera[1], 0.9, 10.0]]])
+    cyl = robot_cylinders(robots, radius)
+    img = r.render(camera, 0.0, r.camera.tilt_min, None, cylinders=cyl)[0]
+    clean = r.render(camera, 0.0, r.camera.tilt_min, None)[0]
+    rows = np.flatnonzero((img != clean).any(axis=1))
+    dark = np.flatnonzero(img[rows[len(rows) // 2]] < 40)  # a row through the body
+    # the silhouette spans the tangent lines: 2 f tan(asin(r / d))
+    expected = 2 * r.camera.focal * radius / np.sqrt(d * d - radius * radius)
+    assert abs(len(dark) - expected) <= 2
+    assert abs(dark.mean() + 0.5 - r.camera.width / 2) <= 1
+
+
+def random_looks(n, seed):
+    rng = np.random.default_rng(seed)
+    rows = np.stack([draw_looks(AppearanceConfig.randomised(), rng) for _ in range(n)])
+    rows[:, LOOK["move_pan"]] = rng.uniform(-0.05, 0.05, n)
+    rows[:, LOOK["frame"]] = rng.integers(0, 20, n)
+    robots = np.zeros((n, 2, 4))
+    robots[:, 0] = [1.0, 0.3, 0.8, 60.0]
+    return rows, tone_curves(rows), robot_cylinders(robots, 0.12)
+
+
+def test_a_frame_depends_on_its_camera_and_look_only(renderer, states, monkeypatch):
+    pose, pan, tilt, ball = states
+    rows, tone, cyl = random_looks(N, 1)
+    cyl[:, :, :2] += pose[:, None, :2]  # a robot 1 m in front of each camera
+    batch = renderer.render(*states, looks=rows, tone=tone, cylinders=cyl)
+    for k in range(N):
+        alone = renderer.render(pose[k], pan[k], tilt[k], ball[k], looks=rows[k : k + 1],
+                                tone=tone[k : k + 1], cylinders=cyl[k : k + 1])
+        np.testing.assert_array_equal(alone[0], batch[k])
+    order = np.random.default_rng(0).permutation(N)
+    shuffled = renderer.render(pose[order], pan[order], tilt[order], ball[order],
+                               looks=rows[order], tone=tone[order], cylinders=cyl[order])
+    np.testing.assert_array_equal(shuffled, batch[order])
+    serial = Renderer(parallel=False).render(*states, looks=rows, tone=tone, cylinders=cyl)
+    np.testing.assert_array_equal(serial, batch)
+    for seed in (101, 102, 103):
+        monkeypatch.setattr(renderer_module, "_WORK_GARBAGE_SEED", seed)
+        dirty = renderer.render(*states, looks=rows, tone=tone, cylinders=cyl)
+        np.testing.assert_array_equal(dirty, batch)
+
+
+def test_bad_looks_are_clear_errors(renderer, states):
+    with pytest.raises(ValueError, match="looks must have shape"):
+        renderer.render(*states, looks=np.zeros((N, 3)))
+    with pytest.raises(ValueError, match="tone must be a uint8"):
+        renderer.render(*states, looks=neutral_looks(N), tone=np.zeros((N, 256)))
+    with pytest.raises(ValueError, match="cylinders"):
+        renderer.render(*states, cylinders=np.zeros((N, 1, 5)))
+    assert len(LOOK_FIELDS) == len(set(LOOK_FIELDS))
+
+
+def test_config_ranges_are_checked():
+    with pytest.raises(ValueError, match=r"AppearanceConfig\.gain"):
+        AppearanceConfig(gain=(1.2, 1.0))
+    with pytest.raises(ValueError, match=r"AppearanceConfig\.defocus"):
+        AppearanceConfig(defocus=(0.0, 9.0))
+    assert not AppearanceConfig().enabled and AppearanceConfig.randomised().enabled
