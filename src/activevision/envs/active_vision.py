@@ -57,6 +57,29 @@ class ActiveVisionEnv(gym.Env):
     lists every entry. The prior pose is the believed pose, or with ``prior_error_range`` the
     true pose corrupted by an error drawn per episode, quantised to ``prior_grid``.
 
+    ## A world beyond the paper's (off by default)
+    ``appearance=AppearanceConfig(...)`` (:mod:`activevision.rendering.appearance`) draws a
+    look per episode: illumination gain, offset, gamma and vignetting, Gaussian and shot
+    noise, defocus, motion blur along the head's move of the step, carpet mowing stripes and
+    grain, painted line width and wear, a hall beyond the carpet (advertising boards,
+    spectators, walls), and the camera mounted off its model (height, tilt, field of view:
+    the image changes, the robot's model of its camera, and so Algorithm 1, does not).
+    ``AppearanceConfig.randomised()`` turns every factor on at its robust range.
+
+    ``robots=RobotsConfig(count=(lo, hi))`` (:mod:`activevision.envs.robots`) stands 0-8
+    other KidSize robots on the field per episode: a body cylinder and a narrower head, 0.4-1
+    m tall, uniform on the field, at least ``min_spacing`` from each other and from ours.
+    They are rendered, over lines, landmarks and the ball (painter's order), and they occlude:
+    a landmark is *hidden* when the straight sight line from the camera's optical centre to
+    every one of 17 points along it passes through a robot's body or head
+    (:mod:`activevision.geometry.occlusion`; a line a robot crosses is still seen on either
+    side). The camera sits above the robot's ground position whatever the head angles, so what
+    is hidden is fixed for the episode: hidden landmarks are left out of Algorithm 1's UKF
+    updates (the goal search), of ``observed_mask`` and ``desired_mask``, and so of the
+    success rate and the landmark success rule. Robots that would hide the ball are placed
+    again, so every start keeps the ball in view. ``info`` then also has ``robots`` ((R, 4):
+    x, y, height, grey; height 0 marks an unused slot) and ``hidden_mask`` ((K,) bool).
+
     ## Rewards
     ``+1`` when the action brings the head closer to the goal viewpoint (Euclidean distance in
     (pan, tilt) degrees), ``-1`` when it moves away, ``0`` otherwise; ``-2`` when the ball
@@ -94,7 +117,8 @@ class ActiveVisionEnv(gym.Env):
     ``render_mode="rgb_array"`` returns the camera image beside a top view of the field.
 
     ## Version History
-    * v0: initial release.
+    * v0: initial release; later options (appearance, robots, Dict observations) default to
+      the paper's world, whose observations are unchanged byte for byte.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 3}

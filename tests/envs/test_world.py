@@ -1,0 +1,125 @@
+"""The world beyond the paper: randomised appearance and other robots in the episodes.
+(The paper's default world is checked byte for byte by test_digest.py.)"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import activevision.envs  # noqa: F401
+from activevision.envs import ActiveVisionVectorEnv
+from activevision.envs.config import EnvConfig
+from activevision.envs.robots import RobotsConfig
+from activevision.envs.simulation import EpisodeBatch
+from activevision.geometry.kernels import ball_visible_mask
+from activevision.localisation import LocalisationConfig, best_viewpoints, entropy
+from activevision.rendering.appearance import AppearanceConfig
+
+WORLD = EnvConfig(appearance=AppearanceConfig.randomised(), robots=RobotsConfig(count=(2, 4)))
+
+
+def test_default_world_has_no_robots_and_no_looks():
+    env = gym.make("ActiveVision-v0")
+    _, info = env.reset(seed=0)
+    assert "robots" not in info and "hidden_mask" not in info
+    assert not EnvConfig().appearance.enabled and EnvConfig().robots.max_count == 0
+
+
+def test_hidden_landmarks_are_never_seen_and_starts_keep_the_ball():
+    sim = EpisodeBatch(WORLD, 32)
+    rngs = [np.random.default_rng(s) for s in range(32)]
+    sim.reset(np.arange(32), rngs)
+    assert sim.hidden.any()  # the robots hide something in some episodes
+    assert (sim.robots[:, :, 2] > 0).sum(axis=1).min() >= 2
+    assert ball_visible_mask(sim.ball, sim.pose, sim.pan, sim.tilt, WORLD.camera,
+                             WORLD.field.ball_radius).all()
+    # robots keep their spacing from ours and from each other, on the field
+    used = sim.robots[:, :, 2] > 0
+    for i in range(32):
+        xy = np.vstack([sim.pose[i, :2], sim.robots[i, used[i], :2]])
+        gaps = np.hypot(*(xy[:, None] - xy[None]).transpose(2, 0, 1))
+        assert gaps[~np.eye(len(xy), dtype=bool)].min() >= WORLD.robots.min_spacing
+        assert (np.abs(xy[:, 0]) <= WORLD.field.half_length).all()
+    rng = np.random.default_rng(0)
+    for _ in range(10):
+        sim.step(rng.integers(0, 9, 32))
+        assert not (sim.observed & sim.hidden).any()
+        assert not (sim.desired & sim.hidden).any()
+
+
+def test_the_goal_search_leaves_hidden_landmarks_out():
+    sim = EpisodeBatch(WORLD.replace(robots=RobotsConfig()), 1)
+    sim.reset(np.arange(1), [np.random.default_rng(3)])
+    loc = LocalisationConfig()
+    mean, ball = sim.believed_pose[:1], sim.ball[:1]
+    cov = loc.ukf.initial_cov
+    free = best_viewpoints(mean, cov, ball, sim.landmarks, WORLD.camera)
+    all_hidden = best_viewpoints(mean, cov, ball, sim.landmarks, WORLD.camera,
+                                 hidden=np.ones(len(sim.landmarks), bool))
+    assert free.visible.any() and not all_hidden.visible.any()
+    shows_ball = all_hidden.ball_visible[0]
+    np.testing.assert_allclose(all_hidden.entropies[0, shows_ball], entropy(cov))
+    one = int(np.argwhere(free.visible[0])[0, 1])
+    mask = np.zeros(len(sim.landmarks), bool)
+    mask[one] = True
+    partly = best_viewpoints(mean, cov, ball, sim.landmarks, WORLD.camera, hidden=mask)
+    assert not partly.visible[0, :, one].any()
+    np.testing.assert_array_equal(np.delete(partly.visible, one, -1),
+                                  np.delete(free.visible, one, -1))
+
+
+def test_same_seed_same_bytes_and_vector_equals_singles():
+    n, steps = 3, 25
+    actions = np.random.default_rng(1).integers(0, 9, (steps, n))
+    venv = ActiveVisionVectorEnv(num_envs=n, config=WORLD)
+    singles = [gym.make("ActiveVision-v0", config=WORLD) for _ in range(n)]
+    vobs, _ = venv.reset(seed=5)
+    sobs = [e.reset(seed=5 + i)[0] for i, e in enumerate(singles)]
+    done = np.zeros(n, dtype=bool)
+    resets = 0
+    for t in range(steps):
+        for i in range(n):
+            np.testing.assert_array_equal(vobs[i], sobs[i], err_msg=f"env {i} step {t}")
+        vobs, vr, vterm, vtrunc, _ = venv.step(actions[t])
+        for i, env in enumerate(singles):
+            if done[i]:  # NEXT_STEP autoreset: this step resets the sub-env
+                sobs[i], _ = env.reset()
+                resets += 1
+            else:
+                sobs[i], r, term, trunc, _ = env.step(int(actions[t, i]))
+                assert (r, term, trunc) == (vr[i], vterm[i], vtrunc[i])
+        done = vterm | vtrunc
+    assert resets >= 1
+    again = gym.make("ActiveVision-v0", config=WORLD).reset(seed=5)[0]
+    np.testing.assert_array_equal(again, singles[0].reset(seed=5)[0])
+
+
+def test_frames_differ_from_the_clean_world_and_between_episodes():
+    clean = gym.make("ActiveVision-v0").reset(seed=2)[0]
+    looks = gym.make("ActiveVision-v0", config=WORLD.replace(robots=RobotsConfig()))
+    a = looks.reset(seed=2)[0].copy()
+    b = looks.reset(seed=3)[0]
+    assert (a != clean).mean() > 0.3 and (a != b).mean() > 0.3
+
+
+def test_stored_states_render_as_they_were_seen():
+    # DAgger stores states and renders them again for its minibatches
+    sim = EpisodeBatch(WORLD, 6)
+    sim.reset(np.arange(6), [np.random.default_rng(s) for s in range(6)])
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        sim.step(rng.integers(0, 9, 6))
+        idx = np.arange(6)
+        seen = sim.render(idx)
+        again = sim.render_states(
+            sim.pose.copy(), sim.head.copy(), sim.ball.copy(), sim.frame_looks(idx),
+            sim.robots.copy(),
+        )
+        np.testing.assert_array_equal(again, seen)
+
+
+@pytest.mark.parametrize("bad", [{"count": (3, 2)}, {"count": (0, 9)}, {"height": (1.0, 0.5)}])
+def test_bad_robot_config_is_one_clear_error(bad):
+    with pytest.raises(ValueError, match="RobotsConfig"):
+        RobotsConfig(**bad)
