@@ -178,3 +178,28 @@ def test_a_run_is_scored_beside_its_files_never_over_them(trained, tmp_path, cap
     after = digests(run)
     assert {k: after[k] for k in before} == before  # the run's own files untouched
     assert set(after) - set(before) == {"robustness/robustness.csv", "robustness/robustness.png"}
+
+
+def test_an_exported_policy_is_marked_against_its_training_world(tmp_path, capsys, monkeypatch):
+    import json
+
+    from activevision.runtime import pretrained_policy_path
+
+    # the shipped policy, as if it had been trained among 0-4 other robots
+    model = tmp_path / "policy" / "policy.onnx"
+    model.parent.mkdir()
+    shutil.copy(pretrained_policy_path(), model)
+    values = json.loads(pretrained_policy_path().with_suffix(".json").read_text())
+    values["world"]["robots"]["count"] = [0, 4]
+    model.with_suffix(".json").write_text(json.dumps(values))
+    monkeypatch.setattr("activevision.runtime.pretrained_policy_path", lambda: model)
+
+    out = tmp_path / "r"
+    argv = ["robustness", "--shipped", "--episodes", "1", "--out", str(out), "--perturbations"]
+    assert main([*argv, "robots-3", "gain-dark-strong"]) == 0
+    rows = {r["name"]: r for r in read_rows(out / "robustness.csv")}
+    assert list(rows) == ["clean", "gain-dark-strong", "robots-3"]
+    trained = {name: r["in_training_range"] for name, r in rows.items()}
+    assert trained == {"clean": "True", "gain-dark-strong": "False", "robots-3": "True"}
+    printed = capsys.readouterr().out
+    assert any(line.startswith("robots-3") and " yes " in line for line in printed.splitlines())

@@ -2,13 +2,15 @@
 
 import csv
 import dataclasses
+import json
+import shutil
 
 import numpy as np
 import pytest
 
 from activevision.envs import EnvConfig
 from activevision.envs.robots import RobotsConfig
-from activevision.experiments.policies import OraclePolicy
+from activevision.experiments.policies import OnnxPolicy, OraclePolicy, with_world
 from activevision.experiments.robustness import (
     CLEAN,
     PAPER_CLEAN,
@@ -25,6 +27,7 @@ from activevision.experiments.robustness import (
 )
 from activevision.figures.robustness import plot_robustness
 from activevision.rendering.appearance import AppearanceConfig
+from activevision.runtime import PolicyFileError, pretrained_policy_path
 
 RANDOMISED = EnvConfig(appearance=AppearanceConfig.randomised(), robots=RobotsConfig(count=(0, 4)))
 BY_NAME = {p.name: p for p in PERTURBATIONS}
@@ -189,3 +192,46 @@ def test_drops_are_points_below_clean():
 def test_the_clean_row_comes_first():
     with pytest.raises(ValueError, match="clean"):
         score_perturbations(OraclePolicy(), EnvConfig(), [BY_NAME["robots-1"]], 1, 0)
+
+
+def exported_copy(directory, **world_changes):
+    """A copy of the shipped policy whose policy.json's world has ``world_changes``
+    (record -> {field: value}) applied."""
+    model = directory / "policy.onnx"
+    shutil.copy(pretrained_policy_path(), model)
+    values = json.loads(pretrained_policy_path().with_suffix(".json").read_text())
+    for record, changes in world_changes.items():
+        values["world"][record].update(changes)
+    model.with_suffix(".json").write_text(json.dumps(values))
+    return model
+
+
+def test_an_exported_policy_is_scored_against_its_training_world(tmp_path):
+    policy = OnnxPolicy(exported_copy(tmp_path, robots={"count": [0, 4]}))
+    assert policy.env_config().robots.count == (0, 0)  # evaluate: the paper's clean world
+    clean = policy.env_config(trained_world=True)
+    assert clean == policy.env_config().replace(robots=RobotsConfig(count=(0, 4)))
+    rows = perturbations(clean)
+    assert [p.name for p in rows][:2] == [CLEAN, PAPER_CLEAN]  # randomised: both clean rows
+    assert clean.robots.count == (0, 4) == BY_NAME[CLEAN].config(clean).robots.count
+    inside = {p.name for p in rows if within(p.config(clean), clean)}
+    assert inside == {CLEAN, PAPER_CLEAN, "robots-1", "robots-2", "robots-3", "robots-4"}
+
+
+def test_the_shipped_policy_was_trained_in_the_clean_world():
+    policy = OnnxPolicy(pretrained_policy_path())
+    clean = policy.env_config(trained_world=True)
+    assert clean == policy.env_config()
+    assert PAPER_CLEAN not in [p.name for p in perturbations(clean)]
+
+
+def test_a_world_this_version_cannot_play_is_a_policy_file_error():
+    with pytest.raises(PolicyFileError, match=r"p\.json: 'world' records \['weather'\]"):
+        with_world(EnvConfig(), {"weather": {"rain": [0, 1]}}, source="p.json")
+    with pytest.raises(PolicyFileError, match=r"'world' does not fit.*'world' appearance.*fog"):
+        with_world(EnvConfig(), {"appearance": {"fog": [0, 1]}})
+    with pytest.raises(PolicyFileError, match=r"'world' does not fit.*count"):
+        with_world(EnvConfig(), {"robots": {"count": [3, 1]}})
+    partial = with_world(RANDOMISED, {"robots": {"count": [1, 2]}})  # missing: the defaults
+    assert partial.robots == RobotsConfig(count=(1, 2))
+    assert partial.appearance == RANDOMISED.appearance  # a record not given is kept

@@ -48,8 +48,9 @@ def _method(args: argparse.Namespace) -> str:
 
 
 def _policy(name: str, args: argparse.Namespace) -> tuple[HeadPolicy, EnvConfig]:
-    """The policy and the env it was trained on, as ``evaluate`` plays it: a policy that
-    observes a prior pose gets one ``--error`` off."""
+    """The policy and the env it was trained on, as ``evaluate`` plays it (a policy that
+    observes a prior pose gets one ``--error`` off), in the world it was trained in: an
+    exported policy's is its policy.json's ``world``, a run's its config.json's ``env``."""
     from activevision.experiments.compare import config_at_error
     from activevision.experiments.methods import make_policy
     from activevision.experiments.policies import OnnxPolicy
@@ -57,9 +58,9 @@ def _policy(name: str, args: argparse.Namespace) -> tuple[HeadPolicy, EnvConfig]
     clean = config_at_error(env_config_of_run(args.run), args.error)
     policy = make_policy(name, args.error, clean, args.run, args.weights)
     if isinstance(policy, OnnxPolicy) and args.run is None:
-        # the packaged policy's observation (its policy.json keeps no appearance or robots:
-        # it is scored as trained on the clean world)
-        clean = config_at_error(policy.env_config(clean), args.error)
+        # the packaged policy's observation and training world (appearance ranges, other
+        # robots): its clean row is played there, and in_training_range compares with it
+        clean = config_at_error(policy.env_config(clean, trained_world=True), args.error)
     return policy, clean
 
 

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol, cast, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -19,11 +20,15 @@ from numpy.typing import ArrayLike
 from activevision.envs.actions import action_table, greedy_actions
 from activevision.envs.config import EnvConfig
 from activevision.envs.observations import IMAGE_KEY, Observation, flatten_vectors, vector_keys
+from activevision.envs.robots import RobotsConfig
 from activevision.envs.starts import corrupt_pose
 from activevision.geometry import field_landmarks
 from activevision.geometry.angles import wrap_angle
 from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
+from activevision.rendering.appearance import AppearanceConfig
 from activevision.runtime.goal_evidence import GoalEvidence
+from activevision.runtime.metadata import PolicyFileError
+from activevision.typecheck import config_from_dict
 
 if TYPE_CHECKING:
     import torch
@@ -237,6 +242,35 @@ class LearnedPolicy:
             return int(self.goal_evidence.act(goal_logits.cpu().numpy(), head, np.zeros(1, int))[0])
 
 
+def with_world(
+    config: EnvConfig, world: Mapping[str, Mapping[str, Any]], source: str = "policy.json"
+) -> EnvConfig:
+    """``config`` in ``world``, a policy.json's record of the world its policy was trained in
+    (:attr:`activevision.runtime.PolicyMetadata.world`): each of its ``appearance`` and
+    ``robots`` replaces ``config``'s (missing fields take their defaults). PolicyFileError
+    names ``source`` and what does not fit."""
+    builders: dict[str, type[AppearanceConfig] | type[RobotsConfig]] = {
+        "appearance": AppearanceConfig,
+        "robots": RobotsConfig,
+    }
+    unknown = sorted(set(world) - set(builders))
+    if unknown:
+        raise PolicyFileError(
+            f"{source}: 'world' records {unknown}, which this activevision does not know"
+            f" (it plays {sorted(builders)})"
+        )
+    try:
+        changes = {
+            name: config_from_dict(builders[name], record, f"'world' {name}")
+            for name, record in world.items()
+        }
+        return config.replace(**changes)
+    except (TypeError, ValueError) as error:
+        raise PolicyFileError(
+            f"{source}: 'world' does not fit this activevision: {error}"
+        ) from error
+
+
 class OnnxPolicy:
     """An exported policy run by :class:`activevision.runtime.HeadController` (no torch),
     fed the newest camera frame, as on a robot."""
@@ -248,10 +282,21 @@ class OnnxPolicy:
 
         self.controller = HeadController(model_path, color_order="rgb")
 
-    def env_config(self, base: EnvConfig | None = None) -> EnvConfig:
-        """``base`` (default: the paper's env) observing what this policy was trained on."""
+    def env_config(
+        self, base: EnvConfig | None = None, *, trained_world: bool = False
+    ) -> EnvConfig:
+        """``base`` (default: the paper's env) observing what this policy was trained on.
+
+        ``trained_world``: also in the world it was trained in (policy.json's ``world``, its
+        appearance ranges and other robots; ``base``'s when the file predates the record).
+        Evaluation plays the paper's clean world whatever the policy was trained in;
+        ``activevision robustness`` plays the trained one as its ``clean`` row.
+        PolicyFileError if the record does not fit this activevision's configs.
+        """
         meta = self.controller.metadata
         base = base or EnvConfig()
+        if trained_world and meta.world is not None:
+            base = with_world(base, meta.world, source=str(self.controller.metadata_path))
         if meta.observation == base.observation and meta.action_history == base.action_history:
             return base
         return base.replace(observation=meta.observation, action_history=meta.action_history)

@@ -10,8 +10,8 @@ Writes two files side by side, each atomically (temporary file + ``os.replace``)
   Relu -> Gemm``.
 * ``policy.json`` — what the runtime needs besides the graph (see
   :mod:`activevision.runtime.metadata`): input size and stack, the action table in degrees,
-  head limits, the camera the policy was trained with, SHA-256 of the model and of the run's
-  ``config.json``, package version, opset.
+  head limits, the camera and world (appearance ranges, other robots) the policy was trained
+  with, SHA-256 of the model and of the run's ``config.json``, package version, opset.
 
 Needs torch and onnx (``pip install activevision[export]``); onnxruntime, when installed, is
 used to check the exported graph against PyTorch.
@@ -48,6 +48,7 @@ from activevision.runtime.metadata import (
     PolicyMetadata,
     metadata_path_for,
 )
+from activevision.typecheck import config_to_dict
 
 #: ONNX opset of exported policies (onnxruntime >= 1.14 runs it).
 DEFAULT_OPSET = 17
@@ -127,6 +128,7 @@ def policy_metadata(
     training_config_sha256: str | None = None,
     action_names: Sequence[str] | None = None,
     camera: Any | None = None,
+    world: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The caller's part of policy.json, from radians.
 
@@ -143,6 +145,10 @@ def policy_metadata(
             :class:`activevision.runtime.CameraModel`), recorded as policy.json's ``camera``
             so that ``HeadController(..., camera=...)`` can compare a robot's camera with it.
             None: not recorded.
+        world: the world the policy was trained in, recorded as policy.json's ``world``:
+            record name -> config dataclass or its dict (``{"appearance": env.appearance,
+            "robots": env.robots}``, stored as ``typecheck.config_to_dict`` writes them).
+            None: not recorded.
     """
     table = np.asarray(action_table, dtype=np.float64)
     if table.ndim != 2 or table.shape[1] != 2:
@@ -158,6 +164,8 @@ def policy_metadata(
     }
     if camera is not None:
         values["camera"] = CameraModel.of(camera).to_json()
+    if world is not None:
+        values["world"] = {name: config_to_dict(record) for name, record in world.items()}
     values["training_config_sha256"] = training_config_sha256
     values["action_names"] = list((action_names or STANDARD_ACTION_NAMES)[: len(table)])
     return values

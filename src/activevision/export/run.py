@@ -25,8 +25,9 @@ def export_run(
     weights, or with ``weights="best"`` those with the best validation score.
 
     Reads the weights with :func:`activevision.training.load_policy`, the action table,
-    head limits and camera from the run's environment settings (``config.json``'s ``env``)
-    and records the SHA-256 of ``config.json`` in the metadata.
+    head limits, camera and world (appearance ranges, other robots) from the run's
+    environment settings (``config.json``'s ``env``) and records the SHA-256 of
+    ``config.json`` in the metadata.
 
     Args:
         run_dir: a run directory written by :mod:`activevision.training`.
@@ -56,6 +57,7 @@ def export_run(
         training_config_sha256=hashlib.sha256(config_bytes).hexdigest(),
         action_names=ACTION_NAMES_8WAY,
         camera=env.camera,
+        world={"appearance": env.appearance, "robots": env.robots},
     )
     metadata["step_deg"] = env.step_deg
     metadata["action_set"] = env.action_set

@@ -25,6 +25,8 @@ Example ``policy.json`` (abridged)::
       "camera": {"width_px": 160, "height_px": 120, "hfov_deg": 58.0, "camera_height_m": 0.5,
                  "pan_min_deg": -90.0, "pan_max_deg": 90.0, "tilt_min_deg": 5.0,
                  "tilt_max_deg": 65.0},
+      "world": {"appearance": {"gain": [1.0, 1.0], "offset": [0.0, 0.0], ...},
+                "robots": {"count": [0, 0], "height": [0.4, 1.0], "radius": 0.12, ...}},
       "training_config_sha256": "9a0b..."
     }
 
@@ -37,6 +39,13 @@ radians. ``action_table_deg[a] = (d_pan, d_tilt)``: pan positive to the left, ti
 unknown and :class:`~activevision.runtime.HeadController` cannot compare the robot's with it.
 ``head_limits_deg`` is what the controller clips its commands to; export writes the trained
 camera's pan and tilt range to both.
+
+``world`` is the world the policy was trained in: the run's ``env.appearance`` (each
+appearance factor's ``[low, high]`` range) and ``env.robots`` (other robots: ``count`` and
+their size and spacing), as ``typecheck.config_to_dict`` writes them. The runtime checks only
+its shape (an object of objects whose values are finite numbers or ``[low, high]`` pairs) and
+hands it out as a plain dict (:attr:`PolicyMetadata.world`); ``activevision robustness`` builds
+the configs from it. Files written before it existed lack it (None: unknown).
 """
 
 from __future__ import annotations
@@ -329,6 +338,9 @@ class PolicyMetadata:
     goal_views: np.ndarray | None = field(default=None, repr=False)  #: (V, 2) rad
     #: the camera the policy was trained with (None: a policy.json from before it was kept)
     camera: CameraModel | None = None
+    #: the world the policy was trained in, ``{"appearance": {factor: [low, high], ...},
+    #: "robots": {"count": [lo, hi], ...}}`` (None: a policy.json from before it was kept)
+    world: dict[str, dict[str, Any]] | None = field(default=None, repr=False)
     raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -377,6 +389,7 @@ class PolicyMetadata:
             goal_output_name=read.optional_str("goal_output_name"),
             goal_views=read.goal_views(),
             camera=read.camera(),
+            world=read.world(),
             raw=dict(values),
         )
 
@@ -501,6 +514,35 @@ class _MetadataReader:
             return CameraModel(**values)
         except ValueError as error:
             raise self.fail(f"'camera' is invalid: {error}") from error
+
+    def world(self) -> dict[str, dict[str, Any]] | None:
+        """The training world (an object of objects of numbers and ``[low, high]`` pairs),
+        a copy; None when the file predates the record."""
+        record = self.values.get("world")
+        if record is None:
+            return None
+        shape = "an object of objects ({'appearance': {...}, 'robots': {...}})"
+        if not isinstance(record, Mapping):
+            raise self.fail(f"'world' must be {shape}, got {record!r}")
+        world: dict[str, dict[str, Any]] = {}
+        for name, group in record.items():
+            if not isinstance(name, str) or not isinstance(group, Mapping):
+                raise self.fail(f"'world' must be {shape}; {name!r} is {group!r}")
+            world[name] = {}
+            for key, value in group.items():
+                items = value if isinstance(value, list) else [value]
+                numbers = [_real(v) for v in items]
+                if (
+                    not isinstance(key, str)
+                    or len(items) != (2 if isinstance(value, list) else 1)
+                    or any(n is None or not math.isfinite(n) for n in numbers)
+                ):
+                    raise self.fail(
+                        f"'world' {name}.{key} must be a finite number or a [low, high] pair of"
+                        f" them, got {value!r}"
+                    )
+                world[name][key] = list(value) if isinstance(value, list) else value
+        return world
 
     def head_limits(self) -> HeadLimits:
         limits_deg = self.values.get("head_limits_deg")
