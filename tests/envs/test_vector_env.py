@@ -8,6 +8,9 @@ import pytest
 
 import activevision.envs  # noqa: F401
 from activevision.envs import ActiveVisionVectorEnv
+from activevision.envs.config import EnvConfig
+from activevision.envs.robots import RobotsConfig
+from activevision.rendering.appearance import AppearanceConfig
 
 
 def test_make_vec_returns_the_native_vector_env():
@@ -18,13 +21,21 @@ def test_make_vec_returns_the_native_vector_env():
     assert infos["success_rate"].shape == (3,)
 
 
-@pytest.mark.parametrize("frame_stack", [1, 3])
-def test_vector_env_equals_single_envs_with_the_same_seeds(frame_stack):
+#: A randomised world: every appearance factor on, 2-4 other robots.
+WORLD = EnvConfig(appearance=AppearanceConfig.randomised(), robots=RobotsConfig(count=(2, 4)))
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [{"frame_stack": 1}, {"frame_stack": 3}, {"config": WORLD}],
+    ids=["stack1", "stack3", "randomised-world"],
+)
+def test_vector_env_equals_single_envs_with_the_same_seeds(kwargs):
     n, seed, steps = 4, 11, 45
     rng = np.random.default_rng(0)
     actions = rng.integers(0, 9, (steps, n))
-    venv = ActiveVisionVectorEnv(num_envs=n, frame_stack=frame_stack)
-    singles = [gym.make("ActiveVision-v0", frame_stack=frame_stack) for _ in range(n)]
+    venv = ActiveVisionVectorEnv(num_envs=n, **kwargs)
+    singles = [gym.make("ActiveVision-v0", **kwargs) for _ in range(n)]
     vobs, _ = venv.reset(seed=seed)
     sobs = [e.reset(seed=seed + i)[0] for i, e in enumerate(singles)]
     done = np.zeros(n, dtype=bool)
