@@ -86,9 +86,12 @@ def test_export_run_writes_the_runs_world(tmp_path):
     assert config_from_dict(AppearanceConfig, world["appearance"]) == config.env.appearance
 
 
-def test_shipped_policy_records_the_clean_world():
+def test_shipped_policy_records_its_randomised_world():
+    # the shipped policy is the dagger_robust preset's run
     world = load_metadata(pretrained_policy_path().with_suffix(".json")).world
-    assert world == clean_world()
+    assert world is not None and world != clean_world()
+    assert config_from_dict(AppearanceConfig, world["appearance"]) == AppearanceConfig.randomised()
+    assert config_from_dict(RobotsConfig, world["robots"]).count == (0, 4)
 
 
 def test_metadata_without_the_record_loads(policy):

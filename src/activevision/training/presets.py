@@ -98,7 +98,10 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     ),
     # more data, same learner: 81-83% (4x, 8x) against the paper set-up's 79% (README)
     "data4x": (lambda: more_episodes(4), "4x the episodes for the paper's 30,000 updates"),
-    "data8x": (lambda: more_episodes(8), "8x the episodes (the paper's DDQN shipped before DAgger)"),
+    "data8x": (
+        lambda: more_episodes(8),
+        "8x the episodes (the paper's DDQN shipped before DAgger)",
+    ),
     # The README's main job: DAgger on what a robot has (image, head angles, a prior pose 0-2
     # m/rad off with its error scale, and the entropy method's proposal from it), 40,000
     # steps: about 2 minutes on a 2-core CPU, where the paper's DDQN in 6,000 steps stayed

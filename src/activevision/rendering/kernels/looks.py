@@ -195,11 +195,11 @@ def texture_row(
         dc = (carpet[m + 1] - c0) * step
         h0 = hall[m]
         dh = (hall[m + 1] - h0) * step
-        for q in range(min(KNOT, width_px - m * KNOT)):
-            i = m * KNOT + q
-            f = np.float32(q) + np.float32(0.5)
+        f = np.float32(0.5)  # a float counter: int -> float has no vector instruction
+        for i in range(m * KNOT, min((m + 1) * KNOT, width_px)):
             share = min(max((value[i] - bg) * inv_span, zero), one)
             value[i] += share * (c0 + f * dc) + (one - share) * (h0 + f * dh)
+            f += one
 
 
 @njit(**JIT)
@@ -236,11 +236,12 @@ def illuminate_row(v: float, value: np.ndarray, look: np.ndarray, params: Params
     vig = np.float32(look[_VIGNETTING] / (params.cx * params.cx + params.cy * params.cy))
     dv = v - params.cy
     base = np.float32(dv * dv)
-    cx = np.float32(params.cx - 0.5)
     one = np.float32(1.0)
+    # a float column counter, not float(i): int64 -> float has no vector instruction (AVX2)
+    du = np.float32(0.5 - params.cx)
     for i in range(value.shape[0]):
-        du = np.float32(i) - cx
         value[i] = value[i] * gain * (one - vig * (base + du * du)) + offset
+        du += one
 
 
 #: Most taps of the blur filter along one axis (defocus and motion blur convolved).
@@ -365,7 +366,8 @@ def finish_frame(
                 row[i] += np.float32(math.sqrt(read2 + shot * max(row[i], zero))) * table[i]
         if toned:
             for i in range(width):
-                img[j, i] = tone[min(max(int(row[i] + np.float32(0.5)), 0), 255)]
+                level = np.int32(min(max(row[i] + np.float32(0.5), zero), np.float32(255.0)))
+                img[j, i] = tone[level]
         else:
             for i in range(width):
                 img[j, i] = np.uint8(min(max(row[i] + np.float32(0.5), zero), np.float32(255.0)))
