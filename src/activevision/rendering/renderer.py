@@ -63,7 +63,8 @@ class Renderer:
     painted line at its true width, the centre circle, the penalty marks and a short centre
     mark, both goals (posts and crossbars) and the ball, anti-aliased by exact box-filter
     coverage of each pixel (see :mod:`activevision.rendering.kernels`). Greys and optional
-    noise come from :class:`RenderConfig`.
+    noise come from :class:`RenderConfig`; per-camera randomised looks (``looks``, ``tone``:
+    :mod:`.appearance`) and other robots (``cylinders``) are options of :meth:`render`.
 
     Batches of ``PARALLEL_MIN_BATCH`` or more frames are split over the numba threads
     (``numba.set_num_threads``); smaller ones, or all with ``parallel=False``, render on the
@@ -132,7 +133,7 @@ class Renderer:
             looks: (N, len(LOOK_FIELDS)) randomised appearance of each camera
                 (:mod:`.appearance`: ``draw_looks`` per episode, the per-frame columns set by
                 the caller); None: the clean render.
-            tone: (N, 256) uint8 tone curves (``appearance.tone_curve``), with ``looks``;
+            tone: (N, 256) uint8 tone curves (``appearance.tone_curves``), with ``looks``;
                 None: none.
             cylinders: (N, C, 6) vertical cylinders (other robots' bodies) per camera: x, y,
                 radius, bottom z, top z (m), grey; radius 0 marks an unused slot.
@@ -169,7 +170,6 @@ class Renderer:
         if rng is not None and self.config.has_noise:  # with noise, rng is checked above
             apply_noise(out, self.config, rng)
         return out
-
 
     def _looks(
         self,
