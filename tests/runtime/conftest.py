@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import json
 import math
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -150,6 +151,22 @@ def frames() -> Callable[[int, int], np.ndarray]:
     return get
 
 
+def assert_record_rejected(model: Path, key: str, record: object, message: str) -> None:
+    """policy.json's ``key`` replaced by ``record``: loading it, alone or through a
+    HeadController, is one PolicyFileError matching ``message`` and naming the file."""
+    from activevision.runtime import HeadController, PolicyFileError, load_metadata
+
+    path = model.with_suffix(".json")
+    values = json.loads(path.read_text())
+    values[key] = record
+    path.write_text(json.dumps(values))
+    with pytest.raises(PolicyFileError, match=message) as error:
+        load_metadata(path)
+    assert str(path) in str(error.value)  # names the file
+    with pytest.raises(PolicyFileError, match=message):
+        HeadController(model)
+
+
 @pytest.fixture(scope="session")
 def helpers() -> SimpleNamespace:
     """The reference functions above, for test modules (importlib mode has no conftest
@@ -157,5 +174,5 @@ def helpers() -> SimpleNamespace:
     return SimpleNamespace(
         eight_way_table=eight_way_table, make_network=make_network, export=export,
         colourise=colourise, area_matrix=area_matrix, reference_preprocess=reference_preprocess,
-        frame_sizes=FRAME_SIZES,
+        frame_sizes=FRAME_SIZES, assert_record_rejected=assert_record_rejected,
     )

@@ -18,7 +18,6 @@ from activevision.runtime import (
     CameraMismatchWarning,
     CameraModel,
     HeadController,
-    PolicyFileError,
     load_metadata,
     pretrained_policy_path,
 )
@@ -129,21 +128,10 @@ def test_metadata_without_the_record_loads(policy):
     assert controller.trained_camera is None and controller.robot_camera == robot
 
 
-def assert_rejected(model, record, message) -> None:
-    path = model.with_suffix(".json")
-    values = json.loads(path.read_text())
-    values["camera"] = record
-    path.write_text(json.dumps(values))
-    with pytest.raises(PolicyFileError, match=message) as error:
-        load_metadata(path)
-    assert str(path) in str(error.value)  # names the file
-    with pytest.raises(PolicyFileError, match=message):
-        HeadController(model)
-
-
 @pytest.mark.parametrize("record", [[160, 120], "160x120", {"width_px": 160, "height_px": 120}])
-def test_malformed_record_is_a_policy_file_error(camera_policy, record):
-    assert_rejected(camera_policy, record, "'camera' must be an object with keys")
+def test_malformed_record_is_a_policy_file_error(camera_policy, record, helpers):
+    message = "'camera' must be an object with keys"
+    helpers.assert_record_rejected(camera_policy, "camera", record, message)
 
 
 @pytest.mark.parametrize(
@@ -163,9 +151,9 @@ def test_malformed_record_is_a_policy_file_error(camera_policy, record):
         ({"pan_min_deg": 90.0, "pan_max_deg": -90.0}, "must be ordered"),
     ],
 )
-def test_invalid_value_is_a_policy_file_error(camera_policy, changes, message):
+def test_invalid_value_is_a_policy_file_error(camera_policy, changes, message, helpers):
     record = {**CameraModel.of(TRAINED).to_json(), **changes}
-    assert_rejected(camera_policy, record, f"'camera' .*{message}")
+    helpers.assert_record_rejected(camera_policy, "camera", record, f"'camera' .*{message}")
 
 
 def test_robot_camera_must_be_a_camera(camera_policy):
