@@ -8,10 +8,12 @@ as strings: nothing heavy (numba, the renderer, torch) is imported until an env 
 from __future__ import annotations
 
 ENV_ID = "ActiveVision-v0"
+MATCH_ENV_ID = "ActiveVisionMatch-v0"
 
 
 def register_envs() -> None:
-    """Register ``ActiveVision-v0`` (single and native vector entry points) once."""
+    """Register ``ActiveVision-v0`` and ``ActiveVisionMatch-v0`` (single and native vector
+    entry points) once."""
     try:
         from gymnasium.envs.registration import register, registry
     except ImportError:  # the robot runtime needs no Gymnasium
@@ -22,4 +24,11 @@ def register_envs() -> None:
             entry_point="activevision.envs.active_vision:ActiveVisionEnv",
             vector_entry_point="activevision.envs.vector:ActiveVisionVectorEnv",
             max_episode_steps=20,
+        )
+    if MATCH_ENV_ID not in registry:
+        # no max_episode_steps: the match truncates itself after MatchConfig.ticks
+        register(
+            id=MATCH_ENV_ID,
+            entry_point="activevision.envs.match.env:ActiveVisionMatchEnv",
+            vector_entry_point="activevision.envs.match.vector:ActiveVisionMatchVectorEnv",
         )

@@ -48,9 +48,11 @@ LOG_2PIE = math.log(2.0 * math.pi * math.e)
 #: namedtuple is a homogeneous tuple; the field types are checked where the bundle is made.)
 Fields = tuple[Any, ...]
 
-#: error codes written by :func:`search_kernel`
+#: error codes written by :func:`search_kernel` and returned by :func:`ukf_update_rb`
 OK = 0
 NOT_PD = 1
+#: :func:`ukf_update_rb` left the belief as it was: the detection failed the innovation gate
+GATED = 2
 
 
 @njit(cache=True)
@@ -105,6 +107,17 @@ def expected_rb(
 
 
 @njit(cache=True)
+def sigma_points3(x: np.ndarray, L: np.ndarray, sig: np.ndarray) -> None:
+    """Merwe's 7 sigma points of a pose into ``sig`` (7, 3): ``x``, ``x + L[:, k]``,
+    ``x - L[:, k]`` (``L``: the Cholesky factor of ``(n + lambda) P``)."""
+    for j in range(3):
+        sig[0, j] = x[j]
+        for k in range(3):
+            sig[k + 1, j] = x[j] + L[j, k]
+            sig[k + 4, j] = x[j] - L[j, k]
+
+
+@njit(cache=True)
 def ukf_update_rb(
     x: np.ndarray,
     P: np.ndarray,
@@ -113,12 +126,18 @@ def ukf_update_rb(
     noise: tuple[float, float],
     weights: SigmaWeights,
     scratch: UKFScratch,
-) -> bool:
+    gate: float = math.inf,
+) -> tuple[int, float]:
     """One UKF range-bearing update of ``x`` (3,) and ``P`` (3, 3) in place (as
     ``ukf.ukf_update``) by the detection ``z = (range, bearing)`` of the landmark ``segment =
     (ax, ay, bx, by)`` with variances ``noise = (var_r, var_b)``, with the
-    :class:`SigmaWeights` ``weights`` and the :class:`UKFScratch` ``scratch``. False if a
-    covariance is not positive definite."""
+    :class:`SigmaWeights` ``weights`` and the :class:`UKFScratch` ``scratch``.
+
+    Returns ``(status, distance)``: the squared Mahalanobis distance of the innovation,
+    ``y^T S^-1 y`` (NaN if not computed), and the status :data:`OK`, :data:`NOT_PD` if a
+    covariance is not positive definite, or :data:`GATED` (nothing changed) when the
+    distance exceeds ``gate`` (a chi-square quantile with 2 degrees of freedom: the standard
+    validation gate against false detections; the search never gates)."""
     z0, z1 = z
     ax, ay, bx, by = segment
     var_r, var_b = noise
@@ -126,12 +145,8 @@ def ukf_update_rb(
     L, sig, hz = scratch
     A = weights.n_lambda * P
     if not chol3(A, L):
-        return False
-    for j in range(3):
-        sig[0, j] = x[j]
-        for k in range(3):
-            sig[k + 1, j] = x[j] + L[j, k]
-            sig[k + 4, j] = x[j] - L[j, k]
+        return NOT_PD, math.nan
+    sigma_points3(x, L, sig)
     point = ax == bx and ay == by
     nx = ny = phi = 0.0
     if not point:  # the line's normal, oriented as the detection (``ukf.line_normal``)
@@ -169,12 +184,15 @@ def ukf_update_rb(
         c21 += w * e2 * db
     det = s00 * s11 - s01 * s01
     if not det > 0.0:
-        return False
+        return NOT_PD, math.nan
     i00, i01, i11 = s11 / det, -s01 / det, s00 / det
+    y0, y1 = z0 - zr, wrap(z1 - zb)
+    distance = y0 * (i00 * y0 + i01 * y1) + y1 * (i01 * y0 + i11 * y1)
+    if distance > gate:
+        return GATED, distance
     k00, k01 = c00 * i00 + c01 * i01, c00 * i01 + c01 * i11
     k10, k11 = c10 * i00 + c11 * i01, c10 * i01 + c11 * i11
     k20, k21 = c20 * i00 + c21 * i01, c20 * i01 + c21 * i11
-    y0, y1 = z0 - zr, wrap(z1 - zb)
     x[0] += k00 * y0 + k01 * y1
     x[1] += k10 * y0 + k11 * y1
     x[2] = wrap(x[2] + (k20 * y0 + k21 * y1))
@@ -188,7 +206,7 @@ def ukf_update_rb(
             )
             P[i, j] = v
             P[j, i] = v
-    return chol3(P, L)
+    return (OK if chol3(P, L) else NOT_PD), distance
 
 
 @njit(cache=True)
@@ -295,14 +313,17 @@ def search_block(
             if not clip_visible(ax, ay, bx, by, planes, r_lo[s, k], r_hi[s, k]):
                 continue
             visible[s, v, k] = True
-            ok = ukf_update_rb(
-                x,
-                P,
-                (zs[s, k, 0], zs[s, k, 1]),
-                (ax, ay, bx, by),
-                (var_r[s, k], var_b[s, k]),
-                weights,
-                scratch,
+            ok = (
+                ukf_update_rb(
+                    x,
+                    P,
+                    (zs[s, k, 0], zs[s, k, 1]),
+                    (ax, ay, bx, by),
+                    (var_r[s, k], var_b[s, k]),
+                    weights,
+                    scratch,
+                )[0]
+                == OK
             )
         if ok:
             entropies[s, v] = 0.5 * (3 * LOG_2PIE) + math.log(L[0, 0] * L[1, 1] * L[2, 2])

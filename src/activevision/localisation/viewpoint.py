@@ -58,6 +58,13 @@ def _noise_table(ukf: UKFConfig) -> np.ndarray:
     return table
 
 
+def landmark_fields(landmarks: LandmarkSet, ukf: UKFConfig) -> kernels.Fields:
+    """The fields of the kernels' ``Landmarks`` bundle: ``landmarks`` and ``ukf``'s noise."""
+    return tuple(
+        Landmarks(landmarks.segments, landmarks.max_distance, landmarks.types, _noise_table(ukf))
+    )
+
+
 def search_args(
     means: np.ndarray,
     covs: np.ndarray,
@@ -103,11 +110,7 @@ def _static_bundles(
         return bundles
     Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
     bundles = (
-        tuple(
-            Landmarks(
-                landmarks.segments, landmarks.max_distance, landmarks.types, _noise_table(ukf)
-            )
-        ),
+        landmark_fields(landmarks, ukf),
         tuple(SigmaWeights(Wm, Wc, ukf.n + ukf.lambda_)),
         tuple(Views(grid.pans, grid.tilts, bool(ball_views_only))),
         camera_fields(cam),

@@ -1,0 +1,155 @@
+"""Configuration of the match environment: one typed, nested config per part.
+
+Nothing here is in the paper, whose robot stands still; each default names its source (a
+KidSize rule, a team's report, or the reasoning) beside it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import typing
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from activevision.envs.robots import RobotsConfig
+from activevision.geometry import CameraConfig, FieldSpec
+from activevision.localisation.config import UKFConfig
+from activevision.localisation.tracking import TrackerConfig
+from activevision.rendering.appearance import AppearanceConfig
+from activevision.typecheck import check_dataclass_fields, in_range
+
+#: What the agent observes: the image, plus the head angles, plus the belief (mean,
+#: uncertainty) and the robot's ball model (``envs.match.observations``).
+MatchObservation = Literal["image", "image+head", "image+head+belief"]
+MATCH_OBSERVATIONS: tuple[str, ...] = typing.get_args(MatchObservation)
+#: What the reward scores: the belief's entropy (what a robot can compute) or its true error.
+RewardKind = Literal["entropy", "error"]
+#: Where the robot walks: random waypoints, or scripted to the ball (a striker).
+WalkTarget = Literal["waypoints", "ball"]
+
+
+@dataclass(frozen=True)
+class WalkConfig:
+    """How our robot walks. KidSize robots walk at 0.1-0.3 m/s and turn at about 30 deg/s
+    (team description papers, e.g. NUbots 2019 and Bit-Bots 2022)."""
+
+    target: WalkTarget = "waypoints"
+    speed: float = field(default=0.2, metadata=in_range(0.0, 1.0))  #: forward (m/s)
+    turn_rate: float = field(default=0.5, metadata=in_range(0.0, 3.0))  #: rad/s
+    reach: float = field(default=0.25, metadata=in_range(0.01, 2.0))  #: a waypoint is reached (m)
+    #: ticks to stand at a reached waypoint, uniform (robots stop to kick, to look, to wait)
+    pause_ticks: tuple[int, int] = (0, 15)
+    #: waypoints are drawn this far (m) inside the field lines
+    margin: float = field(default=0.5, metadata=in_range(0.0, 3.0))
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+        lo, hi = self.pause_ticks
+        if not 0 <= lo <= hi:
+            raise ValueError(f"WalkConfig.pause_ticks: must satisfy 0 <= low <= high, got {lo, hi}")
+
+
+@dataclass(frozen=True)
+class BallConfig:
+    """The ball rolls with constant deceleration and is kicked at random times (by anyone)."""
+
+    #: rolling deceleration on artificial turf (m/s^2); measured values lie 0.3-0.6
+    deceleration: float = field(default=0.4, metadata=in_range(0.0, 5.0))
+    kick_rate: float = field(default=0.02, metadata=in_range(0.0, 1.0))  #: kicks per tick
+    kick_speed: tuple[float, float] = (0.5, 2.5)  #: initial speed of a kick (m/s), uniform
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+        lo, hi = self.kick_speed
+        if not 0 <= lo <= hi <= 10:
+            raise ValueError(
+                f"BallConfig.kick_speed: must lie in [0, 10] m/s, ordered, got {lo, hi}"
+            )
+
+
+@dataclass(frozen=True)
+class DetectionConfig:
+    """The landmark detector. A landmark in view is detected with a probability falling
+    linearly from ``near`` at the robot to ``far`` at its detection range (small, distant
+    features are missed more often); detections carry the UKF's own sensor noise. A false
+    detection (a robot's foot taken for a corner) appears with ``false_rate`` per tick:
+    a random point landmark at a random range and bearing inside the image."""
+
+    near: float = field(default=0.95, metadata=in_range(0.0, 1.0))
+    far: float = field(default=0.5, metadata=in_range(0.0, 1.0))
+    false_rate: float = field(default=0.05, metadata=in_range(0.0, 1.0))
+    #: std of the robot's ball detector, as a fraction of the ball's range
+    ball_noise: float = field(default=0.05, metadata=in_range(0.0, 1.0))
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+
+
+@dataclass(frozen=True)
+class MatchRewardConfig:
+    """Reward per tick: ``-entropy_weight * H`` (``kind="entropy"``, H the belief's entropy
+    in nats) or ``-error_weight * |position error|`` (``kind="error"``, m), plus
+    ``ball_weight`` with the ball in view, minus ``travel_weight`` per degree of head move."""
+
+    kind: RewardKind = "entropy"
+    entropy_weight: float = field(default=0.1, metadata=in_range(0.0))
+    error_weight: float = field(default=1.0, metadata=in_range(0.0))
+    ball_weight: float = field(default=0.5, metadata=in_range(0.0))
+    travel_weight: float = field(default=0.005, metadata=in_range(0.0))
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+
+
+def _match_ukf() -> UKFConfig:
+    # A match starts from a known kick-off position (initial std 10 cm, 3 deg). The per-tick
+    # base noise is foot slip while stepping on the spot: small, so that a standing robot's
+    # belief drifts 0.1 m / 0.1 rad in about a minute, not in seconds.
+    return UKFConfig(odometry_base=(0.002, 0.002, 0.004), initial_std=(0.1, 0.1, 0.05))
+
+
+def _match_tracker() -> TrackerConfig:
+    return TrackerConfig(ukf=_match_ukf())
+
+
+@dataclass(frozen=True)
+class MatchConfig:
+    """Everything that defines a match of ``ActiveVisionMatch-v0``."""
+
+    field: FieldSpec = dataclasses.field(default_factory=FieldSpec)  #: KidSize field
+    camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)  #: the paper's camera
+    #: control ticks per match: 600 ticks of 0.32 s is 3.2 minutes of play
+    ticks: int = dataclasses.field(default=600, metadata=in_range(1))
+    tick_seconds: float = dataclasses.field(default=0.32, metadata=in_range(0.01, 10.0))  #: P
+    step_deg: float = dataclasses.field(default=3.0, metadata=in_range(0.1, 30.0))  #: P: 3 deg
+    observation: MatchObservation = "image"
+    walk: WalkConfig = dataclasses.field(default_factory=WalkConfig)
+    ball: BallConfig = dataclasses.field(default_factory=BallConfig)
+    detection: DetectionConfig = dataclasses.field(default_factory=DetectionConfig)
+    tracker: TrackerConfig = dataclasses.field(default_factory=_match_tracker)
+    reward: MatchRewardConfig = dataclasses.field(default_factory=MatchRewardConfig)
+    #: randomised appearance, drawn per match (``rendering.appearance``; off: clean)
+    appearance: AppearanceConfig = dataclasses.field(default_factory=AppearanceConfig)
+    #: other robots, standing still for the match (``envs.robots``; none by default)
+    robots: RobotsConfig = dataclasses.field(default_factory=RobotsConfig)
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+        if self.detection.far > self.detection.near:
+            raise ValueError("MatchConfig.detection: far must not exceed near")
+
+    @property
+    def head_step(self) -> float:
+        """The head move per action (rad)."""
+        return math.radians(self.step_deg)
+
+    def replace(self, **changes: Any) -> MatchConfig:
+        """A copy with ``changes``; an unknown name is a ValueError naming the fields."""
+        names = {f.name for f in dataclasses.fields(self)}
+        for name, value in changes.items():
+            if name not in names:
+                raise ValueError(
+                    f"MatchConfig: unknown keyword {name}={value!r}; the fields are {sorted(names)}"
+                )
+        return dataclasses.replace(self, **changes)

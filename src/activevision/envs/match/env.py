@@ -1,0 +1,150 @@
+"""``ActiveVisionMatch-v0``: head control while the robot plays -- a continuing task."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from activevision.envs.actions import check_actions
+from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.observations import (
+    Observation,
+    image_space,
+    observation_space,
+    observe,
+    single,
+)
+from activevision.envs.match.simulation import MatchBatch
+
+
+def resolve_match_config(config: MatchConfig | None, overrides: dict[str, Any]) -> MatchConfig:
+    """``config`` (default :class:`MatchConfig()`) with the keyword ``overrides``."""
+    if config is None:
+        config = MatchConfig()
+    elif not isinstance(config, MatchConfig):
+        raise ValueError(f"config: expects MatchConfig or None, got {config!r}")
+    return config.replace(**overrides) if overrides else config
+
+
+class ActiveVisionMatchEnv(gym.Env):
+    """
+    ## Description
+    The robot plays: it walks about a RoboCup KidSize field while the ball rolls and is
+    kicked, and its head camera must keep its localisation good *and* the ball in sight,
+    every control tick, for a whole match. The paper's task (``ActiveVision-v0``) is one
+    frozen moment; this is the question a RoboCup team asks of its head control.
+
+    Every tick (``tick_seconds``, the paper's 320 ms):
+
+    1. the head moves by the action (the episodic env's 9 moves of ``step_deg``, 3 deg);
+    2. our robot walks (:class:`WalkConfig`): to random waypoints, pausing at each, or to
+       the ball (``walk.target="ball"``), planning from its *believed* pose at KidSize speed
+       (0.2 m/s, 0.5 rad/s). Its true motion drifts from the commanded step with the UKF's
+       odometry model (std proportional to distance walked and angle turned, plus a small
+       slip per tick); the commanded step is its odometry;
+    3. the ball (:class:`BallConfig`) rolls with constant deceleration, bounces off the
+       field lines, and is kicked at random times in random directions;
+    4. the detector (:class:`DetectionConfig`) sees the landmarks in view (the episodic
+       env's visibility model; behind another robot they are hidden), each with a
+       probability falling with range, with the UKF's own sensor noise, plus occasional
+       false detections of point features;
+    5. the UKF (:mod:`activevision.localisation.tracking`) predicts from odometry and
+       updates with each detection, closest first, behind a chi-square validation gate; a
+       run of gated detections makes the robot declare itself lost (kidnapped) and widen
+       its belief;
+    6. the robot's ball model takes the ball's measured position when it is in view, and is
+       carried along by odometry when it is not.
+
+    ## Action Space
+    ``Discrete(9)``: stay, then the 8 head moves of ``ActiveVision-v0`` (pan positive to the
+    left, tilt positive down), clipped to the head's limits.
+
+    ## Observation Space
+    ``Box(0, 255, (1, 120, 160), uint8)``: the camera image. ``observation="image+head"``
+    and ``"image+head+belief"`` give a ``Dict`` adding the head angles, then the belief's
+    mean and std and the ball model (:mod:`activevision.envs.match.observations`).
+
+    ## Rewards
+    Per tick (:class:`MatchRewardConfig`): ``-0.1 H`` with ``H`` the belief's entropy in
+    nats (``kind="error"``: ``-|position error|`` in m, a simulator-only signal), ``+0.5``
+    with the ball in view, ``-0.005`` per degree the head moved.
+
+    ## Starting State
+    Our robot anywhere on the field (0.5 m inside the lines), any heading; its belief starts
+    at a known kick-off position (std 10 cm, 3 deg). The ball anywhere on the field, at rest,
+    its position known to the ball model. The head anywhere within its limits.
+
+    ## Episode End
+    Never terminates; truncates after ``ticks`` ticks (600: 3.2 minutes of play).
+
+    ## Info
+    What the robot knows: ``belief_mean`` (3,), ``belief_cov`` (3, 3), ``entropy``,
+    ``head``, ``head_move`` (rad this tick), ``ball_relative`` (robot frame, m),
+    ``ball_age`` (ticks since seen), ``declared_lost``, ``detections_accepted`` and
+    ``detections_gated`` (cumulative). What only the simulator knows: ``pose``, ``ball``,
+    ``position_error`` (m), ``heading_error`` (rad), ``ball_in_view``, ``detected_mask``
+    ((K,) bool: landmarks detected this tick), ``waypoint``, ``tick``.
+
+    ## Arguments
+    ``gymnasium.make("ActiveVisionMatch-v0", config=MatchConfig(...))`` or any
+    :class:`MatchConfig` field as a keyword (``ticks=300``, ``step_deg=6.0``,
+    ``observation="image+head+belief"``). ``gymnasium.make_vec(..., vectorization_mode=
+    "vector_entry_point")`` gives the native batched env.
+
+    ## Version History
+    * v0: initial release.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 3}
+
+    def __init__(
+        self,
+        config: MatchConfig | None = None,
+        render_mode: str | None = None,
+        **config_overrides: Any,
+    ) -> None:
+        config = resolve_match_config(config, config_overrides)
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode: expects one of {self.metadata['render_modes']} or None, "
+                f"got {render_mode!r}"
+            )
+        self.config = config
+        self.render_mode = render_mode
+        self.sim = MatchBatch(config, 1)
+        self.action_space = spaces.Discrete(len(self.sim.actions))
+        self.observation_space = observation_space(config)
+        self._frames = np.zeros((1, *image_space(config).shape), dtype=np.uint8)
+        self._slot = np.zeros(1, dtype=np.int64)
+
+    def reset(
+        self, *, seed: int | None = None, options: dict | None = None
+    ) -> tuple[Observation, dict[str, Any]]:
+        super().reset(seed=seed)
+        self.sim.reset(self._slot, [self.np_random])
+        return self._observe(), self._info()
+
+    def step(self, action: object) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
+        action = check_actions(action, len(self.sim.actions), ()).reshape(1)
+        reward = self.sim.step(action)
+        truncated = bool(self.sim.tick[0] >= self.config.ticks)
+        return self._observe(), float(reward[0]), False, truncated, self._info()
+
+    def _observe(self) -> Observation:
+        self.sim.render(self._slot, out=self._frames[:, 0])
+        return single(observe(self._frames, self.sim))
+
+    def _info(self) -> dict[str, Any]:
+        return {
+            key: value[0].item() if value.ndim == 1 else value[0]
+            for key, value in self.sim.info_arrays().items()
+        }
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode != "rgb_array":
+            return None
+        grey = self._frames[0, 0]
+        return np.repeat(grey[:, :, None], 3, axis=2)

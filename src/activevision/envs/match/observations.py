@@ -1,0 +1,82 @@
+"""What the match agent observes (``MatchConfig.observation``).
+
+| key      | shape           | contents                                                      |
+|----------|-----------------|---------------------------------------------------------------|
+| "image"  | (1, H, W) uint8 | the camera image                                              |
+| "head"   | (2,) float32    | head joint angles (pan, tilt), rad                            |
+| "pose"   | (4,) float32    | the belief's mean (x m, y m, cos theta, sin theta)            |
+| "belief" | (3,) float32    | the belief's std in x, y (m) and theta (rad), capped at 10    |
+| "ball"   | (3,) float32    | the ball model: position in the robot frame (m), seconds since |
+|          |                 | the ball was last seen (capped at 10)                         |
+
+"image+head" has image and head; "image+head+belief" adds pose, belief and ball: everything
+a robot's own localisation and ball model give it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from gymnasium import spaces
+
+from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.simulation import MatchBatch
+
+IMAGE_KEY = "image"
+VECTOR_SIZES = {"head": 2, "pose": 4, "belief": 3, "ball": 3}
+_BOUND = 10.0
+
+Observation = np.ndarray | dict[str, np.ndarray]
+
+
+def vector_keys(cfg: MatchConfig) -> tuple[str, ...]:
+    """The Dict observation's vector keys, in the order networks concatenate them."""
+    if cfg.observation == "image":
+        return ()
+    return ("head",) + (("pose", "belief", "ball") if "belief" in cfg.observation else ())
+
+
+def image_space(cfg: MatchConfig) -> spaces.Box:
+    return spaces.Box(0, 255, (1, cfg.camera.height, cfg.camera.width), dtype=np.uint8)
+
+
+def observation_space(cfg: MatchConfig) -> spaces.Box | spaces.Dict:
+    """The image Box, or the Dict of the image and the vector keys."""
+    image = image_space(cfg)
+    if cfg.observation == "image":
+        return image
+    vectors = {
+        key: spaces.Box(-_BOUND, _BOUND, (VECTOR_SIZES[key],), dtype=np.float32)
+        for key in vector_keys(cfg)
+    }
+    return spaces.Dict({IMAGE_KEY: image, **vectors})
+
+
+def observe(frames: np.ndarray, sim: MatchBatch) -> Observation:
+    """Observations of all N slots: ``frames`` (N, 1, H, W) and the slots' state."""
+    keys = vector_keys(sim.cfg)
+    if not keys:
+        return frames.copy()
+    obs: dict[str, np.ndarray] = {IMAGE_KEY: frames.copy()}
+    for key in keys:
+        obs[key] = np.clip(_vector(key, sim), -_BOUND, _BOUND).astype(np.float32)
+    return obs
+
+
+def _vector(key: str, sim: MatchBatch) -> np.ndarray:
+    if key == "head":
+        return sim.head
+    if key == "pose":
+        theta = sim.mean[:, 2]
+        return np.column_stack([sim.mean[:, :2], np.cos(theta), np.sin(theta)])
+    if key == "belief":
+        return np.sqrt(np.diagonal(sim.cov, axis1=1, axis2=2))
+    age = sim.ball_age * sim.cfg.tick_seconds
+    return np.column_stack([sim.ball_relative, age])
+
+
+def single(obs: Observation, i: int = 0) -> Observation:
+    """Slot ``i`` of a batched observation."""
+    if isinstance(obs, dict):
+        return {k: v[i] for k, v in obs.items()}
+    one: np.ndarray = obs[i]
+    return one
