@@ -88,16 +88,25 @@ def randomised_world(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, fl
     def single() -> None:
         k = counter[0] = (counter[0] + 1) % pool
         s = slice(k, k + 1)
-        renderer.render(pose[k], pan[k], tilt[k], ball[k], looks=looks[s], tone=tone[s],
-                        cylinders=cylinders[s])
+        renderer.render(
+            pose[k], pan[k], tilt[k], ball[k], looks=looks[s], tone=tone[s], cylinders=cylinders[s]
+        )
 
     out = np.empty((64, *renderer.image_shape), dtype=np.uint8)
 
     def batch() -> None:
         k = counter[0] = (counter[0] + 64) % (pool - 64)
         s = slice(k, k + 64)
-        renderer.render(pose[s], pan[s], tilt[s], ball[s], out=out, looks=looks[s],
-                        tone=tone[s], cylinders=cylinders[s])
+        renderer.render(
+            pose[s],
+            pan[s],
+            tilt[s],
+            ball[s],
+            out=out,
+            looks=looks[s],
+            tone=tone[s],
+            cylinders=cylinders[s],
+        )
 
     def clean_single() -> None:
         k = counter[0] = (counter[0] + 1) % pool
@@ -113,8 +122,12 @@ def randomised_world(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, fl
     # clean and randomised alternate within every round, so that a slow spell of the
     # machine spoils both alike (these machines vary by 2-3x from minute to minute)
     best = {"single": np.inf, "batch": np.inf, "clean_single": np.inf, "clean_batch": np.inf}
-    calls = {"single": single, "batch": batch, "clean_single": clean_single,
-             "clean_batch": clean_batch}
+    calls = {
+        "single": single,
+        "batch": batch,
+        "clean_single": clean_single,
+        "clean_batch": clean_batch,
+    }
     for _ in range(2 * args.rounds):
         for name, fn in calls.items():
             chunk = 20 if "single" in name else 5

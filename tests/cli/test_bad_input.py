@@ -110,9 +110,9 @@ BAD_ARGUMENTS = [
     (["train", "--set", "env_kwargs.nope=1", "--out", "{tmp}/x"], "nope"),
     (["train", "--set", "env.nope=1", "--out", "{tmp}/x"], "nope"),
     (["train", "--set", "learner.gamma=2", "--out", "{tmp}/x"], "gamma"),
-    (["train", "--set", "env_kwargs.step_deg=\"3\"", "--out", "{tmp}/x"], "step_deg"),
+    (["train", "--set", 'env_kwargs.step_deg="3"', "--out", "{tmp}/x"], "step_deg"),
     (["train", "--set", "env_kwargs.field=42", "--out", "{tmp}/x"], "field"),
-    (["train", "--set", "env_kwargs.field=\"moon\"", "--out", "{tmp}/x"], "moon"),
+    (["train", "--set", 'env_kwargs.field="moon"', "--out", "{tmp}/x"], "moon"),
     (["train", "--set", "env_kwargs.frame_stack=true", "--out", "{tmp}/x"], "frame_stack"),
     (["train", "--set", "env_kwargs.ball_lost_reward=NaN", "--out", "{tmp}/x"], "ball_lost"),
     (["train", "--set", "env_kwargs.max_episode_steps=0", "--out", "{tmp}/x"], "max_episode"),
@@ -240,50 +240,142 @@ def replace_replay_array(run: Path, name: str, value) -> None:
 
 TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
     # (name, tamper, command, what the error names)
-    ("policy weights", lambda r: flip_bytes(r / "policy.safetensors"),
-     ["evaluate", "--run", "{run}", "--methods", "learned", "--episodes", "2"], "policy"),
-    ("policy weights, export", lambda r: flip_bytes(r / "policy.safetensors"),
-     ["export", "{run}", "-o", "{run}/../out.onnx"], "policy.safetensors"),
-    ("policy weights, episode", lambda r: flip_bytes(r / "policy.safetensors", 10),
-     ["episode", "--run", "{run}", "--out", "{run}/../e.png"], "policy.safetensors"),
-    ("truncated weights", lambda r: (r / "policy.safetensors").write_bytes(b"\x08"),
-     ["export", "{run}", "-o", "{run}/../out.onnx"], "policy.safetensors"),
-    ("checkpoint weights", lambda r: flip_bytes(latest(r) / "model.safetensors"),
-     ["train", "--resume", "{run}"], "corrupt"),
-    ("empty manifest", lambda r: (latest(r) / "manifest.json").write_text("{}"),
-     ["train", "--resume", "{run}"], "manifest"),
-    ("manifest not an object", lambda r: (latest(r) / "manifest.json").write_text("[1]"),
-     ["train", "--resume", "{run}"], "manifest"),
-    ("extra checkpoint file", lambda r: (latest(r) / "evil.pt").write_bytes(b"x"),
-     ["train", "--resume", "{run}"], "evil.pt"),
-    ("edited config", lambda r: (r / "config.json").write_text(
-        (r / "config.json").read_text().replace('"learning_rate": 0.0005', '"learning_rate": 0.1')),
-     ["train", "--resume", "{run}"], "config.json"),
-    ("config not JSON", lambda r: (r / "config.json").write_text("{"),
-     ["evaluate", "--run", "{run}", "--methods", "learned"], "config.json"),
-    ("config with a bad env key", lambda r: (r / "config.json").write_text(
-        (r / "config.json").read_text().replace('"env": {', '"env": {"x": 1, ')),
-     ["export", "{run}", "-o", "{run}/../out.onnx"], "'x'"),
-    ("state.json missing a key", lambda r: edit_state(r, lambda s: s.pop("episode_seed")),
-     ["train", "--resume", "{run}"], "episode_seed"),
-    ("state.json wrong type", lambda r: edit_state(r, lambda s: s.update(step="soon")),
-     ["train", "--resume", "{run}"], "checkpoint"),
-    ("state.json not an object", lambda r: ((latest(r) / "state.json").write_text("[]"),
-                                            rewrite_manifest(latest(r))),
-     ["train", "--resume", "{run}"], "JSON object"),
-    ("replay of another shape", lambda r: replace_replay_array(r, "shape", [500, 2, 120, 160]),
-     ["train", "--resume", "{run}"], "obs_shape"),
-    ("replay missing an array", lambda r: replace_replay_array(r, "counters", [1, 2]),
-     ["train", "--resume", "{run}"], "checkpoint"),
-    ("optimizer state of another network", lambda r: swap_optimizer_state(r),
-     ["train", "--resume", "{run}"], "checkpoint"),
-    ("compare.csv of other episodes", lambda r: write_compare_csv(r, episodes=50),
-     ["compare", "--run", "{run}", "--methods", "random", "--errors", "0,0.5",
-      "--episodes", "2"], "50 episodes"),
-    ("evaluation.json not JSON", lambda r: write_file(r / "evaluation" / "evaluation.json", "{"),
-     ["report", "{run}"], "evaluation.json"),
-    ("metrics.csv garbage", lambda r: (r / "metrics.csv").write_text("epoch,step\nx,y\n"),
-     ["plot", "{run}"], "metrics.csv"),
+    (
+        "policy weights",
+        lambda r: flip_bytes(r / "policy.safetensors"),
+        ["evaluate", "--run", "{run}", "--methods", "learned", "--episodes", "2"],
+        "policy",
+    ),
+    (
+        "policy weights, export",
+        lambda r: flip_bytes(r / "policy.safetensors"),
+        ["export", "{run}", "-o", "{run}/../out.onnx"],
+        "policy.safetensors",
+    ),
+    (
+        "policy weights, episode",
+        lambda r: flip_bytes(r / "policy.safetensors", 10),
+        ["episode", "--run", "{run}", "--out", "{run}/../e.png"],
+        "policy.safetensors",
+    ),
+    (
+        "truncated weights",
+        lambda r: (r / "policy.safetensors").write_bytes(b"\x08"),
+        ["export", "{run}", "-o", "{run}/../out.onnx"],
+        "policy.safetensors",
+    ),
+    (
+        "checkpoint weights",
+        lambda r: flip_bytes(latest(r) / "model.safetensors"),
+        ["train", "--resume", "{run}"],
+        "corrupt",
+    ),
+    (
+        "empty manifest",
+        lambda r: (latest(r) / "manifest.json").write_text("{}"),
+        ["train", "--resume", "{run}"],
+        "manifest",
+    ),
+    (
+        "manifest not an object",
+        lambda r: (latest(r) / "manifest.json").write_text("[1]"),
+        ["train", "--resume", "{run}"],
+        "manifest",
+    ),
+    (
+        "extra checkpoint file",
+        lambda r: (latest(r) / "evil.pt").write_bytes(b"x"),
+        ["train", "--resume", "{run}"],
+        "evil.pt",
+    ),
+    (
+        "edited config",
+        lambda r: (r / "config.json").write_text(
+            (r / "config.json")
+            .read_text()
+            .replace('"learning_rate": 0.0005', '"learning_rate": 0.1')
+        ),
+        ["train", "--resume", "{run}"],
+        "config.json",
+    ),
+    (
+        "config not JSON",
+        lambda r: (r / "config.json").write_text("{"),
+        ["evaluate", "--run", "{run}", "--methods", "learned"],
+        "config.json",
+    ),
+    (
+        "config with a bad env key",
+        lambda r: (r / "config.json").write_text(
+            (r / "config.json").read_text().replace('"env": {', '"env": {"x": 1, ')
+        ),
+        ["export", "{run}", "-o", "{run}/../out.onnx"],
+        "'x'",
+    ),
+    (
+        "state.json missing a key",
+        lambda r: edit_state(r, lambda s: s.pop("episode_seed")),
+        ["train", "--resume", "{run}"],
+        "episode_seed",
+    ),
+    (
+        "state.json wrong type",
+        lambda r: edit_state(r, lambda s: s.update(step="soon")),
+        ["train", "--resume", "{run}"],
+        "checkpoint",
+    ),
+    (
+        "state.json not an object",
+        lambda r: ((latest(r) / "state.json").write_text("[]"), rewrite_manifest(latest(r))),
+        ["train", "--resume", "{run}"],
+        "JSON object",
+    ),
+    (
+        "replay of another shape",
+        lambda r: replace_replay_array(r, "shape", [500, 2, 120, 160]),
+        ["train", "--resume", "{run}"],
+        "obs_shape",
+    ),
+    (
+        "replay missing an array",
+        lambda r: replace_replay_array(r, "counters", [1, 2]),
+        ["train", "--resume", "{run}"],
+        "checkpoint",
+    ),
+    (
+        "optimizer state of another network",
+        lambda r: swap_optimizer_state(r),
+        ["train", "--resume", "{run}"],
+        "checkpoint",
+    ),
+    (
+        "compare.csv of other episodes",
+        lambda r: write_compare_csv(r, episodes=50),
+        [
+            "compare",
+            "--run",
+            "{run}",
+            "--methods",
+            "random",
+            "--errors",
+            "0,0.5",
+            "--episodes",
+            "2",
+        ],
+        "50 episodes",
+    ),
+    (
+        "evaluation.json not JSON",
+        lambda r: write_file(r / "evaluation" / "evaluation.json", "{"),
+        ["report", "{run}"],
+        "evaluation.json",
+    ),
+    (
+        "metrics.csv garbage",
+        lambda r: (r / "metrics.csv").write_text("epoch,step\nx,y\n"),
+        ["plot", "{run}"],
+        "metrics.csv",
+    ),
 ]
 
 
@@ -309,8 +401,9 @@ def swap_optimizer_state(run: Path) -> None:
     rewrite_manifest(latest(run))
 
 
-@pytest.mark.parametrize(("tamper", "argv", "needle"), [t[1:] for t in TAMPERS],
-                         ids=[t[0] for t in TAMPERS])
+@pytest.mark.parametrize(
+    ("tamper", "argv", "needle"), [t[1:] for t in TAMPERS], ids=[t[0] for t in TAMPERS]
+)
 def test_tampered_files_are_refused(trained, tmp_path, capsys, tamper, argv, needle):
     run = Path(shutil.copytree(trained, tmp_path / "run"))
     # an unfinished run, so resume has work to do

@@ -90,9 +90,13 @@ def test_vector_env_rejects_bad_keyword(key: str, value: Any, shown: str) -> Non
     assert_names(error, key, shown)
 
 
-@pytest.mark.parametrize(("key", "value", "shown"), BAD_VECTOR_KWARGS[3:] + [
-    ("render_mode", "rgb", "'rgb'"),
-])
+@pytest.mark.parametrize(
+    ("key", "value", "shown"),
+    BAD_VECTOR_KWARGS[3:]
+    + [
+        ("render_mode", "rgb", "'rgb'"),
+    ],
+)
 def test_single_env_rejects_bad_env_argument(key: str, value: Any, shown: str) -> None:
     with pytest.raises(ValueError) as error:
         ActiveVisionEnv(**{key: value})
@@ -105,16 +109,19 @@ def test_gym_make_time_limit_must_be_positive() -> None:
         gym.make("ActiveVision-v0", max_episode_steps=0)
 
 
-@pytest.mark.parametrize(("cls", "key", "value", "shown"), [
-    (CameraConfig, "width", 160.0, "160.0"),
-    (CameraConfig, "height", True, "True"),
-    (CameraConfig, "hfov", "1.0", "'1.0'"),
-    (CameraConfig, "camera_height", NAN, "nan"),
-    (CameraConfig, "tilt_min", None, "None"),
-    (FieldSpec, "length", "9", "'9'"),
-    (FieldSpec, "ball_radius", INF, "inf"),
-    (FieldSpec, "penalty_area_width", "5", "'5'"),
-])
+@pytest.mark.parametrize(
+    ("cls", "key", "value", "shown"),
+    [
+        (CameraConfig, "width", 160.0, "160.0"),
+        (CameraConfig, "height", True, "True"),
+        (CameraConfig, "hfov", "1.0", "'1.0'"),
+        (CameraConfig, "camera_height", NAN, "nan"),
+        (CameraConfig, "tilt_min", None, "None"),
+        (FieldSpec, "length", "9", "'9'"),
+        (FieldSpec, "ball_radius", INF, "inf"),
+        (FieldSpec, "penalty_area_width", "5", "'5'"),
+    ],
+)
 def test_geometry_configs_reject_bad_types(cls: type, key: str, value: Any, shown: str) -> None:
     with pytest.raises(ValueError) as error:
         cls(**{key: value})
@@ -188,18 +195,21 @@ class _Typed:
         check_dataclass_fields(self)
 
 
-@pytest.mark.parametrize(("key", "value", "message"), [
-    ("flag", 1, "_Typed.flag: expects bool, got 1"),
-    ("count", np.bool_(True), "_Typed.count: expects int, got np.True_"),
-    ("scale", "1", "_Typed.scale: expects float, got '1'"),
-    ("scale", INF, "_Typed.scale: expects float with finite values, got inf"),
-    ("name", 3, "_Typed.name: expects str, got 3"),
-    ("mode", "c", "_Typed.mode: expects one of 'a', 'b', got 'c'"),
-    ("pair", (1.0, 2.5), "_Typed.pair: expects tuple[float, int], got (1.0, 2.5)"),
-    ("many", (1, "2"), "_Typed.many: expects tuple[int, ...], got (1, '2')"),
-    ("maybe", NAN, "_Typed.maybe: expects float | None with finite values, got nan"),
-    ("camera", None, "_Typed.camera: expects CameraConfig, got None"),
-])
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        ("flag", 1, "_Typed.flag: expects bool, got 1"),
+        ("count", np.bool_(True), "_Typed.count: expects int, got np.True_"),
+        ("scale", "1", "_Typed.scale: expects float, got '1'"),
+        ("scale", INF, "_Typed.scale: expects float with finite values, got inf"),
+        ("name", 3, "_Typed.name: expects str, got 3"),
+        ("mode", "c", "_Typed.mode: expects one of 'a', 'b', got 'c'"),
+        ("pair", (1.0, 2.5), "_Typed.pair: expects tuple[float, int], got (1.0, 2.5)"),
+        ("many", (1, "2"), "_Typed.many: expects tuple[int, ...], got (1, '2')"),
+        ("maybe", NAN, "_Typed.maybe: expects float | None with finite values, got nan"),
+        ("camera", None, "_Typed.camera: expects CameraConfig, got None"),
+    ],
+)
 def test_check_dataclass_fields_messages(key: str, value: Any, message: str) -> None:
     with pytest.raises(ValueError) as error:
         _Typed(**{key: value})
@@ -207,11 +217,22 @@ def test_check_dataclass_fields_messages(key: str, value: Any, message: str) -> 
 
 
 def test_check_dataclass_fields_normalises() -> None:
-    typed = _Typed(flag=np.bool_(True), count=np.int64(3), scale=2, limit=-INF, pair=[1, 2],
-                   many=[1, 2, 3], maybe=1)
-    assert typed == _Typed(flag=True, count=3, scale=2.0, limit=-INF, pair=(1.0, 2),
-                           many=(1, 2, 3), maybe=1.0)
+    typed = _Typed(
+        flag=np.bool_(True),
+        count=np.int64(3),
+        scale=2,
+        limit=-INF,
+        pair=[1, 2],
+        many=[1, 2, 3],
+        maybe=1,
+    )
+    assert typed == _Typed(
+        flag=True, count=3, scale=2.0, limit=-INF, pair=(1.0, 2), many=(1, 2, 3), maybe=1.0
+    )
     assert [type(v) for v in (typed.flag, typed.count, typed.scale, typed.maybe)] == [
-        bool, int, float, float
+        bool,
+        int,
+        float,
+        float,
     ]
     assert type(typed.pair) is tuple and type(typed.pair[0]) is float

@@ -31,8 +31,9 @@ def test_hidden_landmarks_are_never_seen_and_starts_keep_the_ball():
     sim.reset(np.arange(32), rngs)
     assert sim.hidden.any()  # the robots hide something in some episodes
     assert (sim.robots[:, :, 2] > 0).sum(axis=1).min() >= 2
-    assert ball_visible_mask(sim.ball, sim.pose, sim.pan, sim.tilt, WORLD.camera,
-                             WORLD.field.ball_radius).all()
+    assert ball_visible_mask(
+        sim.ball, sim.pose, sim.pan, sim.tilt, WORLD.camera, WORLD.field.ball_radius
+    ).all()
     # robots keep their spacing from ours and from each other, on the field
     used = sim.robots[:, :, 2] > 0
     for i in range(32):
@@ -54,8 +55,9 @@ def test_the_goal_search_leaves_hidden_landmarks_out():
     mean, ball = sim.believed_pose[:1], sim.ball[:1]
     cov = loc.ukf.initial_cov
     free = best_viewpoints(mean, cov, ball, sim.landmarks, WORLD.camera)
-    all_hidden = best_viewpoints(mean, cov, ball, sim.landmarks, WORLD.camera,
-                                 hidden=np.ones(len(sim.landmarks), bool))
+    all_hidden = best_viewpoints(
+        mean, cov, ball, sim.landmarks, WORLD.camera, hidden=np.ones(len(sim.landmarks), bool)
+    )
     assert free.visible.any() and not all_hidden.visible.any()
     shows_ball = all_hidden.ball_visible[0]
     np.testing.assert_allclose(all_hidden.entropies[0, shows_ball], entropy(cov))
@@ -64,8 +66,9 @@ def test_the_goal_search_leaves_hidden_landmarks_out():
     mask[one] = True
     partly = best_viewpoints(mean, cov, ball, sim.landmarks, WORLD.camera, hidden=mask)
     assert not partly.visible[0, :, one].any()
-    np.testing.assert_array_equal(np.delete(partly.visible, one, -1),
-                                  np.delete(free.visible, one, -1))
+    np.testing.assert_array_equal(
+        np.delete(partly.visible, one, -1), np.delete(free.visible, one, -1)
+    )
 
 
 def test_same_seed_same_bytes():
@@ -96,7 +99,10 @@ def test_stored_states_render_as_they_were_seen():
         idx = np.arange(6)
         seen = sim.render(idx)
         again = sim.render_states(
-            sim.pose.copy(), sim.head.copy(), sim.ball.copy(), sim.frame_looks(idx),
+            sim.pose.copy(),
+            sim.head.copy(),
+            sim.ball.copy(),
+            sim.frame_looks(idx),
             sim.robots.copy(),
         )
         np.testing.assert_array_equal(again, seen)

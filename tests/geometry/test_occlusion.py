@@ -52,15 +52,16 @@ def test_agrees_with_walking_the_sight_line():
         axis=-1,
     )
     robots = np.column_stack(
-        [cams[:, :2] + rng.uniform(-2, 2, (n, 2)), rng.uniform(0.4, 1.0, n),
-         np.full(n, 80.0)]
+        [cams[:, :2] + rng.uniform(-2, 2, (n, 2)), rng.uniform(0.4, 1.0, n), np.full(n, 80.0)]
     )[:, None]
     cyls = robot_cylinders(robots, 0.15)
     got = hidden_points(cams, pts, cyls)
-    want = np.array([
-        [any(brute_force(cams[i], pts[i, j], c) for c in cyls[i]) for j in range(m)]
-        for i in range(n)
-    ])
+    want = np.array(
+        [
+            [any(brute_force(cams[i], pts[i, j], c) for c in cyls[i]) for j in range(m)]
+            for i in range(n)
+        ]
+    )
     disagree = got != want
     assert want.sum() > 20  # the cases exercise occlusion
     assert disagree.sum() <= 2  # a sight line grazing an edge within the walk's step

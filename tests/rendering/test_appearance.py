@@ -118,8 +118,16 @@ def test_motion_blur_needs_a_head_move(renderer, states):
 
 @pytest.mark.parametrize(
     "name, value",
-    [("stripes", 15.0), ("grain", 10.0), ("line_width", 0.03), ("line_wear", 0.8),
-     ("clutter", 50.0), ("mount_height", 0.05), ("mount_tilt", 0.05), ("mount_fov", 0.1)],
+    [
+        ("stripes", 15.0),
+        ("grain", 10.0),
+        ("line_width", 0.03),
+        ("line_wear", 0.8),
+        ("clutter", 50.0),
+        ("mount_height", 0.05),
+        ("mount_tilt", 0.05),
+        ("mount_fov", 0.1),
+    ],
 )
 def test_each_scene_factor_changes_the_frame(renderer, states, name, value):
     if name == "clutter":  # views of the horizon: the hall beyond the carpet in every one
@@ -170,12 +178,26 @@ def test_a_frame_depends_on_its_camera_and_look_only(renderer, states, monkeypat
     cyl[:, :, :2] += pose[:, None, :2]  # a robot 1 m in front of each camera
     batch = renderer.render(*states, looks=rows, tone=tone, cylinders=cyl)
     for k in range(N):
-        alone = renderer.render(pose[k], pan[k], tilt[k], ball[k], looks=rows[k : k + 1],
-                                tone=tone[k : k + 1], cylinders=cyl[k : k + 1])
+        alone = renderer.render(
+            pose[k],
+            pan[k],
+            tilt[k],
+            ball[k],
+            looks=rows[k : k + 1],
+            tone=tone[k : k + 1],
+            cylinders=cyl[k : k + 1],
+        )
         np.testing.assert_array_equal(alone[0], batch[k])
     order = np.random.default_rng(0).permutation(N)
-    shuffled = renderer.render(pose[order], pan[order], tilt[order], ball[order],
-                               looks=rows[order], tone=tone[order], cylinders=cyl[order])
+    shuffled = renderer.render(
+        pose[order],
+        pan[order],
+        tilt[order],
+        ball[order],
+        looks=rows[order],
+        tone=tone[order],
+        cylinders=cyl[order],
+    )
     np.testing.assert_array_equal(shuffled, batch[order])
     serial = Renderer(parallel=False).render(*states, looks=rows, tone=tone, cylinders=cyl)
     np.testing.assert_array_equal(serial, batch)

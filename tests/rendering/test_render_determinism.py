@@ -38,10 +38,12 @@ def serial() -> Renderer:
 
 def render_alone(renderer, pose, pan, tilt, ball) -> np.ndarray:
     """Each camera in its own call (the single env's path)."""
-    return np.concatenate([
-        renderer.render(pose[k], pan[k], tilt[k], None if ball is None else ball[k])
-        for k in range(len(pose))
-    ])
+    return np.concatenate(
+        [
+            renderer.render(pose[k], pan[k], tilt[k], None if ball is None else ball[k])
+            for k in range(len(pose))
+        ]
+    )
 
 
 def render_chunks(renderer, pose, pan, tilt, ball, size: int) -> np.ndarray:
@@ -49,8 +51,9 @@ def render_chunks(renderer, pose, pan, tilt, ball, size: int) -> np.ndarray:
     parts = []
     for s in range(0, len(pose), size):
         sl = slice(s, s + size)
-        parts.append(renderer.render(pose[sl], pan[sl], tilt[sl],
-                                     None if ball is None else ball[sl]))
+        parts.append(
+            renderer.render(pose[sl], pan[sl], tilt[sl], None if ball is None else ball[sl])
+        )
     return np.concatenate(parts)
 
 
@@ -69,8 +72,9 @@ def all_renders(parallel, serial, pose, pan, tilt, ball):
     n = len(pose)
     yield "batch", parallel.render(pose, pan, tilt, ball)
     order = np.random.default_rng(n).permutation(n)
-    shuffled = parallel.render(pose[order], pan[order], tilt[order],
-                               None if ball is None else ball[order])
+    shuffled = parallel.render(
+        pose[order], pan[order], tilt[order], None if ball is None else ball[order]
+    )
     unshuffled = np.empty_like(shuffled)
     unshuffled[order] = shuffled
     yield "shuffled batch", unshuffled
@@ -90,8 +94,9 @@ def assert_same_everywhere(parallel, serial, pose, pan, tilt, ball) -> None:
 # polygon leaves the image first), heading, head angles over their full limits, and a ball
 # at some distance and bearing from the view direction.
 _near_centre = st.tuples(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5))
-_anywhere = st.tuples(st.floats(-CARPET_X - 1, CARPET_X + 1), st.floats(-CARPET_Y - 1,
-                                                                          CARPET_Y + 1))
+_anywhere = st.tuples(
+    st.floats(-CARPET_X - 1, CARPET_X + 1), st.floats(-CARPET_Y - 1, CARPET_Y + 1)
+)
 _camera = st.tuples(
     st.one_of(_near_centre, _anywhere),
     st.floats(-math.pi, math.pi),

@@ -44,8 +44,13 @@ def random_states(n: int, seed: int):
 
 
 def project(point3, pose, pan, tilt):
-    uv, _, inside = project_points(np.asarray([point3], float), np.asarray([pose], float),
-                                   np.asarray([pan]), np.asarray([tilt]), CAM)
+    uv, _, inside = project_points(
+        np.asarray([point3], float),
+        np.asarray([pose], float),
+        np.asarray([pan]),
+        np.asarray([tilt]),
+        CAM,
+    )
     assert inside[0, 0]
     return uv[0, 0]
 
@@ -78,14 +83,16 @@ def test_distant_goal_line_stays_connected(renderer):
     img = renderer.render(np.array(pose), pan, tilt, None)[0].astype(int)
     ys = np.linspace(-SPEC.half_width, SPEC.half_width, 2001)
     pts = np.stack([np.full_like(ys, SPEC.half_length), ys, np.zeros_like(ys)], 1)
-    uv, _, inside = project_points(pts, np.array([pose]), np.array([pan]), np.array([tilt]),
-                                   CAM)
+    uv, _, inside = project_points(pts, np.array([pose]), np.array([pan]), np.array([tilt]), CAM)
     uv = uv[0][inside[0]]
     columns = np.unique(uv[:, 0].astype(int))
     assert len(columns) > 100
     for col in columns:
-        v_line = np.interp(col + 0.5, uv[:, 0], uv[:, 1]) if uv[0, 0] < uv[-1, 0] else np.interp(
-            col + 0.5, uv[::-1, 0], uv[::-1, 1])
+        v_line = (
+            np.interp(col + 0.5, uv[:, 0], uv[:, 1])
+            if uv[0, 0] < uv[-1, 0]
+            else np.interp(col + 0.5, uv[::-1, 0], uv[::-1, 1])
+        )
         rows = img[max(int(v_line) - 2, 0) : int(v_line) + 3, col]
         assert rows.max() >= CFG.grass + 10, f"goal line gap at column {col}"
 
@@ -93,8 +100,11 @@ def test_distant_goal_line_stays_connected(renderer):
     ref = render_reference(np.array([pose]), pan, tilt)[0].astype(int)
     gaps = 0
     for col in columns:
-        v_line = np.interp(col + 0.5, uv[::-1, 0], uv[::-1, 1]) if uv[0, 0] > uv[-1, 0] else \
-            np.interp(col + 0.5, uv[:, 0], uv[:, 1])
+        v_line = (
+            np.interp(col + 0.5, uv[::-1, 0], uv[::-1, 1])
+            if uv[0, 0] > uv[-1, 0]
+            else np.interp(col + 0.5, uv[:, 0], uv[:, 1])
+        )
         rows = ref[max(int(v_line) - 2, 0) : int(v_line) + 3, col]
         gaps += rows.max() < CFG.grass + 10
     assert gaps > 10
@@ -156,8 +166,7 @@ def ring_row_ranges(renderer, pose, pan, tilt) -> np.ndarray:
     (``[0]``) and hole polygon (``[1]``) for one camera."""
     scene = renderer._kernel_scene
     work, scratch = allocate_work(1, scene, 0), allocate_scratch(1, scene, 0)
-    cameras = Cameras(np.array([pose]), np.array([pan]), np.array([tilt]), np.zeros((1, 2)),
-                      False)
+    cameras = Cameras(np.array([pose]), np.array([pan]), np.array([tilt]), np.zeros((1, 2)), False)
     looks = Looks(*renderer._looks(1, None, None, None))
     setup_camera(0, scene, renderer._kernel_params, cameras, looks, work, scratch)
     return work.ring_rows[0]
@@ -180,8 +189,9 @@ def test_ring_with_its_hole_off_image(renderer, monkeypatch):
     for seed in range(1, 1 + GARBAGE_KINDS):
         monkeypatch.setattr(renderer_module, "_WORK_GARBAGE_SEED", seed)
         renders[f"alone, garbage {seed}"] = renderer.render(np.array(pose), pan, tilt, None)[0]
-        renders[f"batch, garbage {seed}"] = renderer.render(batch_pose, batch_pan, batch_tilt,
-                                                            None)[3]
+        renders[f"batch, garbage {seed}"] = renderer.render(
+            batch_pose, batch_pan, batch_tilt, None
+        )[3]
     for name, img in renders.items():
         np.testing.assert_array_equal(img, alone, err_msg=name)
 
@@ -189,8 +199,9 @@ def test_ring_with_its_hole_off_image(renderer, monkeypatch):
     ring = fast > CFG.grass + 20
     assert ring.sum() > 500  # the ring is drawn
     near = dilate(ring[None] | (fast[None] != round(CFG.grass)), 2)
-    truth = render_supersampled(np.array([pose]), pan, tilt, None, samples_per_axis=16,
-                                mask=near)[0]
+    truth = render_supersampled(np.array([pose]), pan, tilt, None, samples_per_axis=16, mask=near)[
+        0
+    ]
     err = np.abs(fast - truth)[near[0]]
     assert err.mean() < 2.0, f"MAE {err.mean():.2f}"
     assert err.max() < 20
@@ -244,8 +255,9 @@ def test_noise_off_by_default_and_reproducible_when_on():
     a = plain.render(pose, pan, tilt, ball)
     np.testing.assert_array_equal(a, plain.render(pose, pan, tilt, ball))
 
-    noisy = Renderer(config=RenderConfig(noise_std=4.0, brightness_jitter=10.0,
-                                         contrast_jitter=0.1))
+    noisy = Renderer(
+        config=RenderConfig(noise_std=4.0, brightness_jitter=10.0, contrast_jitter=0.1)
+    )
     with pytest.raises(ValueError, match="rng"):
         noisy.render(pose, pan, tilt, ball)
     b1 = noisy.render(pose, pan, tilt, ball, rng=np.random.default_rng(7))
@@ -274,8 +286,12 @@ def test_noise_off_by_default_and_reproducible_when_on():
     ],
 )
 def test_bad_inputs_raise_value_error_naming_the_argument(renderer, kwargs, name):
-    args = {"pose": np.zeros((2, 3)), "pan": np.zeros(2), "tilt": np.full(2, 0.3),
-            "ball_xy": np.ones((2, 2))}
+    args = {
+        "pose": np.zeros((2, 3)),
+        "pan": np.zeros(2),
+        "tilt": np.full(2, 0.3),
+        "ball_xy": np.ones((2, 2)),
+    }
     args.update(kwargs)
     with pytest.raises(ValueError, match=name):
         renderer.render(**args)

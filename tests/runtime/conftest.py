@@ -53,8 +53,13 @@ def render_frames(width: int, height: int, count: int) -> np.ndarray:
         from activevision.rendering import Renderer
 
         renderer = Renderer(camera=CameraConfig(width=width, height=height))
-        pose = np.column_stack([rng.uniform(-3, 3, count), rng.uniform(-2, 2, count),
-                                rng.uniform(-math.pi, math.pi, count)])
+        pose = np.column_stack(
+            [
+                rng.uniform(-3, 3, count),
+                rng.uniform(-2, 2, count),
+                rng.uniform(-math.pi, math.pi, count),
+            ]
+        )
         pan = rng.uniform(-1.2, 1.2, count)
         tilt = rng.uniform(0.15, 1.0, count)
         ball = pose[:, :2] + rng.uniform(-2, 2, (count, 2))
@@ -134,8 +139,9 @@ def policy(tmp_path_factory) -> SimpleNamespace:
     """A freshly initialised paper network and its export (stack 1)."""
     network = make_network()
     paths = export(network, tmp_path_factory.mktemp("policy"))
-    return SimpleNamespace(network=network, model_path=paths.model_path,
-                           metadata_path=paths.metadata_path)
+    return SimpleNamespace(
+        network=network, model_path=paths.model_path, metadata_path=paths.metadata_path
+    )
 
 
 @pytest.fixture(scope="session")
@@ -172,7 +178,12 @@ def helpers() -> SimpleNamespace:
     """The reference functions above, for test modules (importlib mode has no conftest
     imports)."""
     return SimpleNamespace(
-        eight_way_table=eight_way_table, make_network=make_network, export=export,
-        colourise=colourise, area_matrix=area_matrix, reference_preprocess=reference_preprocess,
-        frame_sizes=FRAME_SIZES, assert_record_rejected=assert_record_rejected,
+        eight_way_table=eight_way_table,
+        make_network=make_network,
+        export=export,
+        colourise=colourise,
+        area_matrix=area_matrix,
+        reference_preprocess=reference_preprocess,
+        frame_sizes=FRAME_SIZES,
+        assert_record_rejected=assert_record_rejected,
     )

@@ -39,8 +39,12 @@ def test_decisions_match_torch_for_grey_rgb_bgr(policy, frames, helpers, width, 
     bgr_controller = HeadController(policy.model_path, color_order="bgr")
     for i, grey in enumerate(frames(width, height)):
         rgb = helpers.colourise(grey, seed=i)
-        cases = [(controller, grey, "rgb"), (controller, grey[:, :, None], "rgb"),
-                 (controller, rgb, "rgb"), (bgr_controller, rgb[:, :, ::-1], "bgr")]
+        cases = [
+            (controller, grey, "rgb"),
+            (controller, grey[:, :, None], "rgb"),
+            (controller, rgb, "rgb"),
+            (bgr_controller, rgb[:, :, ::-1], "bgr"),
+        ]
         references = np.stack([helpers.reference_preprocess(f, o)[None] for _, f, o in cases])
         with torch.inference_mode():
             q_torch = policy.network(torch.from_numpy(references)).numpy()
@@ -113,8 +117,11 @@ def test_bad_frame_leaves_stack_untouched(tmp_path, frames, helpers):
 
 @pytest.mark.parametrize(
     "frame",
-    [np.zeros((480, 640, 3), dtype=np.float32), np.zeros((480, 640, 4), dtype=np.uint8),
-     np.zeros(640, dtype=np.uint8)],
+    [
+        np.zeros((480, 640, 3), dtype=np.float32),
+        np.zeros((480, 640, 4), dtype=np.uint8),
+        np.zeros(640, dtype=np.uint8),
+    ],
     ids=["float", "4-channel", "1-D"],
 )
 def test_bad_frames(policy, frame):
@@ -175,8 +182,10 @@ def test_corrupt_metadata(policy_copy):
         ({"stack": 2}, "input shape"),
         ({"image_width": 320}, "input shape"),
         ({"n_actions": 5}, "n_actions"),
-        ({"action_table_deg": [[0, 0]] * 5, "n_actions": 5, "action_names": ["stay"] * 5},
-         "5 actions"),
+        (
+            {"action_table_deg": [[0, 0]] * 5, "n_actions": 5, "action_names": ["stay"] * 5},
+            "5 actions",
+        ),
         ({"action_table_deg": [[0, 0]] * 5, "n_actions": 5}, "one name per action"),
         ({"input_name": "image"}, "no input 'image'"),
         ({"format_version": 99}, "format_version"),
@@ -190,8 +199,10 @@ def test_corrupt_metadata(policy_copy):
             {"head_limits_deg": {"pan_min": -720, "pan_max": 720, "tilt_min": 5, "tilt_max": 65}},
             "outside",
         ),
-        ({"head_limits_deg": {"pan_min": -90, "pan_max": 90, "tilt_min": 5, "tilt_max": 900}},
-         "outside"),
+        (
+            {"head_limits_deg": {"pan_min": -90, "pan_max": 90, "tilt_min": 5, "tilt_max": 900}},
+            "outside",
+        ),
     ],
 )
 def test_metadata_mismatch(policy_copy, change, message):
@@ -221,8 +232,9 @@ def test_runtime_imports_and_runs_without_torch(policy):
         loaded = [m for m in ("numba", "onnx", "scipy") if m in sys.modules]
         print(command.action, loaded)
     """)
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                            timeout=60)
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
     assert result.returncode == 0, result.stderr
     action, loaded = result.stdout.split(maxsplit=1)
     assert 0 <= int(action) < 9 and loaded.strip() == "[]"
@@ -238,8 +250,9 @@ def test_missing_onnxruntime_names_the_extra(policy):
         except ImportError as error:
             print(error)
     """)
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                            timeout=60)
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
     assert result.returncode == 0, result.stderr
     assert "activevision[runtime]" in result.stdout
 

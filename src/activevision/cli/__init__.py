@@ -1,6 +1,6 @@
 """The ``activevision`` command line: ``main`` and ``build_parser``; one module per command
-group (``train``, ``evaluate``, ``robustness``, ``deploy``, ``scene``, ``quickstart``), shared
-argument types in :mod:`activevision.cli.args` and the output-path check in
+group (``train``, ``evaluate``, ``robustness``, ``match``, ``deploy``, ``scene``,
+``quickstart``), shared argument types in :mod:`activevision.cli.args` and the output-path check in
 :mod:`activevision.cli.outputs`.
 
 Heavy imports (torch, matplotlib) happen inside the command that needs them, so
@@ -14,10 +14,10 @@ from __future__ import annotations
 import os
 import sys
 
-from activevision.cli import deploy, evaluate, quickstart, robustness, scene, train
+from activevision.cli import deploy, evaluate, match, quickstart, robustness, scene, train
 from activevision.cli.args import ArgumentParser
 
-_COMMAND_GROUPS = (train, evaluate, robustness, deploy, quickstart, scene)
+_COMMAND_GROUPS = (train, evaluate, robustness, match, deploy, quickstart, scene)
 
 
 def build_parser() -> ArgumentParser:

@@ -46,9 +46,7 @@ class RobotsConfig:
             )
         lo_g, hi_g = self.grey
         if not 0 <= lo_g <= hi_g <= 255:
-            raise ValueError(
-                f"RobotsConfig.grey: must lie in [0, 255], ordered, got {self.grey!r}"
-            )
+            raise ValueError(f"RobotsConfig.grey: must lie in [0, 255], ordered, got {self.grey!r}")
 
     @property
     def max_count(self) -> int:

@@ -132,9 +132,7 @@ class EpisodeBatch:
         camera = np.column_stack(
             [self.pose[slots, :2], np.full(len(slots), cfg.camera.camera_height)]
         )
-        self.hidden[slots] = hidden_landmarks(
-            self.landmarks, camera, self.cylinders(slots)
-        )
+        self.hidden[slots] = hidden_landmarks(self.landmarks, camera, self.cylinders(slots))
 
     def cylinders(self, idx: np.ndarray) -> np.ndarray:
         """The other robots of slots ``idx`` as the renderer's cylinders (len(idx), 2R, 6)."""
@@ -189,13 +187,16 @@ class EpisodeBatch:
         self.goal_tilt[slots] = np.where(found, result.tilt, cfg.camera.tilt_min)
         self.goal_entropy[slots] = np.where(found, result.entropy, np.nan)
         # What the goal view really shows: the true pose at the goal head angles.
-        self.desired[slots] = visible_mask(
-            self.landmarks,
-            self.pose[slots],
-            self.goal_pan[slots],
-            self.goal_tilt[slots],
-            cfg.camera,
-        ) & ~self.hidden[slots]
+        self.desired[slots] = (
+            visible_mask(
+                self.landmarks,
+                self.pose[slots],
+                self.goal_pan[slots],
+                self.goal_tilt[slots],
+                cfg.camera,
+            )
+            & ~self.hidden[slots]
+        )
         self._observe(slots)
         self.step_count[slots] = 0
         self.success_step[slots] = -1
@@ -258,9 +259,12 @@ class EpisodeBatch:
         return reward, lost | success, success, lost
 
     def _observe(self, idx: np.ndarray) -> None:
-        self.observed[idx] = visible_mask(
-            self.landmarks, self.pose[idx], self.pan[idx], self.tilt[idx], self.cfg.camera
-        ) & ~self.hidden[idx]
+        self.observed[idx] = (
+            visible_mask(
+                self.landmarks, self.pose[idx], self.pan[idx], self.tilt[idx], self.cfg.camera
+            )
+            & ~self.hidden[idx]
+        )
 
     def _succeeded(self, idx: np.ndarray) -> np.ndarray:
         if self.cfg.success_mode == "landmarks":

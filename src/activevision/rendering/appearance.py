@@ -26,6 +26,7 @@ and the pixel, so a frame's bytes do not depend on the batch it was rendered in.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -144,9 +145,10 @@ class AppearanceConfig:
             mount_fov=(-0.05, 0.05),
         )
 
-    @property
+    @functools.cached_property
     def enabled(self) -> bool:
-        """Whether any factor differs from the clean render."""
+        """Whether any factor differs from the clean render (cached: the envs ask every
+        step, and building the comparison config costs most of a millisecond)."""
         return self != AppearanceConfig(stripe_width=self.stripe_width)
 
     def replace(self, **changes: Range) -> AppearanceConfig:

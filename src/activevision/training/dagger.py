@@ -59,7 +59,6 @@ from activevision.training.validation import summarise_validation
 MAX_EPISODE_STEPS = 20  #: the registration's time limit
 
 
-
 class StateDataset:
     """A ring buffer of labelled states (no images)."""
 

@@ -204,7 +204,12 @@ def texture_row(
 
 @njit(**JIT)
 def worn_paint(
-    v: float, lo: int, hi: int, paint: np.ndarray, homography: np.ndarray, look: np.ndarray,
+    v: float,
+    lo: int,
+    hi: int,
+    paint: np.ndarray,
+    homography: np.ndarray,
+    look: np.ndarray,
     noise: np.ndarray,
 ) -> None:
     """Paint wear: columns ``[lo, hi)`` of ``paint`` (W,) keep :data:`WORN_KEEP` of their

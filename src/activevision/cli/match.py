@@ -1,0 +1,150 @@
+"""``activevision match``: head-control strategies through whole matches on the same seeds
+(:mod:`activevision.experiments.match`): a table, a CSV and three figures."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from activevision.cli.args import add_overwrite, choice_list, positive_int, seed
+from activevision.cli.outputs import OutputError, check_outputs, is_training_run
+
+OUTPUT_FILES = ("match.csv", "match_pareto.png", "match_error.png", "match_clip.gif")
+
+
+def _method_names() -> tuple[str, ...]:
+    from activevision.experiments.match_methods import match_method_names
+
+    return match_method_names()
+
+
+def _step_deg(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not 0.1 <= value <= 30:
+        raise argparse.ArgumentTypeError(f"must lie in [0.1, 30] degrees, got {text!r}")
+    return value
+
+
+def cmd_match(args: argparse.Namespace) -> None:
+    """Play every chosen strategy through the same matches; print, write and plot."""
+    out: Path = args.out
+    if is_training_run(out):
+        raise OutputError(f"refusing to write into the training run {out}; choose another --out")
+    files = [out / name for name in OUTPUT_FILES]
+    check_outputs(named=files, overwrite=args.overwrite)
+    if args.model is not None and not args.model.is_file():
+        raise ValueError(f"--model {args.model}: no such file")
+    methods = list(dict.fromkeys(args.methods or _method_names()))
+    clip_method = args.clip_method or methods[0]
+    if clip_method not in methods:
+        raise ValueError(f"--clip-method {clip_method} is not among --methods")
+
+    import numpy as np
+
+    from activevision.envs.match.config import MatchConfig, WalkConfig
+    from activevision.experiments.match import (
+        compare_matches,
+        csv_rows,
+        format_result,
+        pareto_front,
+        table_header,
+    )
+    from activevision.figures.match import clip_frames, plot_error_over_time, plot_pareto, save_gif
+    from activevision.io import write_csv
+
+    config = MatchConfig(
+        ticks=args.ticks, step_deg=args.step_deg, walk=WalkConfig(target=args.walk)
+    )
+    minutes = args.ticks * config.tick_seconds / 60
+    print(
+        f"{len(methods)} methods x {args.matches} matches of {args.ticks} ticks"
+        f" ({minutes:.1f} min of play), seeds {args.seed}..{args.seed + args.matches - 1},"
+        f" head {args.step_deg:g} deg per {config.tick_seconds:g} s, walking to {args.walk}"
+    )
+    print(table_header(), flush=True)
+    results = compare_matches(
+        methods,
+        config,
+        args.matches,
+        args.seed,
+        args.model,
+        progress=lambda r: print(f"{format_result(r)}   ({r.seconds:.0f} s)", flush=True),
+    )
+    front = pareto_front(results)
+    print(f"Pareto front (position RMSE vs ball in view): {', '.join(front)}")
+    csv_path, pareto_path, error_path, clip_path = files
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(csv_path, csv_rows(results, args.matches, args.seed))
+    title = (
+        f"{args.matches} matches x {minutes:.1f} min, seed {args.seed},"
+        f" head {args.step_deg:g} deg/tick"
+    )
+    points = {
+        r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()} for r in results
+    }
+    plot_pareto(points, front, pareto_path, title)
+    plot_error_over_time(
+        {r.method: r.error_curve for r in results}, config.tick_seconds, error_path, title
+    )
+    clip = next(r for r in results if r.method == clip_method).clip
+    frames = clip_frames(
+        np.array(clip.pose),
+        np.array(clip.mean),
+        np.array(clip.cov),
+        np.array(clip.head),
+        np.array(clip.ball),
+        np.array(clip.ball_in_view),
+        config.field,
+        config.camera,
+        f"{clip_method}, match seed {args.seed}",
+        config.tick_seconds,
+        every=max(1, args.ticks // 150),
+    )
+    save_gif(frames, clip_path, fps=10)
+    print(f"wrote {', '.join(str(f) for f in files)}")
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser(
+        "match",
+        help="compare head-control strategies through whole matches (ActiveVisionMatch-v0)",
+        description="Play each strategy through the same seeded matches of"
+        " ActiveVisionMatch-v0 (the robot walking, the ball kicked about, the UKF tracking"
+        " every tick) and report position and heading RMSE, time lost, ball in view, entropy"
+        " and head travel with 95%% intervals; writes match.csv, match_pareto.png,"
+        " match_error.png and match_clip.gif.",
+    )
+    p.set_defaults(func=cmd_match)
+    p.add_argument(
+        "--methods",
+        nargs="+",
+        type=choice_list(_method_names),
+        metavar="NAME",
+        help="strategies to play (default: all: " + " ".join(_method_names()) + ")",
+    )
+    p.add_argument("--matches", type=positive_int, default=50)
+    p.add_argument("--ticks", type=positive_int, default=600, help="ticks per match (0.32 s each)")
+    p.add_argument("--seed", type=seed, default=0, help="match i plays seed SEED + i")
+    p.add_argument(
+        "--step-deg", type=_step_deg, default=3.0, help="head move per tick (paper: 3 degrees)"
+    )
+    p.add_argument(
+        "--walk",
+        choices=("waypoints", "ball"),
+        default="waypoints",
+        help="our robot walks to random waypoints, or to the ball",
+    )
+    p.add_argument(
+        "--model",
+        type=Path,
+        help="an exported policy.onnx for episodic_learned (default: the shipped one)",
+    )
+    p.add_argument(
+        "--clip-method", help="the strategy shown in match_clip.gif (default: the first)"
+    )
+    p.add_argument("--out", type=Path, default=Path("match-results"), help="output directory")
+    add_overwrite(p)

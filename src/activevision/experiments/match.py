@@ -1,0 +1,189 @@
+"""Play head-control strategies through whole matches on the same seeds and measure what a
+RoboCup team cares about (``activevision match``).
+
+Per match (then mean and 95% interval over matches):
+
+* ``position_rmse`` (m) and ``heading_rmse`` (deg): root mean square of the belief's error
+  over every tick;
+* ``lost_share``: the share of ticks with the position error above ``LOST_M`` (0.5 m);
+* ``ball_in_view``: the share of ticks with the ball in the image;
+* ``entropy``: the belief's mean entropy (nats);
+* ``head_travel``: how far the head moved, degrees per second.
+
+Match ``i`` of every method is reset with seed ``seed + i``: the same start, ball and walk
+draws. Strategies only change where the head looks, and so what is detected.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+from activevision.experiments.evaluate import Interval, mean_interval
+from activevision.experiments.match_methods import make_match_policy
+
+LOST_M = 0.5  #: position error (m) beyond which a robot counts as lost
+#: per-match metrics, in table order: name -> (column header, format)
+MATCH_METRICS = {
+    "position_rmse": ("pos RMSE m", "{:.3f}"),
+    "heading_rmse": ("head. RMSE deg", "{:.2f}"),
+    "lost_share": ("lost", "{:.1%}"),
+    "ball_in_view": ("ball in view", "{:.1%}"),
+    "entropy": ("entropy", "{:.2f}"),
+    "head_travel": ("travel deg/s", "{:.1f}"),
+}
+SHARES = ("lost_share", "ball_in_view")
+
+
+@dataclass
+class MatchClip:
+    """One match tick by tick, for the clip: true pose, belief, head and ball."""
+
+    pose: list[np.ndarray] = field(default_factory=list)
+    mean: list[np.ndarray] = field(default_factory=list)
+    cov: list[np.ndarray] = field(default_factory=list)
+    head: list[np.ndarray] = field(default_factory=list)
+    ball: list[np.ndarray] = field(default_factory=list)
+    ball_in_view: list[bool] = field(default_factory=list)
+
+    def add(self, info: dict[str, np.ndarray], i: int) -> None:
+        self.pose.append(info["pose"][i].copy())
+        self.mean.append(info["belief_mean"][i].copy())
+        self.cov.append(info["belief_cov"][i].copy())
+        self.head.append(info["head"][i].copy())
+        self.ball.append(info["ball"][i].copy())
+        self.ball_in_view.append(bool(info["ball_in_view"][i]))
+
+
+@dataclass(frozen=True)
+class MethodResult:
+    """One method over every match."""
+
+    method: str
+    per_match: dict[str, np.ndarray]  #: metric -> (M,)
+    error_curve: np.ndarray  #: (ticks, M) position error per tick and match
+    clip: MatchClip
+    seconds: float
+
+    def summary(self) -> dict[str, Interval]:
+        """Mean and 95% interval over matches of every metric (shares clipped to [0, 1])."""
+        out = {}
+        for name, values in self.per_match.items():
+            iv = mean_interval(values.tolist())
+            if name in SHARES:
+                iv = Interval(iv.mean, max(iv.low, 0.0), min(iv.high, 1.0))
+            out[name] = iv
+        return out
+
+
+def play_matches(
+    method: str,
+    config: MatchConfig,
+    matches: int,
+    seed: int,
+    model: Path | None = None,
+    clip_match: int = 0,
+) -> MethodResult:
+    """Play ``matches`` matches of ``config`` with strategy ``method`` in lock-step."""
+    start = time.perf_counter()
+    policy = make_match_policy(method, config, model)
+    env = ActiveVisionMatchVectorEnv(matches, config)
+    obs, info = env.reset(seed=seed)
+    policy.reset(matches, np.random.default_rng(seed))
+    ticks = config.ticks
+    position = np.zeros((ticks, matches))
+    heading = np.zeros((ticks, matches))
+    ball = np.zeros((ticks, matches), dtype=bool)
+    entropy = np.zeros((ticks, matches))
+    travel = np.zeros((ticks, matches))
+    clip = MatchClip()
+    clip.add(info, clip_match)
+    for t in range(ticks):
+        obs, _, _, _, info = env.step(policy.act(obs, info))
+        position[t] = info["position_error"]
+        heading[t] = info["heading_error"]
+        ball[t] = info["ball_in_view"]
+        entropy[t] = info["entropy"]
+        travel[t] = np.degrees(np.hypot(*info["head_move"].T))
+        clip.add(info, clip_match)
+    env.close()
+    per_match = {
+        "position_rmse": np.sqrt(np.mean(position**2, axis=0)),
+        "heading_rmse": np.degrees(np.sqrt(np.mean(heading**2, axis=0))),
+        "lost_share": np.mean(position > LOST_M, axis=0),
+        "ball_in_view": np.mean(ball, axis=0),
+        "entropy": np.mean(entropy, axis=0),
+        "head_travel": travel.sum(axis=0) / (ticks * config.tick_seconds),
+    }
+    return MethodResult(method, per_match, position, clip, time.perf_counter() - start)
+
+
+def compare_matches(
+    methods: Sequence[str],
+    config: MatchConfig,
+    matches: int,
+    seed: int,
+    model: Path | None = None,
+    progress: Callable[[MethodResult], None] | None = None,
+) -> list[MethodResult]:
+    """:func:`play_matches` for each method, on the same seeds."""
+    results = []
+    for name in methods:
+        result = play_matches(name, config, matches, seed, model)
+        results.append(result)
+        if progress is not None:
+            progress(result)
+    return results
+
+
+def table_header() -> str:
+    cols = "".join(f"{header:>22}" for header, _ in MATCH_METRICS.values())
+    return f"{'method':<18}{cols}"
+
+
+def format_result(result: MethodResult) -> str:
+    """One table row: each metric's mean and 95% interval."""
+    summary = result.summary()
+    cells = []
+    for name, (_, fmt) in MATCH_METRICS.items():
+        iv = summary[name]
+        cells.append(f"{fmt.format(iv.mean)} [{fmt.format(iv.low)},{fmt.format(iv.high)}]")
+    return f"{result.method:<18}" + "".join(f"{c:>22}" for c in cells)
+
+
+def csv_rows(results: Sequence[MethodResult], matches: int, seed: int) -> list[dict]:
+    """One CSV row per method: every metric's mean, low and high, plus the run's facts."""
+    rows = []
+    for r in results:
+        row: dict[str, object] = {"method": r.method, "matches": matches, "seed": seed}
+        for name, iv in r.summary().items():
+            row[name] = iv.mean
+            row[f"{name}_low"] = iv.low
+            row[f"{name}_high"] = iv.high
+        row["seconds"] = round(r.seconds, 2)
+        rows.append(row)
+    return rows
+
+
+def pareto_front(results: Sequence[MethodResult]) -> list[str]:
+    """The methods no other beats on both position RMSE (lower) and ball in view (higher)."""
+    points = {
+        r.method: (r.per_match["position_rmse"].mean(), r.per_match["ball_in_view"].mean())
+        for r in results
+    }
+    front = []
+    for name, (rmse, ball) in points.items():
+        dominated = any(
+            (o_rmse <= rmse and o_ball >= ball) and (o_rmse < rmse or o_ball > ball)
+            for other, (o_rmse, o_ball) in points.items()
+            if other != name
+        )
+        if not dominated:
+            front.append(name)
+    return front

@@ -1,0 +1,349 @@
+"""Head-control strategies for a whole match (``ActiveVisionMatch-v0``), batched over N
+matches, and the registry ``activevision match`` takes its ``--methods`` from.
+
+A strategy sees what a robot knows -- its head angles, its UKF belief and its ball model
+(the env's info keys ``head``, ``belief_mean``, ``belief_cov``, ``ball_relative``,
+``ball_age``) -- and, if it is learned, the camera image. It returns one discrete action per
+match: most strategies pick a head *target* and move towards it at head speed (the greedy
+action), as a real head does.
+
+The handwritten strategies follow what RoboCup teams describe; their published code is
+C++/Python behaviour trees with many more states, so each is the core of the pattern, not a
+port:
+
+* ``ball_track``: keep the ball centred (every team's default while the ball is seen).
+* ``bhuman_cycle``: B-Human's active look (B-Human Team Report and Code Release 2019,
+  "LookActive"): pan to and fro around the ball, the sweep narrowed as the robot walks
+  faster, tilt on the ball.
+* ``bitbots_search``: Bit-Bots (Hamburg Bit-Bots, ``bitbots_head_mover``): track the ball
+  while it was seen in the last second, otherwise run the search pattern, two pan sweeps at
+  a near and a far tilt.
+* ``nubots_6point``: NUbots' 6-point look (NUbots Team Description 2019, "look at 6 points
+  in turn"): left, centre and right at a near and a far tilt, dwelling at each.
+* ``entropy_greedy``: Seekircher et al. 2010 / Czarnetzki et al. 2010 -- every ``k`` ticks,
+  Algorithm 1 from the current belief (mean *and* covariance) picks the view with the least
+  expected entropy that keeps the ball; move there at head speed.
+* ``episodic_learned``: the package's shipped episodic policy, run every tick, its goal
+  (Algorithm 1's proposal from the believed pose) re-planned every ``k`` ticks.
+* ``random``: uniformly random moves.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from activevision.envs.actions import action_table, greedy_actions
+from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.observations import IMAGE_KEY, Observation
+from activevision.geometry import clip_head, field_landmarks
+from activevision.localisation import LocalisationConfig, best_viewpoints
+
+
+class MatchPolicy(Protocol):
+    """What ``activevision match`` needs of a strategy."""
+
+    name: str
+
+    def reset(self, n: int, rng: np.random.Generator) -> None:
+        """N matches start (all at once: the runner plays them in lock-step)."""
+
+    def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
+        """The discrete actions (N,) for this tick."""
+
+
+def ball_direction(info: dict[str, np.ndarray], config: MatchConfig) -> np.ndarray:
+    """Head angles (N, 2) that centre the ball of the ball model (clipped to the limits)."""
+    rel = info["ball_relative"]
+    pan = np.arctan2(rel[:, 1], rel[:, 0])
+    distance = np.maximum(np.hypot(rel[:, 0], rel[:, 1]), 0.05)
+    tilt = np.arctan2(config.camera.camera_height - config.field.ball_radius, distance)
+    return np.column_stack(clip_head(pan, tilt, config.camera))
+
+
+class TargetPolicy:
+    """A strategy that picks head targets: the greedy move towards them at head speed."""
+
+    name = "target"
+
+    def __init__(self, config: MatchConfig) -> None:
+        self.config = config
+        self.table = action_table(config.step_deg, "8way")
+        self.step = config.head_step
+
+    def reset(self, n: int, rng: np.random.Generator) -> None:
+        self.n = n
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        raise NotImplementedError
+
+    def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
+        return greedy_actions(info["head"], self.targets(info), self.table)
+
+    def reached(self, info: dict[str, np.ndarray], target: np.ndarray) -> np.ndarray:
+        """Heads within one move of ``target`` (N, 2)."""
+        d = info["head"] - target
+        reached: np.ndarray = np.hypot(d[:, 0], d[:, 1]) <= self.step * 0.75
+        return reached
+
+
+class BallTrack(TargetPolicy):
+    name = "ball_track"
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        return ball_direction(info, self.config)
+
+
+class BHumanCycle(TargetPolicy):
+    """Pan to and fro around the ball: +-45 deg standing, narrowed linearly to +-15 deg at
+    full walking speed (speed from the belief's motion), tilt on the ball."""
+
+    name = "bhuman_cycle"
+    wide, narrow = math.radians(45.0), math.radians(15.0)
+
+    def reset(self, n: int, rng: np.random.Generator) -> None:
+        super().reset(n, rng)
+        self.side = np.ones(n)
+        self.last_mean: np.ndarray | None = None
+        self.speed = np.zeros(n)
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        mean = info["belief_mean"]
+        if self.last_mean is not None:
+            moved = np.hypot(*(mean[:, :2] - self.last_mean[:, :2]).T) / self.config.tick_seconds
+            self.speed = 0.8 * self.speed + 0.2 * moved
+        self.last_mean = mean.copy()
+        full = max(self.config.walk.speed, 1e-6)
+        amplitude = self.wide - (self.wide - self.narrow) * np.clip(self.speed / full, 0, 1)
+        ball = ball_direction(info, self.config)
+        target = ball.copy()
+        target[:, 0] = ball[:, 0] + self.side * amplitude
+        target = np.column_stack(clip_head(target[:, 0], target[:, 1], self.config.camera))
+        turn = self.reached(info, target) | (
+            np.abs(info["head"][:, 0] - target[:, 0]) < self.step * 0.75
+        )
+        self.side = np.where(turn, -self.side, self.side)
+        return target
+
+
+class PatternPolicy(TargetPolicy):
+    """Visit a fixed list of (pan, tilt) points in turn, dwelling ``dwell`` ticks at each."""
+
+    points_deg: tuple[tuple[float, float], ...] = ()
+    dwell = 0
+
+    def reset(self, n: int, rng: np.random.Generator) -> None:
+        super().reset(n, rng)
+        self.points = np.radians(np.array(self.points_deg))
+        self.index = np.zeros(n, dtype=np.int64)
+        self.waited = np.zeros(n, dtype=np.int64)
+
+    def pattern_targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        target = self.points[self.index]
+        at = self.reached(info, target)
+        self.waited = np.where(at, self.waited + 1, 0)
+        advance = at & (self.waited > self.dwell)
+        self.index = np.where(advance, (self.index + 1) % len(self.points), self.index)
+        self.waited[advance] = 0
+        return np.asarray(self.points[self.index])
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        return self.pattern_targets(info)
+
+
+class BitBotsSearch(PatternPolicy):
+    """The ball while it was seen within the last second, else the search pattern."""
+
+    name = "bitbots_search"
+    points_deg = ((-90.0, 15.0), (90.0, 15.0), (90.0, 40.0), (-90.0, 40.0))
+    recent_ticks = 3
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        search = self.pattern_targets(info)
+        recent = info["ball_age"] <= self.recent_ticks
+        return np.where(recent[:, None], ball_direction(info, self.config), search)
+
+
+class NUbots6Point(PatternPolicy):
+    name = "nubots_6point"
+    points_deg = (
+        (60.0, 15.0),
+        (0.0, 15.0),
+        (-60.0, 15.0),
+        (-60.0, 45.0),
+        (0.0, 45.0),
+        (60.0, 45.0),
+    )
+    dwell = 2
+
+
+class EntropyGreedy(TargetPolicy):
+    """Every ``every`` ticks: Algorithm 1 from the belief (mean and covariance) and the ball
+    model; the view with the least expected entropy that shows the ball (the ball itself
+    when none does)."""
+
+    name = "entropy_greedy"
+
+    def __init__(self, config: MatchConfig, every: int = 5) -> None:
+        super().__init__(config)
+        self.every = every
+        self.landmarks = field_landmarks(config.field)
+        self.localisation = LocalisationConfig(ukf=config.tracker.ukf)
+
+    def reset(self, n: int, rng: np.random.Generator) -> None:
+        super().reset(n, rng)
+        self.tick = 0
+        self.goal = np.zeros((n, 2))
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        if self.tick % self.every == 0:
+            self.goal = plan_views(info, self.config, self.landmarks, self.localisation, True)
+        self.tick += 1
+        return self.goal
+
+
+def ball_on_field(info: dict[str, np.ndarray]) -> np.ndarray:
+    """The ball model's position (N, 2) on the field, through the believed pose."""
+    mean, rel = info["belief_mean"], info["ball_relative"]
+    c, s = np.cos(mean[:, 2]), np.sin(mean[:, 2])
+    return np.column_stack(
+        [mean[:, 0] + c * rel[:, 0] - s * rel[:, 1], mean[:, 1] + s * rel[:, 0] + c * rel[:, 1]]
+    )
+
+
+def plan_views(
+    info: dict[str, np.ndarray],
+    config: MatchConfig,
+    landmarks: Any,
+    localisation: LocalisationConfig,
+    use_belief_cov: bool,
+) -> np.ndarray:
+    """Algorithm 1 from each belief's mean (with its covariance, or the episodic start
+    covariance): the best view (N, 2) that shows the model's ball; the ball's direction
+    where no view does."""
+    means = info["belief_mean"]
+    covs = info["belief_cov"] if use_belief_cov else localisation.ukf.initial_cov
+    result = best_viewpoints(
+        means,
+        covs,
+        ball_on_field(info),
+        landmarks,
+        config.camera,
+        grid=localisation.grid,
+        ukf=localisation.ukf,
+        ball_radius=config.field.ball_radius,
+        ball_views_only=True,
+    )
+    views = np.column_stack([result.pan, result.tilt])
+    return np.where(result.ok[:, None], views, ball_direction(info, config))
+
+
+class EpisodicLearned:
+    """The shipped (or an exported) episodic policy, every tick, fed the belief as its prior
+    pose and Algorithm 1's proposal re-planned every ``every`` ticks (from the believed pose
+    with the episodic start covariance, as it was trained)."""
+
+    name = "episodic_learned"
+
+    def __init__(self, config: MatchConfig, model: Path | None = None, every: int = 5) -> None:
+        from activevision.runtime import HeadController, pretrained_policy_path
+
+        self.config = config
+        self.model = Path(model) if model is not None else pretrained_policy_path()
+        self.every = every
+        self.landmarks = field_landmarks(config.field)
+        self.localisation = LocalisationConfig()
+        self._make = lambda: HeadController(self.model)
+
+    def reset(self, n: int, rng: np.random.Generator) -> None:
+        self.controllers = [self._make() for _ in range(n)]
+        self.tick = 0
+        self.proposal = np.zeros((n, 2))
+
+    def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
+        if self.tick % self.every == 0:
+            self.proposal = plan_views(info, self.config, self.landmarks, self.localisation, False)
+        self.tick += 1
+        images = obs[IMAGE_KEY] if isinstance(obs, dict) else obs
+        mean, cov = info["belief_mean"], info["belief_cov"]
+        actions = np.zeros(len(self.controllers), dtype=np.int64)
+        for i, controller in enumerate(self.controllers):
+            inputs = controller.inputs
+            pan, tilt = info["head"][i]
+            actions[i] = controller.act(
+                images[i, -1],
+                pan,
+                tilt,
+                pose=tuple(mean[i]) if "pose" in inputs else None,
+                proposal=tuple(self.proposal[i]) if "proposal" in inputs else None,
+                pose_error=float(np.sqrt(cov[i, 0, 0] + cov[i, 1, 1]))
+                if "pose_error" in inputs
+                else None,
+            ).action
+        return actions
+
+
+class RandomMoves:
+    name = "random"
+
+    def __init__(self, config: MatchConfig) -> None:
+        self.n_actions = len(action_table(config.step_deg, "8way"))
+
+    def reset(self, n: int, rng: np.random.Generator) -> None:
+        self.n, self.rng = n, rng
+
+    def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
+        return self.rng.integers(self.n_actions, size=self.n)
+
+
+@dataclass(frozen=True)
+class MatchMethod:
+    name: str
+    factory: Callable[[MatchConfig, Path | None], MatchPolicy]
+    help: str
+    needs_images: bool  #: plays from camera images (the others need no rendering)
+    needs_run: bool = False  #: needs ``--run`` (a trained match policy)
+
+
+MATCH_METHODS: dict[str, MatchMethod] = {
+    m.name: m
+    for m in (
+        MatchMethod("ball_track", lambda c, _: BallTrack(c), "keep the ball centred", False),
+        MatchMethod("bhuman_cycle", lambda c, _: BHumanCycle(c), "B-Human-style pan cycle", False),
+        MatchMethod(
+            "bitbots_search", lambda c, _: BitBotsSearch(c), "Bit-Bots-style search", False
+        ),
+        MatchMethod(
+            "nubots_6point", lambda c, _: NUbots6Point(c), "NUbots-style 6-point look", False
+        ),
+        MatchMethod(
+            "entropy_greedy",
+            lambda c, _: EntropyGreedy(c),
+            "Algorithm 1 from the belief every 5 ticks",
+            False,
+        ),
+        MatchMethod(
+            "episodic_learned",
+            lambda c, run: EpisodicLearned(c, run),
+            "the shipped episodic policy, goal re-planned",
+            True,
+        ),
+        MatchMethod("random", lambda c, _: RandomMoves(c), "uniformly random moves", False),
+    )
+}
+
+
+def match_method_names() -> tuple[str, ...]:
+    return tuple(MATCH_METHODS)
+
+
+def make_match_policy(name: str, config: MatchConfig, model: Path | None = None) -> MatchPolicy:
+    """A fresh strategy ``name`` for matches of ``config``."""
+    if name not in MATCH_METHODS:
+        raise ValueError(f"unknown match method {name!r}; choose from {', '.join(MATCH_METHODS)}")
+    return MATCH_METHODS[name].factory(config, model)

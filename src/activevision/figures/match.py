@@ -1,0 +1,158 @@
+"""The match comparison's figures (``activevision match``): the Pareto front of position
+error against ball in view, the error over time, and an animated top view of one match with
+the belief's ellipse. Plain arrays in; the caller gathers them from the env."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from matplotlib.patches import Ellipse, Polygon
+
+from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure
+from activevision.figures.topview import draw_field
+from activevision.geometry import CameraConfig, FieldSpec
+from activevision.io import atomic_path
+
+#: a method's point and whiskers: (mean, low, high) of each axis
+Point = Mapping[str, tuple[float, float, float]]
+
+
+def plot_pareto(
+    points: Mapping[str, Point], front: Sequence[str], path: str | os.PathLike[str], title: str
+) -> None:
+    """Position RMSE (y, lower is better) against the share of ticks with the ball in view
+    (x, higher is better), with 95% whiskers; the Pareto front joined by a line."""
+    fig = new_figure(figsize=(7.0, 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    for name, p in points.items():
+        bx, by = p["ball_in_view"], p["position_rmse"]
+        ax.errorbar(
+            100 * bx[0],
+            by[0],
+            xerr=[[100 * (bx[0] - bx[1])], [100 * (bx[2] - bx[0])]],
+            yerr=[[by[0] - by[1]], [by[2] - by[0]]],
+            fmt="o" if name in front else "s",
+            ms=7,
+            capsize=3,
+            label=name + (" (front)" if name in front else ""),
+        )
+    on_front = sorted(
+        (100 * points[n]["ball_in_view"][0], points[n]["position_rmse"][0]) for n in front
+    )
+    if len(on_front) > 1:
+        ax.plot(*zip(*on_front, strict=True), color="grey", lw=1, ls="--", zorder=0)
+    ax.set_xlabel("ball in view (% of ticks)  ->  better")
+    ax.set_ylabel("position RMSE (m)  <-  better")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    save_figure(fig, path, dpi=120)
+
+
+def plot_error_over_time(
+    curves: Mapping[str, np.ndarray],
+    tick_seconds: float,
+    path: str | os.PathLike[str],
+    title: str,
+) -> None:
+    """Mean position error over matches at each tick (``curves``: method -> (ticks, M)),
+    with a 95% band."""
+    fig = new_figure(figsize=(7.5, 4.0), layout="constrained")
+    ax = fig.add_subplot()
+    for name, errors in curves.items():
+        t = np.arange(1, len(errors) + 1) * tick_seconds
+        mean = errors.mean(axis=1)
+        half = (
+            1.96 * errors.std(axis=1, ddof=1) / math.sqrt(errors.shape[1])
+            if errors.shape[1] > 1
+            else 0
+        )
+        ax.plot(t, mean, lw=1.2, label=name)
+        ax.fill_between(t, mean - half, mean + half, alpha=0.2)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("position error (m), mean over matches")
+    ax.set_title(title, fontsize=9)
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=2)
+    save_figure(fig, path, dpi=110)
+
+
+def clip_frames(
+    pose: np.ndarray,
+    mean: np.ndarray,
+    cov: np.ndarray,
+    head: np.ndarray,
+    ball: np.ndarray,
+    ball_in_view: np.ndarray,
+    field: FieldSpec,
+    camera: CameraConfig,
+    title: str,
+    tick_seconds: float,
+    every: int = 3,
+) -> list[np.ndarray]:
+    """RGB frames of one match from above: the true robot (red) with its camera's view
+    wedge, the belief's mean and 2-sigma ellipse (blue), the ball (orange, hollow when out
+    of view). Every ``every``-th tick of ``pose`` (T, 3) etc."""
+    frames = []
+    fig = new_figure(figsize=(6.4, 4.6), layout="constrained")
+    for t in range(0, len(pose), every):
+        fig.clear()
+        ax = fig.add_subplot()
+        draw_field(ax, field)
+        x, y, th = pose[t]
+        yaw = th + head[t, 0]
+        reach = 8.0  # the view wedge, drawn long enough to reach a far ball
+        half = camera.hfov / 2
+        wedge = [
+            (x, y),
+            (x + reach * math.cos(yaw + half), y + reach * math.sin(yaw + half)),
+            (x + reach * math.cos(yaw - half), y + reach * math.sin(yaw - half)),
+        ]
+        ax.add_patch(Polygon(wedge, closed=True, color="yellow", alpha=0.25, zorder=2))
+        ax.plot(pose[: t + 1, 0], pose[: t + 1, 1], color="red", lw=0.8, alpha=0.6, zorder=3)
+        ax.plot(x, y, "o", color="red", ms=7, zorder=4)
+        ax.plot(
+            [x, x + 0.3 * math.cos(th)], [y, y + 0.3 * math.sin(th)], color="red", lw=2, zorder=4
+        )
+        values, vectors = np.linalg.eigh(cov[t, :2, :2])
+        angle = math.degrees(math.atan2(vectors[1, 1], vectors[0, 1]))
+        width, height = 4 * np.sqrt(np.maximum(values[::-1], 0))  # 2 sigma each side
+        ax.add_patch(
+            Ellipse(
+                tuple(mean[t, :2]),
+                width,
+                height,
+                angle=angle,
+                fill=False,
+                ec="blue",
+                lw=1.5,
+                zorder=5,
+            )
+        )
+        ax.plot(*mean[t, :2], "x", color="blue", ms=7, zorder=5)
+        seen = bool(ball_in_view[t])
+        ax.plot(*ball[t], "o", ms=6, zorder=6, mfc="orange" if seen else "none", mec="darkorange")
+        error = math.hypot(*(mean[t, :2] - pose[t, :2]))
+        ax.set_title(f"{title}   t = {t * tick_seconds:5.1f} s   error {error:.2f} m", fontsize=9)
+        frames.append(figure_to_rgb(fig))
+    return frames
+
+
+def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: float) -> None:
+    """Write RGB frames as an animated GIF, atomically (Pillow, matplotlib's own dependency)."""
+    from PIL import Image
+
+    images = [Image.fromarray(f) for f in frames]
+    with atomic_path(path) as tmp:
+        images[0].save(
+            tmp,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            duration=int(1000 / fps),
+            loop=0,
+        )
