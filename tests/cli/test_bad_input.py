@@ -3,7 +3,6 @@ on stderr that names the problem; no traceback, no silent acceptance, no file de
 
 from __future__ import annotations
 
-import hashlib
 import json
 import shutil
 from collections.abc import Callable
@@ -13,59 +12,11 @@ import pytest
 
 from activevision.cli import main
 
-#: A training run small enough for a test (CPU seconds), through the real CLI.
-TINY_TRAIN = [
-    "train",
-    "--preset",
-    "quickstart_ddqn",
-    "--steps",
-    "60",
-    "--set",
-    "learning_starts=20",
-    "--set",
-    "batch_size=8",
-    "--set",
-    "buffer_size=500",
-    "--set",
-    "epoch_steps=30",
-    "--set",
-    "checkpoint_interval=30",
-    "--set",
-    "tensorboard=false",
-    "--set",
-    "num_threads=1",
-]
-
-
-@pytest.fixture(scope="module")
-def trained(tmp_path_factory) -> Path:
-    run = tmp_path_factory.mktemp("runs") / "tiny"
-    assert main([*TINY_TRAIN, "--out", str(run)]) == 0
-    return run
-
 
 @pytest.fixture
 def run(trained, tmp_path) -> Path:
     """A private copy of the tiny run, free to be tampered with."""
     return Path(shutil.copytree(trained, tmp_path / "run"))
-
-
-def one_clear_line(capsys, *needles: str) -> str:
-    captured = capsys.readouterr()
-    lines = [line for line in captured.err.splitlines() if line.strip()]
-    assert len(lines) == 1, captured.err
-    assert "Traceback" not in captured.err + captured.out
-    for needle in needles:
-        assert needle in lines[0], lines[0]
-    return lines[0]
-
-
-def digests(directory: Path) -> dict[str, str]:
-    return {
-        str(p.relative_to(directory)): hashlib.sha256(p.read_bytes()).hexdigest()
-        for p in sorted(directory.rglob("*"))
-        if p.is_file()
-    }
 
 
 # (argv with {run} and {tmp} placeholders, what the error line must name)
@@ -135,11 +86,11 @@ BAD_ARGUMENTS = [
 
 
 @pytest.mark.parametrize(("argv", "needle"), BAD_ARGUMENTS, ids=" ".join)
-def test_bad_arguments(trained, tmp_path, capsys, argv, needle):
+def test_bad_arguments(trained, tmp_path, capsys, argv, needle, digests, one_clear_line):
     before = digests(trained)
     filled = [a.format(run=trained, tmp=tmp_path) for a in argv]
     assert main(filled) == 2
-    one_clear_line(capsys, needle.format(run=trained, tmp=tmp_path))
+    one_clear_line(needle.format(run=trained, tmp=tmp_path))
     assert digests(trained) == before  # nothing of the run was touched
     assert not (tmp_path / "x").exists()  # a refused training run leaves no directory
 
@@ -157,18 +108,18 @@ def test_bad_arguments(trained, tmp_path, capsys, argv, needle):
     ],
     ids=lambda v: " ".join(v) if isinstance(v, list) else v,
 )
-def test_run_files_are_never_overwritten(run, capsys, argv, needle):
+def test_run_files_are_never_overwritten(run, capsys, argv, needle, digests, one_clear_line):
     before = digests(run)
     assert main([a.format(run=run) for a in argv]) == 2
-    one_clear_line(capsys, needle, "refusing")
+    one_clear_line(needle, "refusing")
     assert digests(run) == before
 
 
-def test_named_outputs_need_overwrite(tmp_path, capsys):
+def test_named_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     picture = tmp_path / "view.png"
     picture.write_bytes(b"a photo of my robot")
     assert main(["render", "--out", str(picture)]) == 2
-    one_clear_line(capsys, "--overwrite")
+    one_clear_line("--overwrite")
     assert picture.read_bytes() == b"a photo of my robot"
     assert main(["render", "--out", str(picture), "--overwrite"]) == 0
     assert picture.read_bytes().startswith(b"\x89PNG")
@@ -179,11 +130,11 @@ def test_finished_run_resumes_to_nothing_and_says_so(run, capsys):
     assert "finished" in capsys.readouterr().out
 
 
-def test_run_without_checkpoint_needs_overwrite(run, capsys):
+def test_run_without_checkpoint_needs_overwrite(run, capsys, tiny_train, one_clear_line):
     shutil.rmtree(run / "checkpoints")
-    assert main([*TINY_TRAIN, "--out", str(run)]) == 2
-    one_clear_line(capsys, "--overwrite")
-    assert main([*TINY_TRAIN, "--out", str(run), "--overwrite"]) == 0
+    assert main([*tiny_train, "--out", str(run)]) == 2
+    one_clear_line("--overwrite")
+    assert main([*tiny_train, "--out", str(run), "--overwrite"]) == 0
 
 
 def test_stale_checkpoint_writes_are_cleaned_on_the_next_start(trained, tmp_path):
@@ -404,10 +355,12 @@ def swap_optimizer_state(run: Path) -> None:
 @pytest.mark.parametrize(
     ("tamper", "argv", "needle"), [t[1:] for t in TAMPERS], ids=[t[0] for t in TAMPERS]
 )
-def test_tampered_files_are_refused(trained, tmp_path, capsys, tamper, argv, needle):
+def test_tampered_files_are_refused(
+    trained, tmp_path, capsys, tamper, argv, needle, one_clear_line
+):
     run = Path(shutil.copytree(trained, tmp_path / "run"))
     # an unfinished run, so resume has work to do
     shutil.rmtree(run / "checkpoints" / "step_000000060")
     tamper(run)
     assert main([a.format(run=run) for a in argv]) == 2
-    one_clear_line(capsys, needle)
+    one_clear_line(needle)

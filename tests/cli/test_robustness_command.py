@@ -1,7 +1,6 @@
 """``activevision robustness``: the tiny real command, its outputs, and bad input."""
 
 import csv
-import hashlib
 import shutil
 from pathlib import Path
 
@@ -13,16 +12,6 @@ from activevision.cli import main
 def read_rows(path: Path) -> list[dict]:
     with path.open() as f:
         return list(csv.DictReader(f))
-
-
-def one_clear_line(capsys, *needles: str) -> str:
-    captured = capsys.readouterr()
-    lines = [line for line in captured.err.splitlines() if line.strip()]
-    assert len(lines) == 1, captured.err
-    assert "Traceback" not in captured.err + captured.out
-    for needle in needles:
-        assert needle in lines[0], lines[0]
-    return lines[0]
 
 
 TINY = [
@@ -64,7 +53,7 @@ def test_tiny_run_writes_its_rows_and_figure(tmp_path, capsys):
     assert any(line.startswith("worst change vs clean:") for line in lines)
 
 
-def test_existing_outputs_need_overwrite(tmp_path, capsys):
+def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     out = tmp_path / "r"
     out.mkdir()
     (out / "robustness.csv").write_text("my earlier results\n")
@@ -80,7 +69,7 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys):
         str(out),
     ]
     assert main(argv) == 2
-    one_clear_line(capsys, "robustness.csv", "--overwrite")
+    one_clear_line("robustness.csv", "--overwrite")
     assert (out / "robustness.csv").read_text() == "my earlier results\n"
     assert main([*argv, "--overwrite"]) == 0
     assert [r["name"] for r in read_rows(out / "robustness.csv")] == ["clean", "robots-1"]
@@ -110,52 +99,16 @@ def test_list_prints_the_table(capsys):
     ],
     ids=" ".join,
 )
-def test_bad_input_is_one_clear_line(tmp_path, capsys, argv, needle):
+def test_bad_input_is_one_clear_line(tmp_path, capsys, argv, needle, one_clear_line):
     out = tmp_path / "r"
     assert main(["robustness", *argv, "--out", str(out)]) == 2
-    one_clear_line(capsys, needle)
+    one_clear_line(needle)
     assert not out.exists()
 
 
-TINY_TRAIN = [
-    "train",
-    "--preset",
-    "quickstart_ddqn",
-    "--steps",
-    "60",
-    "--set",
-    "learning_starts=20",
-    "--set",
-    "batch_size=8",
-    "--set",
-    "buffer_size=500",
-    "--set",
-    "epoch_steps=30",
-    "--set",
-    "checkpoint_interval=30",
-    "--set",
-    "tensorboard=false",
-    "--set",
-    "num_threads=1",
-]
-
-
-def digests(directory: Path) -> dict[str, str]:
-    return {
-        str(p.relative_to(directory)): hashlib.sha256(p.read_bytes()).hexdigest()
-        for p in sorted(directory.rglob("*"))
-        if p.is_file()
-    }
-
-
-@pytest.fixture(scope="module")
-def trained(tmp_path_factory) -> Path:
-    run = tmp_path_factory.mktemp("runs") / "tiny"
-    assert main([*TINY_TRAIN, "--out", str(run)]) == 0
-    return run
-
-
-def test_a_run_is_scored_beside_its_files_never_over_them(trained, tmp_path, capsys):
+def test_a_run_is_scored_beside_its_files_never_over_them(
+    trained, tmp_path, capsys, digests, one_clear_line
+):
     run = Path(shutil.copytree(trained, tmp_path / "run"))
     before = digests(run)
     argv = [
@@ -168,7 +121,7 @@ def test_a_run_is_scored_beside_its_files_never_over_them(trained, tmp_path, cap
         "line-wear-strong",
     ]
     assert main([*argv, "--out", str(run)]) == 2
-    one_clear_line(capsys, "training run", "--out")
+    one_clear_line("training run", "--out")
     assert main(argv) == 0
     rows = read_rows(run / "robustness" / "robustness.csv")
     assert [(r["method"], r["name"]) for r in rows] == [

@@ -8,8 +8,9 @@ with two things a tracker needs and a one-shot search does not:
 * a **validation gate**: a detection whose innovation lies further than ``gate`` (squared
   Mahalanobis distance, chi-square with 2 degrees of freedom) from what the belief expects
   is discarded, the standard defence against false detections;
-* a **lost detector** for a kidnapped robot: the share of recent detections that failed the
-  gate, as an exponential moving average. When it passes ``lost_share`` the robot declares
+* a **lost detector** for a kidnapped robot: the share of detections that failed the gate,
+  per tick with two or more detections (a false detection comes alone: at most one a tick),
+  as an exponential moving average over such ticks. When it passes ``lost_share`` the robot declares
   itself lost and the covariance is widened to ``lost_std`` around the mean, so that the
   gate lets detections in again. A UKF cannot relocalise globally (the field is
   symmetric), so this *detects* a kidnapping and recovers only from a teleport within
@@ -38,6 +39,7 @@ from activevision.localisation.kernels import (
     OK,
     Fields,
     chol3,
+    expected_rb,
     sigma_points3,
     ukf_update_rb,
 )
@@ -56,8 +58,8 @@ class TrackerConfig:
 
     ukf: UKFConfig = DEFAULT_UKF  #: sigma points, sensor and odometry noise
     gate: float = CHI2_2DOF_999  #: squared Mahalanobis distance beyond which a detection is dropped
-    #: weight of each new detection in the moving share of gated detections
-    lost_rate: float = 0.1
+    #: weight of each tick (with two or more detections) in the moving share of gated ones
+    lost_rate: float = 0.2
     #: that share above which the robot declares itself lost (kidnapped)
     lost_share: float = 0.5
     #: the belief's std (m, m, rad) after declaring itself lost
@@ -171,12 +173,18 @@ def track_kernel(
             if k < 0:
                 break
             t = types[k]
-            sr = noise[t, 0] + noise[t, 1] * abs(det_z[n, d, 0])
+            ax, ay = segments[k, 0, 0], segments[k, 0, 1]
+            bx, by = segments[k, 1, 0], segments[k, 1, 1]
+            # the noise at the range the belief expects, not the measured one: weighting by
+            # the measured range trusts detections that err short more, a bias that repeated
+            # updates turn into overconfidence
+            expected_range = abs(expected_rb(x[0], x[1], x[2], ax, ay, bx, by)[0])
+            sr = noise[t, 0] + noise[t, 1] * expected_range
             status, distance = ukf_update_rb(
                 x,
                 P,
                 (det_z[n, d, 0], det_z[n, d, 1]),
-                (segments[k, 0, 0], segments[k, 0, 1], segments[k, 1, 0], segments[k, 1, 1]),
+                (ax, ay, bx, by),
                 (sr * sr, noise[t, 2] * noise[t, 2]),
                 weights,
                 scratch,
@@ -185,18 +193,20 @@ def track_kernel(
             if status == NOT_PD:
                 errors[n] = NOT_PD
                 break
-            was_gated = status == GATED
-            if was_gated:
+            if status == GATED:
                 gated[n] += 1
             else:
                 accepted[n] += 1
                 nis[n] += distance
-            gated_share[n] += lost_rate * ((1.0 if was_gated else 0.0) - gated_share[n])
-            if gated_share[n] > lost_share:
-                declared[n] = True
-                gated_share[n] = 0.0
-                P[:, :] = 0.0
-                P[0, 0], P[1, 1], P[2, 2] = lx * lx, ly * ly, lt * lt
+        seen = accepted[n] + gated[n]
+        if seen < 2:  # a lone false detection must not look like a kidnapping
+            continue
+        gated_share[n] += lost_rate * (gated[n] / seen - gated_share[n])
+        if gated_share[n] > lost_share:
+            declared[n] = True
+            gated_share[n] = 0.0
+            P[:, :] = 0.0
+            P[0, 0], P[1, 1], P[2, 2] = lx * lx, ly * ly, lt * lt
     return errors
 
 

@@ -76,13 +76,17 @@ def roll_ball(
     velocity[kicked] = np.column_stack([np.cos(angle), np.sin(angle)]) * speed[:, None]
     speed_now = np.hypot(velocity[:, 0], velocity[:, 1])
     slower = np.maximum(speed_now - config.deceleration * dt, 0.0)
-    # average speed over the tick, so a ball stops where constant deceleration stops it
-    mean_speed = 0.5 * (speed_now + slower)
-    scale = np.divide(mean_speed, speed_now, out=np.zeros_like(speed_now), where=speed_now > 0)
-    ball += velocity * scale[:, None] * dt
-    velocity *= np.divide(slower, speed_now, out=np.zeros_like(speed_now), where=speed_now > 0)[
-        :, None
-    ]
+    # exact under constant deceleration, also in the tick the ball stops
+    if config.deceleration > 0:
+        travel = (speed_now**2 - slower**2) / (2 * config.deceleration)
+    else:
+        travel = speed_now * dt
+    moving = speed_now > 0
+    unit = np.divide(
+        velocity, speed_now[:, None], out=np.zeros_like(velocity), where=moving[:, None]
+    )
+    ball += unit * travel[:, None]
+    velocity[:] = unit * slower[:, None]
     for axis, half in enumerate(half_field):
         over = ball[:, axis] > half
         under = ball[:, axis] < -half

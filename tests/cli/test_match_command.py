@@ -1,0 +1,56 @@
+"""``activevision match``: the tiny real command, its four outputs, and bad input."""
+
+import csv
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+from activevision.cli import main
+
+TINY = ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "random"]
+
+
+def test_tiny_match_writes_table_csv_and_figures(tmp_path, capsys):
+    out = tmp_path / "m"
+    assert main([*TINY, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "ball_track" in printed and "Pareto front" in printed
+    with (out / "match.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [r["method"] for r in rows] == ["ball_track", "random"]
+    assert float(rows[0]["position_rmse_low"]) <= float(rows[0]["position_rmse"])
+    for name in ("match_pareto.png", "match_error.png"):
+        assert Image.open(out / name).size[0] > 400
+    gif = Image.open(out / "match_clip.gif")
+    assert gif.n_frames == 10  # the start and 9 ticks
+
+
+def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
+    out = tmp_path / "m"
+    assert main([*TINY, "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main([*TINY, "--out", str(out)]) == 2
+    one_clear_line("match.csv", "--overwrite")
+    assert main([*TINY, "--out", str(out), "--overwrite"]) == 0
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["match", "--methods", "nope"], "nope"),
+        (["match", "--matches", "0"], "--matches"),
+        (["match", "--step-deg", "90"], "--step-deg"),
+        (["match", "--walk", "home"], "--walk"),
+        (["match", "--model", "missing.onnx", "--matches", "1"], "missing.onnx"),
+        (["match", "--methods", "random", "--clip-method", "ball_track"], "--clip-method"),
+    ],
+)
+def test_bad_input_is_one_clear_line(tmp_path, argv, needle, one_clear_line):
+    assert main([*argv, "--out", str(tmp_path / "m")]) == 2
+    one_clear_line(needle)
+
+
+def test_refuses_a_training_run(trained, one_clear_line):
+    assert main([*TINY, "--out", str(Path(trained))]) == 2
+    one_clear_line("training run")

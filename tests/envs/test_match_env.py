@@ -1,0 +1,250 @@
+"""ActiveVisionMatch-v0: the Gymnasium contract, same seed same bytes in every
+vectorization mode, the dynamics and the detector against hand-computed cases and the UKF's
+measurement model, and bad input."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import activevision.envs  # noqa: F401  (registers the envs)
+from activevision.envs.match.config import BallConfig, DetectionConfig, MatchConfig, WalkConfig
+from activevision.envs.match.detections import detect_kernel
+from activevision.envs.match.dynamics import (
+    apply_motion,
+    move_relative,
+    roll_ball,
+    to_robot_frame,
+    walk_command,
+)
+from activevision.envs.match.env import ActiveVisionMatchEnv
+from activevision.envs.match.simulation import MatchBatch
+from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+from activevision.envs.robots import RobotsConfig
+from activevision.geometry import field_landmarks
+from activevision.geometry.field import FieldSpec
+from activevision.localisation import hx_range_bearing
+from activevision.rendering.appearance import AppearanceConfig
+
+TICKS = 25
+
+
+def rollout(env, seed, actions):
+    obs, info = env.reset(seed=seed)
+    out = [(obs, info)]
+    for a in actions:
+        obs, reward, terminated, truncated, info = env.step(a)
+        out.append((obs, info, reward, terminated, truncated))
+    return out
+
+
+def assert_same(a, b):
+    if isinstance(a, list | tuple):
+        assert len(a) == len(b)
+        for x, y in zip(a, b, strict=True):
+            assert_same(x, y)
+    elif isinstance(a, dict):
+        assert a.keys() == b.keys()
+        for key in a:
+            assert_same(a[key], b[key])
+    else:
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+@pytest.mark.parametrize("observation", ["image", "image+head", "image+head+belief"])
+def test_gymnasium_env_checker(observation):
+    env = gym.make("ActiveVisionMatch-v0", observation=observation, ticks=30)
+    check_env(env.unwrapped, skip_render_check=True)
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+
+
+def test_same_seed_same_bytes_and_truncation():
+    actions = np.random.default_rng(0).integers(0, 9, TICKS)
+    a = rollout(ActiveVisionMatchEnv(ticks=TICKS), 7, actions)
+    b = rollout(ActiveVisionMatchEnv(ticks=TICKS), 7, actions)
+    for x, y in zip(a, b, strict=True):
+        assert_same(list(x), list(y))
+    assert all(not step[3] for step in a[1:])  # never terminates
+    assert [step[4] for step in a[1:]] == [False] * (TICKS - 1) + [True]
+    c = rollout(ActiveVisionMatchEnv(ticks=TICKS), 8, actions)
+    assert not np.array_equal(a[-1][1]["pose"], c[-1][1]["pose"])
+
+
+def vector_rollout(envs, seed, actions):
+    obs, info = envs.reset(seed=seed)
+    out = [(obs, info)]
+    for a in actions:
+        out.append(envs.step(a))
+    return out
+
+
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_every_vectorizer_agrees_with_the_native_one(mode):
+    """Gymnasium's Sync and Async vectorizers over single envs and the native vector env
+    give the same batches, byte for byte, across an autoreset."""
+    n, ticks = 3, 12
+    actions = np.random.default_rng(2).integers(0, 9, (ticks + 3, n))
+    kwargs = {"observation": "image+head+belief", "ticks": ticks}
+    native = gym.make_vec(
+        "ActiveVisionMatch-v0", num_envs=n, vectorization_mode="vector_entry_point", **kwargs
+    )
+    other = gym.make_vec("ActiveVisionMatch-v0", num_envs=n, vectorization_mode=mode, **kwargs)
+    try:
+        for x, y in zip(
+            vector_rollout(native, 4, actions), vector_rollout(other, 4, actions), strict=True
+        ):
+            for part_x, part_y in zip(x, y, strict=True):
+                if isinstance(part_x, dict) and "pose" in part_x:  # infos: the env's keys
+                    for key in part_x:
+                        if not key.startswith("_"):
+                            assert_same(part_x[key], part_y[key])
+                else:
+                    assert_same(part_x, part_y)
+    finally:
+        native.close()
+        other.close()
+
+
+def test_vector_slots_are_the_single_envs_in_any_order():
+    """Slot i reset with seed s_i plays exactly the single env reset with s_i, whatever the
+    other slots hold (seeds shuffled)."""
+    seeds = [31, 5, 17]
+    actions = np.random.default_rng(3).integers(0, 9, (10, 3))
+    envs = ActiveVisionMatchVectorEnv(3, ticks=50)
+    batched = [envs.reset(seed=seeds)] + [envs.step(a) for a in actions]
+    for i, s in enumerate(seeds):
+        single = rollout(ActiveVisionMatchEnv(ticks=50), s, actions[:, i])
+        for b, one in zip(batched, single, strict=True):
+            np.testing.assert_array_equal(b[0][i], one[0])
+            np.testing.assert_array_equal(b[-1]["belief_cov"][i], one[1]["belief_cov"])
+
+
+def test_ball_rolls_to_a_stop_where_constant_deceleration_stops_it():
+    """From 1.2 m/s at 0.4 m/s^2 the ball stops after v^2 / 2a = 1.8 m."""
+    ball, velocity = np.zeros((1, 2)), np.array([[1.2, 0.0]])
+    config = BallConfig(kick_rate=0.0)
+    for _ in range(100):
+        roll_ball(ball, velocity, np.ones((1, 3)), config, 0.32, (4.5, 3.0))
+    np.testing.assert_allclose(ball[0], [1.8, 0.0], atol=1e-9)
+    assert not velocity.any()
+
+
+def test_ball_bounces_off_the_field_lines():
+    ball, velocity = np.array([[4.4, 0.0]]), np.array([[1.0, 0.0]])
+    roll_ball(ball, velocity, np.ones((1, 3)), BallConfig(deceleration=0.0), 0.32, (4.5, 3.0))
+    np.testing.assert_allclose(ball[0], [4.5 - 0.22, 0.0])
+    assert velocity[0, 0] == -1.0
+
+
+def test_walk_command_turns_then_walks():
+    walk = WalkConfig(speed=0.2, turn_rate=0.5)
+    believed = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    waypoint = np.array([[2.0, 0.0], [0.0, 2.0], [2.0, 0.0]])
+    paused = np.array([False, False, True])
+    step = walk_command(believed, waypoint, paused, walk, 0.32)
+    np.testing.assert_allclose(step[0], [0.064, 0.0, 0.0])  # facing it: full speed
+    np.testing.assert_allclose(step[1], [0.0, 0.0, 0.16], atol=1e-12)  # 90 deg off: turn only
+    np.testing.assert_array_equal(step[2], 0.0)
+
+
+def test_ball_model_follows_odometry():
+    """A world point seen from the moved robot is where the ball model carries it."""
+    rng = np.random.default_rng(5)
+    pose = np.column_stack([rng.uniform(-3, 3, 8), rng.uniform(-2, 2, 8), rng.uniform(-3, 3, 8)])
+    point = rng.uniform(-4, 4, (8, 2))
+    step = rng.normal(0, [0.1, 0.05, 0.3], (8, 3))
+    before = to_robot_frame(point, pose)
+    apply_motion(pose, step, (100.0, 100.0))
+    np.testing.assert_allclose(move_relative(before, step), to_robot_frame(point, pose), atol=1e-12)
+
+
+def detect(poses, visible, normals, false_draw, near=1.0, far=1.0, false_rate=0.0):
+    lm = field_landmarks(FieldSpec())
+    sim = MatchBatch(MatchConfig(), 1)
+    n, k = visible.shape
+    return detect_kernel(
+        visible,
+        poses,
+        np.zeros(n),
+        lm.segments,
+        lm.max_distance,
+        lm.types,
+        sim._noise_table,
+        sim._point_ids,
+        np.full((n, k), 0.5),
+        normals,
+        false_draw,
+        (near, far, false_rate, 0.5),
+    )
+
+
+def test_detections_without_noise_are_the_ukf_measurement():
+    """Zero noise: each detection is ``hx_range_bearing`` of the true pose (the UKF's own
+    model), closest landmarks first; every visible landmark is detected at rate 1."""
+    lm = field_landmarks(FieldSpec())
+    poses = np.array([[1.0, -0.5, 0.3], [-2.0, 1.0, 2.5]])
+    visible = np.zeros((2, len(lm)), dtype=bool)
+    visible[0, [3, 20, 40]] = True
+    visible[1, [1, 45]] = True
+    ids, z, count = detect(poses, visible, np.zeros((2, len(lm), 2)), np.ones((2, 4)))
+    assert count.tolist() == [3, 2]
+    for i in range(2):
+        got = ids[i, : count[i]]
+        assert sorted(got) == sorted(np.flatnonzero(visible[i]))
+        for d, k in enumerate(got):
+            np.testing.assert_allclose(z[i, d], hx_range_bearing(poses[i], lm.segments[k])[0])
+    # none detected at rate 0; a false detection comes last, inside the image
+    ids, z, count = detect(
+        poses, visible, np.zeros((2, len(lm), 2)), np.zeros((2, 4)), 0.0, 0.0, 1.0
+    )
+    assert count.tolist() == [1, 1]
+    assert np.all(np.abs(z[:, 0, 1]) <= 0.5)
+
+
+def test_randomised_world_with_robots_plays():
+    """Appearance and other robots on: a hidden landmark is never detected."""
+    config = MatchConfig(
+        ticks=20,
+        appearance=AppearanceConfig.randomised(),
+        robots=RobotsConfig(count=(4, 4)),
+    )
+    sim = MatchBatch(config, 4)
+    sim.reset(np.arange(4), [np.random.default_rng(s) for s in range(4)])
+    frames = []
+    for t in range(20):
+        sim.step(np.full(4, t % 9))
+        assert not (sim.detected & sim.hidden).any()
+        frames.append(sim.render())
+    assert np.ptp(np.asarray(frames)) > 50
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"ticks": 0}, "ticks"),
+        ({"step_deg": 90.0}, "step_deg"),
+        ({"observation": "pose"}, "observation"),
+        ({"detection": DetectionConfig(near=0.2, far=0.5)}, "far"),
+        ({"no_such": 1}, "unknown keyword"),
+    ],
+)
+def test_bad_config_is_one_clear_error(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        gym.make("ActiveVisionMatch-v0", **kwargs)
+
+
+@pytest.mark.parametrize(
+    ("make", "match"),
+    [
+        (lambda: WalkConfig(pause_ticks=(5, 1)), "pause_ticks"),
+        (lambda: WalkConfig(speed=-0.1), "speed"),
+        (lambda: BallConfig(kick_speed=(3.0, 1.0)), "kick_speed"),
+        (lambda: DetectionConfig(near=1.5), "near"),
+    ],
+)
+def test_bad_part_config_names_the_field(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()

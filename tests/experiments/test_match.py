@@ -1,0 +1,119 @@
+"""The match runner and strategies: every strategy plays, the same seeds give the same
+matches, the metrics are what they say, and the strategies aim where they claim."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from activevision.envs.match.config import MatchConfig
+from activevision.experiments.match import (
+    MATCH_METRICS,
+    MatchClip,
+    MethodResult,
+    csv_rows,
+    pareto_front,
+    play_matches,
+)
+from activevision.experiments.match_methods import (
+    BHumanCycle,
+    NUbots6Point,
+    ball_direction,
+    make_match_policy,
+    match_method_names,
+)
+
+SMALL = MatchConfig(ticks=12)
+
+
+@pytest.mark.parametrize("method", match_method_names())
+def test_every_strategy_plays_and_the_metrics_are_in_range(method):
+    result = play_matches(method, SMALL, 2, seed=3)
+    assert set(result.per_match) == set(MATCH_METRICS)
+    for name, values in result.per_match.items():
+        assert values.shape == (2,) and np.isfinite(values).all(), name
+    assert (result.per_match["ball_in_view"] >= 0).all() and (
+        result.per_match["ball_in_view"] <= 1
+    ).all()
+    assert (result.per_match["position_rmse"] >= 0).all()
+    assert result.error_curve.shape == (12, 2)
+    assert len(result.clip.pose) == 13  # the start and every tick
+
+
+def test_same_seeds_same_matches():
+    a = play_matches("entropy_greedy", SMALL, 2, seed=9)
+    b = play_matches("entropy_greedy", SMALL, 2, seed=9)
+    for name in MATCH_METRICS:
+        np.testing.assert_array_equal(a.per_match[name], b.per_match[name])
+    c = play_matches("ball_track", SMALL, 2, seed=9)  # another head, the same walks and balls
+    np.testing.assert_array_equal(a.clip.pose[0], c.clip.pose[0])
+
+
+def test_rmse_is_the_root_mean_square_of_the_error_curve():
+    r = play_matches("random", SMALL, 3, seed=1)
+    np.testing.assert_allclose(r.per_match["position_rmse"], np.sqrt((r.error_curve**2).mean(0)))
+    np.testing.assert_allclose(r.per_match["lost_share"], (r.error_curve > 0.5).mean(0))
+
+
+def fake(method: str, rmse: float, ball: float) -> MethodResult:
+    per_match = {name: np.zeros(4) for name in MATCH_METRICS}
+    per_match["position_rmse"] = np.full(4, rmse)
+    per_match["ball_in_view"] = np.full(4, ball)
+    return MethodResult(method, per_match, np.zeros((1, 4)), MatchClip(), 0.0)
+
+
+def test_pareto_front_by_hand():
+    results = [fake("a", 0.1, 0.5), fake("b", 0.2, 0.6), fake("c", 0.2, 0.4), fake("d", 0.1, 0.5)]
+    assert pareto_front(results) == ["a", "b", "d"]  # c is beaten by a on both
+    rows = csv_rows(results, 4, 0)
+    assert rows[0]["position_rmse"] == pytest.approx(0.1) and rows[0]["matches"] == 4
+
+
+def test_ball_direction_by_hand():
+    """The ball 1 m ahead and 1 m left: pan 45 deg; tilt atan((0.5 - 0.07) / sqrt 2)."""
+    info = {"ball_relative": np.array([[1.0, 1.0]])}
+    head = ball_direction(info, MatchConfig())
+    np.testing.assert_allclose(head[0], [math.pi / 4, math.atan2(0.43, math.sqrt(2))])
+
+
+def info_for(head, ball_relative, mean=None):
+    n = len(head)
+    return {
+        "head": np.asarray(head, float),
+        "ball_relative": np.asarray(ball_relative, float),
+        "ball_age": np.zeros(n, dtype=np.int64),
+        "belief_mean": np.zeros((n, 3)) if mean is None else np.asarray(mean, float),
+    }
+
+
+def test_bhuman_cycle_narrows_when_walking():
+    """Standing, the sweep reaches 45 deg beside the ball; walking at full speed, 15."""
+    policy = BHumanCycle(MatchConfig())
+    policy.reset(1, np.random.default_rng(0))
+    ball = [[2.0, 0.0]]
+    standing = policy.targets(info_for([[0.0, 0.3]], ball))
+    assert math.degrees(abs(standing[0, 0])) == pytest.approx(45.0)
+    policy.reset(1, np.random.default_rng(0))
+    for t in range(60):  # walking 0.2 m/s: 0.064 m per tick
+        target = policy.targets(info_for([[0.0, 0.3]], ball, [[0.064 * t, 0.0, 0.0]]))
+    assert math.degrees(abs(target[0, 0])) == pytest.approx(15.0, abs=0.5)
+
+
+def test_six_point_look_visits_its_points_in_turn():
+    policy = NUbots6Point(MatchConfig())
+    policy.reset(1, np.random.default_rng(0))
+    visited = []
+    head = np.radians([[60.0, 15.0]])
+    for _ in range(30):
+        target = policy.targets(info_for(head, [[1.0, 0.0]]))
+        head = target.copy()  # a head that arrives at once
+        visited.append(tuple(np.round(np.degrees(target[0]))))
+    order = list(dict.fromkeys(visited))
+    assert order == [(60, 15), (0, 15), (-60, 15), (-60, 45), (0, 45), (60, 45)]
+
+
+def test_unknown_method_is_one_clear_error():
+    with pytest.raises(ValueError, match="unknown match method 'nope'"):
+        make_match_policy("nope", SMALL)
