@@ -11,14 +11,8 @@ from gymnasium.utils.env_checker import check_env
 
 import activevision.envs  # noqa: F401  (registers the envs)
 from activevision.envs.match.config import BallConfig, DetectionConfig, MatchConfig, WalkConfig
-from activevision.envs.match.detections import detect_kernel
-from activevision.envs.match.dynamics import (
-    apply_motion,
-    move_relative,
-    roll_ball,
-    to_robot_frame,
-    walk_command,
-)
+from activevision.envs.match.detections import detect_one
+from activevision.envs.match.dynamics import carry, move_pose, roll_ball, to_robot_frame, walk_step
 from activevision.envs.match.env import ActiveVisionMatchEnv
 from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
@@ -122,86 +116,99 @@ def test_vector_slots_are_the_single_envs_in_any_order():
             np.testing.assert_array_equal(b[-1]["belief_cov"][i], one[1]["belief_cov"])
 
 
+def roll(ball, velocity, ticks, deceleration=0.4, kick_rate=0.0):
+    ball, velocity = np.array(ball, float), np.array(velocity, float)
+    for _ in range(ticks):
+        roll_ball(ball, velocity, np.ones(3), (deceleration, kick_rate, 0.5, 2.5), 0.32, 4.5, 3.0)
+    return ball, velocity
+
+
 def test_ball_rolls_to_a_stop_where_constant_deceleration_stops_it():
     """From 1.2 m/s at 0.4 m/s^2 the ball stops after v^2 / 2a = 1.8 m."""
-    ball, velocity = np.zeros((1, 2)), np.array([[1.2, 0.0]])
-    config = BallConfig(kick_rate=0.0)
-    for _ in range(100):
-        roll_ball(ball, velocity, np.ones((1, 3)), config, 0.32, (4.5, 3.0))
-    np.testing.assert_allclose(ball[0], [1.8, 0.0], atol=1e-9)
+    ball, velocity = roll([0.0, 0.0], [1.2, 0.0], 100)
+    np.testing.assert_allclose(ball, [1.8, 0.0], atol=1e-12)
     assert not velocity.any()
 
 
 def test_ball_bounces_off_the_field_lines():
-    ball, velocity = np.array([[4.4, 0.0]]), np.array([[1.0, 0.0]])
-    roll_ball(ball, velocity, np.ones((1, 3)), BallConfig(deceleration=0.0), 0.32, (4.5, 3.0))
-    np.testing.assert_allclose(ball[0], [4.5 - 0.22, 0.0])
-    assert velocity[0, 0] == -1.0
+    ball, velocity = roll([4.4, 0.0], [1.0, 0.0], 1, deceleration=0.0)
+    np.testing.assert_allclose(ball, [4.5 - 0.22, 0.0])
+    assert velocity[0] == -1.0
 
 
-def test_walk_command_turns_then_walks():
-    walk = WalkConfig(speed=0.2, turn_rate=0.5)
-    believed = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
-    waypoint = np.array([[2.0, 0.0], [0.0, 2.0], [2.0, 0.0]])
-    paused = np.array([False, False, True])
-    step = walk_command(believed, waypoint, paused, walk, 0.32)
-    np.testing.assert_allclose(step[0], [0.064, 0.0, 0.0])  # facing it: full speed
-    np.testing.assert_allclose(step[1], [0.0, 0.0, 0.16], atol=1e-12)  # 90 deg off: turn only
-    np.testing.assert_array_equal(step[2], 0.0)
+def test_a_kick_sets_direction_and_speed():
+    ball, velocity = np.zeros(2), np.zeros(2)
+    roll_ball(ball, velocity, np.array([0.0, 0.25, 0.5]), (0.0, 0.1, 1.0, 3.0), 0.5, 4.5, 3.0)
+    np.testing.assert_allclose(velocity, [0.0, 2.0], atol=1e-12)  # 90 deg, 2 m/s
+    np.testing.assert_allclose(ball, [0.0, 1.0], atol=1e-12)
+
+
+def test_walk_step_turns_then_walks():
+    here = np.zeros(3)
+    np.testing.assert_allclose(
+        walk_step(here, np.array([2.0, 0.0]), False, 0.2, 0.5, 0.32), [0.064, 0, 0]
+    )
+    # 90 degrees off: turn only, at the turn rate
+    np.testing.assert_allclose(
+        walk_step(here, np.array([0.0, 2.0]), False, 0.2, 0.5, 0.32), [0, 0, 0.16], atol=1e-12
+    )
+    assert walk_step(here, np.array([2.0, 0.0]), True, 0.2, 0.5, 0.32) == (0.0, 0.0, 0.0)
 
 
 def test_ball_model_follows_odometry():
     """A world point seen from the moved robot is where the ball model carries it."""
     rng = np.random.default_rng(5)
-    pose = np.column_stack([rng.uniform(-3, 3, 8), rng.uniform(-2, 2, 8), rng.uniform(-3, 3, 8)])
-    point = rng.uniform(-4, 4, (8, 2))
-    step = rng.normal(0, [0.1, 0.05, 0.3], (8, 3))
-    before = to_robot_frame(point, pose)
-    apply_motion(pose, step, (100.0, 100.0))
-    np.testing.assert_allclose(move_relative(before, step), to_robot_frame(point, pose), atol=1e-12)
+    for _ in range(20):
+        pose = np.array([rng.uniform(-3, 3), rng.uniform(-2, 2), rng.uniform(-3, 3)])
+        point = rng.uniform(-4, 4, 2)
+        step = rng.normal(0, [0.1, 0.05, 0.3])
+        before = to_robot_frame(point[0], point[1], pose)
+        move_pose(pose, *step, 100.0, 100.0)
+        np.testing.assert_allclose(
+            carry(*before, *step), to_robot_frame(point[0], point[1], pose), atol=1e-12
+        )
 
 
-def detect(poses, visible, normals, false_draw, near=1.0, far=1.0, false_rate=0.0):
+def detect(pose, visible, normals, false_draw, near=1.0, far=1.0, false_rate=0.0):
     lm = field_landmarks(FieldSpec())
     sim = MatchBatch(MatchConfig(), 1)
-    n, k = visible.shape
-    return detect_kernel(
+    k = len(lm)
+    ids, z = np.empty(k + 1, dtype=np.int64), np.empty((k + 1, 2))
+    count = detect_one(
+        pose,
+        0.0,
         visible,
-        poses,
-        np.zeros(n),
         lm.segments,
         lm.max_distance,
         lm.types,
         sim._noise_table,
         sim._point_ids,
-        np.full((n, k), 0.5),
+        np.full(k, 0.5),
         normals,
         false_draw,
         (near, far, false_rate, 0.5),
+        ids,
+        z,
+        np.empty(k),
     )
+    return ids, z, count
 
 
 def test_detections_without_noise_are_the_ukf_measurement():
     """Zero noise: each detection is ``hx_range_bearing`` of the true pose (the UKF's own
     model), closest landmarks first; every visible landmark is detected at rate 1."""
     lm = field_landmarks(FieldSpec())
-    poses = np.array([[1.0, -0.5, 0.3], [-2.0, 1.0, 2.5]])
-    visible = np.zeros((2, len(lm)), dtype=bool)
-    visible[0, [3, 20, 40]] = True
-    visible[1, [1, 45]] = True
-    ids, z, count = detect(poses, visible, np.zeros((2, len(lm), 2)), np.ones((2, 4)))
-    assert count.tolist() == [3, 2]
-    for i in range(2):
-        got = ids[i, : count[i]]
-        assert sorted(got) == sorted(np.flatnonzero(visible[i]))
-        for d, k in enumerate(got):
-            np.testing.assert_allclose(z[i, d], hx_range_bearing(poses[i], lm.segments[k])[0])
-    # none detected at rate 0; a false detection comes last, inside the image
-    ids, z, count = detect(
-        poses, visible, np.zeros((2, len(lm), 2)), np.zeros((2, 4)), 0.0, 0.0, 1.0
-    )
-    assert count.tolist() == [1, 1]
-    assert np.all(np.abs(z[:, 0, 1]) <= 0.5)
+    for pose, seen in (([1.0, -0.5, 0.3], [3, 20, 40]), ([-2.0, 1.0, 2.5], [1, 45])):
+        pose = np.array(pose)
+        visible = np.zeros(len(lm), dtype=bool)
+        visible[seen] = True
+        ids, z, count = detect(pose, visible, np.zeros((len(lm), 2)), np.ones(4))
+        assert count == len(seen) and sorted(ids[:count]) == seen and ids[count] == -1
+        for d, k in enumerate(ids[:count]):
+            np.testing.assert_allclose(z[d], hx_range_bearing(pose, lm.segments[k])[0])
+        # none detected at rate 0; a false detection comes last, inside the image
+        ids, z, count = detect(pose, visible, np.zeros((len(lm), 2)), np.zeros(4), 0.0, 0.0, 1.0)
+        assert count == 1 and abs(z[0, 1]) <= 0.5 and 0.5 <= z[0, 0] <= 4.0
 
 
 def test_randomised_world_with_robots_plays():

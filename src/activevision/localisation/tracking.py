@@ -140,6 +140,73 @@ def predict_odometry(
 
 
 @njit(cache=True)
+def track_one(
+    n: int,
+    means: np.ndarray,
+    covs: np.ndarray,
+    odom: tuple[float, float, float],
+    det_ids: np.ndarray,
+    det_z: np.ndarray,
+    gated_share: np.ndarray,
+    landmarks: Landmarks,
+    weights: SigmaWeights,
+    model: tuple[float, float, float, float, float],
+    tracker: tuple[float, float, float, float, float, float],
+    stats: TrackStats,
+    scratch: UKFScratch,
+) -> int:
+    """Robot ``n``'s tick (see :meth:`Tracker.step`): predict ``means[n]``, ``covs[n]`` by
+    ``odom``, then update with the detections ``det_ids`` (D,) / ``det_z`` (D, 2) in order,
+    gated, counting into row ``n`` of ``stats``. ``tracker = (gate, lost_rate, lost_share,
+    lost_std x, y, theta)``. Returns :data:`OK` or :data:`NOT_PD`."""
+    segments, _, types, noise = landmarks
+    gate, lost_rate, lost_share, lx, ly, lt = tracker
+    accepted, gated, nis, declared = stats
+    x, P = means[n], covs[n]
+    if not predict_odometry(x, P, odom, model, weights, scratch):
+        return NOT_PD
+    for d in range(det_ids.shape[0]):
+        k = det_ids[d]
+        if k < 0:
+            break
+        t = types[k]
+        ax, ay = segments[k, 0, 0], segments[k, 0, 1]
+        bx, by = segments[k, 1, 0], segments[k, 1, 1]
+        # the noise at the range the belief expects, not the measured one: weighting by the
+        # measured range trusts detections that err short more, a bias that repeated
+        # updates turn into overconfidence
+        expected_range = abs(expected_rb(x[0], x[1], x[2], ax, ay, bx, by)[0])
+        sr = noise[t, 0] + noise[t, 1] * expected_range
+        status, distance = ukf_update_rb(
+            x,
+            P,
+            (det_z[d, 0], det_z[d, 1]),
+            (ax, ay, bx, by),
+            (sr * sr, noise[t, 2] * noise[t, 2]),
+            weights,
+            scratch,
+            gate,
+        )
+        if status == NOT_PD:
+            return NOT_PD
+        if status == GATED:
+            gated[n] += 1
+        else:
+            accepted[n] += 1
+            nis[n] += distance
+    seen = accepted[n] + gated[n]
+    if seen < 2:  # a lone false detection must not look like a kidnapping
+        return OK
+    gated_share[n] += lost_rate * (gated[n] / seen - gated_share[n])
+    if gated_share[n] > lost_share:
+        declared[n] = True
+        gated_share[n] = 0.0
+        P[:, :] = 0.0
+        P[0, 0], P[1, 1], P[2, 2] = lx * lx, ly * ly, lt * lt
+    return OK
+
+
+@njit(cache=True)
 def track_kernel(
     means: np.ndarray,
     covs: np.ndarray,
@@ -153,60 +220,29 @@ def track_kernel(
     tracker: tuple[float, float, float, float, float, float],
     stats: Fields,
 ) -> np.ndarray:
-    """Predict every robot by its odometry, then update it with its detections in order,
-    gated; see :meth:`Tracker.step`. ``tracker = (gate, lost_rate, lost_share, lost_std x, y,
-    theta)``. Returns the error codes (N,) int8 (:data:`OK` or :data:`NOT_PD`)."""
-    segments, _, types, noise = Landmarks(*landmarks)
-    weights = SigmaWeights(*weights)
-    gate, lost_rate, lost_share, lx, ly, lt = tracker
-    accepted, gated, nis, declared = stats
+    """:func:`track_one` for every robot. Returns the error codes (N,) int8."""
+    lm = Landmarks(*landmarks)
+    sw = SigmaWeights(*weights)
+    counts = TrackStats(*stats)
     scratch = UKFScratch(np.empty((3, 3)), np.empty((7, 3)), np.empty((7, 2)))
     errors = np.zeros(means.shape[0], dtype=np.int8)
     for n in range(means.shape[0]):
-        x, P = means[n], covs[n]
         odom = (odometry[n, 0], odometry[n, 1], odometry[n, 2])
-        if not predict_odometry(x, P, odom, model, weights, scratch):
-            errors[n] = NOT_PD
-            continue
-        for d in range(det_ids.shape[1]):
-            k = det_ids[n, d]
-            if k < 0:
-                break
-            t = types[k]
-            ax, ay = segments[k, 0, 0], segments[k, 0, 1]
-            bx, by = segments[k, 1, 0], segments[k, 1, 1]
-            # the noise at the range the belief expects, not the measured one: weighting by
-            # the measured range trusts detections that err short more, a bias that repeated
-            # updates turn into overconfidence
-            expected_range = abs(expected_rb(x[0], x[1], x[2], ax, ay, bx, by)[0])
-            sr = noise[t, 0] + noise[t, 1] * expected_range
-            status, distance = ukf_update_rb(
-                x,
-                P,
-                (det_z[n, d, 0], det_z[n, d, 1]),
-                (ax, ay, bx, by),
-                (sr * sr, noise[t, 2] * noise[t, 2]),
-                weights,
-                scratch,
-                gate,
-            )
-            if status == NOT_PD:
-                errors[n] = NOT_PD
-                break
-            if status == GATED:
-                gated[n] += 1
-            else:
-                accepted[n] += 1
-                nis[n] += distance
-        seen = accepted[n] + gated[n]
-        if seen < 2:  # a lone false detection must not look like a kidnapping
-            continue
-        gated_share[n] += lost_rate * (gated[n] / seen - gated_share[n])
-        if gated_share[n] > lost_share:
-            declared[n] = True
-            gated_share[n] = 0.0
-            P[:, :] = 0.0
-            P[0, 0], P[1, 1], P[2, 2] = lx * lx, ly * ly, lt * lt
+        errors[n] = track_one(
+            n,
+            means,
+            covs,
+            odom,
+            det_ids[n],
+            det_z[n],
+            gated_share,
+            lm,
+            sw,
+            model,
+            tracker,
+            counts,
+            scratch,
+        )
     return errors
 
 

@@ -1,111 +1,115 @@
 """What moves in a match besides the head: our robot walking (with odometry drift) and the
-ball rolling and being kicked. Pure functions over N matches at once; the random numbers
-come in as arrays drawn from each match's own generator (``envs.match.simulation``)."""
+ball rolling and being kicked. Compiled functions of one match (row ``n`` of the batch's
+arrays), composed by :mod:`activevision.envs.match.kernels`; the random numbers come in as
+each match's own draws of the tick."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
-from activevision.envs.match.config import BallConfig, WalkConfig
-from activevision.geometry.angles import wrap_angle
-from activevision.localisation.config import UKFConfig
+from activevision.geometry.angles import wrap_angle as wrap
 
 
-def walk_command(
+@njit(cache=True)
+def walk_step(
     believed: np.ndarray,
     waypoint: np.ndarray,
-    paused: np.ndarray,
-    walk: WalkConfig,
+    paused: bool,
+    speed: float,
+    turn_rate: float,
     dt: float,
-) -> np.ndarray:
-    """The walking engine's step ``(dx, dy, dtheta)`` (N, 3) in the robot frame for one tick:
-    turn towards the waypoint at ``turn_rate``, walk forward at ``speed`` scaled by how well
-    the robot faces it (``cos`` of the heading error, never backwards). The robot plans from
-    its *believed* pose ``believed`` (N, 3), as a real one does; ``paused`` (N,) bool robots
-    stand."""
-    to = waypoint - believed[:, :2]
-    error = wrap_angle(np.arctan2(to[:, 1], to[:, 0]) - believed[:, 2])
-    max_turn = walk.turn_rate * dt
-    turn = np.clip(error, -max_turn, max_turn)
-    distance = np.hypot(to[:, 0], to[:, 1])
-    forward = np.minimum(walk.speed * dt, distance) * np.maximum(np.cos(error), 0.0)
-    command = np.column_stack([forward, np.zeros_like(forward), turn])
-    command[paused] = 0.0
-    return command
+) -> tuple[float, float, float]:
+    """The walking engine's step ``(dx, dy, dtheta)`` (robot frame) for one tick from the
+    believed pose ``believed`` (3,) to ``waypoint`` (2,): turn towards it at ``turn_rate``,
+    walk forward at ``speed`` scaled by how well the robot faces it (``cos`` of the heading
+    error, never backwards); a paused robot stands. The robot plans from its *belief*, as a
+    real one does."""
+    if paused:
+        return 0.0, 0.0, 0.0
+    tx, ty = waypoint[0] - believed[0], waypoint[1] - believed[1]
+    error = wrap(math.atan2(ty, tx) - believed[2])
+    max_turn = turn_rate * dt
+    turn = min(max(error, -max_turn), max_turn)
+    forward = min(speed * dt, math.hypot(tx, ty)) * max(math.cos(error), 0.0)
+    return forward, 0.0, turn
 
 
-def odometry_stds(command: np.ndarray, ukf: UKFConfig) -> np.ndarray:
-    """Std (N, 3) of the true motion around the commanded step, robot frame: the UKF's
-    odometry model (``localisation.ukf.odometry_noise``), i.e. drift proportional to the
-    distance walked and the angle turned, plus a small slip per tick."""
-    bx, by, bt = ukf.odometry_base
-    trans = ukf.odometry_translation_fraction * np.hypot(command[:, 0], command[:, 1])
-    rot = ukf.odometry_rotation_fraction * np.abs(command[:, 2])
-    return np.column_stack([bx + trans, by + trans, bt + rot])
+@njit(cache=True)
+def drift_stds(
+    dx: float, dy: float, dth: float, model: tuple[float, float, float, float, float]
+) -> tuple[float, float, float]:
+    """Std of the true motion around the commanded step (robot frame): the UKF's odometry
+    model (``localisation.ukf.odometry_noise``; ``model = (base x, y, theta, translation
+    fraction, rotation fraction)``): drift proportional to the distance walked and the
+    angle turned, plus a small slip per tick."""
+    bx, by, bt, tf, rf = model
+    trans = tf * math.hypot(dx, dy)
+    return bx + trans, by + trans, bt + rf * abs(dth)
 
 
-def apply_motion(pose: np.ndarray, step: np.ndarray, half_carpet: tuple[float, float]) -> None:
-    """Move poses (N, 3) in place by robot-frame steps (N, 3); a robot stays on the carpet
-    (it is stopped at its edge)."""
-    c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
-    pose[:, 0] = np.clip(
-        pose[:, 0] + c * step[:, 0] - s * step[:, 1], -half_carpet[0], half_carpet[0]
-    )
-    pose[:, 1] = np.clip(
-        pose[:, 1] + s * step[:, 0] + c * step[:, 1], -half_carpet[1], half_carpet[1]
-    )
-    pose[:, 2] = wrap_angle(pose[:, 2] + step[:, 2])
+@njit(cache=True)
+def move_pose(pose: np.ndarray, dx: float, dy: float, dth: float, hx: float, hy: float) -> None:
+    """Move ``pose`` (3,) in place by a robot-frame step; a robot stays within ``(hx, hy)``
+    of the centre (stopped at the carpet's edge)."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    pose[0] = min(max(pose[0] + c * dx - s * dy, -hx), hx)
+    pose[1] = min(max(pose[1] + s * dx + c * dy, -hy), hy)
+    pose[2] = wrap(pose[2] + dth)
 
 
+@njit(cache=True)
 def roll_ball(
     ball: np.ndarray,
     velocity: np.ndarray,
-    kicks: np.ndarray,
-    config: BallConfig,
+    kick: np.ndarray,
+    ball_model: tuple[float, float, float, float],
     dt: float,
-    half_field: tuple[float, float],
+    hx: float,
+    hy: float,
 ) -> None:
-    """One tick of N balls, in place: positions (N, 2), velocities (N, 2). ``kicks`` (N, 3)
-    uniforms decide a kick (``u0 < kick_rate``), its direction and its speed. The ball
-    decelerates at ``deceleration`` and bounces back off the field lines (the referee puts a
-    ball that left the field back in; a bounce keeps it in play without a throw-in rule)."""
-    kicked = kicks[:, 0] < config.kick_rate
-    angle = 2 * np.pi * kicks[kicked, 1]
-    lo, hi = config.kick_speed
-    speed = lo + (hi - lo) * kicks[kicked, 2]
-    velocity[kicked] = np.column_stack([np.cos(angle), np.sin(angle)]) * speed[:, None]
-    speed_now = np.hypot(velocity[:, 0], velocity[:, 1])
-    slower = np.maximum(speed_now - config.deceleration * dt, 0.0)
-    # exact under constant deceleration, also in the tick the ball stops
-    if config.deceleration > 0:
-        travel = (speed_now**2 - slower**2) / (2 * config.deceleration)
-    else:
-        travel = speed_now * dt
-    moving = speed_now > 0
-    unit = np.divide(
-        velocity, speed_now[:, None], out=np.zeros_like(velocity), where=moving[:, None]
-    )
-    ball += unit * travel[:, None]
-    velocity[:] = unit * slower[:, None]
-    for axis, half in enumerate(half_field):
-        over = ball[:, axis] > half
-        under = ball[:, axis] < -half
-        ball[over, axis] = 2 * half - ball[over, axis]
-        ball[under, axis] = -2 * half - ball[under, axis]
-        velocity[over | under, axis] *= -1.0
-        np.clip(ball[:, axis], -half, half, out=ball[:, axis])
+    """One tick of a ball, in place: position and velocity (2,). ``kick`` (3,) uniforms
+    decide a kick (``u0 < kick_rate``), its direction and speed; ``ball_model =
+    (deceleration, kick_rate, kick speed low, high)``. The ball decelerates uniformly
+    (exactly, also in the tick it stops) and bounces back off the field lines ``(hx, hy)``
+    (the referee puts a ball that left back in; a bounce keeps it in play)."""
+    decel, kick_rate, lo, hi = ball_model
+    if kick[0] < kick_rate:
+        angle = 2 * math.pi * kick[1]
+        speed = lo + (hi - lo) * kick[2]
+        velocity[0], velocity[1] = speed * math.cos(angle), speed * math.sin(angle)
+    speed = math.hypot(velocity[0], velocity[1])
+    if speed == 0.0:
+        return
+    slower = max(speed - decel * dt, 0.0)
+    travel = (speed * speed - slower * slower) / (2 * decel) if decel > 0 else speed * dt
+    ux, uy = velocity[0] / speed, velocity[1] / speed
+    ball[0] += ux * travel
+    ball[1] += uy * travel
+    velocity[0], velocity[1] = ux * slower, uy * slower
+    for axis, half in ((0, hx), (1, hy)):
+        if ball[axis] > half:
+            ball[axis] = min(max(2 * half - ball[axis], -half), half)
+            velocity[axis] = -velocity[axis]
+        elif ball[axis] < -half:
+            ball[axis] = min(max(-2 * half - ball[axis], -half), half)
+            velocity[axis] = -velocity[axis]
 
 
-def to_robot_frame(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
-    """World points (N, 2) in the frames of poses (N, 3)."""
-    d = points - pose[:, :2]
-    c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
-    return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])
+@njit(cache=True)
+def to_robot_frame(px: float, py: float, pose: np.ndarray) -> tuple[float, float]:
+    """The world point ``(px, py)`` in the frame of ``pose`` (3,)."""
+    dx, dy = px - pose[0], py - pose[1]
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return c * dx + s * dy, -s * dx + c * dy
 
 
-def move_relative(points: np.ndarray, step: np.ndarray) -> np.ndarray:
-    """Robot-frame points (N, 2) after the robot moved by ``step`` (N, 3) (its own frame):
-    how a robot carries its ball model along with its odometry."""
-    d = points - step[:, :2]
-    c, s = np.cos(step[:, 2]), np.sin(step[:, 2])
-    return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])
+@njit(cache=True)
+def carry(rx: float, ry: float, dx: float, dy: float, dth: float) -> tuple[float, float]:
+    """A robot-frame point after the robot moved by ``(dx, dy, dth)`` (its own frame): how a
+    robot carries its ball model along with its odometry."""
+    ex, ey = rx - dx, ry - dy
+    c, s = math.cos(dth), math.sin(dth)
+    return c * ex + s * ey, -s * ex + c * ey

@@ -12,23 +12,17 @@ import numpy as np
 
 from activevision.envs.actions import action_table, check_actions
 from activevision.envs.match.config import MatchConfig
-from activevision.envs.match.detections import detect_kernel
-from activevision.envs.match.dynamics import (
-    apply_motion,
-    move_relative,
-    odometry_stds,
-    roll_ball,
-    to_robot_frame,
-    walk_command,
-)
+from activevision.envs.match.dynamics import to_robot_frame
+from activevision.envs.match.kernels import MatchParams, MatchState, move_kernel, sense_kernel
 from activevision.envs.robots import draw_robots
-from activevision.geometry import clip_head, field_landmarks
+from activevision.geometry import field_landmarks
 from activevision.geometry.angles import wrap_angle
 from activevision.geometry.field import LandmarkType
-from activevision.geometry.kernels import ball_visible_mask, visible_mask
+from activevision.geometry.kernels import ball_visible_mask, camera_fields
 from activevision.geometry.occlusion import hidden_landmarks, hidden_points, robot_cylinders
 from activevision.localisation import entropy
-from activevision.localisation.tracking import Tracker
+from activevision.localisation.bundles import SigmaWeights
+from activevision.localisation.sigma_points import NotPositiveDefiniteError, merwe_weights
 from activevision.localisation.viewpoint import landmark_fields
 from activevision.rendering import Renderer
 from activevision.rendering.appearance import (
@@ -62,11 +56,11 @@ class MatchBatch:
         self.landmarks = field_landmarks(cfg.field)
         self.renderer = Renderer(cfg.field, cfg.camera)
         self.actions = action_table(cfg.step_deg, "8way")
-        self.tracker = Tracker(self.landmarks, cfg.tracker)
         k = self.k = len(self.landmarks)
         types = self.landmarks.types
         self._point_ids = np.flatnonzero(np.isin(types, [int(t) for t in _POINT_TYPES]))
-        _, _, _, self._noise_table = landmark_fields(self.landmarks, cfg.tracker.ukf)
+        self._landmark_fields = landmark_fields(self.landmarks, cfg.tracker.ukf)
+        self._noise_table = self._landmark_fields[3]
         self.pose = np.zeros((num_envs, 3))
         self.mean = np.zeros((num_envs, 3))
         self.cov = np.zeros((num_envs, 3, 3))
@@ -92,7 +86,87 @@ class MatchBatch:
         self.tone = np.repeat(identity_tone()[None], num_envs, axis=0)
         self._uniforms = np.zeros((num_envs, k + _EXTRA_UNIFORMS))
         self._normals = np.zeros((num_envs, 2 * k + _EXTRA_NORMALS))
+        self.reward = np.zeros(num_envs)
         self._rngs: list[np.random.Generator] = [np.random.default_rng(0)] * num_envs
+        self._bundles(cfg)
+
+    def _bundles(self, cfg: MatchConfig) -> None:
+        """The kernels' bundles, built once (the state bundle holds this batch's arrays)."""
+        ukf, tracker, walk, ball, det, r = (
+            cfg.tracker.ukf,
+            cfg.tracker,
+            cfg.walk,
+            cfg.ball,
+            cfg.detection,
+            cfg.reward,
+        )
+        field, cam = cfg.field, cfg.camera
+        self._state = tuple(
+            MatchState(
+                self.pose,
+                self.mean,
+                self.cov,
+                self.gated_share,
+                self.head,
+                self.last_move,
+                self.ball,
+                self.ball_velocity,
+                self.ball_relative,
+                self.ball_age,
+                self.ball_seen,
+                self.waypoint,
+                self.pause,
+                self.detected,
+                self.accepted,
+                self.gated,
+                self.declared_lost,
+                self.hidden,
+                self.reward,
+            )
+        )
+        carpet = field.carpet_half_extent
+        self._params = tuple(
+            MatchParams(
+                cfg.tick_seconds,
+                walk.speed,
+                walk.turn_rate,
+                walk.reach,
+                float(walk.pause_ticks[0]),
+                float(walk.pause_ticks[1]),
+                field.half_length - walk.margin,
+                field.half_width - walk.margin,
+                float(walk.target == "ball"),
+                carpet[0],
+                carpet[1],
+                field.half_length,
+                field.half_width,
+                det.near,
+                det.far,
+                det.false_rate,
+                cam.hfov / 2,
+                det.ball_noise,
+                field.ball_radius,
+                cam.pan_min,
+                cam.pan_max,
+                cam.tilt_min,
+                cam.tilt_max,
+                float(r.kind == "entropy"),
+                r.entropy_weight,
+                r.error_weight,
+                r.ball_weight,
+                r.travel_weight,
+            )
+        )
+        Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
+        self._weights = tuple(SigmaWeights(Wm, Wc, ukf.n + ukf.lambda_))
+        self._model = (
+            *ukf.odometry_base,
+            ukf.odometry_translation_fraction,
+            ukf.odometry_rotation_fraction,
+        )
+        self._tracker = (tracker.gate, tracker.lost_rate, tracker.lost_share, *tracker.lost_std)
+        self._ball_model = (ball.deceleration, ball.kick_rate, *ball.kick_speed)
+        self._camera = camera_fields(cam)
 
     # ------------------------------------------------------------------ starts
     def reset(self, indices: np.ndarray, rngs: list[np.random.Generator]) -> None:
@@ -146,8 +220,12 @@ class MatchBatch:
         self._update_hidden(idx)
         self.ball_seen[idx] = self._ball_visible(idx)
         # the ball's kick-off spot is known: the model starts at it
-        self.ball_relative[idx] = to_robot_frame(self.ball[idx], self.pose[idx])
+        for slot in idx:
+            self.ball_relative[slot] = to_robot_frame(
+                self.ball[slot, 0], self.ball[slot, 1], self.pose[slot]
+            )
         self.ball_age[idx] = 0
+        self.reward[idx] = 0.0
 
     # ------------------------------------------------------------------ dynamics
     def step(self, actions: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
@@ -165,41 +243,44 @@ class MatchBatch:
         reward = np.zeros(self.n)
         if not len(idx):
             return reward
-        cfg = self.cfg
+        idx = np.ascontiguousarray(idx, dtype=np.int64)
         self._draw(idx)
         uniforms, normals = self._uniforms[idx], self._normals[idx]
-        k = self.k
-        old = self.head[idx]
-        self.head[idx] = np.column_stack(clip_head(pan, tilt, cfg.camera))
-        self.last_move[idx] = self.head[idx] - old
-        # our robot walks from what it believes, and drifts
-        self._next_waypoints(idx, uniforms[:, k + 7 :])
-        command = walk_command(
-            self.mean[idx], self.waypoint[idx], self.pause[idx] > 0, cfg.walk, cfg.tick_seconds
+        targets = np.ascontiguousarray(np.column_stack([pan, tilt]), dtype=np.float64)
+        odometry = move_kernel(
+            idx,
+            targets,
+            self._state,
+            self._params,
+            self._model,
+            self._ball_model,
+            uniforms,
+            normals,
         )
-        self.pause[idx] = np.maximum(self.pause[idx] - 1, 0)
-        true_step = (
-            command + odometry_stds(command, cfg.tracker.ukf) * normals[:, 2 * k : 2 * k + 3]
-        )
-        carpet = cfg.field.carpet_half_extent
-        pose = self.pose[idx]
-        apply_motion(pose, true_step, carpet)
-        self.pose[idx] = pose
-        ball, velocity = self.ball[idx], self.ball_velocity[idx]
-        roll_ball(
-            ball,
-            velocity,
-            uniforms[:, k + 4 : k + 7],
-            cfg.ball,
-            cfg.tick_seconds,
-            (cfg.field.half_length, cfg.field.half_width),
-        )
-        self.ball[idx], self.ball_velocity[idx] = ball, velocity
-        if cfg.robots.max_count:
+        ball_hidden = np.zeros(len(idx), dtype=bool)
+        if self.cfg.robots.max_count:
             self._update_hidden(idx)
-        self._sense_and_track(idx, command, uniforms, normals)
+            ball_hidden = self._ball_hidden(idx)
+        errors = sense_kernel(
+            idx,
+            odometry,
+            self._state,
+            self._params,
+            self._landmark_fields,
+            self._weights,
+            self._camera,
+            self._model,
+            self._tracker,
+            self._point_ids,
+            ball_hidden,
+            uniforms,
+            normals,
+        )
+        if errors.any():
+            bad = int(idx[np.flatnonzero(errors)[0]])
+            raise NotPositiveDefiniteError(f"match {bad}: the belief lost positive definiteness")
         self.tick[idx] += 1
-        reward[idx] = self._reward(idx)
+        reward[idx] = self.reward[idx]
         return reward
 
     def _draw(self, idx: np.ndarray) -> None:
@@ -209,90 +290,17 @@ class MatchBatch:
             rng.random(out=self._uniforms[i])
             rng.standard_normal(out=self._normals[i])
 
-    def _next_waypoints(self, idx: np.ndarray, draws: np.ndarray) -> None:
-        """A robot at its waypoint (by its belief) pauses, then walks to the next: a random
-        one, or (``walk.target="ball"``) the ball's believed position."""
+    def _ball_hidden(self, idx: np.ndarray) -> np.ndarray:
+        """Whether another robot stands between each camera of ``idx`` and its ball."""
         cfg = self.cfg
-        walk = cfg.walk
-        hx, hy = cfg.field.half_length - walk.margin, cfg.field.half_width - walk.margin
-        reached = np.hypot(*(self.waypoint[idx] - self.mean[idx, :2]).T) < walk.reach
-        reached &= self.pause[idx] == 0
-        slots = idx[reached]
-        d = draws[reached]
-        if walk.target == "ball":
-            c, s = np.cos(self.mean[slots, 2]), np.sin(self.mean[slots, 2])
-            rel = self.ball_relative[slots]
-            self.waypoint[slots, 0] = self.mean[slots, 0] + c * rel[:, 0] - s * rel[:, 1]
-            self.waypoint[slots, 1] = self.mean[slots, 1] + s * rel[:, 0] + c * rel[:, 1]
-        else:
-            self.waypoint[slots] = np.column_stack([hx * (2 * d[:, 0] - 1), hy * (2 * d[:, 1] - 1)])
-        lo, hi = walk.pause_ticks
-        self.pause[slots] = lo + np.floor(d[:, 2] * (hi - lo + 1)).astype(np.int64)
-        if walk.target == "ball":  # a striker re-plans to the ball every tick it walks
-            moving = idx[~reached]
-            c, s = np.cos(self.mean[moving, 2]), np.sin(self.mean[moving, 2])
-            rel = self.ball_relative[moving]
-            self.waypoint[moving, 0] = self.mean[moving, 0] + c * rel[:, 0] - s * rel[:, 1]
-            self.waypoint[moving, 1] = self.mean[moving, 1] + s * rel[:, 0] + c * rel[:, 1]
-
-    def _sense_and_track(
-        self, idx: np.ndarray, command: np.ndarray, uniforms: np.ndarray, normals: np.ndarray
-    ) -> None:
-        cfg, k = self.cfg, self.k
-        det = cfg.detection
-        visible = (
-            visible_mask(
-                self.landmarks, self.pose[idx], self.head[idx, 0], self.head[idx, 1], cfg.camera
-            )
-            & ~self.hidden[idx]
-        )
-        ids, z, _ = detect_kernel(
-            visible,
-            np.ascontiguousarray(self.pose[idx]),
-            np.ascontiguousarray(self.head[idx, 0]),
-            self.landmarks.segments,
-            self.landmarks.max_distance,
-            self.landmarks.types,
-            self._noise_table,
-            self._point_ids,
-            np.ascontiguousarray(uniforms[:, :k]),
-            np.ascontiguousarray(normals[:, : 2 * k].reshape(-1, k, 2)),
-            np.ascontiguousarray(uniforms[:, k : k + 4]),
-            (det.near, det.far, det.false_rate, cfg.camera.hfov / 2),
-        )
-        self.detected[idx] = False
-        rows = np.repeat(idx, ids.shape[1])
-        valid = ids.ravel() >= 0
-        self.detected[rows[valid], ids.ravel()[valid]] = True
-        mean, cov, share = self.mean[idx], self.cov[idx], self.gated_share[idx]
-        stats = self.tracker.step(mean, cov, command, ids, z, share)
-        self.mean[idx], self.cov[idx], self.gated_share[idx] = mean, cov, share
-        self.accepted[idx] += stats.accepted
-        self.gated[idx] += stats.gated
-        self.declared_lost[idx] |= stats.declared_lost
-        # the ball model: measured when seen, else carried along by odometry
-        seen = self._ball_visible(idx)
-        self.ball_seen[idx] = seen
-        relative = move_relative(self.ball_relative[idx], command)
-        measured = to_robot_frame(self.ball[idx], self.pose[idx])
-        distance = np.hypot(measured[:, 0], measured[:, 1])
-        noisy = measured + (det.ball_noise * distance)[:, None] * normals[:, 2 * k + 3 :]
-        self.ball_relative[idx] = np.where(seen[:, None], noisy, relative)
-        self.ball_age[idx] = np.where(seen, 0, self.ball_age[idx] + 1)
-
-    def _reward(self, idx: np.ndarray) -> np.ndarray:
-        r = self.cfg.reward
-        if r.kind == "entropy":
-            reward = -r.entropy_weight * self.entropy(idx)
-        else:
-            reward = -r.error_weight * self.position_error(idx)
-        travel = np.degrees(np.hypot(self.last_move[idx, 0], self.last_move[idx, 1]))
-        result: np.ndarray = reward + r.ball_weight * self.ball_seen[idx] - r.travel_weight * travel
-        return result
+        camera = np.column_stack([self.pose[idx, :2], np.full(len(idx), cfg.camera.camera_height)])
+        points = np.column_stack([self.ball[idx], np.full(len(idx), cfg.field.ball_radius)])
+        hidden: np.ndarray = hidden_points(camera, points[:, None], self.cylinders(idx))[:, 0]
+        return hidden
 
     def _ball_visible(self, idx: np.ndarray) -> np.ndarray:
         cfg = self.cfg
-        seen = ball_visible_mask(
+        seen: np.ndarray = ball_visible_mask(
             self.ball[idx],
             self.pose[idx],
             self.head[idx, 0],
@@ -301,11 +309,7 @@ class MatchBatch:
             cfg.field.ball_radius,
         )
         if cfg.robots.max_count:  # a robot between camera and ball hides it
-            camera = np.column_stack(
-                [self.pose[idx, :2], np.full(len(idx), cfg.camera.camera_height)]
-            )
-            points = np.column_stack([self.ball[idx], np.full(len(idx), cfg.field.ball_radius)])
-            seen &= ~hidden_points(camera, points[:, None], self.cylinders(idx))[:, 0]
+            seen &= ~self._ball_hidden(idx)
         return seen
 
     def _update_hidden(self, idx: np.ndarray) -> None:
