@@ -15,6 +15,7 @@ def test_render_and_viewpoints_write_pictures(tmp_path):
 def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     out = tmp_path / "run"
     argv = ["quickstart", "--out", str(out), "--steps", "600", "--episodes", "6"]
+    argv += ["--matches", "2", "--match-ticks", "6"]
     assert main(argv) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last.startswith("main job: learned ") and "scan" in last and "random" in last
@@ -28,6 +29,8 @@ def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
         "compare/compare.png",
         "episode.png",
         "episode.gif",
+        "match/match.csv",
+        "match/match_pareto.png",
         "report.md",
     ):
         assert (out / name).exists(), name
@@ -38,6 +41,7 @@ def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     assert {"learned", "random", "oracle", "entropy_jump", "scan"} <= methods
     report = (out / "report.md").read_text()
     assert "compare/compare.png" in report and "| learned |" in report
+    assert "match/match_pareto.png" in report and "| entropy_greedy |" in report
     # Running it again finds the finished run and only redoes evaluation and figures.
     assert main(argv) == 0
     # The trained run exports to ONNX for the robot runtime.

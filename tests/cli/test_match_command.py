@@ -54,3 +54,19 @@ def test_bad_input_is_one_clear_line(tmp_path, argv, needle, one_clear_line):
 def test_refuses_a_training_run(trained, one_clear_line):
     assert main([*TINY, "--out", str(Path(trained))]) == 2
     one_clear_line("training run")
+
+
+def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys):
+    """--preset match_ddqn trains the package's DDQN on ActiveVisionMatch-v0; the run plays
+    as ``learned`` (PyTorch, batched) and, exported, as ``onnx_policy`` (HeadController)."""
+    run = tmp_path / "match_run"
+    argv = [*tiny_train, "--out", str(run)]
+    argv[argv.index("quickstart_ddqn")] = "match_ddqn"
+    assert main(argv) == 0
+    out = tmp_path / "m"
+    assert main([*TINY, "--out", str(out), "--run", str(run), "--methods", "learned"]) == 0
+    assert main(["export", str(run), "-o", str(tmp_path / "policy.onnx")]) == 0
+    onnx = ["--methods", "onnx_policy", "--model", str(tmp_path / "policy.onnx")]
+    assert main([*TINY, "--out", str(out), "--overwrite", *onnx]) == 0
+    with (out / "match.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["onnx_policy"]

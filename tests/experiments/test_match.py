@@ -21,14 +21,14 @@ from activevision.experiments.match_methods import (
     BHumanCycle,
     NUbots6Point,
     ball_direction,
+    default_match_methods,
     make_match_policy,
-    match_method_names,
 )
 
 SMALL = MatchConfig(ticks=12)
 
 
-@pytest.mark.parametrize("method", match_method_names())
+@pytest.mark.parametrize("method", default_match_methods(None))
 def test_every_strategy_plays_and_the_metrics_are_in_range(method):
     result = play_matches(method, SMALL, 2, seed=3)
     assert set(result.per_match) == set(MATCH_METRICS)
@@ -117,3 +117,5 @@ def test_six_point_look_visits_its_points_in_turn():
 def test_unknown_method_is_one_clear_error():
     with pytest.raises(ValueError, match="unknown match method 'nope'"):
         make_match_policy("nope", SMALL)
+    with pytest.raises(ValueError, match="needs a training run"):
+        make_match_policy("learned", SMALL)

@@ -38,7 +38,11 @@ def cmd_match(args: argparse.Namespace) -> None:
     check_outputs(named=files, overwrite=args.overwrite)
     if args.model is not None and not args.model.is_file():
         raise ValueError(f"--model {args.model}: no such file")
-    methods = list(dict.fromkeys(args.methods or _method_names()))
+    from activevision.experiments.match_methods import default_match_methods
+
+    if args.run is not None and not (args.run / "config.json").is_file():
+        raise ValueError(f"--run {args.run}: not a training run (no config.json)")
+    methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
     clip_method = args.clip_method or methods[0]
     if clip_method not in methods:
         raise ValueError(f"--clip-method {clip_method} is not among --methods")
@@ -72,6 +76,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         args.matches,
         args.seed,
         args.model,
+        args.run,
         progress=lambda r: print(f"{format_result(r)}   ({r.seconds:.0f} s)", flush=True),
     )
     front = pareto_front(results)
@@ -124,7 +129,7 @@ def add_parsers(sub: Any) -> None:
         nargs="+",
         type=choice_list(_method_names),
         metavar="NAME",
-        help="strategies to play (default: all: " + " ".join(_method_names()) + ")",
+        help="strategies to play (default: all; learned with --run): " + " ".join(_method_names()),
     )
     p.add_argument("--matches", type=positive_int, default=50)
     p.add_argument("--ticks", type=positive_int, default=600, help="ticks per match (0.32 s each)")
@@ -141,8 +146,9 @@ def add_parsers(sub: Any) -> None:
     p.add_argument(
         "--model",
         type=Path,
-        help="an exported policy.onnx for episodic_learned (default: the shipped one)",
+        help="an exported policy.onnx for onnx_policy (default: the shipped one)",
     )
+    p.add_argument("--run", type=Path, help="a training run for the learned strategy")
     p.add_argument(
         "--clip-method", help="the strategy shown in match_clip.gif (default: the first)"
     )

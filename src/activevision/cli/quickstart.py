@@ -11,7 +11,8 @@ from activevision.cli.args import positive_int, seed
 
 
 def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
-    """The commands the main job runs: train (or resume), evaluate, compare, episode, report.
+    """The commands the main job runs: train (or resume), evaluate, compare, episode, a short
+    match comparison, report.
     A second run finds the run and redoes evaluation and figures, replacing their files."""
     from activevision.training.checkpoint import list_checkpoints
 
@@ -28,6 +29,10 @@ def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
         + ["--seed", run_seed, "--overwrite"],
         ["episode", "--run", out, "--seed", run_seed, "--overwrite"]
         + ["--out", str(args.out / "episode.png")],
+        # a short closed-loop comparison of the head-control strategies (under a minute)
+        ["match", "--matches", str(args.matches), "--ticks", str(args.match_ticks)]
+        + ["--seed", run_seed]
+        + ["--out", str(args.out / "match"), "--overwrite"],
         ["report", out],
     ]
 
@@ -66,3 +71,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--steps", type=positive_int, default=None, help="default: the preset's")
     p.add_argument("--episodes", type=positive_int, default=100)
     p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("--matches", type=positive_int, default=16, help="of the match comparison")
+    p.add_argument(
+        "--match-ticks", type=positive_int, default=300, help="ticks per match (0.32 s each)"
+    )

@@ -88,11 +88,14 @@ def play_matches(
     matches: int,
     seed: int,
     model: Path | None = None,
+    run: Path | None = None,
     clip_match: int = 0,
 ) -> MethodResult:
-    """Play ``matches`` matches of ``config`` with strategy ``method`` in lock-step."""
+    """Play ``matches`` matches of ``config`` with strategy ``method`` in lock-step
+    (``model``: an exported policy for ``onnx_policy``, ``run``: a training run for
+    ``learned``)."""
     start = time.perf_counter()
-    policy = make_match_policy(method, config, model)
+    policy = make_match_policy(method, config, model, run)
     env = ActiveVisionMatchVectorEnv(matches, config)
     obs, info = env.reset(seed=seed)
     policy.reset(matches, np.random.default_rng(seed))
@@ -130,12 +133,13 @@ def compare_matches(
     matches: int,
     seed: int,
     model: Path | None = None,
+    run: Path | None = None,
     progress: Callable[[MethodResult], None] | None = None,
 ) -> list[MethodResult]:
     """:func:`play_matches` for each method, on the same seeds."""
     results = []
     for name in methods:
-        result = play_matches(name, config, matches, seed, model)
+        result = play_matches(name, config, matches, seed, model, run)
         results.append(result)
         if progress is not None:
             progress(result)

@@ -23,8 +23,11 @@ port:
 * ``entropy_greedy``: Seekircher et al. 2010 / Czarnetzki et al. 2010 -- every ``k`` ticks,
   Algorithm 1 from the current belief (mean *and* covariance) picks the view with the least
   expected entropy that keeps the ball; move there at head speed.
-* ``episodic_learned``: the package's shipped episodic policy, run every tick, its goal
-  (Algorithm 1's proposal from the believed pose) re-planned every ``k`` ticks.
+* ``onnx_policy``: an exported policy through the robot runtime's ``HeadController``; by
+  default the package's shipped episodic policy, run every tick, its goal (Algorithm 1's
+  proposal from the believed pose) re-planned every ``k`` ticks.
+* ``learned``: a training run's network (``--run``; e.g. ``--preset match_ddqn``), greedy,
+  batched over the matches.
 * ``random``: uniformly random moves.
 """
 
@@ -243,12 +246,13 @@ def plan_views(
     return np.where(result.ok[:, None], views, ball_direction(info, config))
 
 
-class EpisodicLearned:
-    """The shipped (or an exported) episodic policy, every tick, fed the belief as its prior
-    pose and Algorithm 1's proposal re-planned every ``every`` ticks (from the believed pose
-    with the episodic start covariance, as it was trained)."""
+class OnnxMatchPolicy:
+    """An exported policy (default: the shipped episodic one) through ``HeadController``,
+    every tick; a policy that takes them is fed the belief as its prior pose and Algorithm
+    1's proposal, re-planned every ``every`` ticks (from the believed pose with the episodic
+    start covariance, as it was trained)."""
 
-    name = "episodic_learned"
+    name = "onnx_policy"
 
     def __init__(self, config: MatchConfig, model: Path | None = None, every: int = 5) -> None:
         from activevision.runtime import HeadController, pretrained_policy_path
@@ -266,7 +270,8 @@ class EpisodicLearned:
         self.proposal = np.zeros((n, 2))
 
     def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
-        if self.tick % self.every == 0:
+        needs_proposal = "proposal" in self.controllers[0].inputs
+        if needs_proposal and self.tick % self.every == 0:
             self.proposal = plan_views(info, self.config, self.landmarks, self.localisation, False)
         self.tick += 1
         images = obs[IMAGE_KEY] if isinstance(obs, dict) else obs
@@ -288,6 +293,35 @@ class EpisodicLearned:
         return actions
 
 
+class LearnedMatchPolicy:
+    """A training run's network (an image Q-network, e.g. ``--preset match_ddqn``): greedy
+    actions for every match in one batched forward pass."""
+
+    name = "learned"
+
+    def __init__(self, run: Path) -> None:
+        import torch
+
+        from activevision.training import load_config, load_policy
+
+        config = load_config(run / "config.json")
+        if config.algo != "ddqn":
+            raise ValueError(
+                f"{run}: the match plays image Q-networks (algo ddqn), not {config.algo}"
+            )
+        self.torch = torch
+        self.net = load_policy(run).eval()
+
+    def reset(self, n: int, rng: np.random.Generator) -> None:
+        pass
+
+    def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
+        images = obs[IMAGE_KEY] if isinstance(obs, dict) else obs
+        with self.torch.inference_mode():
+            q = self.net(self.torch.from_numpy(np.ascontiguousarray(images)))
+        return np.asarray(q.argmax(dim=1).numpy(), dtype=np.int64)
+
+
 class RandomMoves:
     name = "random"
 
@@ -304,7 +338,8 @@ class RandomMoves:
 @dataclass(frozen=True)
 class MatchMethod:
     name: str
-    factory: Callable[[MatchConfig, Path | None], MatchPolicy]
+    #: (config, model: an exported policy file, run: a training run) -> a fresh strategy
+    factory: Callable[[MatchConfig, Path | None, Path | None], MatchPolicy]
     help: str
     needs_images: bool  #: plays from camera images (the others need no rendering)
     needs_run: bool = False  #: needs ``--run`` (a trained match policy)
@@ -313,27 +348,36 @@ class MatchMethod:
 MATCH_METHODS: dict[str, MatchMethod] = {
     m.name: m
     for m in (
-        MatchMethod("ball_track", lambda c, _: BallTrack(c), "keep the ball centred", False),
-        MatchMethod("bhuman_cycle", lambda c, _: BHumanCycle(c), "B-Human-style pan cycle", False),
+        MatchMethod("ball_track", lambda c, _m, _r: BallTrack(c), "keep the ball centred", False),
         MatchMethod(
-            "bitbots_search", lambda c, _: BitBotsSearch(c), "Bit-Bots-style search", False
+            "bhuman_cycle", lambda c, _m, _r: BHumanCycle(c), "B-Human-style pan cycle", False
         ),
         MatchMethod(
-            "nubots_6point", lambda c, _: NUbots6Point(c), "NUbots-style 6-point look", False
+            "bitbots_search", lambda c, _m, _r: BitBotsSearch(c), "Bit-Bots-style search", False
+        ),
+        MatchMethod(
+            "nubots_6point", lambda c, _m, _r: NUbots6Point(c), "NUbots-style 6-point look", False
         ),
         MatchMethod(
             "entropy_greedy",
-            lambda c, _: EntropyGreedy(c),
+            lambda c, _m, _r: EntropyGreedy(c),
             "Algorithm 1 from the belief every 5 ticks",
             False,
         ),
         MatchMethod(
-            "episodic_learned",
-            lambda c, run: EpisodicLearned(c, run),
-            "the shipped episodic policy, goal re-planned",
+            "onnx_policy",
+            lambda c, model, _r: OnnxMatchPolicy(c, model),
+            "an exported policy (--model; default: the shipped episodic one), goal re-planned",
             True,
         ),
-        MatchMethod("random", lambda c, _: RandomMoves(c), "uniformly random moves", False),
+        MatchMethod(
+            "learned",
+            lambda c, _m, run: LearnedMatchPolicy(run),  # type: ignore[arg-type]
+            "a training run's image Q-network (--run), e.g. --preset match_ddqn",
+            True,
+            needs_run=True,
+        ),
+        MatchMethod("random", lambda c, _m, _r: RandomMoves(c), "uniformly random moves", False),
     )
 }
 
@@ -342,8 +386,17 @@ def match_method_names() -> tuple[str, ...]:
     return tuple(MATCH_METHODS)
 
 
-def make_match_policy(name: str, config: MatchConfig, model: Path | None = None) -> MatchPolicy:
+def default_match_methods(run: Path | None) -> tuple[str, ...]:
+    """Every strategy, ``learned`` only with a run."""
+    return tuple(n for n, m in MATCH_METHODS.items() if run is not None or not m.needs_run)
+
+
+def make_match_policy(
+    name: str, config: MatchConfig, model: Path | None = None, run: Path | None = None
+) -> MatchPolicy:
     """A fresh strategy ``name`` for matches of ``config``."""
     if name not in MATCH_METHODS:
         raise ValueError(f"unknown match method {name!r}; choose from {', '.join(MATCH_METHODS)}")
-    return MATCH_METHODS[name].factory(config, model)
+    if MATCH_METHODS[name].needs_run and run is None:
+        raise ValueError(f"the {name} strategy needs a training run (--run runs/NAME)")
+    return MATCH_METHODS[name].factory(config, model, run)

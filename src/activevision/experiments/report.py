@@ -7,6 +7,7 @@ Layout of a run directory after the quickstart::
     runs/NAME/evaluation/evaluation.{csv,json} fixed-seed evaluation of every method
     runs/NAME/compare/compare.{csv,png}       success vs localisation error
     runs/NAME/episode.png, episode.gif        learned vs random from one start
+    runs/NAME/match/match.csv, match_*.png    head-control strategies through whole matches
     runs/NAME/report.md                       this page
 """
 
@@ -104,6 +105,27 @@ def write_report(run_dir: str | Path) -> Path:
             "![episode](episode.png)",
             "",
             "Animated: [episode.gif](episode.gif)",
+        ]
+    match_rows = _csv_rows(run / "match" / "match.csv")
+    if match_rows:
+        first = match_rows[0]
+        parts += [
+            "",
+            "## Head control through whole matches",
+            "",
+            f"`ActiveVisionMatch-v0`: {first['matches']} matches from seed {first['seed']}, the"
+            " same for every strategy; the robot walks, the ball is kicked about, the UKF"
+            " tracks every tick. Mean [95% interval] over matches.",
+            "",
+            _table(match_rows, ["position_rmse", "heading_rmse", "lost_share"]),
+            "",
+            _table(match_rows, ["ball_in_view", "entropy", "head_travel"]),
+            "",
+            "![Pareto front](match/match_pareto.png)",
+            "",
+            "![error over time](match/match_error.png)",
+            "",
+            "Animated: [match_clip.gif](match/match_clip.gif)",
         ]
     parts += [
         "",

@@ -119,6 +119,17 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         ),
         "the paper's DDQN compressed to 6,000 steps (the former main job)",
     ),
+    # The paper's DDQN + PER on the match env's image (ActiveVisionMatch-v0, its defaults):
+    # the package's learner on the closed-loop task. 600-tick matches, gamma 0.99.
+    "match_ddqn": (
+        lambda: TrainConfig(
+            env_id="ActiveVisionMatch-v0",
+            learner=LearnerConfig(learning_starts=1000, target_update_interval=1000),
+            exploration=ExplorationConfig(fraction=0.2),
+            run=RunConfig(total_timesteps=60_000),
+        ),
+        "the paper's DDQN on the match env's image (ActiveVisionMatch-v0)",
+    ),
     # DAgger with the oracle as teacher (training.dagger), one preset per observation; each
     # fits in 30 minutes on a 2-core CPU (README: learned head control)
     "dagger_image": (
