@@ -226,3 +226,17 @@ def describe(hint: Any) -> str:
     if isinstance(hint, type):
         return hint.__name__
     return repr(hint)
+
+
+def replace_fields(instance: _Config, changes: Mapping[str, Any]) -> _Config:
+    """A copy of dataclass ``instance`` with ``changes``; an unknown name is a ValueError
+    naming the fields (the environments pass their keyword arguments here, and
+    ``gymnasium.make`` rewords a TypeError into a long one)."""
+    names = {f.name for f in dataclasses.fields(instance)}
+    for name, value in changes.items():
+        if name not in names:
+            raise ValueError(
+                f"{type(instance).__name__}: unknown keyword {name}={value!r};"
+                f" the fields are {sorted(names)}"
+            )
+    return dataclasses.replace(instance, **changes)

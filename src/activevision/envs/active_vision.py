@@ -10,7 +10,12 @@ import numpy as np
 from gymnasium import spaces
 
 from activevision.envs.actions import check_actions
-from activevision.envs.config import EnvConfig, check_count, resolve_config
+from activevision.envs.config import (
+    EnvConfig,
+    check_count,
+    check_render_mode,
+    resolve_config,
+)
 from activevision.envs.observations import (
     Observation,
     ObservationBuilder,
@@ -132,11 +137,7 @@ class ActiveVisionEnv(gym.Env):
         **config_overrides: Any,
     ) -> None:
         config = resolve_config(config, config_overrides)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode: expects one of {self.metadata['render_modes']} or None, "
-                f"got {render_mode!r}"
-            )
+        check_render_mode(render_mode, self.metadata["render_modes"])
         self.config = config
         self.render_mode = render_mode
         # Only the info's "did not happen" value: the time limit is gymnasium.make's TimeLimit.

@@ -14,7 +14,7 @@ from activevision.envs.robots import RobotsConfig
 from activevision.geometry import CameraConfig, FieldSpec, field_preset
 from activevision.geometry.field import FIELD_PRESETS
 from activevision.rendering.appearance import AppearanceConfig
-from activevision.typecheck import check_dataclass_fields
+from activevision.typecheck import check_dataclass_fields, replace_fields
 
 SuccessMode = Literal["tolerance", "landmarks"]
 ActionSet = Literal["8way", "4way"]
@@ -139,15 +139,8 @@ class EnvConfig:
         )
 
     def replace(self, **changes: Any) -> EnvConfig:
-        """A copy with ``changes``; an unknown name is a ValueError (the environments pass their
-        keyword arguments here, and gymnasium.make rewords a TypeError into a long one)."""
-        names = {f.name for f in dataclasses.fields(self)}
-        for name, value in changes.items():
-            if name not in names:
-                raise ValueError(
-                    f"EnvConfig: unknown keyword {name}={value!r}; the fields are {sorted(names)}"
-                )
-        return dataclasses.replace(self, **changes)
+        """A copy with ``changes``; an unknown name is a ValueError naming the fields."""
+        return replace_fields(self, changes)
 
 
 def _field_spec(value: object) -> FieldSpec:
@@ -175,6 +168,12 @@ def resolve_config(config: EnvConfig | None, overrides: Mapping[str, Any]) -> En
     elif not isinstance(config, EnvConfig):
         raise ValueError(f"config: expects EnvConfig or None, got {config!r}")
     return config.replace(**overrides) if overrides else config
+
+
+def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
+    """ValueError unless ``render_mode`` is None or one of ``modes``."""
+    if render_mode is not None and render_mode not in modes:
+        raise ValueError(f"render_mode: expects one of {modes} or None, got {render_mode!r}")
 
 
 def check_count(name: str, value: object) -> int:

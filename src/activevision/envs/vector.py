@@ -18,6 +18,7 @@ from activevision.envs.observations import (
     image_space,
     observation_space,
 )
+from activevision.envs.seeding import reseed_generators
 from activevision.envs.simulation import EpisodeBatch
 from activevision.localisation import LocalisationConfig
 
@@ -67,18 +68,7 @@ class ActiveVisionVectorEnv(VectorEnv):
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
-        seeds: list[int | None]
-        if seed is None:
-            seeds = [None] * self.num_envs
-        elif isinstance(seed, int | np.integer):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"expected {self.num_envs} seeds, got {len(seeds)}")
-        for i, s in enumerate(seeds):
-            if s is not None or seed is None:
-                self._rngs[i] = seeding.np_random(s)[0]
+        reseed_generators(self._rngs, seed)
         self.sim.reset(self._all, self._rngs)
         self._observations.start(self._all)
         self._render(started=self._all)

@@ -4,6 +4,7 @@ canvas, so drawing never touches the user's backend or pyplot's global figures."
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -39,3 +40,20 @@ def save_rgb(rgb: np.ndarray, path: str | os.PathLike[str]) -> None:
 
     with atomic_path(path) as tmp:
         imsave(tmp, rgb, format="png")
+
+
+def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: float) -> None:
+    """Write RGB frames (H, W, 3) uint8 as a looping animated GIF, atomically (Pillow,
+    matplotlib's own dependency)."""
+    from PIL import Image
+
+    images = [Image.fromarray(f) for f in frames]
+    with atomic_path(path) as tmp:
+        images[0].save(
+            tmp,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            duration=int(1000 / fps),
+            loop=0,
+        )

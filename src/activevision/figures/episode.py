@@ -12,11 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure
+from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
 from activevision.figures.scene import view_figure
 from activevision.figures.topview import draw_topview
 from activevision.geometry import CameraConfig, FieldSpec, LandmarkSet
-from activevision.io import atomic_path
 
 
 @dataclass(frozen=True)
@@ -108,8 +107,6 @@ def plot_episodes(
 
 def animate_episode(trace: EpisodeTrace, out_gif: str | os.PathLike[str], fps: int = 3) -> None:
     """An animated GIF: camera image beside the top view, one frame per step."""
-    from PIL import Image
-
     frames = []
     for s in trace.snapshots:
         fig = view_figure(
@@ -125,14 +122,6 @@ def animate_episode(trace: EpisodeTrace, out_gif: str | os.PathLike[str], fps: i
             s.observed,
             title=f"{trace.policy}, step {s.step}",
         )
-        frames.append(Image.fromarray(figure_to_rgb(fig)))
+        frames.append(figure_to_rgb(fig))
     frames += [frames[-1]] * 2  # linger on the outcome
-    with atomic_path(out_gif) as tmp:
-        frames[0].save(
-            tmp,
-            format="GIF",
-            save_all=True,
-            append_images=frames[1:],
-            duration=int(1000 / fps),
-            loop=0,
-        )
+    save_gif(frames, out_gif, fps)

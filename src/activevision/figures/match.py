@@ -11,10 +11,11 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from matplotlib.patches import Ellipse, Polygon
 
-from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure
+from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
 from activevision.figures.topview import draw_field
 from activevision.geometry import CameraConfig, FieldSpec
-from activevision.io import atomic_path
+
+__all__ = ["clip_frames", "plot_error_over_time", "plot_pareto", "save_gif"]
 
 #: a method's point and whiskers: (mean, low, high) of each axis
 Point = Mapping[str, tuple[float, float, float]]
@@ -140,19 +141,3 @@ def clip_frames(
         ax.set_title(f"{title}   t = {t * tick_seconds:5.1f} s   error {error:.2f} m", fontsize=9)
         frames.append(figure_to_rgb(fig))
     return frames
-
-
-def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: float) -> None:
-    """Write RGB frames as an animated GIF, atomically (Pillow, matplotlib's own dependency)."""
-    from PIL import Image
-
-    images = [Image.fromarray(f) for f in frames]
-    with atomic_path(path) as tmp:
-        images[0].save(
-            tmp,
-            format="GIF",
-            save_all=True,
-            append_images=images[1:],
-            duration=int(1000 / fps),
-            loop=0,
-        )

@@ -17,7 +17,7 @@ from activevision.geometry import CameraConfig, FieldSpec
 from activevision.localisation.config import UKFConfig
 from activevision.localisation.tracking import TrackerConfig
 from activevision.rendering.appearance import AppearanceConfig
-from activevision.typecheck import check_dataclass_fields, in_range
+from activevision.typecheck import check_dataclass_fields, in_range, replace_fields
 
 #: What the agent observes: the image, plus the head angles, plus the belief (mean,
 #: uncertainty) and the robot's ball model (``envs.match.observations``).
@@ -152,10 +152,4 @@ class MatchConfig:
 
     def replace(self, **changes: Any) -> MatchConfig:
         """A copy with ``changes``; an unknown name is a ValueError naming the fields."""
-        names = {f.name for f in dataclasses.fields(self)}
-        for name, value in changes.items():
-            if name not in names:
-                raise ValueError(
-                    f"MatchConfig: unknown keyword {name}={value!r}; the fields are {sorted(names)}"
-                )
-        return dataclasses.replace(self, **changes)
+        return replace_fields(self, changes)

@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from activevision.envs.actions import check_actions
+from activevision.envs.config import check_render_mode
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.observations import (
     Observation,
@@ -107,11 +108,7 @@ class ActiveVisionMatchEnv(gym.Env):
         **config_overrides: Any,
     ) -> None:
         config = resolve_match_config(config, config_overrides)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode: expects one of {self.metadata['render_modes']} or None, "
-                f"got {render_mode!r}"
-            )
+        check_render_mode(render_mode, self.metadata["render_modes"])
         self.config = config
         self.render_mode = render_mode
         self.sim = MatchBatch(config, 1)

@@ -21,6 +21,7 @@ from activevision.envs.match.observations import (
     observe,
 )
 from activevision.envs.match.simulation import MatchBatch
+from activevision.envs.seeding import reseed_generators
 
 
 class ActiveVisionMatchVectorEnv(VectorEnv):
@@ -51,18 +52,7 @@ class ActiveVisionMatchVectorEnv(VectorEnv):
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
-        seeds: list[int | None]
-        if seed is None:
-            seeds = [None] * self.num_envs
-        elif isinstance(seed, int | np.integer):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"expected {self.num_envs} seeds, got {len(seeds)}")
-        for i, s in enumerate(seeds):
-            if s is not None or seed is None:
-                self._rngs[i] = seeding.np_random(s)[0]
+        reseed_generators(self._rngs, seed)
         self.sim.reset(self._all, self._rngs)
         self._needs_reset[:] = False
         return self._observe(), self._infos()
