@@ -1,12 +1,15 @@
-"""The discrete head actions: stay, or move the head by a fixed step in one of 4 or 8
-directions. Diagonals move ``step * sqrt(2) / 2`` on each axis, so every move has the same
-length (the release's convention)."""
+"""The head actions. Discrete (the paper's): stay, or move the head by a fixed step in one
+of 4 or 8 directions; diagonals move ``step * sqrt(2) / 2`` on each axis, so every move has
+the same length (the release's convention). Continuous (the paper's future work): a
+``Box(-1, 1, (2,))`` scaled to a maximum move per tick on each axis."""
 
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import numpy as np
+from gymnasium import spaces
 
 from activevision.runtime.goal_evidence import greedy_actions
 
@@ -58,4 +61,58 @@ def check_actions(actions: object, n_actions: int, shape: tuple[int, ...]) -> np
     return array
 
 
-__all__ = ["ACTION_NAMES_8WAY", "action_table", "check_actions", "greedy_actions"]
+ActionType = Literal["discrete", "continuous"]
+
+
+def check_continuous_actions(actions: object, shape: tuple[int, ...]) -> np.ndarray:
+    """``actions`` as a float64 array of ``shape`` (ending in 2: pan, tilt) with finite
+    values in [-1, 1]; anything else is a ValueError naming the value."""
+    try:
+        array = np.asarray(actions, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"invalid action {actions!r}: expects numbers in [-1, 1], shape {shape}"
+        ) from None
+    if array.shape != shape:
+        raise ValueError(
+            f"invalid action {actions!r}: expects numbers in [-1, 1], shape {shape},"
+            f" got shape {array.shape}"
+        )
+    if not (np.isfinite(array).all() and (np.abs(array) <= 1.0).all()):
+        raise ValueError(f"invalid action {actions!r}: expects finite numbers in [-1, 1]")
+    return array
+
+
+def head_action_space(action_type: ActionType, n_actions: int) -> spaces.Box | spaces.Discrete:
+    """``Discrete(n_actions)``, or ``Box(-1, 1, (2,), float32)`` for continuous moves."""
+    if action_type == "continuous":
+        return spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+    return spaces.Discrete(n_actions)
+
+
+def head_moves(
+    actions: object,
+    action_type: ActionType,
+    table: np.ndarray,
+    max_move: tuple[float, float],
+    n: int,
+) -> np.ndarray:
+    """The head moves (n, 2) rad of n actions: rows of the discrete ``table``, or continuous
+    actions times ``max_move`` (pan, tilt rad). Each action is checked first."""
+    if action_type == "continuous":
+        scaled: np.ndarray = check_continuous_actions(actions, (n, 2)) * np.asarray(max_move)
+        return scaled
+    moves: np.ndarray = table[check_actions(actions, len(table), (n,))]
+    return moves
+
+
+__all__ = [
+    "ACTION_NAMES_8WAY",
+    "ActionType",
+    "action_table",
+    "check_actions",
+    "check_continuous_actions",
+    "greedy_actions",
+    "head_action_space",
+    "head_moves",
+]

@@ -7,9 +7,8 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 
-from activevision.envs.actions import check_actions
+from activevision.envs.actions import check_actions, check_continuous_actions, head_action_space
 from activevision.envs.config import (
     EnvConfig,
     check_count,
@@ -51,6 +50,13 @@ class ActiveVisionEnv(gym.Env):
 
     Head angles are clipped to pan [-90, 90] and tilt [5, 65] degrees. An action outside the
     space raises ``ValueError``.
+
+    ``action_type="continuous"`` (the paper's future work): ``Box(-1, 1, (2,), float32)``,
+    ``(pan, tilt)`` as a fraction of ``max_move_deg`` (10 degrees on each axis by default)
+    per step. Everything else is the same: the reward compares the Euclidean (pan, tilt)
+    distance in degrees to the goal before and after the move (so any move, however small,
+    that brings the head closer earns +1; ``reward_resolution_deg`` sets a dead band), the
+    success rule, the ball-lost rule and the 20-step limit.
 
     ## Observation Space
     ``Box(0, 255, (frame_stack, 120, 160), uint8)``: the latest ``frame_stack`` (default 1,
@@ -143,7 +149,7 @@ class ActiveVisionEnv(gym.Env):
         # Only the info's "did not happen" value: the time limit is gymnasium.make's TimeLimit.
         self.max_episode_steps = check_count("max_episode_steps", max_episode_steps)
         self.sim = EpisodeBatch(config, 1, localisation)
-        self.action_space = spaces.Discrete(len(self.sim.actions))
+        self.action_space = head_action_space(config.action_type, len(self.sim.actions))
         self.observation_space = observation_space(config, len(self.sim.actions))
         self._observations = ObservationBuilder(config, 1, len(self.sim.actions))
         self._frames = np.zeros(image_space(config).shape, dtype=np.uint8)
@@ -160,6 +166,8 @@ class ActiveVisionEnv(gym.Env):
         return self._observe(), self.sim.info(0, self.max_episode_steps)
 
     def step(self, action: object) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
+        if self.config.action_type == "continuous":
+            return self._after_move(self.sim.step(check_continuous_actions(action, (2,))[None]))
         action = check_actions(action, len(self.sim.actions), ()).reshape(1)
         self._observations.record(action, self._slot)
         return self._after_move(self.sim.step(action))

@@ -10,6 +10,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from activevision.envs.actions import ActionType
 from activevision.envs.robots import RobotsConfig
 from activevision.geometry import CameraConfig, FieldSpec, field_preset
 from activevision.geometry.field import FIELD_PRESETS
@@ -34,6 +35,11 @@ class EnvConfig:
     camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)
     step_deg: float = 3.0  #: head move per action (P: "3 degrees")
     action_set: ActionSet = "8way"  #: stay + 8 directions (R); "4way": stay + 4 directions
+    #: "discrete" (P); "continuous": a Box(-1, 1, (2,)) times ``max_move_deg`` (P's future work)
+    action_type: ActionType = "discrete"
+    #: continuous actions: the largest head move per tick (pan, tilt degrees). Not in P; a
+    #: KidSize neck servo turns 30 deg in a 320 ms tick with ease, 10 deg keeps the image sharp
+    max_move_deg: tuple[float, float] = (10.0, 10.0)
     frame_stack: int = 1  #: images per observation (P: one 160x120x1 frame)
     success_mode: SuccessMode = "tolerance"  #: P: within tolerance of the goal; R: "landmarks"
     #: P leaves the tolerance open. One action step (3 deg): every start can get that close,
@@ -77,8 +83,7 @@ class EnvConfig:
         def bad(name: str, why: str) -> ValueError:
             return ValueError(f"EnvConfig.{name}: {why}, got {getattr(self, name)!r}")
 
-        if not 0 < self.step_deg <= 30:
-            raise bad("step_deg", "must lie in (0, 30] degrees")
+        self._check_actions(bad)
         if self.frame_stack < 1:
             raise bad("frame_stack", "must be a positive integer")
         if not self.success_tolerance_deg > 0:
@@ -107,6 +112,14 @@ class EnvConfig:
             raise bad("max_start_draws", "must be a positive integer")
         self._check_observation(bad)
 
+    def _check_actions(self, bad: typing.Callable[[str, str], ValueError]) -> None:
+        if not 0 < self.step_deg <= 30:
+            raise bad("step_deg", "must lie in (0, 30] degrees")
+        if not all(0 < m <= 90 for m in self.max_move_deg):
+            raise bad("max_move_deg", "must lie in (0, 90] degrees on each axis")
+        if self.action_type == "continuous" and self.action_history:
+            raise bad("action_history", "holds discrete actions, not action_type='continuous'")
+
     def _check_observation(self, bad: typing.Callable[[str, str], ValueError]) -> None:
         if self.prior_error_range is not None:
             lo, hi = self.prior_error_range
@@ -122,6 +135,11 @@ class EnvConfig:
             raise bad("action_history", "needs a Dict observation (observation='image+head...')")
         if self.observation != "image" and self.frame_stack != 1:
             raise bad("observation", "a Dict observation takes frame_stack=1 (use action_history)")
+
+    @property
+    def max_move(self) -> tuple[float, float]:
+        """``max_move_deg`` in radians."""
+        return (math.radians(self.max_move_deg[0]), math.radians(self.max_move_deg[1]))
 
     @property
     def observes_prior(self) -> bool:

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from activevision.envs.actions import action_table, check_actions
+from activevision.envs.actions import action_table, head_moves
 from activevision.envs.config import EnvConfig
 from activevision.envs.reward import approach_reward, viewpoint_distance_deg
 from activevision.envs.robots import draw_robots
@@ -208,14 +208,14 @@ class EpisodeBatch:
 
     # ------------------------------------------------------------------ dynamics
     def step(self, actions: np.ndarray, active: np.ndarray | None = None) -> StepOutcome:
-        """Apply one discrete action per slot (only where ``active``).
+        """Apply one action per slot (only where ``active``): discrete, or (N, 2) continuous.
 
         Returns:
             ``(reward, terminated, success, ball_lost)``, each (N,).
         """
         idx = np.arange(self.n) if active is None else np.flatnonzero(active)
-        actions = check_actions(actions, len(self.actions), (self.n,))
-        move = self.actions[actions[idx]]
+        cfg = self.cfg
+        move = head_moves(actions, cfg.action_type, self.actions, cfg.max_move, self.n)[idx]
         return self.move_head(idx, self.pan[idx] + move[:, 0], self.tilt[idx] + move[:, 1])
 
     def move_head(self, idx: np.ndarray, pan: np.ndarray, tilt: np.ndarray) -> StepOutcome:

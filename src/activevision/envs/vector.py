@@ -6,11 +6,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from activevision.envs.actions import head_action_space
 from activevision.envs.config import EnvConfig, check_count, resolve_config
 from activevision.envs.observations import (
     Observation,
@@ -34,7 +34,8 @@ class ActiveVisionVectorEnv(VectorEnv):
     also terminates), as single envs from ``gymnasium.make`` do. Infos hold the single env's
     keys as arrays over sub-environments (landmark sets as (N, K) boolean masks
     ``desired_mask`` and ``observed_mask``): the very arrays ``SyncVectorEnv`` and
-    ``AsyncVectorEnv`` stack from single envs. Actions must be integers in the action space.
+    ``AsyncVectorEnv`` stack from single envs. Actions must lie in the action space (integers;
+    with ``action_type="continuous"`` an (N, 2) float array in [-1, 1]).
     """
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
@@ -53,7 +54,7 @@ class ActiveVisionVectorEnv(VectorEnv):
         self.sim = EpisodeBatch(config, self.num_envs, localisation)
         n_actions = len(self.sim.actions)
         self.single_observation_space = observation_space(config, n_actions)
-        self.single_action_space = spaces.Discrete(n_actions)
+        self.single_action_space = head_action_space(config.action_type, n_actions)
         self._observations = ObservationBuilder(config, self.num_envs, n_actions)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)

@@ -12,6 +12,7 @@ import typing
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from activevision.envs.actions import ActionType
 from activevision.envs.robots import RobotsConfig
 from activevision.geometry import CameraConfig, FieldSpec
 from activevision.localisation.config import UKFConfig
@@ -129,6 +130,10 @@ class MatchConfig:
     ticks: int = dataclasses.field(default=600, metadata=in_range(1))
     tick_seconds: float = dataclasses.field(default=0.32, metadata=in_range(0.01, 10.0))  #: P
     step_deg: float = dataclasses.field(default=3.0, metadata=in_range(0.1, 30.0))  #: P: 3 deg
+    #: "discrete": the 9 moves of ``step_deg``; "continuous": Box(-1, 1, (2,)) times
+    #: ``max_move_deg`` (pan, tilt degrees per tick; as ``EnvConfig``)
+    action_type: ActionType = "discrete"
+    max_move_deg: tuple[float, float] = (10.0, 10.0)
     observation: MatchObservation = "image"
     walk: WalkConfig = dataclasses.field(default_factory=WalkConfig)
     ball: BallConfig = dataclasses.field(default_factory=BallConfig)
@@ -144,6 +149,15 @@ class MatchConfig:
         check_dataclass_fields(self)
         if self.detection.far > self.detection.near:
             raise ValueError("MatchConfig.detection: far must not exceed near")
+        if not all(0 < m <= 90 for m in self.max_move_deg):
+            raise ValueError(
+                f"MatchConfig.max_move_deg: must lie in (0, 90] degrees, got {self.max_move_deg!r}"
+            )
+
+    @property
+    def max_move(self) -> tuple[float, float]:
+        """``max_move_deg`` in radians."""
+        return (math.radians(self.max_move_deg[0]), math.radians(self.max_move_deg[1]))
 
     @property
     def head_step(self) -> float:

@@ -6,9 +6,8 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 
-from activevision.envs.actions import check_actions
+from activevision.envs.actions import check_actions, check_continuous_actions, head_action_space
 from activevision.envs.config import check_render_mode
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.observations import (
@@ -61,7 +60,8 @@ class ActiveVisionMatchEnv(gym.Env):
 
     ## Action Space
     ``Discrete(9)``: stay, then the 8 head moves of ``ActiveVision-v0`` (pan positive to the
-    left, tilt positive down), clipped to the head's limits.
+    left, tilt positive down), clipped to the head's limits. ``action_type="continuous"``:
+    ``Box(-1, 1, (2,), float32)``, the (pan, tilt) move as a fraction of ``max_move_deg``.
 
     ## Observation Space
     ``Box(0, 255, (1, 120, 160), uint8)``: the camera image. ``observation="image+head"``
@@ -112,7 +112,7 @@ class ActiveVisionMatchEnv(gym.Env):
         self.config = config
         self.render_mode = render_mode
         self.sim = MatchBatch(config, 1)
-        self.action_space = spaces.Discrete(len(self.sim.actions))
+        self.action_space = head_action_space(config.action_type, len(self.sim.actions))
         self.observation_space = observation_space(config)
         self._frames = np.zeros((1, *image_space(config).shape), dtype=np.uint8)
         self._slot = np.zeros(1, dtype=np.int64)
@@ -125,8 +125,10 @@ class ActiveVisionMatchEnv(gym.Env):
         return self._observe(), self._info()
 
     def step(self, action: object) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
-        action = check_actions(action, len(self.sim.actions), ()).reshape(1)
-        reward = self.sim.step(action)
+        if self.config.action_type == "continuous":
+            reward = self.sim.step(check_continuous_actions(action, (2,))[None])
+        else:
+            reward = self.sim.step(check_actions(action, len(self.sim.actions), ()).reshape(1))
         truncated = bool(self.sim.tick[0] >= self.config.ticks)
         return self._observe(), float(reward[0]), False, truncated, self._info()
 

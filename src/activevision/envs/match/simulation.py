@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activevision.envs.actions import action_table, check_actions
+from activevision.envs.actions import action_table, head_moves
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.dynamics import to_robot_frame
 from activevision.envs.match.kernels import MatchParams, MatchState, move_kernel, sense_kernel
@@ -230,11 +230,11 @@ class MatchBatch:
     # ------------------------------------------------------------------ dynamics
     def step(self, actions: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
         """One tick of the matches ``active`` (all by default), each moving its head by its
-        discrete action (:mod:`activevision.envs.actions`, ``step_deg`` per tick).
+        action (:mod:`activevision.envs.actions`: discrete, or (N, 2) continuous).
         Returns the rewards (N,)."""
         idx = np.arange(self.n) if active is None else np.flatnonzero(active)
-        actions = check_actions(actions, len(self.actions), (self.n,))
-        move = self.actions[actions[idx]]
+        cfg = self.cfg
+        move = head_moves(actions, cfg.action_type, self.actions, cfg.max_move, self.n)[idx]
         return self.move_head(idx, self.head[idx, 0] + move[:, 0], self.head[idx, 1] + move[:, 1])
 
     def move_head(self, idx: np.ndarray, pan: np.ndarray, tilt: np.ndarray) -> np.ndarray:

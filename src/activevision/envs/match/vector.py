@@ -6,11 +6,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from activevision.envs.actions import head_action_space
 from activevision.envs.config import check_count
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.env import resolve_match_config
@@ -39,7 +39,7 @@ class ActiveVisionMatchVectorEnv(VectorEnv):
         self.config = config = resolve_match_config(config, config_overrides)
         self.sim = MatchBatch(config, self.num_envs)
         self.single_observation_space = observation_space(config)
-        self.single_action_space = spaces.Discrete(len(self.sim.actions))
+        self.single_action_space = head_action_space(config.action_type, len(self.sim.actions))
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._rngs = [seeding.np_random()[0] for _ in range(self.num_envs)]
