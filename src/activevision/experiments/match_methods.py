@@ -37,14 +37,14 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
 from activevision.envs.actions import action_table, greedy_actions
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.observations import IMAGE_KEY, Observation
-from activevision.geometry import clip_head, field_landmarks
+from activevision.geometry import LandmarkSet, clip_head, field_landmarks
 from activevision.localisation import LocalisationConfig, best_viewpoints
 
 
@@ -222,7 +222,7 @@ def ball_on_field(info: dict[str, np.ndarray]) -> np.ndarray:
 def plan_views(
     info: dict[str, np.ndarray],
     config: MatchConfig,
-    landmarks: Any,
+    landmarks: LandmarkSet,
     localisation: LocalisationConfig,
     use_belief_cov: bool,
 ) -> np.ndarray:
