@@ -81,6 +81,35 @@ def test_same_seed_same_bytes():
         np.testing.assert_array_equal(x, y)
 
 
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_gymnasium_vectorizers_play_the_randomised_world_as_the_native_one(mode):
+    """Sync and Async vectorizers over single envs in the randomised world with robots give
+    the native vector env's batches byte for byte, across autoresets (looks and robots are
+    drawn anew at every reset, from each sub-environment's generator)."""
+    n, steps = 3, 30
+    actions = np.random.default_rng(4).integers(0, 9, (steps, n))
+    native = gym.make_vec(
+        "ActiveVision-v0", n, vectorization_mode="vector_entry_point", config=WORLD
+    )
+    other = gym.make_vec("ActiveVision-v0", n, vectorization_mode=mode, config=WORLD)
+    try:
+        a, b = native.reset(seed=11), other.reset(seed=11)
+        resets = 0
+        for step in [None, *actions]:
+            if step is not None:
+                a, b = native.step(step), other.step(step)
+                resets += int((a[2] | a[3]).sum())
+                for x, y in zip(a[1:4], b[1:4], strict=True):
+                    np.testing.assert_array_equal(x, y)
+            np.testing.assert_array_equal(a[0], b[0])
+            for key in ("robots", "hidden_mask", "head", "goal_viewpoint", "observed_mask"):
+                np.testing.assert_array_equal(a[-1][key], b[-1][key])
+        assert resets >= 2  # the comparison crossed autoresets
+    finally:
+        native.close()
+        other.close()
+
+
 def test_frames_differ_from_the_clean_world_and_between_episodes():
     clean = gym.make("ActiveVision-v0").reset(seed=2)[0]
     looks = gym.make("ActiveVision-v0", config=WORLD.replace(robots=RobotsConfig()))
