@@ -43,6 +43,9 @@ class WalkConfig:
     pause_ticks: tuple[int, int] = (0, 15)
     #: waypoints are drawn this far (m) inside the field lines
     margin: float = field(default=0.5, metadata=in_range(0.0, 3.0))
+    #: ``target="ball"``: stop this far (m) short of the ball, on the line from the robot, as
+    #: a striker lines up a kick (standing over the ball would put it below the camera)
+    ball_standoff: float = field(default=0.4, metadata=in_range(0.0, 2.0))
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)

@@ -72,6 +72,7 @@ class MatchParams(NamedTuple):
     waypoint_x: float  #: waypoints within +-waypoint_x, +-waypoint_y
     waypoint_y: float
     walk_to_ball: float  #: 1: the waypoint is the ball
+    ball_standoff: float  #: stop this far short of the ball
     carpet_x: float
     carpet_y: float
     field_x: float
@@ -96,7 +97,8 @@ class MatchParams(NamedTuple):
 @njit(cache=True)
 def _next_waypoint(n: int, s: MatchState, p: MatchParams, draws: np.ndarray) -> None:
     """A robot at its waypoint (by its belief) pauses, then walks to the next: a random one,
-    or (``walk_to_ball``) the ball's believed position, re-planned every tick."""
+    or (``walk_to_ball``) the ball's believed position less ``ball_standoff``, re-planned
+    every tick."""
     mean, wp = s.mean[n], s.waypoint[n]
     reached = math.hypot(wp[0] - mean[0], wp[1] - mean[1]) < p.reach and s.pause[n] == 0
     if reached:
@@ -105,6 +107,9 @@ def _next_waypoint(n: int, s: MatchState, p: MatchParams, draws: np.ndarray) -> 
     if p.walk_to_ball > 0:
         c, si = math.cos(mean[2]), math.sin(mean[2])
         rx, ry = s.ball_relative[n, 0], s.ball_relative[n, 1]
+        distance = math.hypot(rx, ry)
+        keep = max(distance - p.ball_standoff, 0.0) / distance if distance > 0 else 0.0
+        rx, ry = rx * keep, ry * keep
         wp[0], wp[1] = mean[0] + c * rx - si * ry, mean[1] + si * rx + c * ry
     elif reached:
         wp[0] = p.waypoint_x * (2 * draws[0] - 1)

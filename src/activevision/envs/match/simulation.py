@@ -136,6 +136,7 @@ class MatchBatch:
                 field.half_length - walk.margin,
                 field.half_width - walk.margin,
                 float(walk.target == "ball"),
+                walk.ball_standoff,
                 carpet[0],
                 carpet[1],
                 field.half_length,
