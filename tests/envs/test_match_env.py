@@ -255,3 +255,18 @@ def test_bad_config_is_one_clear_error(kwargs, match):
 def test_bad_part_config_names_the_field(make, match):
     with pytest.raises(ValueError, match=match):
         make()
+
+
+def test_a_striker_aims_short_of_the_ball():
+    """``walk.target="ball"``: the waypoint is the ball model's position through the belief,
+    ``ball_standoff`` short of it on the line from the robot."""
+    sim = MatchBatch(MatchConfig(walk=WalkConfig(target="ball", ball_standoff=0.4)), 2)
+    sim.reset(np.arange(2), [np.random.default_rng(s) for s in (1, 2)])
+    mean, relative = sim.mean.copy(), sim.ball_relative.copy()
+    sim.step(np.zeros(2, dtype=np.int64))
+    for i in range(2):
+        c, s = np.cos(mean[i, 2]), np.sin(mean[i, 2])
+        ball = mean[i, :2] + np.array([[c, -s], [s, c]]) @ relative[i]
+        distance = np.hypot(*(ball - mean[i, :2]))
+        expected = mean[i, :2] + (ball - mean[i, :2]) * (distance - 0.4) / distance
+        np.testing.assert_allclose(sim.waypoint[i], expected, atol=1e-12)
