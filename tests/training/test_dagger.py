@@ -132,3 +132,53 @@ def test_tampered_dagger_checkpoints_are_refused(tmp_path, capsys):
     assert main(["train", "--resume", str(run)]) == 2
     err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
     assert len(err) == 1 and "replay.npz" in err[0]
+
+
+def continuous(steps: int = 600, **extra) -> TrainConfig:
+    return tiny(steps=steps, **{"env.action_type": "continuous", "env.action_history": 0, **extra})
+
+
+def test_continuous_labels_are_the_oracles_straight_moves(tmp_path):
+    trainer = DaggerTrainer(continuous(), tmp_path, loggers=[])
+    trainer._rollout()
+    data, grid = trainer.dataset.arrays, trainer.sim.localisation.grid
+    n = trainer.dataset.size
+    goal = np.stack([grid.pans[data["goal"][:n]], grid.tilts[data["goal"][:n]]], axis=1)
+    reach = np.radians(10.0)
+    for head, target, label in zip(data["head"][:n], goal, data["action"][:n], strict=True):
+        gap = target - head  # hand-computed: the move straight there, each axis capped
+        want = [max(-1.0, min(1.0, g / reach)) for g in gap]
+        np.testing.assert_allclose(label, want, atol=1e-6)
+    assert (np.abs(data["action"][:n]) == 1.0).any()  # some goals lie beyond one move
+    assert ((np.abs(data["action"][:n]) < 1.0) & (data["action"][:n] != 0)).any()
+
+
+def test_continuous_student_reaches_goals_in_fewer_steps_and_exports(tmp_path):
+    from activevision.experiments.policies import OnnxPolicy
+    from activevision.export import export_run
+
+    config = continuous(
+        steps=4000,
+        **{
+            "dagger.num_envs": 24,  # episodes are short: as many updates as the discrete test
+            "dagger.updates_per_rollout": 8,
+            "learner.batch_size": 64,
+            "learner.learning_rate": 1e-3,
+        },
+    )
+    train_dagger(config, tmp_path)
+    learned = LearnedPolicy.from_run(tmp_path)
+    env = ActiveVisionEnv(config.env)
+    records, summary, _ = evaluate_policy(learned, 40, seed=500, env=env)
+    assert summary["success"].mean >= 0.5
+    # 10-degree moves: the goal in a few steps, where the 3-degree oracle needs about 8
+    discrete = ActiveVisionEnv(config.env.replace(action_type="discrete"))
+    _, oracle, _ = evaluate_policy(OraclePolicy(), 40, seed=500, env=discrete)
+    solved = [r["success_duration"] for r in records if r["success"]]
+    assert np.median(solved) <= 0.6 * oracle["success_duration"].mean
+    # HeadController (ONNX, goal evidence in NumPy) plays the same episodes
+    onnx = OnnxPolicy(export_run(tmp_path).model_path)
+    assert onnx.controller.continuous
+    onnx_records, _, _ = evaluate_policy(onnx, 40, seed=500, env=env)
+    assert [r["steps"] for r in onnx_records] == [r["steps"] for r in records]
+    assert [r["success"] for r in onnx_records] == [r["success"] for r in records]

@@ -1,6 +1,8 @@
 """The student network of DAgger: the camera image through a CNN, the robot's own vector
 (head angles, prior pose, proposal, previous actions; ``envs.observations``) through an
-MLP, fused, to one logit per action and optionally 40 goal-view logits.
+MLP, fused, to one logit per action (or, for continuous head control, the move: 2 outputs
+through tanh, a fraction of the largest move on each axis) and optionally 40 goal-view
+logits.
 
 The CNN is the paper's (``q_network``) on a ``downsample`` x ``downsample``-averaged image:
 the 2 x 2 average keeps every landmark edge (lines are 5 cm, 2-7 px at 120 x 160) and
@@ -15,7 +17,7 @@ makes an update 4x cheaper, which on a CPU decides how many samples a run can le
 | fc image_hidden, ReLU                 | 256             |
 | vector: fc 128, ReLU, fc 128, ReLU    | 128             |
 | concat, fc fused_hidden, ReLU         | 256             |
-| fc n_actions (and fc n_goals)         | 9 (40)          |
+| fc n_actions (and fc n_goals)         | 9 or 2 (40)     |
 """
 
 from __future__ import annotations
@@ -28,14 +30,19 @@ from activevision.agents.q_network import PAPER_IMAGE_SHAPE, feature_shape
 
 
 class StudentNetwork(nn.Module):
-    """Action logits for a batch of uint8 images (B, 1, H, W) and float vectors (B, V).
+    """Action logits (or continuous moves) for a batch of uint8 images (B, 1, H, W) and
+    float vectors (B, V).
 
     Args:
-        n_actions: discrete actions (9).
+        n_actions: discrete actions (9); with ``continuous``, the move's axes (2); 0: the
+            trunk alone (:meth:`hidden`, e.g. as a Stable-Baselines3 features extractor).
         vector_size: length of the vector input (0: image only, the paper's input).
         image_shape: (H, W) of the camera image.
         downsample: average-pool factor applied to the image first (1: none).
         n_goals: size of the goal-view classification head (0: none).
+        continuous: the outputs are a move in [-1, 1] per axis, squashed by ``squash``:
+            ``"tanh"`` (DAgger, SAC, TD3) or ``"clip"`` (PPO's Gaussian mean, clipped to
+            the action space as Stable-Baselines3 does).
     """
 
     def __init__(
@@ -48,9 +55,16 @@ class StudentNetwork(nn.Module):
         image_hidden: int = 256,
         vector_hidden: int = 128,
         fused_hidden: int = 256,
+        continuous: bool = False,
+        squash: str = "tanh",
     ) -> None:
         super().__init__()
         self.n_actions = int(n_actions)
+        #: outputs are a head move in [-1, 1] per axis (tanh), not logits
+        self.continuous = bool(continuous)
+        if squash not in ("tanh", "clip"):
+            raise ValueError(f"squash must be 'tanh' or 'clip', got {squash!r}")
+        self.squash = squash
         self.vector_size = int(vector_size)
         self.image_shape = (int(image_shape[0]), int(image_shape[1]))
         self.downsample = int(downsample)
@@ -68,7 +82,7 @@ class StudentNetwork(nn.Module):
             self.vector_fc2 = nn.Linear(self.sizes[1], self.sizes[1])
             fused_in += self.sizes[1]
         self.fused = nn.Linear(fused_in, self.sizes[2])
-        self.logits = nn.Linear(self.sizes[2], self.n_actions)
+        self.logits = nn.Linear(self.sizes[2], self.n_actions) if self.n_actions else None
         self.goal_logits = nn.Linear(self.sizes[2], self.n_goals) if self.n_goals else None
 
     def hidden(self, image: torch.Tensor, vector: torch.Tensor | None = None) -> torch.Tensor:
@@ -87,17 +101,23 @@ class StudentNetwork(nn.Module):
         return F.relu(self.fused(torch.cat(parts, dim=1)))
 
     def forward(self, image: torch.Tensor, vector: torch.Tensor | None = None) -> torch.Tensor:
-        """Action logits (B, n_actions); the greedy action is their argmax."""
-        out: torch.Tensor = self.logits(self.hidden(image, vector))
-        return out
+        """Action logits (B, n_actions), the greedy action their argmax; or with
+        ``continuous`` the move (B, 2) in [-1, 1]."""
+        return self.forward_with_goal(image, vector)[0]
 
     def forward_with_goal(
         self, image: torch.Tensor, vector: torch.Tensor | None = None
     ) -> tuple[torch.Tensor, torch.Tensor | None]:
-        """Action logits and goal-view logits (None without a goal head), one pass."""
+        """Action logits (or moves) and goal-view logits (None without a goal head), one
+        pass."""
+        if self.logits is None:
+            raise ValueError("this network is a trunk (n_actions=0): it has no action output")
         hidden = self.hidden(image, vector)
         goal = self.goal_logits(hidden) if self.goal_logits is not None else None
-        return self.logits(hidden), goal
+        out: torch.Tensor = self.logits(hidden)
+        if self.continuous:
+            out = torch.tanh(out) if self.squash == "tanh" else torch.clamp(out, -1.0, 1.0)
+        return out, goal
 
     def metadata(self) -> dict[str, object]:
         """What :meth:`from_metadata` needs to rebuild this network."""
@@ -109,6 +129,8 @@ class StudentNetwork(nn.Module):
             "downsample": self.downsample,
             "n_goals": self.n_goals,
             "hidden_sizes": list(self.sizes),
+            "action_type": "continuous" if self.continuous else "discrete",
+            "squash": self.squash,
         }
 
     @classmethod
@@ -123,4 +145,6 @@ class StudentNetwork(nn.Module):
             image_hidden,
             vector_hidden,
             fused_hidden,
+            continuous=meta.get("action_type", "discrete") == "continuous",
+            squash=meta.get("squash", "tanh"),
         )

@@ -31,7 +31,7 @@ def _preset_help() -> dict[str, str]:
 
 
 def cmd_train(args: argparse.Namespace) -> None:
-    """Train (or resume) a DDQN + PER or DAgger run."""
+    """Train (or resume) a DDQN + PER, DAgger or Stable-Baselines3 run."""
     from activevision.training import plot_run
 
     run_dir = _resume(args) if args.resume is not None else _train_fresh(args)
@@ -147,13 +147,15 @@ def _add_config_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def add_parsers(sub: Any) -> None:
-    p = sub.add_parser("train", help="train a head controller (DDQN + PER, or DAgger)")
+    p = sub.add_parser("train", help="train a head controller (DDQN + PER, DAgger, SAC/TD3/PPO)")
     p.set_defaults(func=cmd_train)
     _add_config_arguments(p)
     p.add_argument(
         "--algo",
-        choices=("ddqn", "dagger"),
-        help="ddqn: the paper's DDQN + PER; dagger: imitate the oracle (default: the config's)",
+        choices=("ddqn", "dagger", "sac", "td3", "ppo"),
+        help="ddqn: the paper's DDQN + PER; dagger: imitate the oracle; sac, td3, ppo:"
+        " Stable-Baselines3's, for continuous moves (--set env.action_type=continuous; PPO"
+        " also discrete) (default: the config's)",
     )
     p.add_argument(
         "--steps",

@@ -11,7 +11,7 @@ from typing import Literal
 import numpy as np
 from gymnasium import spaces
 
-from activevision.runtime.goal_evidence import greedy_actions
+from activevision.runtime.goal_evidence import continuous_moves, greedy_actions
 
 ACTION_NAMES_8WAY = (
     "stay",
@@ -106,13 +106,30 @@ def head_moves(
     return moves
 
 
+def oracle_actions(
+    head: np.ndarray,
+    target: np.ndarray,
+    action_type: ActionType,
+    table: np.ndarray,
+    max_move: tuple[float, float],
+) -> np.ndarray:
+    """The oracle's actions from heads (N, 2) towards targets (N, 2) rad: the discrete move
+    of ``table`` that ends closest, (N,) int; or the continuous move straight there, clipped
+    to ``max_move``, (N, 2) in [-1, 1]."""
+    if action_type == "continuous":
+        return continuous_moves(head, target, np.asarray(max_move))
+    return greedy_actions(head, target, table)
+
+
 __all__ = [
     "ACTION_NAMES_8WAY",
     "ActionType",
     "action_table",
     "check_actions",
     "check_continuous_actions",
+    "continuous_moves",
     "greedy_actions",
     "head_action_space",
     "head_moves",
+    "oracle_actions",
 ]

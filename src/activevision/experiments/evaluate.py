@@ -29,6 +29,7 @@ METRICS = {
     "entropy_regret": "mean",
     "regret_within": "proportion",  #: entropy regret <= REGRET_TOLERANCE
     "oscillating": "proportion",  #: ended, unsolved, swinging between two views
+    "head_travel": "mean",  #: degrees the head moved over the episode (pan-tilt Euclidean)
 }
 #: nats: a final view this close to the goal view's entropy counts as good as the goal
 REGRET_TOLERANCE = 0.25
@@ -114,7 +115,14 @@ def run_episode(
         "entropy_regret": regret,
         "regret_within": bool(regret <= REGRET_TOLERANCE),
         "oscillating": bool(not info["success"] and swinging(heads)),
+        "head_travel": head_travel_deg(heads),
     }
+
+
+def head_travel_deg(heads: Sequence[np.ndarray]) -> float:
+    """Degrees the head moved through ``heads`` (pan, tilt rad), step by step."""
+    moves = np.diff(np.asarray(heads, dtype=np.float64), axis=0)
+    return float(np.degrees(np.hypot(moves[:, 0], moves[:, 1])).sum()) if len(moves) else 0.0
 
 
 def swinging(heads: Sequence[np.ndarray], tol: float = 1e-9) -> bool:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from activevision.envs.actions import action_table, greedy_actions
+from activevision.envs.actions import action_table, continuous_moves, greedy_actions
 from activevision.envs.config import EnvConfig
 from activevision.envs.observations import IMAGE_KEY, Observation, flatten_vectors, vector_keys
 from activevision.envs.robots import RobotsConfig
@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     import torch
 
     from activevision.agents.student import StudentNetwork
+    from activevision.runtime import HeadCommand
 
 
 @dataclass(frozen=True)
@@ -54,7 +55,8 @@ class HeadPolicy(Protocol):
         """A new episode starts; ``rng`` is this episode's own generator."""
 
     def act(self, obs: Observation, info: dict) -> int | HeadTarget:
-        """The next discrete action, or a head target to jump to."""
+        """The next discrete action, or a head target to jump to (a continuous policy's
+        move: the head's angles plus the move)."""
 
 
 def greedy_action(head: ArrayLike, target: ArrayLike, table: np.ndarray) -> int:
@@ -170,7 +172,9 @@ class ScanPolicy:
 
 class LearnedPolicy:
     """A trained network: the greedy action on the observation (a Q-network on the camera
-    image, or a DAgger student on the image and the Dict observation's vectors)."""
+    image, or a DAgger student on the image and the Dict observation's vectors). A
+    continuous student (``max_move`` given) moves the head by its output times
+    ``max_move``, returned as a :class:`HeadTarget`."""
 
     name = "learned"
 
@@ -181,6 +185,7 @@ class LearnedPolicy:
         num_threads: int | None = 1,
         vector_keys: tuple[str, ...] = (),
         goal_evidence: GoalEvidence | None = None,
+        max_move: tuple[float, float] | None = None,
     ) -> None:
         import torch
 
@@ -196,6 +201,8 @@ class LearnedPolicy:
         self.takes_vector = getattr(q_network, "vector_size", None) is not None
         #: with a DAgger student that acts by its goal head (``dagger.act_by="goal"``)
         self.goal_evidence = goal_evidence
+        #: a continuous student's largest move (pan, tilt) rad; None: discrete actions
+        self.max_move = None if max_move is None else np.asarray(max_move, dtype=np.float64)
 
     @classmethod
     def from_run(
@@ -215,13 +222,16 @@ class LearnedPolicy:
             grid = LocalisationConfig().grid  # the candidate views the goal head names
             table = action_table(config.env.step_deg, config.env.action_set)
             evidence = GoalEvidence(1, grid.views, table)
-        return cls(load_policy(run_dir, weights=weights), device, num_threads, keys, evidence)
+        env = config.env
+        max_move = env.max_move if env.action_type == "continuous" else None
+        network = load_policy(run_dir, weights=weights)
+        return cls(network, device, num_threads, keys, evidence, max_move)
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         if self.goal_evidence is not None:
             self.goal_evidence.reset()
 
-    def act(self, obs: Observation, info: dict) -> int:
+    def act(self, obs: Observation, info: dict) -> int | HeadTarget:
         torch = self.torch
         with torch.inference_mode():
             if not self.takes_vector:
@@ -236,9 +246,16 @@ class LearnedPolicy:
                 torch.from_numpy(np.ascontiguousarray(image)[None]).to(self.device),
                 torch.from_numpy(vector[None]).to(self.device),
             )
+            head = np.asarray(info["head"], dtype=np.float64)[None]
+            if self.max_move is not None:
+                move = logits.cpu().numpy().astype(np.float64).clip(-1.0, 1.0)
+                if self.goal_evidence is not None and goal_logits is not None:
+                    target = self.goal_evidence.target(goal_logits.cpu().numpy(), np.zeros(1, int))
+                    move = continuous_moves(head, target, self.max_move)
+                pan, tilt = head[0] + move[0] * self.max_move
+                return HeadTarget(float(pan), float(tilt))
             if self.goal_evidence is None or goal_logits is None:
                 return int(logits.argmax(dim=1).item())
-            head = np.asarray(info["head"], dtype=np.float64)[None]
             return int(self.goal_evidence.act(goal_logits.cpu().numpy(), head, np.zeros(1, int))[0])
 
 
@@ -304,7 +321,13 @@ class OnnxPolicy:
     def reset(self, info: dict, rng: np.random.Generator) -> None:
         self.controller.reset()
 
-    def act(self, obs: Observation, info: dict) -> int:
+    def act(self, obs: Observation, info: dict) -> int | HeadTarget:
+        command = self._command(obs, info)
+        if self.controller.continuous:
+            return HeadTarget(command.target_pan, command.target_tilt)
+        return command.action
+
+    def _command(self, obs: Observation, info: dict) -> HeadCommand:
         pan, tilt = info["head"]
         if not isinstance(obs, dict):
             if self.controller.metadata.vector_keys:
@@ -312,7 +335,7 @@ class OnnxPolicy:
                     f"this policy observes {self.controller.metadata.observation!r}; play it on"
                     " an env with that observation (OnnxPolicy.env_config())"
                 )
-            return self.controller.act(obs[-1], pan, tilt).action
+            return self.controller.act(obs[-1], pan, tilt)
         inputs = self.controller.inputs
         pose = info["prior_pose"] if "pose" in inputs else None
         pose_error = info["prior_error"] if "pose_error" in inputs else None
@@ -321,4 +344,4 @@ class OnnxPolicy:
             p_pan, p_tilt, _, _, found = obs["proposal"]
             proposal = (p_pan, p_tilt) if found else (math.nan, math.nan)
         image = obs[IMAGE_KEY][-1]
-        return self.controller.act(image, pan, tilt, pose, proposal, pose_error=pose_error).action
+        return self.controller.act(image, pan, tilt, pose, proposal, pose_error=pose_error)

@@ -283,12 +283,21 @@ def _metadata_document(
     model_bytes: bytes,
     opset: int,
 ) -> dict[str, Any]:
+    continuous = bool(getattr(network, "continuous", False))
     derived = {
         "image_height": int(network.image_shape[0]),
         "image_width": int(network.image_shape[1]),
         "stack": _stack(network),
-        "n_actions": int(network.n_actions),
+        # a continuous policy outputs a move; its n_actions are the env's discrete table's
+        "n_actions": len(metadata.get("action_table_deg", ())) if continuous else network.n_actions,
     }
+    if continuous and (
+        metadata.get("action_type") != "continuous" or "max_move_deg" not in metadata
+    ):
+        raise ValueError(
+            "the network outputs continuous moves: metadata needs action_type='continuous'"
+            " and max_move_deg"
+        )
     for key in _DERIVED_KEYS:
         if key in metadata and metadata[key] != derived[key]:
             raise ValueError(
@@ -298,7 +307,7 @@ def _metadata_document(
         if key not in metadata:
             raise ValueError(f"metadata needs {key!r} (build it with policy_metadata())")
     rows = len(metadata["action_table_deg"])
-    if rows != network.n_actions:
+    if not continuous and rows != network.n_actions:
         raise ValueError(
             f"the action table has {rows} rows but the network has {network.n_actions} outputs"
         )

@@ -64,6 +64,9 @@ def export_run(
     metadata["observation"] = env.observation
     metadata["vector_keys"] = list(vector_keys(env))
     metadata["action_history"] = env.action_history
+    metadata["action_type"] = env.action_type
+    if env.action_type == "continuous":
+        metadata["max_move_deg"] = list(env.max_move_deg)
     config = load_config(config_path)
     if config.algo == "dagger":
         from activevision.localisation import LocalisationConfig

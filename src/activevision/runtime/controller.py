@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from activevision.runtime.goal_evidence import GoalEvidence
+from activevision.runtime.goal_evidence import GoalEvidence, continuous_moves
 from activevision.runtime.metadata import (
     CameraModel,
     PolicyFileError,
@@ -35,7 +35,9 @@ class CameraMismatchWarning(UserWarning):
 class HeadCommand(NamedTuple):
     """One decision of the policy. Angles in radians; pan positive left, tilt positive down."""
 
-    action: int  #: index of the chosen discrete action (row of the action table)
+    #: index of the chosen discrete action (row of the action table); -1 for a continuous
+    #: policy, whose move is ``(d_pan, d_tilt)``
+    action: int
     d_pan: float  #: the action's pan step
     d_tilt: float  #: the action's tilt step
     target_pan: float  #: current pan + d_pan, clipped to the head limits
@@ -73,7 +75,9 @@ class HeadController:
     Each :meth:`act` converts the camera frame to grey (ITU-R BT.601), resizes it to the
     policy's input size by area averaging (:mod:`activevision.runtime.preprocess`), pushes it
     onto the frame stack, runs the network and returns the head move with the highest
-    Q-value, plus the resulting joint targets clipped to the head limits.
+    Q-value, plus the resulting joint targets clipped to the head limits. A continuous policy
+    (policy.json's ``action_type``) outputs the move itself, a fraction of ``max_move`` on
+    each axis.
 
     Args:
         model_path: the exported ``policy.onnx``; its metadata is read from the ``.json``
@@ -148,6 +152,8 @@ class HeadController:
             self._outputs.append(meta.goal_output_name)
             self._evidence = GoalEvidence(1, meta.goal_views, meta.action_table)
         self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
+        continuous = meta.action_type == "continuous" and meta.max_move is not None
+        self._max_move = np.asarray(meta.max_move) if continuous else None
         self.last_q_values: np.ndarray | None = None
         self.last_goal_logits: np.ndarray | None = None
 
@@ -167,8 +173,14 @@ class HeadController:
     # ------------------------------------------------------------------ public API
     @property
     def n_actions(self) -> int:
-        """Number of discrete head actions."""
+        """Number of discrete head actions (of the action table; a continuous policy
+        outputs a move instead)."""
         return self.metadata.n_actions
+
+    @property
+    def continuous(self) -> bool:
+        """Whether the policy outputs a continuous move rather than an action index."""
+        return self._max_move is not None
 
     def reset(self) -> None:
         """Forget the frame stack and the remembered actions (call when the head was moved by
@@ -196,7 +208,8 @@ class HeadController:
 
     def q_values(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
         """Push ``frame`` onto the stack and return the policy's Q-values (a DAgger policy's
-        action logits), shape (A,), with the vector input of the last :meth:`act`."""
+        action logits; a continuous policy's move in [-1, 1]), shape (A,) or (2,), with the
+        vector input of the last :meth:`act`."""
         self.observe(frame, color_order)
         outputs = self._session.run(self._outputs, self._feed)
         q: np.ndarray = outputs[0][0]
@@ -235,7 +248,10 @@ class HeadController:
         """
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
         self._fill_vector(pan, tilt, pose, proposal, pose_error)
-        action = int(np.argmax(self.q_values(frame, color_order)))
+        scores = self.q_values(frame, color_order)
+        if self._max_move is not None:
+            return self._continuous_command(scores, pan, tilt)
+        action = int(np.argmax(scores))
         goal_logits = self.last_goal_logits
         if self._evidence is not None and goal_logits is not None:
             # move towards the goal view with the most evidence so far
@@ -247,6 +263,19 @@ class HeadController:
         d_pan, d_tilt = self._table[action]
         target_pan, target_tilt = self.metadata.head_limits.clip(pan + d_pan, tilt + d_tilt)
         return HeadCommand(action, d_pan, d_tilt, target_pan, target_tilt)
+
+    def _continuous_command(self, output: np.ndarray, pan: float, tilt: float) -> HeadCommand:
+        """The move of a continuous policy: its output, or with goal evidence the move
+        straight towards the best-supported view, times ``max_move``."""
+        assert self._max_move is not None
+        move = np.clip(np.asarray(output, dtype=np.float64), -1.0, 1.0)
+        goal_logits = self.last_goal_logits
+        if self._evidence is not None and goal_logits is not None:
+            target = self._evidence.target(goal_logits[None], np.zeros(1, int))
+            move = continuous_moves(np.array([[pan, tilt]]), target, self._max_move)[0]
+        d_pan, d_tilt = (float(v) for v in move * self._max_move)
+        target_pan, target_tilt = self.metadata.head_limits.clip(pan + d_pan, tilt + d_tilt)
+        return HeadCommand(-1, d_pan, d_tilt, target_pan, target_tilt)
 
     def _fill_vector(
         self,
@@ -340,8 +369,13 @@ class HeadController:
         elif len(inputs) != 1:
             raise mismatch(f"the model takes {list(inputs)} but the metadata lists no vector")
         out_shape = list(outputs[meta.output_name].shape)
-        if len(out_shape) != 2 or out_shape[1] != meta.n_actions:
-            raise mismatch(f"output shape {out_shape} but metadata lists {meta.n_actions} actions")
+        if len(out_shape) != 2 or out_shape[1] != meta.output_size:
+            what = (
+                "a continuous 2-axis move"
+                if meta.action_type == "continuous"
+                else f"{meta.n_actions} actions"
+            )
+            raise mismatch(f"output shape {out_shape} but metadata says {what}")
 
 
 def camera_mismatch_message(

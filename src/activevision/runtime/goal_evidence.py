@@ -24,6 +24,16 @@ def greedy_actions(head: np.ndarray, target: np.ndarray, table: np.ndarray) -> n
     return best
 
 
+def continuous_moves(head: np.ndarray, target: np.ndarray, max_move: np.ndarray) -> np.ndarray:
+    """(N, 2) continuous actions in [-1, 1]: the move from each of N heads ((N, 2) pan, tilt
+    rad) straight towards ``target``, each axis clipped to ``max_move`` (pan, tilt rad) and
+    divided by it (the continuous oracle; one step when the target is within reach)."""
+    reach = np.asarray(max_move, dtype=np.float64)
+    gap = np.asarray(target, dtype=np.float64) - np.asarray(head, dtype=np.float64)
+    moves: np.ndarray = np.clip(gap / reach, -1.0, 1.0)
+    return moves
+
+
 def log_softmax(logits: np.ndarray) -> np.ndarray:
     """Row-wise log-softmax, stable for large logits."""
     shifted = logits - logits.max(axis=-1, keepdims=True)
@@ -49,9 +59,13 @@ class GoalEvidence:
         """Slots ``slots`` start new episodes: no evidence yet."""
         self.evidence[slots] = 0.0
 
-    def act(self, goal_logits: np.ndarray, heads: np.ndarray, slots: np.ndarray) -> np.ndarray:
-        """Add this step's ``goal_logits`` (M, V) to slots ``slots`` (M,) and return their
-        greedy moves towards the best-supported view from ``heads`` (M, 2)."""
+    def target(self, goal_logits: np.ndarray, slots: np.ndarray) -> np.ndarray:
+        """Add this step's ``goal_logits`` (M, V) to slots ``slots`` (M,) and return the
+        best-supported view (M, 2) of each."""
         self.evidence[slots] += log_softmax(np.asarray(goal_logits, dtype=np.float64))
-        goals = self.views[np.argmax(self.evidence[slots], axis=1)]
-        return greedy_actions(heads, goals, self.table)
+        goals: np.ndarray = self.views[np.argmax(self.evidence[slots], axis=1)]
+        return goals
+
+    def act(self, goal_logits: np.ndarray, heads: np.ndarray, slots: np.ndarray) -> np.ndarray:
+        """:meth:`target`, then the greedy discrete moves towards it from ``heads`` (M, 2)."""
+        return greedy_actions(heads, self.target(goal_logits, slots), self.table)

@@ -46,6 +46,11 @@ their size and spacing), as ``typecheck.config_to_dict`` writes them. The runtim
 its shape (an object of objects whose values are finite numbers or ``[low, high]`` pairs) and
 hands it out as a plain dict (:attr:`PolicyMetadata.world`); ``activevision robustness`` builds
 the configs from it. Files written before it existed lack it (None: unknown).
+
+``action_type`` is ``"discrete"`` (absent in older files: the graph scores the rows of
+``action_table_deg``) or ``"continuous"``: the graph's output is one move ``(pan, tilt)`` in
+[-1, 1], scaled by ``max_move_deg`` (the largest move per decision on each axis, degrees).
+``action_table_deg`` is kept for the discrete moves the env also defines.
 """
 
 from __future__ import annotations
@@ -73,6 +78,8 @@ _HEAD_LIMIT_KEYS = ("pan_min", "pan_max", "tilt_min", "tilt_max")
 _HEAD_LIMIT_BOUNDS_DEG = {"pan_min": 180.0, "pan_max": 180.0, "tilt_min": 90.0, "tilt_max": 90.0}
 #: Largest head move one action may make (the env's step_deg is at most 30).
 MAX_MOVE_DEG = 30.0
+#: Largest continuous head move per decision (the env's max_move_deg is at most 90).
+MAX_CONTINUOUS_MOVE_DEG = 90.0
 #: Direction (sign of d_pan, sign of d_tilt) each named action must move: pan left +,
 #: tilt down + (activevision.geometry.camera).
 _ACTION_SIGNS = {
@@ -336,6 +343,10 @@ class PolicyMetadata:
     act_by: str = "action"
     goal_output_name: str | None = None
     goal_views: np.ndarray | None = field(default=None, repr=False)  #: (V, 2) rad
+    #: "discrete": the output scores the action table's rows; "continuous": it is the move
+    #: (pan, tilt) in [-1, 1], times ``max_move``
+    action_type: str = "discrete"
+    max_move: tuple[float, float] | None = None  #: continuous: the largest move (pan, tilt) rad
     #: the camera the policy was trained with (None: a policy.json from before it was kept)
     camera: CameraModel | None = None
     #: the world the policy was trained in, ``{"appearance": {factor: [low, high], ...},
@@ -354,6 +365,11 @@ class PolicyMetadata:
     def n_actions(self) -> int:
         """Number of discrete head actions (rows of the action table)."""
         return int(self.action_table.shape[0])
+
+    @property
+    def output_size(self) -> int:
+        """Length of the graph's action output: one score per action, or a 2-axis move."""
+        return 2 if self.action_type == "continuous" else self.n_actions
 
     @property
     def input_shape(self) -> tuple[int, int, int]:
@@ -388,6 +404,8 @@ class PolicyMetadata:
             act_by=read.act_by(),
             goal_output_name=read.optional_str("goal_output_name"),
             goal_views=read.goal_views(),
+            action_type=read.action_type(),
+            max_move=read.max_move(),
             camera=read.camera(),
             world=read.world(),
             raw=dict(values),
@@ -427,6 +445,29 @@ class _MetadataReader:
         if value == "goal" and not isinstance(self.values.get("goal_output_name"), str):
             raise self.fail("'act_by' is 'goal' but no 'goal_output_name' is given")
         return str(value)
+
+    def action_type(self) -> str:
+        value = self.values.get("action_type", "discrete")
+        if value not in ("discrete", "continuous"):
+            raise self.fail(f"'action_type' must be 'discrete' or 'continuous', got {value!r}")
+        return str(value)
+
+    def max_move(self) -> tuple[float, float] | None:
+        """The continuous move's scale (pan, tilt) rad; required with continuous actions."""
+        value = self.values.get("max_move_deg")
+        if value is None:
+            if self.values.get("action_type") == "continuous":
+                raise self.fail("'action_type' is 'continuous' but 'max_move_deg' is missing")
+            return None
+        numbers = [_real(v) for v in value] if isinstance(value, list) else []
+        if len(numbers) != 2 or not all(
+            n is not None and 0 < n <= MAX_CONTINUOUS_MOVE_DEG for n in numbers
+        ):
+            raise self.fail(
+                f"'max_move_deg' must be [pan, tilt] degrees in (0, {MAX_CONTINUOUS_MOVE_DEG:g}],"
+                f" got {value!r}"
+            )
+        return (math.radians(float(value[0])), math.radians(float(value[1])))
 
     def goal_views(self) -> np.ndarray | None:
         """(V, 2) candidate views in radians, required with ``act_by == "goal"``."""

@@ -151,7 +151,39 @@ class DaggerConfig:
             raise ValueError("DaggerConfig.act_by: 'goal' needs goal_class_weight > 0")
 
 
-Algorithm = typing.Literal["ddqn", "dagger"]
+@dataclass(frozen=True)
+class Sb3Config:
+    """Stable-Baselines3's learners (``algo`` "sac", "td3", "ppo"): what ``learner`` and
+    ``replay`` do not set. They take ``learner.learning_rate``, ``gamma``, ``batch_size``,
+    ``learning_starts``, ``train_freq``, ``gradient_steps`` and ``max_grad_norm`` (PPO) and
+    ``replay.buffer_size`` (SAC, TD3; SB3's uniform replay: it has no prioritised one).
+    "S": SB3's default; "T": tuned here."""
+
+    #: environments stepped together (SB3 DummyVecEnv; PPO collects n_steps from each) (T)
+    num_envs: int = field(default=4, metadata=_AT_LEAST_1)
+    tau: float = field(default=0.005, metadata=_FRACTION)  #: SAC/TD3 target update rate (S)
+    #: TD3: std of the Gaussian exploration noise on the action (fraction of the range) (S)
+    action_noise: float = field(default=0.1, metadata=_AT_LEAST_0)
+    n_steps: int = field(default=256, metadata=_AT_LEAST_1)  #: PPO rollout per env (T)
+    n_epochs: int = field(default=4, metadata=_AT_LEAST_1)  #: PPO epochs per rollout (T)
+    gae_lambda: float = field(default=0.95, metadata=_FRACTION)  #: PPO (S)
+    clip_range: float = field(default=0.2, metadata=_POSITIVE)  #: PPO (S)
+    ent_coef: float = field(default=0.0, metadata=_AT_LEAST_0)  #: PPO entropy bonus (S)
+    #: image average-pool factor of the shared CNN (the DAgger student's trunk) (T)
+    downsample: int = field(default=2, metadata=_range(1, 4))
+    #: hidden layer of the critic (and PPO's value head) after the CNN trunk (S: 256, 256)
+    critic_hidden: int = field(default=256, metadata=_AT_LEAST_1)
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+
+
+#: Stable-Baselines3's learners (``training.sb3_learners``)
+SB3_ALGORITHMS = ("sac", "td3", "ppo")
+#: SB3 keeps each transition's image twice (observation and next): 19 KB each at 160 x 120
+SB3_MAX_BUFFER = 200_000
+
+Algorithm = typing.Literal["ddqn", "dagger", "sac", "td3", "ppo"]
 
 
 @dataclass(frozen=True)
@@ -168,9 +200,12 @@ class TrainConfig:
     exploration: ExplorationConfig = field(default_factory=ExplorationConfig)
     replay: ReplayConfig = field(default_factory=ReplayConfig)
     run: RunConfig = field(default_factory=RunConfig)
-    #: "ddqn": the paper's DDQN + PER; "dagger": imitation of the oracle (``dagger``)
+    #: "ddqn": the paper's DDQN + PER; "dagger": imitation of the oracle (``dagger``);
+    #: "sac", "td3", "ppo": Stable-Baselines3's (``sb3``; continuous actions, PPO also
+    #: discrete)
     algo: Algorithm = "ddqn"
     dagger: DaggerConfig = field(default_factory=DaggerConfig)
+    sb3: Sb3Config = field(default_factory=Sb3Config)
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
@@ -180,10 +215,31 @@ class TrainConfig:
             raise ValueError("TrainConfig.algo: 'dagger' needs ActiveVision-v0 (its oracle)")
         if self.algo == "dagger" and self.env.frame_stack != 1:
             raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")
+        if self.algo == "ddqn" and self.env.action_type == "continuous":
+            raise ValueError(
+                "TrainConfig.env.action_type: DDQN learns discrete actions; train continuous"
+                " head control with algo='dagger', 'sac', 'td3' or 'ppo'"
+            )
+        if self.algo in SB3_ALGORITHMS:
+            self._check_sb3()
         if self.algo == "ddqn" and self.env.observation != "image":
             raise ValueError(
                 "TrainConfig.env.observation: the DDQN learner takes images only; train Dict"
-                " observations with algo='dagger'"
+                " observations with algo='dagger', 'sac', 'td3' or 'ppo'"
+            )
+
+    def _check_sb3(self) -> None:
+        if self.env_id != "ActiveVision-v0":
+            raise ValueError(f"TrainConfig.algo: {self.algo!r} trains on ActiveVision-v0")
+        if self.env.frame_stack != 1:
+            raise ValueError(f"TrainConfig.algo: {self.algo!r} takes env.frame_stack=1")
+        if self.algo in ("sac", "td3") and self.env.action_type != "continuous":
+            raise ValueError(f"TrainConfig.algo: {self.algo!r} needs env.action_type='continuous'")
+        if self.algo in ("sac", "td3") and self.replay.buffer_size > SB3_MAX_BUFFER:
+            raise ValueError(
+                f"TrainConfig.replay.buffer_size: {self.algo!r} keeps every image twice"
+                f" (~40 KB a transition); at most {SB3_MAX_BUFFER}, got"
+                f" {self.replay.buffer_size} (e.g. --set replay.buffer_size=50000)"
             )
 
     def replace(self, **changes: Any) -> TrainConfig:
@@ -204,7 +260,7 @@ class TrainConfig:
         return config_from_dict(cls, values)
 
 
-SECTIONS = ("env", "learner", "exploration", "replay", "run", "dagger")
+SECTIONS = ("env", "learner", "exploration", "replay", "run", "dagger", "sb3")
 
 
 def field_paths() -> dict[str, str]:

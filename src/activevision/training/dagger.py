@@ -10,6 +10,11 @@ true goal) and the goal view's index. Then ``updates_per_rollout`` minibatches a
 all states so far: cross-entropy on the teacher's action, plus ``goal_class_weight`` times
 cross-entropy on the goal view (40 classes).
 
+With ``env.action_type="continuous"`` the teacher's action is the move straight to the goal,
+clipped to ``env.max_move_deg`` (``envs.actions.oracle_actions``), and the student regresses
+it (squared error on its tanh output); acting by goal evidence, it moves straight towards the
+best-supported view.
+
 The dataset keeps *states* (pose, head, ball, the observation's vector), not images: each
 minibatch is rendered on the fly by the exact renderer (about 30,000 frames/s), so a million
 states take ~200 MB and a checkpoint stores them whole.
@@ -37,7 +42,8 @@ from gymnasium.utils import seeding
 from torch.nn import functional as F
 
 from activevision.agents.student import StudentNetwork
-from activevision.envs.actions import greedy_actions
+from activevision.envs.actions import oracle_actions
+from activevision.envs.config import EnvConfig
 from activevision.envs.observations import (
     ObservationBuilder,
     vector_keys,
@@ -63,7 +69,12 @@ class StateDataset:
     """A ring buffer of labelled states (no images)."""
 
     def __init__(
-        self, capacity: int, vector_size: int, look_size: int = 0, robots: int = 0
+        self,
+        capacity: int,
+        vector_size: int,
+        look_size: int = 0,
+        robots: int = 0,
+        continuous: bool = False,
     ) -> None:
         self.capacity = capacity
         self.arrays: dict[str, np.ndarray] = {
@@ -71,7 +82,12 @@ class StateDataset:
             "head": np.zeros((capacity, 2)),
             "ball": np.zeros((capacity, 2)),
             "vector": np.zeros((capacity, vector_size), dtype=np.float32),
-            "action": np.zeros(capacity, dtype=np.int64),
+            # the teacher's action: an index, or a continuous move (pan, tilt) in [-1, 1]
+            "action": (
+                np.zeros((capacity, 2), dtype=np.float32)
+                if continuous
+                else np.zeros(capacity, dtype=np.int64)
+            ),
             "goal": np.zeros(capacity, dtype=np.int64),
         }
         # a randomised world: each state's look and other robots, to render it again
@@ -136,6 +152,7 @@ class DaggerTrainer:
         cfg, dag = config.env, config.dagger
         self.sim = EpisodeBatch(cfg, dag.num_envs)
         self.n_actions = len(self.sim.actions)
+        self.continuous = cfg.action_type == "continuous"
         self.keys = vector_keys(cfg)
         self.observations = ObservationBuilder(cfg, dag.num_envs, self.n_actions)
         trainer_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(2)
@@ -144,11 +161,12 @@ class DaggerTrainer:
         with torch.random.fork_rng(devices=[]):
             torch.manual_seed(int(init_seed))
             self.network = StudentNetwork(
-                self.n_actions,
+                2 if self.continuous else self.n_actions,
                 vector_size,
                 (cfg.camera.height, cfg.camera.width),
                 dag.downsample,
                 n_goals=len(self.sim.localisation.grid) if dag.goal_class_weight > 0 else 0,
+                continuous=self.continuous,
             )
         self.network.to(self.device)
         self.optimizer = torch.optim.Adam(
@@ -160,6 +178,7 @@ class DaggerTrainer:
             vector_size,
             look_size=len(LOOK_FIELDS) if env.appearance.enabled else 0,
             robots=env.robots.max_count,
+            continuous=self.continuous,
         )
         self.evidence = self._goal_evidence(dag.num_envs)
         self.run_dir.mkdir(parents=True, exist_ok=True)
@@ -225,7 +244,9 @@ class DaggerTrainer:
         beta = self._round_share = self.teacher_share
 
         def choose(idx: np.ndarray, image: np.ndarray, vector: np.ndarray) -> np.ndarray:
-            teacher = greedy_actions(sim.head[idx], sim.goal[idx], sim.actions)
+            teacher = oracle_actions(
+                sim.head[idx], sim.goal[idx], sim.cfg.action_type, sim.actions, sim.cfg.max_move
+            )
             world: dict[str, np.ndarray] = {}
             looks = sim.frame_looks(idx)
             if looks is not None:
@@ -245,6 +266,8 @@ class DaggerTrainer:
             # the student sees every frame (its goal evidence must), even where it does not act
             student = self.act(image, vector, idx, self.evidence)
             self.step += len(idx)
+            if self.continuous:
+                use_teacher = use_teacher[:, None]
             return np.where(use_teacher, teacher, student)
 
         play_episodes(sim, self.observations, self.evidence, seeds, choose, self._end_episode)
@@ -258,17 +281,9 @@ class DaggerTrainer:
         sim: EpisodeBatch | None = None,
     ) -> np.ndarray:
         """The student's actions for slots ``slots`` of ``sim`` (default: the training
-        batch): its action head's argmax, or with ``evidence`` the move its goal evidence
-        picks."""
-        with torch.inference_mode():
-            logits, goal_logits = self.network.forward_with_goal(
-                torch.from_numpy(image).to(self.device), torch.from_numpy(vector).to(self.device)
-            )
-        if evidence is None or goal_logits is None:
-            actions: np.ndarray = logits.argmax(dim=1).cpu().numpy()
-            return actions
-        heads = (sim or self.sim).head[slots]
-        return evidence.act(goal_logits.cpu().numpy(), heads, slots)
+        batch): see :func:`student_actions`."""
+        sim = sim or self.sim
+        return student_actions(self.network, self.device, image, vector, sim, slots, evidence)
 
     def _end_episode(self, i: int) -> None:
         sim = self.sim
@@ -292,7 +307,11 @@ class DaggerTrainer:
         image = torch.from_numpy(images[:, None]).to(self.device)
         vector = torch.from_numpy(data["vector"][b]).to(self.device)
         logits, goal_logits = self.network.forward_with_goal(image, vector)
-        loss = F.cross_entropy(logits, torch.from_numpy(data["action"][b]).to(self.device))
+        teacher = torch.from_numpy(data["action"][b]).to(self.device)
+        if self.continuous:
+            loss = F.mse_loss(logits, teacher)
+        else:
+            loss = F.cross_entropy(logits, teacher)
         if goal_logits is not None:
             goal = torch.from_numpy(data["goal"][b]).to(self.device)
             loss = loss + self.config.dagger.goal_class_weight * F.cross_entropy(goal_logits, goal)
@@ -335,6 +354,7 @@ class DaggerTrainer:
             "action_history": cfg.action_history,
             "vector_keys": list(self.keys),
             "act_by": self.config.dagger.act_by,
+            "max_move_deg": list(cfg.max_move_deg),
             "goal_views_deg": np.degrees(grid.views).tolist(),
             "step": self.step,
         }
@@ -445,7 +465,8 @@ def play_episodes(
         idx = np.flatnonzero(active)
         image = sim.render(idx)[:, None]
         vector = observations.vectors(sim)[idx]
-        actions = np.zeros(sim.n, dtype=np.int64)
+        continuous = sim.cfg.action_type == "continuous"
+        actions = np.zeros((sim.n, 2) if continuous else sim.n, np.float64 if continuous else int)
         actions[idx] = choose(idx, image, vector)
         observations.record(actions[idx], idx)
         _, terminated, _, _ = sim.step(actions, active=active)
@@ -457,13 +478,54 @@ def play_episodes(
             return
 
 
+def student_actions(
+    network: StudentNetwork,
+    device: torch.device,
+    image: np.ndarray,
+    vector: np.ndarray,
+    sim: EpisodeBatch,
+    slots: np.ndarray,
+    evidence: GoalEvidence | None = None,
+) -> np.ndarray:
+    """A student's greedy actions for slots ``slots`` of ``sim`` from their images and
+    vectors: the argmax of its action head (a continuous student: its move), or with
+    ``evidence`` the oracle's move towards the view its summed goal evidence picks."""
+    with torch.inference_mode():
+        logits, goal_logits = network.forward_with_goal(
+            torch.from_numpy(image).to(device), torch.from_numpy(vector).to(device)
+        )
+    continuous = sim.cfg.action_type == "continuous"
+    if evidence is None or goal_logits is None:
+        if continuous:
+            moves: np.ndarray = logits.cpu().numpy().astype(np.float64).clip(-1.0, 1.0)
+            return moves
+        actions: np.ndarray = logits.argmax(dim=1).cpu().numpy()
+        return actions
+    target = evidence.target(goal_logits.cpu().numpy(), slots)
+    return oracle_actions(
+        sim.head[slots], target, sim.cfg.action_type, sim.actions, sim.cfg.max_move
+    )
+
+
 def greedy_student_episodes(trainer: DaggerTrainer, seeds: Sequence[int]) -> list[dict[str, float]]:
-    """One greedy episode of the student from each seed (each equal to
-    ``ActiveVision-v0`` reset with that seed), played as one batch."""
-    cfg = trainer.config.env
-    sim = EpisodeBatch(cfg, len(seeds))
-    observations = ObservationBuilder(cfg, len(seeds), trainer.n_actions)
+    """One greedy episode of the DAgger student from each seed (see :func:`play_greedy`)."""
     evidence = trainer._goal_evidence(len(seeds))
+    return play_greedy(trainer.network, trainer.device, trainer.config.env, seeds, evidence)
+
+
+def play_greedy(
+    network: StudentNetwork,
+    device: torch.device,
+    cfg: EnvConfig,
+    seeds: Sequence[int],
+    evidence: GoalEvidence | None = None,
+) -> list[dict[str, float]]:
+    """One greedy episode of ``network`` from each seed (each equal to ``ActiveVision-v0``
+    with ``cfg`` reset with that seed), played as one batch; an ``episodes.csv``-style
+    record each."""
+    sim = EpisodeBatch(cfg, len(seeds))
+    n_actions = len(sim.actions)
+    observations = ObservationBuilder(cfg, len(seeds), n_actions)
     records: list[dict[str, float]] = [{} for _ in seeds]
 
     def record(i: int) -> None:
@@ -476,7 +538,9 @@ def greedy_student_episodes(trainer: DaggerTrainer, seeds: Sequence[int]) -> lis
         observations,
         evidence,
         seeds,
-        lambda idx, image, vector: trainer.act(image, vector, idx, evidence, sim),
+        lambda idx, image, vector: student_actions(
+            network, device, image, vector, sim, idx, evidence
+        ),
         record,
     )
     return records

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from activevision.envs.actions import ActionType
 from activevision.envs.config import EnvConfig, ObservationKind
 from activevision.envs.robots import RobotsConfig
 from activevision.rendering.appearance import AppearanceConfig
@@ -46,6 +47,7 @@ def dagger(
     prior_error_range: tuple[float, float] | None = None,
     eval_episodes: int = 300,
     robust: bool = False,
+    action_type: ActionType = "discrete",
 ) -> TrainConfig:
     """DAgger on ``observation``: batch 256 at a learning rate of 1e-3 (tuned here), 64
     episodes a round, 16 updates after each (about 20 states per update), validated four
@@ -53,7 +55,9 @@ def dagger(
     tell when it undoes its own move. With ``prior_error_range`` the prior's error is drawn
     per episode, so the student learns when to trust it. ``robust``: every appearance
     factor randomised at its robust range and 0-4 other robots on the field (domain
-    randomisation; ``rendering.appearance``, ``envs.robots``)."""
+    randomisation; ``rendering.appearance``, ``envs.robots``). ``action_type="continuous"``:
+    moves of up to 10 degrees per axis regressed on the oracle's (no action history: it
+    holds discrete actions)."""
     env = EnvConfig(
         observation=observation,
         prior_error_range=prior_error_range,
@@ -61,7 +65,8 @@ def dagger(
         # 0-2 m/rad never learns to follow a prior it can trust (README: 33% against
         # 96% goal reached at e = 0)
         prior_exact_share=0.5 if prior_error_range is not None else 0.0,
-        action_history=2 if observation != "image" else 0,  # the Box has no room
+        action_history=2 if observation != "image" and action_type == "discrete" else 0,
+        action_type=action_type,
     )
     if robust:
         env = env.replace(
@@ -137,6 +142,13 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         "DAgger on the image alone (the paper's input)",
     ),
     "dagger_head": (lambda: dagger("image+head", 400_000), "DAgger on the image + head angles"),
+    # continuous head control (the paper's future work): moves of up to 10 degrees, so an
+    # episode takes about a third of the steps; 200,000 steps make about as many updates as
+    # dagger_head's 400,000 (README: continuous head control)
+    "dagger_head_continuous": (
+        lambda: dagger("image+head", 200_000, action_type="continuous"),
+        "dagger_head with continuous moves of up to 10 degrees a step",
+    ),
     "dagger_prior": (
         lambda: dagger("image+head+pose+proposal", 400_000, (0.0, 2.0)),
         "DAgger on image, head, a prior pose 0-2 m/rad off and its proposal",

@@ -371,13 +371,18 @@ def train(
     loggers: Sequence[Logger] | None = None,
 ) -> list[dict[str, float]]:
     """Train a fresh run to ``config.run.total_timesteps``; returns the per-epoch metrics.
-    A config with ``algo="dagger"`` is trained by :mod:`activevision.training.dagger`."""
+    A config with ``algo="dagger"`` is trained by :mod:`activevision.training.dagger`, one
+    with "sac", "td3" or "ppo" by :mod:`activevision.training.sb3_learners`."""
+    if config.algo != "ddqn" and (env_factory is not None or aux_target is not None):
+        raise ValueError(f"algo={config.algo!r} trains on ActiveVision-v0 itself: no env_factory")
     if config.algo == "dagger":
         from activevision.training.dagger import train_dagger
 
-        if env_factory is not None or aux_target is not None:
-            raise ValueError("algo='dagger' trains on ActiveVision-v0 itself: no env_factory")
         return train_dagger(config, run_dir, loggers=loggers)
+    if config.algo != "ddqn":
+        from activevision.training.sb3_learners import train_sb3  # SB3 loads only here
+
+        return train_sb3(config, run_dir, loggers=loggers)
     trainer = Trainer(config, run_dir, env_factory, aux_target=aux_target, loggers=loggers)
     try:
         return trainer.train()

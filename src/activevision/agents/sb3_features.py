@@ -1,0 +1,109 @@
+"""The DAgger student's trunk as a Stable-Baselines3 features extractor, and its actors
+turned back into :class:`~activevision.agents.student.StudentNetwork` s.
+
+Every SB3 learner here (SAC, TD3, PPO) sees the observation through
+:class:`StudentFeatures`: the paper's CNN on a 2 x 2-averaged image, plus an MLP on the Dict
+observation's vectors, fused to 256 features. Its actor has no hidden layer of its own
+(``net_arch`` ``pi=[]``), so the actor is exactly a ``StudentNetwork``: trunk, then one
+linear layer squashed to [-1, 1] (tanh for SAC and TD3; PPO's Gaussian mean, clipped as
+SB3 clips it). :func:`actor_network` copies those weights into one, so an SB3 run writes
+the same policy files, validates with the same batched episodes and exports to the same
+torch-free ONNX runtime as a DAgger run.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import torch
+from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
+from torch import nn
+
+from activevision.agents.student import StudentNetwork
+
+IMAGE_KEY = "image"  #: the Dict observation's image (``envs.observations.IMAGE_KEY``)
+
+
+class StudentFeatures(BaseFeaturesExtractor):
+    """(B, 256) features of SB3's preprocessed observation: a uint8 image Box (scaled to
+    [0, 1] by SB3), or a Dict of that image and float vectors, concatenated in
+    ``vector_keys`` order (the order ``envs.observations`` lays them out)."""
+
+    def __init__(
+        self,
+        observation_space: gym.Space[Any],
+        vector_keys: tuple[str, ...] = (),
+        downsample: int = 2,
+    ) -> None:
+        if isinstance(observation_space, gym.spaces.Dict):
+            image_space = observation_space[IMAGE_KEY]
+            sizes = [math.prod(observation_space[k].shape or ()) for k in vector_keys]
+        else:
+            image_space, sizes = observation_space, []
+        if image_space.shape is None or len(image_space.shape) != 3 or image_space.shape[0] != 1:
+            raise ValueError(f"need a (1, H, W) image observation, got {image_space}")
+        height, width = image_space.shape[1:]
+        trunk = StudentNetwork(0, sum(sizes), (height, width), downsample)
+        super().__init__(observation_space, features_dim=trunk.sizes[2])
+        self.vector_keys = tuple(vector_keys)
+        self.trunk = trunk
+
+    def forward(self, observations: Any) -> torch.Tensor:
+        if isinstance(observations, dict):
+            image = observations[IMAGE_KEY]
+            vector = (
+                torch.cat([observations[k].flatten(1) for k in self.vector_keys], dim=1)
+                if self.vector_keys
+                else None
+            )
+        else:
+            image, vector = observations, None
+        return self.trunk.hidden(image, vector)
+
+
+def actor_network(model: Any, n_actions: int) -> StudentNetwork:
+    """A CPU copy of an SB3 model's deterministic actor as a ``StudentNetwork``: SAC's
+    ``tanh(mu)``, TD3's ``tanh(mu)``, PPO's clipped Gaussian mean (continuous) or action
+    logits (discrete, ``n_actions`` of them)."""
+    from stable_baselines3 import PPO, SAC, TD3
+
+    if isinstance(model, SAC):
+        features, head, squash = model.actor.features_extractor, model.actor.mu, "tanh"
+        _check_empty(model.actor.latent_pi, "SAC")
+    elif isinstance(model, TD3):
+        features, head, squash = model.actor.features_extractor, model.actor.mu[0], "tanh"
+        if len(model.actor.mu) != 2:
+            raise ValueError("TD3's actor has hidden layers: build it with net_arch pi=[]")
+    elif isinstance(model, PPO):
+        policy = model.policy
+        features, head, squash = policy.pi_features_extractor, policy.action_net, "clip"
+        _check_empty(policy.mlp_extractor.policy_net, "PPO")
+    else:
+        raise TypeError(f"not a Stable-Baselines3 SAC, TD3 or PPO model: {type(model).__name__}")
+    if not isinstance(features, StudentFeatures) or not isinstance(head, nn.Linear):
+        raise ValueError("the model was not built with StudentFeatures and a linear actor")
+    trunk = features.trunk
+    continuous = isinstance(model.action_space, gym.spaces.Box)
+    network = StudentNetwork(
+        2 if continuous else n_actions,
+        trunk.vector_size,
+        trunk.image_shape,
+        trunk.downsample,
+        continuous=continuous,
+        squash=squash,
+    )
+    weights = {k: v.detach().cpu() for k, v in trunk.state_dict().items()}
+    weights["logits.weight"] = head.weight.detach().cpu()
+    weights["logits.bias"] = head.bias.detach().cpu()
+    network.load_state_dict(weights)
+    return network.eval()
+
+
+def _check_empty(layers: nn.Module, name: str) -> None:
+    if any(True for _ in layers.parameters()):
+        raise ValueError(f"{name}'s actor has hidden layers: build it with net_arch pi=[]")
+
+
+__all__ = ["StudentFeatures", "actor_network"]
