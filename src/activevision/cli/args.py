@@ -157,11 +157,13 @@ def add_overwrite(parser: argparse.ArgumentParser) -> None:
 
 
 def env_config_of_run(run_dir: Path | None) -> EnvConfig:
-    """The EnvConfig a run trained on (its config.json), else the paper's default."""
+    """The EnvConfig a run trained on (its config.json), else the paper's default. Its
+    actions are the paper's discrete ones: a continuous policy moves by head targets
+    (``HeadTarget``), so every method plays the same env."""
     from activevision.envs import EnvConfig
 
     if run_dir is None:
         return EnvConfig()
     from activevision.training.config import load_config
 
-    return load_config(run_dir / "config.json").env
+    return load_config(run_dir / "config.json").env.replace(action_type="discrete")

@@ -43,6 +43,34 @@ def _policies(
     return {name: make_policy(name, error, env_config, args.run, args.weights) for name in names}
 
 
+def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolicy]:
+    """``--runs``: each run's learned policy, as method ``learned:NAME`` (NAME: its
+    directory). Each must observe a subset of what the comparison's env gives (``--run``'s,
+    or the paper's image); a continuous policy plays the same env, moving by head targets."""
+    from activevision.envs.observations import vector_keys
+    from activevision.experiments.policies import LearnedPolicy
+
+    policies: dict[str, HeadPolicy] = {}
+    for run in args.runs or []:
+        other = env_config_of_run(run)
+        given, wanted = vector_keys(env_config), vector_keys(other)
+        if (other.observation == "image") != (env_config.observation == "image") or not set(
+            wanted
+        ) <= set(given):
+            raise ValueError(
+                f"--runs {run} observes {other.observation!r} ({', '.join(wanted) or 'image'}),"
+                f" which the comparison's env ({env_config.observation!r}, from --run) does not"
+                " give: compare runs that observe the same inputs"
+            )
+        name = f"learned:{run.name}"
+        if name in policies:
+            raise ValueError(f"--runs names two runs {run.name!r}: rename one directory")
+        policy = LearnedPolicy.from_run(run, weights=args.weights)
+        policy.name = name
+        policies[name] = policy
+    return policies
+
+
 def cmd_evaluate(args: argparse.Namespace) -> None:
     """Fixed-seed evaluation of every method: table, CSV and JSON."""
     from activevision.envs import ActiveVisionEnv
@@ -65,6 +93,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     env_config = config_at_error(env_config_of_run(args.run), args.error)
     names = args.methods or runnable_methods(_compare_method_names(), args.run)
     policies = _policies(names, args, env_config, args.error)
+    policies.update(_more_runs(args, env_config))
     shipped = policies.get("shipped")
     if args.run is None and isinstance(shipped, OnnxPolicy):
         # every method plays the shipped policy's observation (the others read only info)
@@ -73,11 +102,11 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     summaries, episodes, latency = {}, [], {}
     for name, policy in policies.items():
         records, summary, lat = evaluate_policy(
-            policy, args.episodes, args.seed, env=env, measure_latency=name == "learned"
+            policy, args.episodes, args.seed, env=env, measure_latency=name.startswith("learned")
         )
         summaries[name] = summary
         episodes += [{"method": name, **r} for r in records]
-        if lat:
+        if lat and not latency:
             latency = latency_summary(lat)
     print(format_table(summaries))
     if latency:
@@ -107,6 +136,8 @@ def cmd_compare(args: argparse.Namespace) -> None:
     if args.overwrite:
         (out / "compare.csv").unlink(missing_ok=True)
     env_config = env_config_of_run(args.run)
+    if args.ray and args.runs:
+        raise ValueError("--runs plays in this process: leave out --ray")
     if args.ray:
         from activevision.scaleout.compare import compare_ray, default_method_names
 
@@ -131,6 +162,8 @@ def cmd_compare(args: argparse.Namespace) -> None:
         methods = default_methods(env_config, learned)
         if args.methods:
             methods = {k: v for k, v in methods.items() if k in args.methods}
+        for name, policy in _more_runs(args, env_config).items():
+            methods[name] = lambda e, policy=policy: policy
         compare(out, methods, args.errors, args.episodes, args.seed, env_config)
     plot_compare(out / "compare.csv", out / "compare.png")
     print(f"wrote {out}/compare.csv and compare.png")
@@ -167,12 +200,24 @@ def _add_common(p: argparse.ArgumentParser, run_help: str) -> None:
     p.add_argument("--seed", type=seed, default=0)
 
 
+def _add_runs(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--runs",
+        nargs="+",
+        type=Path,
+        metavar="RUN",
+        help="more training runs, each scored as method learned:NAME on the same episodes"
+        " (e.g. a discrete and a continuous policy side by side)",
+    )
+
+
 def add_parsers(sub: Any) -> None:
     method = choice_list(_method_names)
     p = sub.add_parser("evaluate", help="score methods on fixed-seed episodes")
     p.set_defaults(func=cmd_evaluate)
     _add_common(p, "a training run: adds the learned policy")
     p.add_argument("--methods", nargs="+", type=method, help=" ".join(_method_names()))
+    _add_runs(p)
     p.add_argument("--episodes", type=positive_int, default=100)
     p.add_argument(
         "--error",
@@ -192,6 +237,7 @@ def add_parsers(sub: Any) -> None:
         type=choice_list(_compare_method_names),
         help=" ".join(_compare_method_names()),
     )
+    _add_runs(p)
     p.add_argument(
         "--errors", type=error_levels, default="0:2:0.25", help="start:stop:step or a,b,c"
     )

@@ -1,0 +1,95 @@
+"""Continuous head control from the command line: ``train --algo sac|td3|ppo|dagger`` with
+continuous moves, ``--resume``, ``export``, and a discrete and a continuous policy scored on
+the same episodes by ``evaluate`` and ``compare --runs``."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from activevision.cli import main
+
+TINY = [
+    "--set",
+    "env.action_type=continuous",
+    "--set",
+    "epoch_steps=40",
+    "--set",
+    "checkpoint_interval=40",
+    "--set",
+    "tensorboard=false",
+    "--set",
+    "num_threads=1",
+    "--set",
+    "replay.buffer_size=500",
+    "--set",
+    "learning_starts=20",
+    "--set",
+    "batch_size=8",
+    "--set",
+    "sb3.num_envs=2",
+    "--set",
+    "sb3.n_steps=20",
+    "--set",
+    "dagger.num_envs=8",
+    "--set",
+    "dagger.updates_per_rollout=1",
+]
+
+
+@pytest.fixture(scope="module")
+def continuous_run(tmp_path_factory):
+    """A tiny continuous DAgger run on the paper's image (the discrete ``trained`` run's)."""
+    run = tmp_path_factory.mktemp("runs") / "cont"
+    args = ["train", "--algo", "dagger", "--set", "env.action_history=0", *TINY]
+    assert main([*args, "--steps", "80", "--out", str(run)]) == 0
+    return run
+
+
+@pytest.mark.parametrize("algo", ["sac", "td3", "ppo"])
+def test_sb3_learners_train_resume_and_export(algo, tmp_path, capsys):
+    run = tmp_path / algo
+    base = ["train", "--algo", algo, *TINY, "--set", "env.observation=image+head"]
+    assert main([*base, "--steps", "80", "--out", str(run)]) == 0
+    # a finished run stays finished; a longer one resumes from its newest checkpoint
+    config = json.loads((run / "config.json").read_text())
+    assert config["algo"] == algo and config["env"]["action_type"] == "continuous"
+    with (run / "metrics.csv").open() as f:
+        assert [int(r["step"]) for r in csv.DictReader(f)][0] == 40
+    assert main(["export", str(run)]) == 0
+    meta = json.loads((run / "policy.json").read_text())
+    assert meta["action_type"] == "continuous" and meta["vector_keys"] == ["head"]
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_evaluate_and_compare_score_discrete_and_continuous_side_by_side(
+    trained, continuous_run, tmp_path
+):
+    out = tmp_path / "eval"
+    args = ["evaluate", "--run", str(trained), "--runs", str(continuous_run)]
+    assert main([*args, "--methods", "learned", "scan", "--episodes", "6", "--out", str(out)]) == 0
+    with (out / "evaluation.csv").open() as f:
+        rows = {r["method"]: r for r in csv.DictReader(f)}
+    assert set(rows) == {"learned", "scan", "learned:cont"}
+    with (out / "episodes.csv").open() as f:
+        travel = [(r["method"], float(r["head_travel"])) for r in csv.DictReader(f)]
+    # the continuous policy moves by any amount up to 10 degrees on each axis, not in the
+    # discrete policies' 3-degree steps
+    assert any(1e-3 < t % 3 < 3 - 1e-3 for m, t in travel if m == "learned:cont")
+    compare_out = tmp_path / "cmp"
+    args = ["compare", "--runs", str(continuous_run), "--methods", "scan", "--errors", "0"]
+    assert main([*args, "--episodes", "4", "--out", str(compare_out)]) == 0
+    with (compare_out / "compare.csv").open() as f:
+        methods = [r["method"] for r in csv.DictReader(f)]
+    assert methods == ["scan", "learned:cont"]
+
+
+def test_runs_observing_what_the_env_does_not_give_are_refused(trained, tmp_path, one_clear_line):
+    run = tmp_path / "head"
+    args = ["train", "--algo", "dagger", "--set", "env.observation=image+head", *TINY]
+    assert main([*args, "--set", "env.action_history=0", "--steps", "40", "--out", str(run)]) == 0
+    evaluate = ["evaluate", "--run", str(trained), "--runs", str(run), "--episodes", "2"]
+    assert main([*evaluate, "--out", str(tmp_path / "e")]) == 2
+    one_clear_line("--runs", "observes 'image+head'")
