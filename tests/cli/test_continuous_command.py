@@ -53,11 +53,13 @@ def test_sb3_learners_train_resume_and_export(algo, tmp_path, capsys):
     run = tmp_path / algo
     base = ["train", "--algo", algo, *TINY, "--set", "env.observation=image+head"]
     assert main([*base, "--steps", "80", "--out", str(run)]) == 0
-    # a finished run stays finished; a longer one resumes from its newest checkpoint
     config = json.loads((run / "config.json").read_text())
     assert config["algo"] == algo and config["env"]["action_type"] == "continuous"
     with (run / "metrics.csv").open() as f:
-        assert [int(r["step"]) for r in csv.DictReader(f)][0] == 40
+        assert next(int(r["step"]) for r in csv.DictReader(f)) == 40
+    # --resume reopens it from its newest checkpoint (tests/training: resuming mid-run)
+    assert main(["train", "--resume", str(run)]) == 0
+    assert "is finished" in capsys.readouterr().out
     assert main(["export", str(run)]) == 0
     meta = json.loads((run / "policy.json").read_text())
     assert meta["action_type"] == "continuous" and meta["vector_keys"] == ["head"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -99,7 +100,8 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         # every method plays the shipped policy's observation (the others read only info)
         env_config = config_at_error(shipped.env_config(env_config), args.error)
     env = ActiveVisionEnv(env_config)
-    summaries, episodes, latency = {}, [], {}
+    summaries, episodes = {}, []
+    latency: dict[str, float] = {}
     for name, policy in policies.items():
         records, summary, lat = evaluate_policy(
             policy, args.episodes, args.seed, env=env, measure_latency=name.startswith("learned")
@@ -163,7 +165,7 @@ def cmd_compare(args: argparse.Namespace) -> None:
         if args.methods:
             methods = {k: v for k, v in methods.items() if k in args.methods}
         for name, policy in _more_runs(args, env_config).items():
-            methods[name] = lambda e, policy=policy: policy
+            methods[name] = functools.partial(_same, policy)
         compare(out, methods, args.errors, args.episodes, args.seed, env_config)
     plot_compare(out / "compare.csv", out / "compare.png")
     print(f"wrote {out}/compare.csv and compare.png")
@@ -198,6 +200,11 @@ def _add_common(p: argparse.ArgumentParser, run_help: str) -> None:
     p.add_argument("--run", type=Path, help=run_help)
     add_weights(p)
     p.add_argument("--seed", type=seed, default=0)
+
+
+def _same(policy: HeadPolicy, error: float) -> HeadPolicy:
+    """A learned policy at every error level (it reads no belief)."""
+    return policy
 
 
 def _add_runs(p: argparse.ArgumentParser) -> None:
