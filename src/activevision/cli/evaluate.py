@@ -79,6 +79,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         evaluate_policy,
         format_table,
         latency_summary,
+        paired_steps,
         summary_rows,
     )
     from activevision.io import write_csv, write_json
@@ -117,12 +118,23 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
             f"p50 {latency['p50_ms']:.2f} ms, p99 {latency['p99_ms']:.2f} ms "
             f"(paper: 2.3 ms on a GTX 1060)"
         )
+    solved = paired_steps(episodes, list(summaries))
+    print(
+        f"steps to success on the {solved['episodes']} episodes every method solves (median):"
+        + ", ".join(f" {name} {solved[name]['median']:g}" for name in summaries)
+    )
     rows = summary_rows(summaries, episodes=args.episodes, seed=args.seed, error=args.error)
     write_csv(files[0], rows)
     write_csv(files[1], episodes)
     write_json(
         files[2],
-        {"methods": rows, "latency": latency, "episodes": args.episodes, "seed": args.seed},
+        {
+            "methods": rows,
+            "latency": latency,
+            "steps_where_all_solve": solved,
+            "episodes": args.episodes,
+            "seed": args.seed,
+        },
     )
     print(f"wrote {out}/evaluation.csv, evaluation.json, episodes.csv")
 

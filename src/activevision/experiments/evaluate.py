@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -156,6 +156,26 @@ def evaluate_policy(
         for i in range(episodes)
     ]
     return records, summarise(records), latencies or []
+
+
+def paired_steps(episodes: Sequence[Mapping[str, Any]], methods: Sequence[str]) -> dict[str, Any]:
+    """Steps to success of ``methods`` on the episodes (seeds) that every one of them
+    solves: the count, and each method's median and mean. ``episodes``: the records of
+    :func:`run_episode` with a ``method`` key. Comparing steps only where all succeed keeps a
+    method that solves the easy episodes alone from looking fast."""
+    solved: dict[str, dict[int, int]] = {m: {} for m in methods}
+    for record in episodes:
+        if record["method"] in solved and record["success"]:
+            solved[record["method"]][int(record["seed"])] = int(record["success_duration"])
+    common = set.intersection(*(set(s) for s in solved.values())) if methods else set()
+    out: dict[str, Any] = {"episodes": len(common)}
+    for m in methods:
+        steps = [solved[m][seed] for seed in sorted(common)]
+        out[m] = {
+            "median": float(np.median(steps)) if steps else math.nan,
+            "mean": float(np.mean(steps)) if steps else math.nan,
+        }
+    return out
 
 
 def latency_summary(latencies_s: Sequence[float]) -> dict[str, float]:
