@@ -6,9 +6,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from gymnasium.utils import seeding
-from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import batch_space
 
 from activevision.envs.actions import head_action_space
 from activevision.envs.config import EnvConfig, check_count, resolve_config
@@ -18,12 +15,12 @@ from activevision.envs.observations import (
     image_space,
     observation_space,
 )
-from activevision.envs.seeding import reseed_generators
 from activevision.envs.simulation import EpisodeBatch
+from activevision.envs.slots import SlotVectorEnv
 from activevision.localisation import LocalisationConfig
 
 
-class ActiveVisionVectorEnv(VectorEnv):
+class ActiveVisionVectorEnv(SlotVectorEnv):
     """N ActiveVision episodes in lock-step (see :class:`ActiveVisionEnv` for the task).
 
     Sub-environment ``i`` reset with ``seed=s`` is seeded with ``s + i`` and draws from its own
@@ -38,8 +35,6 @@ class ActiveVisionVectorEnv(VectorEnv):
     with ``action_type="continuous"`` an (N, 2) float array in [-1, 1]).
     """
 
-    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
-
     def __init__(
         self,
         num_envs: int = 1,
@@ -48,32 +43,26 @@ class ActiveVisionVectorEnv(VectorEnv):
         max_episode_steps: int = 20,
         **config_overrides: Any,
     ) -> None:
-        self.num_envs = check_count("num_envs", num_envs)
+        num_envs = check_count("num_envs", num_envs)
         self.config = config = resolve_config(config, config_overrides)
         self.max_episode_steps = check_count("max_episode_steps", max_episode_steps)
-        self.sim = EpisodeBatch(config, self.num_envs, localisation)
+        self.sim = EpisodeBatch(config, num_envs, localisation)
         n_actions = len(self.sim.actions)
-        self.single_observation_space = observation_space(config, n_actions)
-        self.single_action_space = head_action_space(config.action_type, n_actions)
-        self._observations = ObservationBuilder(config, self.num_envs, n_actions)
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self._rngs = [seeding.np_random()[0] for _ in range(self.num_envs)]
-        self._frames = np.zeros((self.num_envs, *image_space(config).shape), dtype=np.uint8)
-        self._needs_reset = np.zeros(self.num_envs, dtype=bool)
-        self._all = np.arange(self.num_envs)
-        # Gymnasium's "_key" masks: every sub-environment reports every key, every step.
-        self._every_env = np.ones(self.num_envs, dtype=bool)
-        self._every_env.flags.writeable = False
+        self._set_up_slots(
+            num_envs,
+            observation_space(config, n_actions),
+            head_action_space(config.action_type, n_actions),
+            image_space(config).shape,
+        )
+        self._observations = ObservationBuilder(config, num_envs, n_actions)
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
-        reseed_generators(self._rngs, seed)
+        self._reseed(seed)
         self.sim.reset(self._all, self._rngs)
         self._observations.start(self._all)
         self._render(started=self._all)
-        self._needs_reset[:] = False
         return self._observe(), self._infos()
 
     def _observe(self) -> Observation:
@@ -112,6 +101,4 @@ class ActiveVisionVectorEnv(VectorEnv):
         return self._observe(), reward, terminated, truncated, infos
 
     def _infos(self) -> dict[str, Any]:
-        infos: dict[str, Any] = self.sim.info_arrays(self.max_episode_steps)
-        infos.update({f"_{key}": self._every_env for key in list(infos)})
-        return infos
+        return self._with_masks(self.sim.info_arrays(self.max_episode_steps))

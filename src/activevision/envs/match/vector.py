@@ -6,9 +6,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from gymnasium.utils import seeding
-from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import batch_space
 
 from activevision.envs.actions import head_action_space
 from activevision.envs.config import check_count
@@ -21,40 +18,33 @@ from activevision.envs.match.observations import (
     observe,
 )
 from activevision.envs.match.simulation import MatchBatch
-from activevision.envs.seeding import reseed_generators
+from activevision.envs.slots import SlotVectorEnv
 
 
-class ActiveVisionMatchVectorEnv(VectorEnv):
+class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     """N matches in lock-step (see :class:`ActiveVisionMatchEnv`). Sub-environment ``i``
     reset with ``seed=s`` is seeded with ``s + i``, so its trajectory equals a single env's
     reset with ``seed=s + i``. Autoreset follows Gymnasium's default (``NEXT_STEP``); infos
     hold the single env's keys as arrays over sub-environments."""
 
-    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
-
     def __init__(
         self, num_envs: int = 1, config: MatchConfig | None = None, **config_overrides: Any
     ) -> None:
-        self.num_envs = check_count("num_envs", num_envs)
+        num_envs = check_count("num_envs", num_envs)
         self.config = config = resolve_match_config(config, config_overrides)
-        self.sim = MatchBatch(config, self.num_envs)
-        self.single_observation_space = observation_space(config)
-        self.single_action_space = head_action_space(config.action_type, len(self.sim.actions))
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self._rngs = [seeding.np_random()[0] for _ in range(self.num_envs)]
-        self._frames = np.zeros((self.num_envs, *image_space(config).shape), dtype=np.uint8)
-        self._needs_reset = np.zeros(self.num_envs, dtype=bool)
-        self._all = np.arange(self.num_envs)
-        self._every_env = np.ones(self.num_envs, dtype=bool)
-        self._every_env.flags.writeable = False
+        self.sim = MatchBatch(config, num_envs)
+        self._set_up_slots(
+            num_envs,
+            observation_space(config),
+            head_action_space(config.action_type, len(self.sim.actions)),
+            image_space(config).shape,
+        )
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
-        reseed_generators(self._rngs, seed)
+        self._reseed(seed)
         self.sim.reset(self._all, self._rngs)
-        self._needs_reset[:] = False
         return self._observe(), self._infos()
 
     def step(
@@ -75,6 +65,4 @@ class ActiveVisionMatchVectorEnv(VectorEnv):
         return observe(self._frames, self.sim)
 
     def _infos(self) -> dict[str, Any]:
-        infos: dict[str, Any] = self.sim.info_arrays()
-        infos.update({f"_{key}": self._every_env for key in list(infos)})
-        return infos
+        return self._with_masks(self.sim.info_arrays())

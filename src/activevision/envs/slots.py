@@ -1,0 +1,56 @@
+"""What the package's native vector envs share: N sub-environments that are the slots of one
+batched simulation, each with its own seeded generator, stepped in lock-step with
+Gymnasium's default autoreset (``NEXT_STEP``)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from activevision.envs.seeding import reseed_generators
+
+
+class SlotVectorEnv(VectorEnv):
+    """Spaces, per-slot generators, the frame buffer and the info masks of a native vector
+    env; subclasses build their simulation and call :meth:`_set_up_slots`."""
+
+    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def _set_up_slots(
+        self,
+        num_envs: int,
+        observation_space: gym.Space[Any],
+        action_space: gym.Space[Any],
+        frame_shape: tuple[int, ...],
+    ) -> None:
+        self.num_envs = num_envs
+        self.single_observation_space = observation_space
+        self.single_action_space = action_space
+        self.observation_space = batch_space(observation_space, num_envs)
+        self.action_space = batch_space(action_space, num_envs)
+        self._rngs = [seeding.np_random()[0] for _ in range(num_envs)]
+        self._frames = np.zeros((num_envs, *frame_shape), dtype=np.uint8)
+        self._needs_reset = np.zeros(num_envs, dtype=bool)
+        self._all = np.arange(num_envs)
+        # Gymnasium's "_key" masks: every sub-environment reports every key, every step.
+        self._every_env = np.ones(num_envs, dtype=bool)
+        self._every_env.flags.writeable = False
+
+    def _reseed(self, seed: int | list[int | None] | None) -> None:
+        """Sub-environment ``i`` reset with ``seed=s`` draws from a generator seeded ``s + i``
+        (``envs.seeding.reseed_generators``); no slot awaits an autoreset after."""
+        reseed_generators(self._rngs, seed)
+        self._needs_reset[:] = False
+
+    def _with_masks(self, infos: dict[str, Any]) -> dict[str, Any]:
+        """``infos`` (arrays over sub-environments) with Gymnasium's ``_key`` masks."""
+        infos.update({f"_{key}": self._every_env for key in list(infos)})
+        return infos
+
+
+__all__ = ["SlotVectorEnv"]
