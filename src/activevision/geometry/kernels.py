@@ -145,6 +145,24 @@ def ball_in_image(
 
 
 @njit(cache=True)
+def visible_landmarks(
+    segments: np.ndarray,
+    max_distance: np.ndarray,
+    x: float,
+    y: float,
+    planes: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Which landmarks (K,) one camera at ``(x, y)`` sees, into ``out``: within each one's
+    ``max_distance`` and inside the image's half-planes ``planes`` (:func:`image_halfplanes`)."""
+    for k in range(segments.shape[0]):
+        ax, ay = segments[k, 0, 0], segments[k, 0, 1]
+        bx, by = segments[k, 1, 0], segments[k, 1, 1]
+        ok, r0, r1 = range_interval(ax, ay, bx, by, x, y, max_distance[k])
+        out[k] = ok and clip_visible(ax, ay, bx, by, planes, r0, r1)
+
+
+@njit(cache=True)
 def visibility_kernel(
     segments: np.ndarray,
     max_distance: np.ndarray,
@@ -163,11 +181,7 @@ def visibility_kernel(
     for i in range(n):
         camera_rotation(poses[i, 2] + pans[i], tilts[i], rot)
         image_halfplanes(poses[i, 0], poses[i, 1], rot, cam, planes)
-        for k in range(n_lm):
-            ax, ay = segments[k, 0, 0], segments[k, 0, 1]
-            bx, by = segments[k, 1, 0], segments[k, 1, 1]
-            ok, r0, r1 = range_interval(ax, ay, bx, by, poses[i, 0], poses[i, 1], max_distance[k])
-            out[i, k] = ok and clip_visible(ax, ay, bx, by, planes, r0, r1)
+        visible_landmarks(segments, max_distance, poses[i, 0], poses[i, 1], planes, out[i])
     return out
 
 

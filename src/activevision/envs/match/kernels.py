@@ -27,9 +27,8 @@ from activevision.geometry.kernels import (
     CameraModel,
     ball_in_image,
     camera_rotation,
-    clip_visible,
     image_halfplanes,
-    range_interval,
+    visible_landmarks,
 )
 from activevision.localisation.bundles import Landmarks, SigmaWeights, UKFScratch
 from activevision.localisation.kernels import LOG_2PIE, NOT_PD, Fields, chol3
@@ -169,26 +168,6 @@ def move_kernel(
 
 
 @njit(cache=True)
-def _visible(
-    n: int,
-    s: MatchState,
-    lm: Landmarks,
-    camera: CameraModel,
-    rot: np.ndarray,
-    planes: np.ndarray,
-    out: np.ndarray,
-) -> None:
-    """Landmarks in view of match ``n``'s camera (as ``geometry.kernels.visibility_kernel``),
-    less those hidden, into ``out`` (K,); ``rot`` and ``planes`` must be the camera's."""
-    px, py = s.pose[n, 0], s.pose[n, 1]
-    for k in range(lm.segments.shape[0]):
-        ax, ay = lm.segments[k, 0, 0], lm.segments[k, 0, 1]
-        bx, by = lm.segments[k, 1, 0], lm.segments[k, 1, 1]
-        ok, r0, r1 = range_interval(ax, ay, bx, by, px, py, lm.max_distance[k])
-        out[k] = ok and not s.hidden[n, k] and clip_visible(ax, ay, bx, by, planes, r0, r1)
-
-
-@njit(cache=True)
 def sense_kernel(
     idx: np.ndarray,
     odometry: np.ndarray,
@@ -228,7 +207,9 @@ def sense_kernel(
         pose = s.pose[n]
         camera_rotation(pose[2] + s.head[n, 0], s.head[n, 1], rot)
         image_halfplanes(pose[0], pose[1], rot, cam, planes)
-        _visible(n, s, lm, cam, rot, planes, visible)
+        visible_landmarks(lm.segments, lm.max_distance, pose[0], pose[1], planes, visible)
+        for k in range(n_lm):
+            visible[k] = visible[k] and not s.hidden[n, k]
         count = detect_one(
             pose,
             s.head[n, 0],
