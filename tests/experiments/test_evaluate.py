@@ -126,14 +126,15 @@ def test_paired_steps_compare_only_episodes_every_method_solves():
     from activevision.experiments.evaluate import paired_steps
 
     episodes = [
-        {"method": "a", "seed": 1, "success": True, "success_duration": 4},
+        {"method": "a", "seed": 1, "success": True, "success_duration": 4, "head_travel": 9.0},
         {"method": "b", "seed": 1, "success": True, "success_duration": 8},
         {"method": "a", "seed": 2, "success": True, "success_duration": 2},
         {"method": "b", "seed": 2, "success": False, "success_duration": 20},
-        {"method": "a", "seed": 3, "success": True, "success_duration": 6},
+        {"method": "a", "seed": 3, "success": True, "success_duration": 6, "head_travel": 3.0},
         {"method": "b", "seed": 3, "success": True, "success_duration": 6},
     ]
     out = paired_steps(episodes, ["a", "b"])
     assert out["episodes"] == 2  # seed 2: b did not solve it
-    assert out["a"] == {"median": 5.0, "mean": 5.0} and out["b"] == {"median": 7.0, "mean": 7.0}
+    assert out["a"] == {"median": 5.0, "mean": 5.0, "head_travel": 6.0}
+    assert out["b"]["median"] == 7.0 and out["b"]["mean"] == 7.0
     assert paired_steps(episodes, ["a"])["a"]["median"] == 4.0  # seeds 1-3: 4, 2, 6

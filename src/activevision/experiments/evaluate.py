@@ -160,20 +160,22 @@ def evaluate_policy(
 
 def paired_steps(episodes: Sequence[Mapping[str, Any]], methods: Sequence[str]) -> dict[str, Any]:
     """Steps to success of ``methods`` on the episodes (seeds) that every one of them
-    solves: the count, and each method's median and mean. ``episodes``: the records of
-    :func:`run_episode` with a ``method`` key. Comparing steps only where all succeed keeps a
-    method that solves the easy episodes alone from looking fast."""
-    solved: dict[str, dict[int, int]] = {m: {} for m in methods}
+    solves: the count, and each method's median and mean steps and mean head travel (deg).
+    ``episodes``: the records of :func:`run_episode` with a ``method`` key. Comparing only
+    where all succeed keeps a method that solves the easy episodes alone from looking fast."""
+    solved: dict[str, dict[int, Mapping[str, Any]]] = {m: {} for m in methods}
     for record in episodes:
         if record["method"] in solved and record["success"]:
-            solved[record["method"]][int(record["seed"])] = int(record["success_duration"])
+            solved[record["method"]][int(record["seed"])] = record
     common = set.intersection(*(set(s) for s in solved.values())) if methods else set()
     out: dict[str, Any] = {"episodes": len(common)}
     for m in methods:
-        steps = [solved[m][seed] for seed in sorted(common)]
+        steps = [int(solved[m][seed]["success_duration"]) for seed in sorted(common)]
+        travel = [float(solved[m][seed].get("head_travel", math.nan)) for seed in sorted(common)]
         out[m] = {
             "median": float(np.median(steps)) if steps else math.nan,
             "mean": float(np.mean(steps)) if steps else math.nan,
+            "head_travel": float(np.mean(travel)) if travel else math.nan,
         }
     return out
 

@@ -1,0 +1,134 @@
+"""Discrete against continuous head control on the same fixed-seed episodes: success rate,
+goal reached, steps to success on the episodes every policy solves, and head travel.
+
+    python bench/continuous.py --runs runs/dagger_head runs/dagger_head_continuous \\
+        runs/sac_head runs/ppo_head --episodes 1000 --figure docs/figures/continuous.png
+
+Every run is played as ``activevision evaluate --runs`` plays it (the first run's env, the
+paper's discrete actions; a continuous policy moves by head targets), together with the
+oracle (the 3-degree greedy moves to the true goal). Test episodes are seed 0's, which no
+training or validation used. Ends with one JSON line: per policy the figures, and the
+median steps of the best continuous policy over the best discrete one (the issue's target:
+at most 0.7, at equal or better success rate).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import torch
+
+from activevision.envs import ActiveVisionEnv
+from activevision.experiments.evaluate import evaluate_policy, paired_steps
+from activevision.experiments.policies import LearnedPolicy, OraclePolicy
+from activevision.training import load_config
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=Path, nargs="+", required=True)
+    parser.add_argument("--episodes", type=int, default=1000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--figure", type=Path, help="write the steps histogram here (PNG)")
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+
+    env_config = load_config(args.runs[0] / "config.json").env.replace(action_type="discrete")
+    env = ActiveVisionEnv(env_config)
+    kinds: dict[str, str] = {}
+    policies = {}
+    for run in args.runs:
+        action_type = load_config(run / "config.json").env.action_type
+        kinds[run.name] = action_type
+        policies[run.name] = LearnedPolicy.from_run(run)
+    policies["oracle"] = OraclePolicy(env_config)
+    kinds["oracle"] = "discrete"
+
+    episodes, summaries = [], {}
+    for name, policy in policies.items():
+        records, summary, _ = evaluate_policy(policy, args.episodes, args.seed, env=env)
+        episodes += [{"method": name, **r} for r in records]
+        summaries[name] = summary
+    learned = [name for name in policies if name != "oracle"]
+    paired = paired_steps(episodes, [*learned, "oracle"])
+
+    print(f"{args.episodes} test episodes from seed {args.seed}; steps to success on the")
+    print(f"{paired['episodes']} episodes every policy (and the oracle) solves")
+    print(
+        f"{'policy':28s} {'actions':>10s} {'success rate':>14s} {'goal reached':>14s}"
+        f" {'median steps':>13s} {'head travel':>12s} {'travel, solved':>15s}"
+    )
+    record: dict[str, object] = {"episodes": args.episodes, "paired": paired["episodes"]}
+    for name in policies:
+        s = summaries[name]
+        print(
+            f"{name:28s} {kinds[name]:>10s} {100 * s['success_rate'].mean:13.1f}%"
+            f" {100 * s['success'].mean:13.1f}% {paired[name]['median']:13g}"
+            f" {s['head_travel'].mean:11.1f}° {paired[name]['head_travel']:14.1f}°"
+        )
+        record[name] = {
+            "actions": kinds[name],
+            "success_rate": s["success_rate"].mean,
+            "success_rate_ci": [s["success_rate"].low, s["success_rate"].high],
+            "goal_reached": s["success"].mean,
+            "goal_reached_ci": [s["success"].low, s["success"].high],
+            "median_steps_paired": paired[name]["median"],
+            "mean_steps_paired": paired[name]["mean"],
+            "head_travel_deg": s["head_travel"].mean,
+            "head_travel_paired_deg": paired[name]["head_travel"],
+        }
+
+    def best(kind: str) -> str | None:
+        names = [n for n in learned if kinds[n] == kind]
+        return max(names, key=lambda n: summaries[n]["success_rate"].mean) if names else None
+
+    discrete, continuous = best("discrete"), best("continuous")
+    if discrete and continuous:
+        ratio = paired[continuous]["median"] / paired[discrete]["median"]
+        equal_or_better = (
+            summaries[continuous]["success_rate"].mean >= summaries[discrete]["success_rate"].mean
+        )
+        print(
+            f"best continuous ({continuous}) over best discrete ({discrete}): median steps"
+            f" x{ratio:.2f} (target <= 0.70), success rate"
+            f" {'equal or better' if equal_or_better else 'lower'}"
+        )
+        record["steps_ratio"] = ratio
+        record["target_met"] = bool(ratio <= 0.7 and equal_or_better)
+    if args.figure is not None:
+        plot(episodes, [*learned, "oracle"], kinds, paired["episodes"], args.figure)
+        print(f"wrote {args.figure}")
+    print(json.dumps(record))
+
+
+def plot(episodes, names, kinds, n_paired, path: Path) -> None:
+    """Steps to success on the episodes every policy solves, one histogram per policy."""
+    solved = {n: {} for n in names}
+    for r in episodes:
+        if r["success"]:
+            solved[r["method"]][r["seed"]] = r["success_duration"]
+    common = set.intersection(*(set(s) for s in solved.values()))
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    bins = np.arange(0.5, 21.5, 1.0)
+    for name in names:
+        steps = [solved[name][s] for s in common]
+        style = "-" if kinds[name] == "continuous" else "--"
+        ax.hist(steps, bins=bins, histtype="step", linewidth=1.8, linestyle=style, label=name)
+    ax.set_xlabel("steps to the goal view")
+    ax.set_ylabel("episodes")
+    ax.set_title(f"steps to success on the {n_paired} test episodes every policy solves")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+
+
+if __name__ == "__main__":
+    main()
