@@ -112,3 +112,76 @@ def test_goal_evidence_sums_log_probabilities_and_moves_greedily():
     evidence.reset()
     assert not evidence.evidence.any()
     assert list(greedy_actions(heads, views[[2, 2]], table)) == [4, 4]  # tilt down towards 45
+
+
+def continuous_export(tmp_path, act_by: str = "action", **metadata_changes):
+    config = EnvConfig(observation="image+head", action_type="continuous")
+    torch.manual_seed(1)
+    network = StudentNetwork(2, 2, n_goals=40, continuous=True).eval()
+    env = ActiveVisionEnv(config)
+    metadata = policy_metadata(env.sim.actions, config.camera)
+    metadata.update(
+        observation="image+head",
+        vector_keys=["head"],
+        action_type="continuous",
+        max_move_deg=[10.0, 6.0],
+    )
+    if act_by == "goal":
+        grid = env.sim.localisation.grid
+        metadata.update(act_by="goal", goal_views_deg=np.degrees(grid.views).tolist())
+    metadata.update(metadata_changes)
+    return network, export_onnx(network, tmp_path / "policy.onnx", metadata)
+
+
+def test_continuous_controller_moves_by_the_output_times_max_move(tmp_path):
+    network, paths = continuous_export(tmp_path)
+    controller = HeadController(paths.model_path)
+    assert controller.continuous
+    frame = np.random.default_rng(0).integers(0, 256, (120, 160), dtype=np.uint8)
+    pan, tilt = 0.2, 0.6
+    command = controller.act(frame, pan, tilt)
+    with torch.inference_mode():
+        move = network(torch.from_numpy(frame[None, None]), torch.tensor([[pan, tilt]])).numpy()[0]
+    want = move * np.radians([10.0, 6.0])  # hand-computed: output x max_move per axis
+    assert command.action == -1
+    assert command.d_pan == pytest.approx(want[0], abs=1e-5)
+    assert command.d_tilt == pytest.approx(want[1], abs=1e-5)
+    assert command.target_pan == pytest.approx(pan + want[0], abs=1e-5)
+    # a head at its pan limit: the target is clipped, the move is the policy's
+    limit = controller.metadata.head_limits.pan_max
+    clipped = controller.act(frame, limit, tilt)
+    assert clipped.target_pan <= limit + 1e-12
+
+
+def test_continuous_goal_evidence_moves_straight_towards_the_best_view(tmp_path):
+    _, paths = continuous_export(tmp_path, act_by="goal")
+    controller = HeadController(paths.model_path)
+    frame = np.zeros((120, 160), np.uint8)
+    command = controller.act(frame, 0.0, 0.5)
+    best = controller.metadata.goal_views[int(np.argmax(controller.last_goal_logits))]
+    reach = np.radians([10.0, 6.0])
+    want = np.clip(best - [0.0, 0.5], -reach, reach)  # straight there, each axis capped
+    assert (command.d_pan, command.d_tilt) == pytest.approx(tuple(want), abs=1e-9)
+
+
+def test_continuous_metadata_must_say_how_far_a_move_goes(tmp_path):
+    from activevision.runtime import PolicyFileError
+
+    with pytest.raises(ValueError, match="max_move_deg"):
+        continuous_export(tmp_path, max_move_deg=None)
+    _, paths = continuous_export(tmp_path)
+    text = paths.metadata_path.read_text()
+    paths.metadata_path.write_text(text.replace('"max_move_deg": [', '"max_move_deg": [500, '))
+    with pytest.raises(PolicyFileError, match="'max_move_deg' must be"):
+        HeadController(paths.model_path, verify_checksum=False)
+    paths.metadata_path.write_text(
+        text.replace('"action_type": "continuous"', '"action_type": "x"')
+    )
+    with pytest.raises(PolicyFileError, match="'action_type' must be"):
+        HeadController(paths.model_path)
+    # a discrete policy.json beside a continuous graph: the output does not fit
+    paths.metadata_path.write_text(
+        text.replace('"action_type": "continuous"', '"action_type": "discrete"')
+    )
+    with pytest.raises(PolicyFileError, match="output shape"):
+        HeadController(paths.model_path)
