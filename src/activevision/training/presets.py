@@ -176,6 +176,10 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         lambda: dagger("image+head", 200_000, action_type="continuous"),
         "dagger_head with continuous moves of up to 10 degrees a step",
     ),
+    "dagger_image_continuous": (
+        lambda: dagger("image", 200_000, action_type="continuous"),
+        "dagger_image with continuous moves of up to 10 degrees a step",
+    ),
     "dagger_prior": (
         lambda: dagger("image+head+pose+proposal", 400_000, (0.0, 2.0)),
         "DAgger on image, head, a prior pose 0-2 m/rad off and its proposal",
