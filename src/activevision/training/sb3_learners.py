@@ -148,7 +148,6 @@ class Sb3Trainer:
         self._epochs_logged = 0
         self._validations_logged = 0
         self._updates_seen = 0
-        self._saved_step = -1
         save_config(config, self.run_dir / run_state.CONFIG_FILE)
         self.logger = LoggerGroup(default_loggers(config, run_dir) if loggers is None else loggers)
         if not _resuming:
@@ -174,8 +173,7 @@ class Sb3Trainer:
                 reset_num_timesteps=False,
                 progress_bar=False,
             )
-        if self._saved_step != self.step:
-            self.save_checkpoint()
+        self.save_checkpoint()  # after the last update (a mid-run one may hold this step)
         self.logger.flush()
         return callback.rows
 
@@ -273,7 +271,6 @@ class Sb3Trainer:
             self.run_dir, self.step, write_files, self.config.run.keep_checkpoints
         )
         write_policy(self.run_dir, actor.state_dict(), metadata)
-        self._saved_step = self.step
         return path
 
     @classmethod
@@ -331,7 +328,9 @@ class Sb3Trainer:
 
 
 class _RunCallback(BaseCallback):
-    """Feeds SB3's steps to the trainer: episodes, losses, epochs, validation, checkpoints."""
+    """Feeds SB3's steps to the trainer: episodes, losses, epochs, validation, checkpoints.
+    A checkpoint falls due on a step but is written when the rollout ends: SB3 stores a
+    step's transitions only after the step's callback, and updates only after the rollout."""
 
     def __init__(self, trainer: Sb3Trainer) -> None:
         super().__init__()
@@ -340,9 +339,15 @@ class _RunCallback(BaseCallback):
         n = trainer.config.sb3.num_envs
         self.returns, self.lengths = np.zeros(n), np.zeros(n, dtype=np.int64)
         self.epoch_start = (trainer.step, time.perf_counter())
+        self.checkpoint_due = False
 
     def _on_rollout_start(self) -> None:
         self.trainer.record_updates()
+
+    def _on_rollout_end(self) -> None:
+        if self.checkpoint_due:
+            self.trainer.save_checkpoint()
+            self.checkpoint_due = False
 
     def _on_step(self) -> bool:
         trainer, run = self.trainer, self.trainer.config.run
@@ -363,7 +368,7 @@ class _RunCallback(BaseCallback):
             trainer.validate()
         interval = run.checkpoint_interval
         if interval and step // interval > before // interval:
-            trainer.save_checkpoint()
+            self.checkpoint_due = True
         return True
 
 
