@@ -29,7 +29,6 @@ exactly where the run stopped.
 
 from __future__ import annotations
 
-import json
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -49,18 +48,15 @@ from activevision.envs.observations import (
     vector_keys,
     vector_sizes,
 )
-from activevision.envs.seeding import episode_seed
 from activevision.envs.simulation import EpisodeBatch
 from activevision.rendering.appearance import LOOK_FIELDS
 from activevision.runtime.goal_evidence import GoalEvidence
 from activevision.training import checkpoint as ckpt
-from activevision.training import state as run_state
-from activevision.training.config import TrainConfig, load_config, save_config
+from activevision.training.config import TrainConfig
 from activevision.training.cpu import configure_torch_cpu, resolve_device
-from activevision.training.loggers import Logger, LoggerGroup, LogPosition, default_loggers
-from activevision.training.metrics import EpochAccumulator, episode_record
-from activevision.training.policy_files import BestWeights, write_policy
-from activevision.training.validation import summarise_validation
+from activevision.training.loggers import Logger
+from activevision.training.metrics import episode_record
+from activevision.training.student_runs import StudentRun
 
 MAX_EPISODE_STEPS = 20  #: the registration's time limit
 
@@ -131,7 +127,7 @@ def goal_indices(sim: EpisodeBatch) -> np.ndarray:
     return index
 
 
-class DaggerTrainer:
+class DaggerTrainer(StudentRun):
     """Trains a :class:`~activevision.agents.student.StudentNetwork` by DAgger."""
 
     def __init__(
@@ -145,9 +141,6 @@ class DaggerTrainer:
         if config.algo != "dagger":
             raise ValueError(f"DaggerTrainer trains algo='dagger', got {config.algo!r}")
         self.config = config
-        self.run_dir = Path(run_dir)
-        if not _resuming and ckpt.list_checkpoints(self.run_dir):
-            raise ValueError(f"{self.run_dir} already holds a run; resume it")
         self.device = resolve_device(config.run.device)
         cfg, dag = config.env, config.dagger
         self.sim = EpisodeBatch(cfg, dag.num_envs)
@@ -181,20 +174,10 @@ class DaggerTrainer:
             continuous=self.continuous,
         )
         self.evidence = self._goal_evidence(dag.num_envs)
-        self.run_dir.mkdir(parents=True, exist_ok=True)
-        ckpt.remove_stale_writes(self.run_dir)
         configure_torch_cpu(config.run.num_threads)
         self.step = 0
-        self.episode = 0
         self._round_share = 1.0
-        self.epoch_log = EpochAccumulator()
-        self.best = BestWeights()
-        self._epochs_logged = 0
-        self._validations_logged = 0
-        save_config(config, self.run_dir / run_state.CONFIG_FILE)
-        self.logger = LoggerGroup(default_loggers(config, run_dir) if loggers is None else loggers)
-        if not _resuming:
-            self.logger.start(None)
+        self._open_run(run_dir, loggers, _resuming)
 
     def _goal_evidence(self, n: int) -> GoalEvidence | None:
         if self.config.dagger.act_by != "goal":
@@ -227,7 +210,8 @@ class DaggerTrainer:
                 self.epoch_log.losses.append(self._update())
             rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
             if self.step // run.epoch_steps > before // run.epoch_steps:
-                rows.append(self._finish_epoch(rate))
+                # epsilon: the teacher's share in the round just played
+                rows.append(self.finish_epoch(self._round_share, rate))
             if run.eval_interval and self.step // run.eval_interval > before // run.eval_interval:
                 self.validate()
             interval = run.checkpoint_interval
@@ -288,12 +272,7 @@ class DaggerTrainer:
     def _end_episode(self, i: int) -> None:
         sim = self.sim
         info = {k: v[i] for k, v in sim.info_arrays(MAX_EPISODE_STEPS).items()}
-        record = episode_record(
-            self.episode, self.step, float(sim.episode_reward[i]), int(sim.step_count[i]), info
-        )
-        self.logger.record_episode(record, self.step)
-        self.epoch_log.episodes.append(record)
-        self.episode += 1
+        self.record_episode(float(sim.episode_reward[i]), int(sim.step_count[i]), info)
 
     def _update(self) -> float:
         """One minibatch of rendered dataset states; returns the imitation loss."""
@@ -321,28 +300,15 @@ class DaggerTrainer:
         self.optimizer.step()
         return float(loss.item())
 
-    def _finish_epoch(self, steps_per_s: float) -> dict[str, float]:
-        epoch = self.step // self.config.run.epoch_steps
-        # epsilon: the teacher's share in the round just played
-        row = self.epoch_log.summary(epoch, self.step, self._round_share, 0.0, steps_per_s)
-        self.logger.record_epoch(row, self.step)
-        self._epochs_logged += 1
-        self.epoch_log = EpochAccumulator()
-        return row
-
     def validate(self) -> dict[str, float]:
         """The student's greedy episodes on the validation seeds (the episodes of
         ``activevision evaluate --seed eval_seed``); keeps the best weights."""
-        run = self.config.run
-        seeds = [episode_seed(run.eval_seed, i) for i in range(run.eval_episodes)]
-        records = greedy_student_episodes(self, seeds)
-        row = summarise_validation(self.step, records, self.best.score)
-        self.logger.record_validation(row, self.step)
-        self._validations_logged += 1
-        if row["best"]:
-            self.best.keep(self.network, self.step, row["success_rate"])
-            self.best.write(self.run_dir, self.metadata())
-        return row
+
+        def play(network: StudentNetwork, seeds: Sequence[int]) -> list[dict[str, float]]:
+            evidence = self._goal_evidence(len(seeds))
+            return play_greedy(network, self.device, self.config.env, seeds, evidence)
+
+        return self.validate_network(self.network, play, self.metadata())
 
     # ------------------------------------------------------------------ files
     def metadata(self) -> dict[str, Any]:
@@ -359,89 +325,29 @@ class DaggerTrainer:
             "step": self.step,
         }
 
-    def state_json(self) -> str:
-        return json.dumps(
-            {
-                "algo": "dagger",
-                "step": self.step,
-                "episode": self.episode,
-                "rng": self.rng.bit_generator.state,
-                "epoch_log": self.epoch_log.to_dict(),
-                "metrics_rows": self._epochs_logged,
-                "evaluations_rows": self._validations_logged,
-                "best_eval": self.best.score if self.best.weights is not None else None,
-                "best_step": self.best.step,
-                "config_sha256": run_state.config_digest(self.run_dir),
-            }
-        )
-
     def save_checkpoint(self) -> Path:
         """Write a checkpoint (atomically) and ``policy.safetensors``."""
-        metadata = self.metadata()
-        tensors = {f"online.{k}": v for k, v in self.network.state_dict().items()}
-        if self.best.weights is not None:
-            tensors.update({f"best.{k}": v for k, v in self.best.weights.items()})
-
-        def write_files(directory: Path) -> None:
-            ckpt.save_tensors(directory / "model.safetensors", tensors, metadata)
-            ckpt.save_torch_state(directory / "optimizer.pt", self.optimizer.state_dict())
-            ckpt.save_arrays(directory / "replay.npz", self.dataset.state_dict())
-            (directory / run_state.STATE_FILE).write_text(self.state_json())
-
-        path = ckpt.write_checkpoint(
-            self.run_dir, self.step, write_files, self.config.run.keep_checkpoints
+        return self.write_checkpoint(
+            self.network,
+            self.metadata(),
+            self.optimizer.state_dict(),
+            self.dataset.state_dict(),
+            self.run_state("dagger", rng=self.rng.bit_generator.state),
         )
-        write_policy(self.run_dir, self.network.state_dict(), metadata)
-        return path
 
     @classmethod
     def resume(
         cls, run_dir: str | os.PathLike[str], *, loggers: Sequence[Logger] | None = None
     ) -> DaggerTrainer:
         """Rebuild the trainer from the run's newest checkpoint."""
-        run_dir = Path(run_dir)
-        path = ckpt.latest_checkpoint(run_dir)
-        ckpt.verify_checkpoint(path)
-        config = load_config(run_dir / run_state.CONFIG_FILE)
-        try:
-            state = json.loads((path / run_state.STATE_FILE).read_text())
-            if state.get("config_sha256") != run_state.config_digest(run_dir):
-                raise ckpt.CheckpointError(
-                    f"{run_dir / run_state.CONFIG_FILE} was changed after checkpoint {path.name}"
-                )
-            trainer = cls(config, run_dir, loggers=loggers, _resuming=True)
-            tensors, _ = ckpt.load_tensors(path / "model.safetensors")
-            weights = {
-                k.removeprefix("online."): v for k, v in tensors.items() if k.startswith("online.")
-            }
-            trainer.network.load_state_dict(weights)
-            trainer.optimizer.load_state_dict(ckpt.load_torch_state(path / "optimizer.pt"))
-            trainer.dataset.load(ckpt.load_arrays(path / "replay.npz"))
-            trainer.step, trainer.episode = int(state["step"]), int(state["episode"])
-            trainer.rng.bit_generator.state = state["rng"]
-            trainer.epoch_log = EpochAccumulator.from_dict(state["epoch_log"])
-            trainer._epochs_logged = int(state["metrics_rows"])
-            trainer._validations_logged = int(state["evaluations_rows"])
-            if state["best_eval"] is not None:
-                best = {
-                    k.removeprefix("best."): v for k, v in tensors.items() if k.startswith("best.")
-                }
-                trainer.best.keep_weights(best, int(state["best_step"]), float(state["best_eval"]))
-        except (KeyError, TypeError, ValueError, RuntimeError) as error:
-            if isinstance(error, ckpt.CheckpointError):
-                raise
-            raise ckpt.CheckpointError(
-                f"checkpoint {path} does not fit this run ({type(error).__name__}: {error})"
-            ) from error
-        trainer.logger.start(
-            LogPosition(
-                trainer.step, trainer._epochs_logged, trainer.episode, trainer._validations_logged
-            )
-        )
-        return trainer
+        return cls.reopen(run_dir, loggers=loggers)
 
-    def close(self) -> None:
-        self.logger.close()
+    def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
+        self.network.load_state_dict(weights)
+        self.optimizer.load_state_dict(ckpt.load_torch_state(path / "optimizer.pt"))
+        self.dataset.load(ckpt.load_arrays(path / "replay.npz"))
+        self.step = int(state["step"])
+        self.rng.bit_generator.state = state["rng"]
 
 
 def play_episodes(
@@ -505,12 +411,6 @@ def student_actions(
     return oracle_actions(
         sim.head[slots], target, sim.cfg.action_type, sim.actions, sim.cfg.max_move
     )
-
-
-def greedy_student_episodes(trainer: DaggerTrainer, seeds: Sequence[int]) -> list[dict[str, float]]:
-    """One greedy episode of the DAgger student from each seed (see :func:`play_greedy`)."""
-    evidence = trainer._goal_evidence(len(seeds))
-    return play_greedy(trainer.network, trainer.device, trainer.config.env, seeds, evidence)
 
 
 def play_greedy(

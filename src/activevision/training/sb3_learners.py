@@ -24,7 +24,6 @@ seed and the step (resuming is reproducible, not bit-identical to an uninterrupt
 
 from __future__ import annotations
 
-import json
 import os
 import time
 from collections.abc import Sequence
@@ -44,19 +43,14 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from activevision.agents.sb3_features import StudentFeatures, actor_network
 from activevision.agents.student import StudentNetwork
 from activevision.envs.observations import vector_keys
-from activevision.envs.seeding import episode_seed
 from activevision.training import checkpoint as ckpt
-from activevision.training import state as run_state
-from activevision.training.config import SB3_ALGORITHMS, TrainConfig, load_config, save_config
+from activevision.training.config import SB3_ALGORITHMS, TrainConfig
 from activevision.training.cpu import configure_torch_cpu, resolve_device
 from activevision.training.dagger import play_greedy
 from activevision.training.environment import make_env
-from activevision.training.loggers import Logger, LoggerGroup, LogPosition, default_loggers
-from activevision.training.metrics import EpochAccumulator, episode_record
-from activevision.training.policy_files import BestWeights, write_policy
-from activevision.training.validation import summarise_validation
+from activevision.training.loggers import Logger
+from activevision.training.student_runs import StudentRun
 
-_ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"sac": SAC, "td3": TD3, "ppo": PPO}
 #: the SB3 logger key each learner's loss is read from (``metrics.csv``'s ``loss``)
 _LOSS_KEY = {"sac": "train/critic_loss", "td3": "train/critic_loss", "ppo": "train/loss"}
 
@@ -116,7 +110,7 @@ def make_vec_env(config: TrainConfig) -> DummyVecEnv:
     return DummyVecEnv([lambda: make_env(config)] * config.sb3.num_envs)
 
 
-class Sb3Trainer:
+class Sb3Trainer(StudentRun):
     """Trains ``config.algo`` ("sac", "td3" or "ppo") with Stable-Baselines3 into a run
     directory laid out like the package's own learners'."""
 
@@ -131,30 +125,17 @@ class Sb3Trainer:
         if config.algo not in SB3_ALGORITHMS:
             raise ValueError(f"Sb3Trainer trains {SB3_ALGORITHMS}, got algo={config.algo!r}")
         self.config = config
-        self.run_dir = Path(run_dir)
-        if not _resuming and ckpt.list_checkpoints(self.run_dir):
-            raise ValueError(f"{self.run_dir} already holds a run; resume it")
         self.device = resolve_device(config.run.device)
         configure_torch_cpu(config.run.num_threads)
         self.env = make_vec_env(config)
         self.env.seed(config.seed)
         self.model = build_model(config, self.env, self.device)
         self.n_actions = int(getattr(make_env(config).action_space, "n", 2))
-        self.run_dir.mkdir(parents=True, exist_ok=True)
-        ckpt.remove_stale_writes(self.run_dir)
-        self.episode = 0
-        self.epoch_log = EpochAccumulator()
-        self.best = BestWeights()
-        self._epochs_logged = 0
-        self._validations_logged = 0
         self._updates_seen = 0
-        save_config(config, self.run_dir / run_state.CONFIG_FILE)
-        self.logger = LoggerGroup(default_loggers(config, run_dir) if loggers is None else loggers)
-        if not _resuming:
-            self.logger.start(None)
+        self._open_run(run_dir, loggers, _resuming)
 
     @property
-    def step(self) -> int:
+    def step(self) -> int:  # type: ignore[override]  # SB3 counts the steps
         """Environment steps so far (SB3's ``num_timesteps``)."""
         return int(self.model.num_timesteps)
 
@@ -177,21 +158,6 @@ class Sb3Trainer:
         self.logger.flush()
         return callback.rows
 
-    def record_episode(self, reward: float, length: int, info: dict[str, Any]) -> None:
-        """An episode ended with this total reward, length and final info."""
-        record = episode_record(self.episode, self.step, reward, length, info)
-        self.logger.record_episode(record, self.step)
-        self.epoch_log.episodes.append(record)
-        self.episode += 1
-
-    def finish_epoch(self, steps_per_s: float) -> dict[str, float]:
-        epoch = self.step // self.config.run.epoch_steps
-        row = self.epoch_log.summary(epoch, self.step, 0.0, 0.0, steps_per_s)
-        self.logger.record_epoch(row, self.step)
-        self._epochs_logged += 1
-        self.epoch_log = EpochAccumulator()
-        return row
-
     def record_updates(self) -> None:
         """Take the loss of the updates SB3 made since the last call (``metrics.csv``)."""
         updates = int(getattr(self.model, "_n_updates", 0))
@@ -207,17 +173,12 @@ class Sb3Trainer:
     def validate(self) -> dict[str, float]:
         """The actor's greedy episodes on the validation seeds (those of ``activevision
         evaluate --seed eval_seed``), batched; keeps the best weights."""
-        run = self.config.run
-        seeds = [episode_seed(run.eval_seed, i) for i in range(run.eval_episodes)]
-        actor = self.actor()
-        records = play_greedy(actor, torch.device("cpu"), self.config.env, seeds)
-        row = summarise_validation(self.step, records, self.best.score)
-        self.logger.record_validation(row, self.step)
-        self._validations_logged += 1
-        if row["best"]:
-            self.best.keep(actor, self.step, row["success_rate"])
-            self.best.write(self.run_dir, self.metadata(actor))
-        return row
+        actor, cpu, env = self.actor(), torch.device("cpu"), self.config.env
+
+        def play(network: StudentNetwork, seeds: Sequence[int]) -> list[dict[str, float]]:
+            return play_greedy(network, cpu, env, seeds)
+
+        return self.validate_network(actor, play, self.metadata(actor))
 
     # ------------------------------------------------------------------ files
     def metadata(self, actor: StudentNetwork) -> dict[str, Any]:
@@ -235,95 +196,43 @@ class Sb3Trainer:
             "step": self.step,
         }
 
-    def state_json(self) -> str:
-        model = self.model
-        return json.dumps(
-            {
-                "algo": self.config.algo,
-                "step": self.step,
-                "n_updates": int(getattr(model, "_n_updates", 0)),
-                "sb3_episodes": int(getattr(model, "_episode_num", 0)),
-                "episode": self.episode,
-                "epoch_log": self.epoch_log.to_dict(),
-                "metrics_rows": self._epochs_logged,
-                "evaluations_rows": self._validations_logged,
-                "best_eval": self.best.score if self.best.weights is not None else None,
-                "best_step": self.best.step,
-                "config_sha256": run_state.config_digest(self.run_dir),
-            }
-        )
-
     def save_checkpoint(self) -> Path:
         """Write a checkpoint (atomically) and ``policy.safetensors``."""
-        actor = self.actor()
-        metadata = self.metadata(actor)
-        tensors = {f"online.{k}": v for k, v in actor.state_dict().items()}
-        if self.best.weights is not None:
-            tensors.update({f"best.{k}": v for k, v in self.best.weights.items()})
-
-        def write_files(directory: Path) -> None:
-            ckpt.save_tensors(directory / "model.safetensors", tensors, metadata)
-            ckpt.save_torch_state(directory / "optimizer.pt", model_state(self.model))
-            ckpt.save_arrays(directory / "replay.npz", buffer_arrays(self.model))
-            (directory / run_state.STATE_FILE).write_text(self.state_json())
-
-        path = ckpt.write_checkpoint(
-            self.run_dir, self.step, write_files, self.config.run.keep_checkpoints
+        actor, model = self.actor(), self.model
+        return self.write_checkpoint(
+            actor,
+            self.metadata(actor),
+            model_state(model),
+            buffer_arrays(model),
+            self.run_state(
+                self.config.algo,
+                n_updates=int(getattr(model, "_n_updates", 0)),
+                sb3_episodes=int(getattr(model, "_episode_num", 0)),
+            ),
         )
-        write_policy(self.run_dir, actor.state_dict(), metadata)
-        return path
 
     @classmethod
     def resume(
         cls, run_dir: str | os.PathLike[str], *, loggers: Sequence[Logger] | None = None
     ) -> Sb3Trainer:
         """Rebuild the trainer from the run's newest checkpoint."""
-        run_dir = Path(run_dir)
-        path = ckpt.latest_checkpoint(run_dir)
-        ckpt.verify_checkpoint(path)
-        config = load_config(run_dir / run_state.CONFIG_FILE)
-        try:
-            state = json.loads((path / run_state.STATE_FILE).read_text())
-            if state.get("config_sha256") != run_state.config_digest(run_dir):
-                raise ckpt.CheckpointError(
-                    f"{run_dir / run_state.CONFIG_FILE} was changed after checkpoint {path.name}"
-                )
-            trainer = cls(config, run_dir, loggers=loggers, _resuming=True)
-            model = trainer.model
-            load_model_state(model, ckpt.load_torch_state(path / "optimizer.pt"))
-            load_buffer_arrays(model, ckpt.load_arrays(path / "replay.npz"))
-            step = int(state["step"])
-            model.num_timesteps = step
-            model._n_updates = trainer._updates_seen = int(state["n_updates"])
-            model._episode_num = int(state["sb3_episodes"])
-            # fresh draws from here on: reseeded from the seed and the step
-            model.set_random_seed(config.seed + step)
-            trainer.env.seed(config.seed + step)
-            trainer.episode = int(state["episode"])
-            trainer.epoch_log = EpochAccumulator.from_dict(state["epoch_log"])
-            trainer._epochs_logged = int(state["metrics_rows"])
-            trainer._validations_logged = int(state["evaluations_rows"])
-            if state["best_eval"] is not None:
-                tensors, _ = ckpt.load_tensors(path / "model.safetensors")
-                best = {
-                    k.removeprefix("best."): v for k, v in tensors.items() if k.startswith("best.")
-                }
-                trainer.best.keep_weights(best, int(state["best_step"]), float(state["best_eval"]))
-        except (KeyError, TypeError, ValueError, RuntimeError) as error:
-            if isinstance(error, ckpt.CheckpointError):
-                raise
-            raise ckpt.CheckpointError(
-                f"checkpoint {path} does not fit this run ({type(error).__name__}: {error})"
-            ) from error
-        trainer.logger.start(
-            LogPosition(
-                trainer.step, trainer._epochs_logged, trainer.episode, trainer._validations_logged
-            )
-        )
-        return trainer
+        return cls.reopen(run_dir, loggers=loggers)
+
+    def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
+        # the actor's weights are in the SB3 state dicts of optimizer.pt as well
+        model, config = self.model, self.config
+        load_model_state(model, ckpt.load_torch_state(path / "optimizer.pt"))
+        load_buffer_arrays(model, ckpt.load_arrays(path / "replay.npz"))
+        step = int(state["step"])
+        model.num_timesteps = step
+        model._n_updates = self._updates_seen = int(state["n_updates"])
+        model._episode_num = int(state["sb3_episodes"])
+        # fresh draws from here on: reseeded from the seed and the step
+        model.set_random_seed(config.seed + step)
+        self.env.seed(config.seed + step)
 
     def close(self) -> None:
-        self.logger.close()
+        super().close()
         self.env.close()
 
 
@@ -362,7 +271,7 @@ class _RunCallback(BaseCallback):
         if step // run.epoch_steps > before // run.epoch_steps:
             start_step, start_time = self.epoch_start
             rate = (step - start_step) / max(time.perf_counter() - start_time, 1e-9)
-            self.rows.append(trainer.finish_epoch(rate))
+            self.rows.append(trainer.finish_epoch(0.0, rate))
             self.epoch_start = (step, time.perf_counter())
         if run.eval_interval and step // run.eval_interval > before // run.eval_interval:
             trainer.validate()
@@ -437,18 +346,4 @@ def _attribute(model: BaseAlgorithm, name: str) -> torch.Tensor:
     return value
 
 
-def train_sb3(
-    config: TrainConfig,
-    run_dir: str | os.PathLike[str],
-    *,
-    loggers: Sequence[Logger] | None = None,
-) -> list[dict[str, float]]:
-    """Train a fresh SB3 run to ``config.run.total_timesteps``."""
-    trainer = Sb3Trainer(config, run_dir, loggers=loggers)
-    try:
-        return trainer.train()
-    finally:
-        trainer.close()
-
-
-__all__ = ["Sb3Trainer", "build_model", "make_vec_env", "train_sb3"]
+__all__ = ["Sb3Trainer", "build_model", "make_vec_env"]

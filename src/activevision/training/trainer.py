@@ -380,9 +380,13 @@ def train(
 
         return train_dagger(config, run_dir, loggers=loggers)
     if config.algo != "ddqn":
-        from activevision.training.sb3_learners import train_sb3  # SB3 loads only here
+        from activevision.training.sb3_learners import Sb3Trainer  # SB3 loads only here
 
-        return train_sb3(config, run_dir, loggers=loggers)
+        sb3 = Sb3Trainer(config, run_dir, loggers=loggers)
+        try:
+            return sb3.train()
+        finally:
+            sb3.close()
     trainer = Trainer(config, run_dir, env_factory, aux_target=aux_target, loggers=loggers)
     try:
         return trainer.train()

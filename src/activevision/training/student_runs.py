@@ -1,0 +1,188 @@
+"""What DAgger runs and Stable-Baselines3 runs share: their policy is a
+:class:`~activevision.agents.student.StudentNetwork`, written to the same policy files,
+logged to the same CSVs, validated on the same batched episodes and checkpointed alike
+(``model.safetensors`` with the newest and best weights, ``optimizer.pt``, ``replay.npz``,
+``state.json``). Each learner adds how it trains and what its checkpoint restores."""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, Self
+
+import numpy as np
+import torch
+
+from activevision.agents.student import StudentNetwork
+from activevision.envs.seeding import episode_seed
+from activevision.training import checkpoint as ckpt
+from activevision.training import state as run_state
+from activevision.training.config import TrainConfig, load_config, save_config
+from activevision.training.loggers import Logger, LoggerGroup, LogPosition, default_loggers
+from activevision.training.metrics import EpochAccumulator, episode_record
+from activevision.training.policy_files import BestWeights, write_policy
+from activevision.training.validation import summarise_validation
+
+#: ``(network, seeds) -> episodes.csv-style records``: one greedy episode per seed
+PlayGreedy = Callable[[StudentNetwork, Sequence[int]], list[dict[str, float]]]
+
+
+class StudentRun:
+    """A run directory whose policy is a student network. Subclasses set ``config`` and
+    ``step`` (the environment steps so far) and implement :meth:`_restore`."""
+
+    config: TrainConfig
+    step: int
+
+    def _open_run(
+        self, run_dir: str | os.PathLike[str], loggers: Sequence[Logger] | None, resuming: bool
+    ) -> None:
+        """Create (or reopen) the run directory, its config.json and its logs."""
+        self.run_dir = Path(run_dir)
+        if not resuming and ckpt.list_checkpoints(self.run_dir):
+            raise ValueError(f"{self.run_dir} already holds a run; resume it")
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        ckpt.remove_stale_writes(self.run_dir)
+        self.episode = 0
+        self.epoch_log = EpochAccumulator()
+        self.best = BestWeights()
+        self._epochs_logged = 0
+        self._validations_logged = 0
+        save_config(self.config, self.run_dir / run_state.CONFIG_FILE)
+        self.logger = LoggerGroup(
+            default_loggers(self.config, run_dir) if loggers is None else loggers
+        )
+        if not resuming:
+            self.logger.start(None)
+
+    # ------------------------------------------------------------------ records
+    def record_episode(self, reward: float, length: int, info: dict[str, Any]) -> None:
+        """An episode ended with this total reward, length and final info."""
+        record = episode_record(self.episode, self.step, reward, length, info)
+        self.logger.record_episode(record, self.step)
+        self.epoch_log.episodes.append(record)
+        self.episode += 1
+
+    def finish_epoch(self, epsilon: float, steps_per_s: float) -> dict[str, float]:
+        """Log the epoch's ``metrics.csv`` row and start the next epoch."""
+        epoch = self.step // self.config.run.epoch_steps
+        row = self.epoch_log.summary(epoch, self.step, epsilon, 0.0, steps_per_s)
+        self.logger.record_epoch(row, self.step)
+        self._epochs_logged += 1
+        self.epoch_log = EpochAccumulator()
+        return row
+
+    def validate_network(
+        self, network: StudentNetwork, play: PlayGreedy, metadata: dict[str, Any]
+    ) -> dict[str, float]:
+        """Greedy episodes of ``network`` on the validation seeds (the episodes of
+        ``activevision evaluate --seed eval_seed``); keeps the best weights."""
+        run = self.config.run
+        seeds = [episode_seed(run.eval_seed, i) for i in range(run.eval_episodes)]
+        row = summarise_validation(self.step, play(network, seeds), self.best.score)
+        self.logger.record_validation(row, self.step)
+        self._validations_logged += 1
+        if row["best"]:
+            self.best.keep(network, self.step, row["success_rate"])
+            self.best.write(self.run_dir, metadata)
+        return row
+
+    # ------------------------------------------------------------------ checkpoints
+    def run_state(self, algo: str, **extra: Any) -> str:
+        """``state.json``: counters, logged rows, the best validation and the config's
+        digest, plus the learner's ``extra``."""
+        return json.dumps(
+            {
+                "algo": algo,
+                "step": self.step,
+                "episode": self.episode,
+                **extra,
+                "epoch_log": self.epoch_log.to_dict(),
+                "metrics_rows": self._epochs_logged,
+                "evaluations_rows": self._validations_logged,
+                "best_eval": self.best.score if self.best.weights is not None else None,
+                "best_step": self.best.step,
+                "config_sha256": run_state.config_digest(self.run_dir),
+            }
+        )
+
+    def write_checkpoint(
+        self,
+        network: StudentNetwork,
+        metadata: dict[str, Any],
+        optimizer_state: dict[str, Any],
+        arrays: dict[str, np.ndarray],
+        state_json: str,
+    ) -> Path:
+        """Write a checkpoint (atomically) and ``policy.safetensors``."""
+        tensors = {f"online.{k}": v for k, v in network.state_dict().items()}
+        if self.best.weights is not None:
+            tensors.update({f"best.{k}": v for k, v in self.best.weights.items()})
+
+        def write_files(directory: Path) -> None:
+            ckpt.save_tensors(directory / "model.safetensors", tensors, metadata)
+            ckpt.save_torch_state(directory / "optimizer.pt", optimizer_state)
+            ckpt.save_arrays(directory / "replay.npz", arrays)
+            (directory / run_state.STATE_FILE).write_text(state_json)
+
+        path = ckpt.write_checkpoint(
+            self.run_dir, self.step, write_files, self.config.run.keep_checkpoints
+        )
+        write_policy(self.run_dir, network.state_dict(), metadata)
+        return path
+
+    @classmethod
+    def reopen(
+        cls, run_dir: str | os.PathLike[str], *, loggers: Sequence[Logger] | None = None
+    ) -> Self:
+        """Rebuild the trainer from the run's newest checkpoint (verified first; a
+        config.json edited after it is refused)."""
+        run_dir = Path(run_dir)
+        path = ckpt.latest_checkpoint(run_dir)
+        ckpt.verify_checkpoint(path)
+        config = load_config(run_dir / run_state.CONFIG_FILE)
+        try:
+            state = json.loads((path / run_state.STATE_FILE).read_text())
+            if state.get("config_sha256") != run_state.config_digest(run_dir):
+                raise ckpt.CheckpointError(
+                    f"{run_dir / run_state.CONFIG_FILE} was changed after checkpoint {path.name}"
+                )
+            trainer = cls(config, run_dir, loggers=loggers, _resuming=True)  # type: ignore[call-arg]
+            tensors, _ = ckpt.load_tensors(path / "model.safetensors")
+            trainer._restore(path, state, _prefixed(tensors, "online."))
+            trainer.episode = int(state["episode"])
+            trainer.epoch_log = EpochAccumulator.from_dict(state["epoch_log"])
+            trainer._epochs_logged = int(state["metrics_rows"])
+            trainer._validations_logged = int(state["evaluations_rows"])
+            if state["best_eval"] is not None:
+                best = _prefixed(tensors, "best.")
+                trainer.best.keep_weights(best, int(state["best_step"]), float(state["best_eval"]))
+        except (KeyError, TypeError, ValueError, RuntimeError) as error:
+            if isinstance(error, ckpt.CheckpointError):
+                raise
+            raise ckpt.CheckpointError(
+                f"checkpoint {path} does not fit this run ({type(error).__name__}: {error})"
+            ) from error
+        trainer.logger.start(
+            LogPosition(
+                trainer.step, trainer._epochs_logged, trainer.episode, trainer._validations_logged
+            )
+        )
+        return trainer
+
+    def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
+        """Put the learner's part of checkpoint ``path`` back: its network ``weights``,
+        optimiser, dataset or replay, step and generators."""
+        raise NotImplementedError
+
+    def close(self) -> None:
+        self.logger.close()
+
+
+def _prefixed(tensors: dict[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:
+    return {k.removeprefix(prefix): v for k, v in tensors.items() if k.startswith(prefix)}
+
+
+__all__ = ["PlayGreedy", "StudentRun"]
