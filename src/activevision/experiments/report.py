@@ -86,7 +86,8 @@ def write_report(run_dir: str | Path) -> Path:
             " goal view's (nats); regret_within: the share of episodes within 0.25 nats;"
             " oscillating: unsolved episodes that end swinging between two views.",
             "",
-            _table(rows, ["reward", "score"]),
+            # head travel (degrees per episode): evaluations written before it lack it
+            _table(rows, [m for m in ("reward", "score", "head_travel") if m in rows[0]]),
         ]
         if data.get("latency"):
             lat = data["latency"]
