@@ -25,8 +25,19 @@ def plot_run(
     evaluations_csv = run_dir / "evaluations.csv"
     validation = read_csv_columns(evaluations_csv) if evaluations_csv.exists() else {}
     out = Path(out_dir) if out_dir is not None else run_dir / "plots"
-    algo = load_config(run_dir / "config.json").algo if (run_dir / "config.json").exists() else ""
-    loss_title = "imitation loss (cross-entropy)" if algo == "dagger" else None
+    config = load_config(run_dir / "config.json") if (run_dir / "config.json").exists() else None
+    loss_title = _LOSS_TITLES.get(config.algo, None) if config is not None else None
+    if config is not None and config.algo == "dagger" and config.env.action_type == "continuous":
+        loss_title = "imitation loss (squared error + goal cross-entropy)"
     return plot_training(
         tables, out, title=run_dir.name, validation=validation, loss_title=loss_title
     )
+
+
+#: the loss curve's title where it is not DDQN's TD loss
+_LOSS_TITLES = {
+    "dagger": "imitation loss (cross-entropy)",
+    "sac": "critic loss (SAC)",
+    "td3": "critic loss (TD3)",
+    "ppo": "PPO loss (clip + value + entropy)",
+}
