@@ -335,13 +335,6 @@ class DaggerTrainer(StudentRun):
             self.run_state("dagger", rng=self.rng.bit_generator.state),
         )
 
-    @classmethod
-    def resume(
-        cls, run_dir: str | os.PathLike[str], *, loggers: Sequence[Logger] | None = None
-    ) -> DaggerTrainer:
-        """Rebuild the trainer from the run's newest checkpoint."""
-        return cls.reopen(run_dir, loggers=loggers)
-
     def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
         self.network.load_state_dict(weights)
         self.optimizer.load_state_dict(ckpt.load_torch_state(path / "optimizer.pt"))

@@ -211,13 +211,6 @@ class Sb3Trainer(StudentRun):
             ),
         )
 
-    @classmethod
-    def resume(
-        cls, run_dir: str | os.PathLike[str], *, loggers: Sequence[Logger] | None = None
-    ) -> Sb3Trainer:
-        """Rebuild the trainer from the run's newest checkpoint."""
-        return cls.reopen(run_dir, loggers=loggers)
-
     def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
         # the actor's weights are in the SB3 state dicts of optimizer.pt as well
         model, config = self.model, self.config

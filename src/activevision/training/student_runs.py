@@ -134,7 +134,7 @@ class StudentRun:
         return path
 
     @classmethod
-    def reopen(
+    def resume(
         cls, run_dir: str | os.PathLike[str], *, loggers: Sequence[Logger] | None = None
     ) -> Self:
         """Rebuild the trainer from the run's newest checkpoint (verified first; a
