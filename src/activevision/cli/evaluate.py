@@ -105,11 +105,15 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     latency: dict[str, float] = {}
     for name, policy in policies.items():
         records, summary, lat = evaluate_policy(
-            policy, args.episodes, args.seed, env=env, measure_latency=name.startswith("learned")
+            policy,
+            args.episodes,
+            args.seed,
+            env=env,
+            measure_latency=name.startswith("learned") and not latency,  # the first one
         )
         summaries[name] = summary
         episodes += [{"method": name, **r} for r in records]
-        if lat and not latency:
+        if lat:
             latency = latency_summary(lat)
     print(format_table(summaries))
     if latency:

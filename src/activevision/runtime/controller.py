@@ -152,7 +152,8 @@ class HeadController:
             self._outputs.append(meta.goal_output_name)
             self._evidence = GoalEvidence(1, meta.goal_views, meta.action_table)
         self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
-        continuous = meta.action_type == "continuous" and meta.max_move is not None
+        # policy.json's reader requires max_move_deg with continuous actions
+        continuous = meta.action_type == "continuous"
         self._max_move = np.asarray(meta.max_move) if continuous else None
         self.last_q_values: np.ndarray | None = None
         self.last_goal_logits: np.ndarray | None = None

@@ -360,12 +360,12 @@ def play_episodes(
     if evidence is not None:
         evidence.reset(slots)
     active = np.ones(sim.n, dtype=bool)
+    continuous = sim.cfg.action_type == "continuous"
+    actions = np.zeros((sim.n, 2) if continuous else sim.n, np.float64 if continuous else int)
     for _ in range(MAX_EPISODE_STEPS):
         idx = np.flatnonzero(active)
         image = sim.render(idx)[:, None]
         vector = observations.vectors(sim)[idx]
-        continuous = sim.cfg.action_type == "continuous"
-        actions = np.zeros((sim.n, 2) if continuous else sim.n, np.float64 if continuous else int)
         actions[idx] = choose(idx, image, vector)
         observations.record(actions[idx], idx)
         _, terminated, _, _ = sim.step(actions, active=active)

@@ -9,6 +9,14 @@ from pathlib import Path
 from activevision.training.config import load_config
 from activevision.training.metrics import read_csv_columns
 
+#: the loss curve's title where it is not DDQN's TD loss
+_LOSS_TITLES = {
+    "dagger": "imitation loss (cross-entropy)",
+    "sac": "critic loss (SAC)",
+    "td3": "critic loss (TD3)",
+    "ppo": "PPO loss (clip + value + entropy)",
+}
+
 
 def plot_run(
     run_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str] | None = None
@@ -32,12 +40,3 @@ def plot_run(
     return plot_training(
         tables, out, title=run_dir.name, validation=validation, loss_title=loss_title
     )
-
-
-#: the loss curve's title where it is not DDQN's TD loss
-_LOSS_TITLES = {
-    "dagger": "imitation loss (cross-entropy)",
-    "sac": "critic loss (SAC)",
-    "td3": "critic loss (TD3)",
-    "ppo": "PPO loss (clip + value + entropy)",
-}

@@ -130,7 +130,7 @@ class Sb3Trainer(StudentRun):
         self.env = make_vec_env(config)
         self.env.seed(config.seed)
         self.model = build_model(config, self.env, self.device)
-        self.n_actions = int(getattr(make_env(config).action_space, "n", 2))
+        self.n_actions = int(getattr(self.env.action_space, "n", 2))
         self._updates_seen = 0
         self._open_run(run_dir, loggers, _resuming)
 
