@@ -26,6 +26,14 @@ def test_tiny_match_writes_table_csv_and_figures(tmp_path, capsys):
     assert gif.n_frames == 10  # the start and 9 ticks
 
 
+def test_a_continuous_match(tmp_path, capsys):
+    out = tmp_path / "m"
+    assert main([*TINY, "--action-type", "continuous", "--out", str(out)]) == 0
+    assert "continuous head moves of up to 3 deg per axis" in capsys.readouterr().out
+    with (out / "match.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["ball_track", "random"]
+
+
 def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     out = tmp_path / "m"
     assert main([*TINY, "--out", str(out)]) == 0
@@ -42,6 +50,7 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
         (["match", "--matches", "0"], "--matches"),
         (["match", "--step-deg", "90"], "--step-deg"),
         (["match", "--walk", "home"], "--walk"),
+        (["match", "--action-type", "diagonal"], "--action-type"),
         (["match", "--model", "missing.onnx", "--matches", "1"], "missing.onnx"),
         (["match", "--methods", "random", "--clip-method", "ball_track"], "--clip-method"),
     ],

@@ -23,6 +23,7 @@ from activevision.experiments.match_methods import (
     ball_direction,
     default_match_methods,
     make_match_policy,
+    move_towards,
 )
 
 SMALL = MatchConfig(ticks=12)
@@ -40,6 +41,36 @@ def test_every_strategy_plays_and_the_metrics_are_in_range(method):
     assert (result.per_match["position_rmse"] >= 0).all()
     assert result.error_curve.shape == (12, 2)
     assert len(result.clip.pose) == 13  # the start and every tick
+
+
+CONTINUOUS = SMALL.replace(action_type="continuous", max_move_deg=(3.0, 3.0))
+
+
+@pytest.mark.parametrize("method", default_match_methods(None))
+def test_every_strategy_plays_a_continuous_match(method):
+    """In a continuous match every strategy returns (N, 2) moves the env accepts."""
+    result = play_matches(method, CONTINUOUS, 2, seed=3)
+    assert np.isfinite(result.per_match["position_rmse"]).all()
+    # no tick moves the head more than 3 deg per axis: sqrt(2) * 3 deg per tick at most
+    most = math.sqrt(2) * 3.0 / CONTINUOUS.tick_seconds
+    assert (result.per_match["head_travel"] <= most + 1e-9).all()
+
+
+def test_move_towards_by_hand():
+    """Discrete: the 3-deg move that ends closest; continuous: straight there, each axis
+    capped at 3 deg (as a fraction of it)."""
+    head = np.radians([[0.0, 20.0], [0.0, 20.0]])
+    target = np.radians([[10.0, 21.0], [1.0, 20.5]])
+    assert move_towards(head, target, SMALL).tolist() == [1, 0]  # pan left; stay
+    np.testing.assert_allclose(
+        move_towards(head, target, CONTINUOUS), [[1.0, 1 / 3], [1 / 3, 0.5 / 3]]
+    )
+
+
+def test_a_q_network_refuses_a_continuous_match(tmp_path):
+    (tmp_path / "config.json").write_text('{"algo": "ddqn"}')
+    with pytest.raises(ValueError, match="discrete matches only"):
+        make_match_policy("learned", CONTINUOUS, run=tmp_path)
 
 
 def test_same_seeds_same_matches():

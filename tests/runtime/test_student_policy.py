@@ -185,3 +185,27 @@ def test_continuous_metadata_must_say_how_far_a_move_goes(tmp_path):
     )
     with pytest.raises(PolicyFileError, match="output shape"):
         HeadController(paths.model_path)
+
+
+@pytest.mark.parametrize("action_type", ["discrete", "continuous"])
+def test_a_continuous_policy_plays_matches_at_the_match_head_speed(tmp_path, action_type):
+    """In a match, the continuous policy's commanded head angles are followed at the match's
+    head speed: the discrete 3-deg move that ends closest, or a move of up to 3 deg per axis."""
+    from activevision.envs.match.config import MatchConfig
+    from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+    from activevision.experiments.match_methods import OnnxMatchPolicy, move_towards
+
+    _, paths = continuous_export(tmp_path)
+    config = MatchConfig(ticks=3, action_type=action_type, max_move_deg=(3.0, 3.0))
+    env = ActiveVisionMatchVectorEnv(2, config)
+    obs, info = env.reset(seed=0)
+    policy = OnnxMatchPolicy(config, paths.model_path)
+    policy.reset(2, np.random.default_rng(0))
+    actions = policy.act(obs, info)
+    for i in range(2):
+        command = HeadController(paths.model_path).act(obs[i, -1], *info["head"][i])
+        target = np.array([[command.target_pan, command.target_tilt]])
+        want = move_towards(info["head"][i : i + 1], target, config)[0]
+        np.testing.assert_array_equal(actions[i], want)
+    env.step(actions)  # the env accepts them
+    env.close()

@@ -61,13 +61,19 @@ def cmd_match(args: argparse.Namespace) -> None:
     from activevision.io import write_csv
 
     config = MatchConfig(
-        ticks=args.ticks, step_deg=args.step_deg, walk=WalkConfig(target=args.walk)
+        ticks=args.ticks,
+        step_deg=args.step_deg,
+        action_type=args.action_type,
+        max_move_deg=(args.step_deg, args.step_deg),
+        walk=WalkConfig(target=args.walk),
     )
     minutes = args.ticks * config.tick_seconds / 60
+    head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
     print(
         f"{len(methods)} methods x {args.matches} matches of {args.ticks} ticks"
         f" ({minutes:.1f} min of play), seeds {args.seed}..{args.seed + args.matches - 1},"
-        f" head {args.step_deg:g} deg per {config.tick_seconds:g} s, walking to {args.walk}"
+        f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
+        f" walking to {args.walk}"
     )
     print(table_header(), flush=True)
     results = compare_matches(
@@ -86,7 +92,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     write_csv(csv_path, csv_rows(results, args.matches, args.seed))
     title = (
         f"{args.matches} matches x {minutes:.1f} min, seed {args.seed},"
-        f" head {args.step_deg:g} deg/tick"
+        f" {args.action_type} head {args.step_deg:g} deg/tick"
     )
     points = {
         r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()} for r in results
@@ -136,6 +142,14 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--seed", type=seed, default=0, help="match i plays seed SEED + i")
     p.add_argument(
         "--step-deg", type=_step_deg, default=3.0, help="head move per tick (paper: 3 degrees)"
+    )
+    p.add_argument(
+        "--action-type",
+        choices=("discrete", "continuous"),
+        default="discrete",
+        help="discrete: the 9 moves of --step-deg (the paper's); continuous: any move of up to"
+        " --step-deg per axis (every strategy moves straight to its target; an exported"
+        " policy's command is followed at that speed)",
     )
     p.add_argument(
         "--walk",

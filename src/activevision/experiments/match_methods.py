@@ -3,9 +3,10 @@ matches, and the registry ``activevision match`` takes its ``--methods`` from.
 
 A strategy sees what a robot knows -- its head angles, its UKF belief and its ball model
 (the env's info keys ``head``, ``belief_mean``, ``belief_cov``, ``ball_relative``,
-``ball_age``) -- and, if it is learned, the camera image. It returns one discrete action per
-match: most strategies pick a head *target* and move towards it at head speed (the greedy
-action), as a real head does.
+``ball_age``) -- and, if it is learned, the camera image. It returns one action per match,
+of the env's kind (``MatchConfig.action_type``): most strategies pick a head *target* and
+move towards it at head speed, as a real head does -- the greedy discrete move, or the
+continuous move straight there, at most ``max_move_deg`` per axis.
 
 The handwritten strategies follow what RoboCup teams describe; their published code is
 C++/Python behaviour trees with many more states, so each is the core of the pattern, not a
@@ -41,7 +42,7 @@ from typing import Protocol
 
 import numpy as np
 
-from activevision.envs.actions import action_table, greedy_actions
+from activevision.envs.actions import action_table, oracle_actions
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.observations import IMAGE_KEY, Observation
 from activevision.geometry import LandmarkSet, clip_head, field_landmarks
@@ -57,7 +58,7 @@ class MatchPolicy(Protocol):
         """N matches start (all at once: the runner plays them in lock-step)."""
 
     def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
-        """The discrete actions (N,) for this tick."""
+        """The actions for this tick: (N,) discrete, or (N, 2) continuous in [-1, 1]."""
 
 
 def ball_direction(info: dict[str, np.ndarray], config: MatchConfig) -> np.ndarray:
@@ -69,14 +70,21 @@ def ball_direction(info: dict[str, np.ndarray], config: MatchConfig) -> np.ndarr
     return np.column_stack(clip_head(pan, tilt, config.camera))
 
 
+def move_towards(head: np.ndarray, target: np.ndarray, config: MatchConfig) -> np.ndarray:
+    """The actions of ``config``'s kind that move heads (N, 2) towards targets (N, 2) rad at
+    head speed: the discrete move of ``step_deg`` that ends closest, or the continuous move
+    straight there, at most ``max_move_deg`` per axis."""
+    table = action_table(config.step_deg, "8way")
+    return oracle_actions(head, target, config.action_type, table, config.max_move)
+
+
 class TargetPolicy:
-    """A strategy that picks head targets: the greedy move towards them at head speed."""
+    """A strategy that picks head targets and moves towards them at head speed."""
 
     name = "target"
 
     def __init__(self, config: MatchConfig) -> None:
         self.config = config
-        self.table = action_table(config.step_deg, "8way")
         self.step = config.head_step
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
@@ -86,7 +94,7 @@ class TargetPolicy:
         raise NotImplementedError
 
     def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
-        return greedy_actions(info["head"], self.targets(info), self.table)
+        return move_towards(info["head"], self.targets(info), self.config)
 
     def reached(self, info: dict[str, np.ndarray], target: np.ndarray) -> np.ndarray:
         """Heads within one move of ``target`` (N, 2)."""
@@ -276,39 +284,48 @@ class OnnxMatchPolicy:
         self.tick += 1
         images = obs[IMAGE_KEY] if isinstance(obs, dict) else obs
         mean, cov = info["belief_mean"], info["belief_cov"]
-        actions = np.zeros(len(self.controllers), dtype=np.int64)
+        commands = []
         for i, controller in enumerate(self.controllers):
             inputs = controller.inputs
             pan, tilt = info["head"][i]
-            actions[i] = controller.act(
-                images[i, -1],
-                pan,
-                tilt,
-                pose=tuple(mean[i]) if "pose" in inputs else None,
-                proposal=tuple(self.proposal[i]) if "proposal" in inputs else None,
-                pose_error=float(np.sqrt(cov[i, 0, 0] + cov[i, 1, 1]))
-                if "pose_error" in inputs
-                else None,
-            ).action
-        return actions
+            commands.append(
+                controller.act(
+                    images[i, -1],
+                    pan,
+                    tilt,
+                    pose=tuple(mean[i]) if "pose" in inputs else None,
+                    proposal=tuple(self.proposal[i]) if "proposal" in inputs else None,
+                    pose_error=float(np.sqrt(cov[i, 0, 0] + cov[i, 1, 1]))
+                    if "pose_error" in inputs
+                    else None,
+                )
+            )
+        if self.config.action_type == "discrete" and not self.controllers[0].continuous:
+            return np.array([c.action for c in commands], dtype=np.int64)
+        # a continuous policy, or a continuous match: towards the head angles the policy
+        # commands, at the match's head speed
+        targets = np.array([(c.target_pan, c.target_tilt) for c in commands])
+        return move_towards(info["head"], targets, self.config)
 
 
 class LearnedMatchPolicy:
     """A training run's network (an image Q-network, e.g. ``--preset match_ddqn``): greedy
-    actions for every match in one batched forward pass."""
+    actions for every match in one batched forward pass (discrete matches only)."""
 
     name = "learned"
 
-    def __init__(self, run: Path) -> None:
+    def __init__(self, config: MatchConfig, run: Path) -> None:
         import torch
 
         from activevision.training import load_config, load_policy
 
-        config = load_config(run / "config.json")
-        if config.algo != "ddqn":
+        run_config = load_config(run / "config.json")
+        if run_config.algo != "ddqn":
             raise ValueError(
-                f"{run}: the match plays image Q-networks (algo ddqn), not {config.algo}"
+                f"{run}: the match plays image Q-networks (algo ddqn), not {run_config.algo}"
             )
+        if config.action_type != "discrete":
+            raise ValueError(f"{run}: an image Q-network plays discrete matches only")
         self.torch = torch
         self.net = load_policy(run).eval()
 
@@ -327,11 +344,14 @@ class RandomMoves:
 
     def __init__(self, config: MatchConfig) -> None:
         self.n_actions = len(action_table(config.step_deg, "8way"))
+        self.continuous = config.action_type == "continuous"
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         self.n, self.rng = n, rng
 
     def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
+        if self.continuous:
+            return self.rng.uniform(-1.0, 1.0, size=(self.n, 2))
         return self.rng.integers(self.n_actions, size=self.n)
 
 
@@ -372,7 +392,7 @@ MATCH_METHODS: dict[str, MatchMethod] = {
         ),
         MatchMethod(
             "learned",
-            lambda c, _m, run: LearnedMatchPolicy(run),  # type: ignore[arg-type]
+            lambda c, _m, run: LearnedMatchPolicy(c, run),  # type: ignore[arg-type]
             "a training run's image Q-network (--run), e.g. --preset match_ddqn",
             True,
             needs_run=True,

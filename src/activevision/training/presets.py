@@ -184,6 +184,12 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         lambda: dagger("image+head+pose+proposal", 400_000, (0.0, 2.0)),
         "DAgger on image, head, a prior pose 0-2 m/rad off and its proposal",
     ),
+    # dagger_prior with continuous moves: 200,000 steps, as dagger_head_continuous (README:
+    # continuous head control)
+    "dagger_prior_continuous": (
+        lambda: dagger("image+head+pose+proposal", 200_000, (0.0, 2.0), action_type="continuous"),
+        "dagger_prior with continuous moves of up to 10 degrees a step",
+    ),
     # Stable-Baselines3's continuous learners on dagger_head_continuous's task (README:
     # continuous head control); each fits in 30 minutes on a 2-core CPU
     "sac_head": (lambda: stable_baselines("sac", 60_000), "SB3 SAC, continuous moves"),
