@@ -24,6 +24,8 @@ from activevision.experiments.match_methods import (
     default_match_methods,
     make_match_policy,
     move_towards,
+    privileged,
+    privileged_methods,
 )
 
 SMALL = MatchConfig(ticks=12)
@@ -100,6 +102,37 @@ def test_pareto_front_by_hand():
     assert pareto_front(results) == ["a", "b", "d"]  # c is beaten by a on both
     rows = csv_rows(results, 4, 0)
     assert rows[0]["position_rmse"] == pytest.approx(0.1) and rows[0]["matches"] == 4
+
+
+def test_references_neither_join_nor_beat_the_front():
+    results = [fake("a", 0.1, 0.5), fake("b", 0.2, 0.6), fake("oracle", 0.05, 0.9)]
+    assert pareto_front(results) == ["oracle"]
+    assert pareto_front(results, references={"oracle"}) == ["a", "b"]
+    assert privileged_methods() == {"oracle_ball", "oracle_entropy"}
+
+
+def test_privileged_info_by_hand():
+    """The robot at (1, 2) facing +y, the ball at (1, 4): 2 m straight ahead; its belief
+    (wrong) and ball model (wrong) are replaced by the truth."""
+    info = {
+        "pose": np.array([[1.0, 2.0, math.pi / 2]]),
+        "ball": np.array([[1.0, 4.0]]),
+        "belief_mean": np.zeros((1, 3)),
+        "ball_relative": np.array([[0.0, -1.0]]),
+    }
+    truth = privileged(info)
+    np.testing.assert_allclose(truth["ball_relative"], [[2.0, 0.0]], atol=1e-12)
+    np.testing.assert_array_equal(truth["belief_mean"], info["pose"])
+    assert info["ball_relative"][0, 1] == -1.0  # the caller's dict is untouched
+
+
+def test_the_true_ball_is_seen_at_least_as_often_as_the_model_s():
+    """``oracle_ball`` tracks the true ball, ``ball_track`` the robot's (stale after kicks)
+    model: over the same 6 matches the oracle sees it at least as often."""
+    config = MatchConfig(ticks=200)
+    model = play_matches("ball_track", config, 6, seed=5).per_match["ball_in_view"].mean()
+    truth = play_matches("oracle_ball", config, 6, seed=5).per_match["ball_in_view"].mean()
+    assert truth >= model
 
 
 def test_ball_direction_by_hand():

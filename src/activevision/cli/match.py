@@ -38,7 +38,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     check_outputs(named=files, overwrite=args.overwrite)
     if args.model is not None and not args.model.is_file():
         raise ValueError(f"--model {args.model}: no such file")
-    from activevision.experiments.match_methods import default_match_methods
+    from activevision.experiments.match_methods import default_match_methods, privileged_methods
 
     if args.run is not None and not (args.run / "config.json").is_file():
         raise ValueError(f"--run {args.run}: not a training run (no config.json)")
@@ -85,8 +85,13 @@ def cmd_match(args: argparse.Namespace) -> None:
         args.run,
         progress=lambda r: print(f"{format_result(r)}   ({r.seconds:.0f} s)", flush=True),
     )
-    front = pareto_front(results)
+    references = privileged_methods() & set(methods)
+    front = pareto_front(results, references)
     print(f"Pareto front (position RMSE vs ball in view): {', '.join(front)}")
+    if references:
+        print(
+            f"privileged references (read the simulator's truth): {', '.join(sorted(references))}"
+        )
     csv_path, pareto_path, error_path, clip_path = files
     out.mkdir(parents=True, exist_ok=True)
     write_csv(csv_path, csv_rows(results, args.matches, args.seed))
@@ -97,7 +102,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     points = {
         r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()} for r in results
     }
-    plot_pareto(points, front, pareto_path, title)
+    plot_pareto(points, front, pareto_path, title, references)
     plot_error_over_time(
         {r.method: r.error_curve for r in results}, config.tick_seconds, error_path, title
     )

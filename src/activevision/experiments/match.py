@@ -17,7 +17,7 @@ draws. Strategies only change where the head looks, and so what is detected.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -175,11 +175,13 @@ def csv_rows(results: Sequence[MethodResult], matches: int, seed: int) -> list[d
     return rows
 
 
-def pareto_front(results: Sequence[MethodResult]) -> list[str]:
-    """The methods no other beats on both position RMSE (lower) and ball in view (higher)."""
+def pareto_front(results: Sequence[MethodResult], references: Collection[str] = ()) -> list[str]:
+    """The methods no other beats on both position RMSE (lower) and ball in view (higher);
+    ``references`` (privileged methods) neither join nor beat anyone."""
     points = {
         r.method: (r.per_match["position_rmse"].mean(), r.per_match["ball_in_view"].mean())
         for r in results
+        if r.method not in references
     }
     front = []
     for name, (rmse, ball) in points.items():

@@ -30,6 +30,13 @@ port:
 * ``learned``: a training run's network (``--run``; e.g. ``--preset match_ddqn``), greedy,
   batched over the matches.
 * ``random``: uniformly random moves.
+
+Two references are *privileged* -- they read what only the simulator knows, so no robot
+can run them -- and bound what a learned strategy could reach from the same head:
+
+* ``oracle_ball``: ``ball_track`` on the true ball;
+* ``oracle_entropy``: ``entropy_greedy`` from the true pose (with the belief's covariance)
+  on the true ball.
 """
 
 from __future__ import annotations
@@ -308,6 +315,35 @@ class OnnxMatchPolicy:
         return move_towards(info["head"], targets, self.config)
 
 
+def privileged(info: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """``info`` with the robot's knowledge replaced by the simulator's truth: the belief's
+    mean by the true pose and the ball model by the true ball (in the true robot frame)."""
+    pose, ball = info["pose"], info["ball"]
+    gap = ball[:, :2] - pose[:, :2]
+    c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+    relative = np.column_stack([c * gap[:, 0] + s * gap[:, 1], -s * gap[:, 0] + c * gap[:, 1]])
+    return {**info, "belief_mean": pose, "ball_relative": relative}
+
+
+class OracleBall(BallTrack):
+    """Privileged: keep the *true* ball centred."""
+
+    name = "oracle_ball"
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        return super().targets(privileged(info))
+
+
+class OracleEntropy(EntropyGreedy):
+    """Privileged: Algorithm 1 every ``every`` ticks from the *true* pose (with the belief's
+    covariance) on the *true* ball."""
+
+    name = "oracle_entropy"
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        return super().targets(privileged(info))
+
+
 class LearnedMatchPolicy:
     """A training run's network (an image Q-network, e.g. ``--preset match_ddqn``): greedy
     actions for every match in one batched forward pass (discrete matches only)."""
@@ -363,6 +399,8 @@ class MatchMethod:
     help: str
     needs_images: bool  #: plays from camera images (the others need no rendering)
     needs_run: bool = False  #: needs ``--run`` (a trained match policy)
+    #: reads the simulator's truth: a reference, not a strategy (off the Pareto front)
+    privileged: bool = False
 
 
 MATCH_METHODS: dict[str, MatchMethod] = {
@@ -398,12 +436,31 @@ MATCH_METHODS: dict[str, MatchMethod] = {
             needs_run=True,
         ),
         MatchMethod("random", lambda c, _m, _r: RandomMoves(c), "uniformly random moves", False),
+        MatchMethod(
+            "oracle_ball",
+            lambda c, _m, _r: OracleBall(c),
+            "privileged reference: ball_track on the true ball",
+            False,
+            privileged=True,
+        ),
+        MatchMethod(
+            "oracle_entropy",
+            lambda c, _m, _r: OracleEntropy(c),
+            "privileged reference: entropy_greedy from the true pose on the true ball",
+            False,
+            privileged=True,
+        ),
     )
 }
 
 
 def match_method_names() -> tuple[str, ...]:
     return tuple(MATCH_METHODS)
+
+
+def privileged_methods() -> frozenset[str]:
+    """The references that read the simulator's truth."""
+    return frozenset(n for n, m in MATCH_METHODS.items() if m.privileged)
 
 
 def default_match_methods(run: Path | None) -> tuple[str, ...]:

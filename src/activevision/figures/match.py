@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 
 import numpy as np
 from matplotlib.patches import Ellipse, Polygon
@@ -22,10 +22,15 @@ Point = Mapping[str, tuple[float, float, float]]
 
 
 def plot_pareto(
-    points: Mapping[str, Point], front: Sequence[str], path: str | os.PathLike[str], title: str
+    points: Mapping[str, Point],
+    front: Sequence[str],
+    path: str | os.PathLike[str],
+    title: str,
+    references: Collection[str] = (),
 ) -> None:
     """Position RMSE (y, lower is better) against the share of ticks with the ball in view
-    (x, higher is better), with 95% whiskers; the Pareto front joined by a line."""
+    (x, higher is better), with 95% whiskers; the Pareto front joined by a line, privileged
+    ``references`` drawn as crosses."""
     fig = new_figure(figsize=(7.0, 5.0), layout="constrained")
     ax = fig.add_subplot()
     for name, p in points.items():
@@ -35,10 +40,11 @@ def plot_pareto(
             by[0],
             xerr=[[100 * (bx[0] - bx[1])], [100 * (bx[2] - bx[0])]],
             yerr=[[by[0] - by[1]], [by[2] - by[0]]],
-            fmt="o" if name in front else "s",
+            fmt="x" if name in references else "o" if name in front else "s",
             ms=7,
             capsize=3,
-            label=name + (" (front)" if name in front else ""),
+            label=name
+            + (" (front)" if name in front else " (privileged)" if name in references else ""),
         )
     on_front = sorted(
         (100 * points[n]["ball_in_view"][0], points[n]["position_rmse"][0]) for n in front
