@@ -18,7 +18,11 @@ from activevision.envs.observations import vector_keys, vector_sizes  # noqa: E4
 from activevision.experiments.policies import LearnedPolicy, OnnxPolicy  # noqa: E402
 from activevision.export import export_onnx, policy_metadata  # noqa: E402
 from activevision.runtime import HeadController  # noqa: E402
-from activevision.runtime.goal_evidence import GoalEvidence, greedy_actions  # noqa: E402
+from activevision.runtime.goal_evidence import (  # noqa: E402
+    GoalEvidence,
+    greedy_actions,
+    policy_actions,
+)
 
 KIND = "image+head+pose+proposal"
 
@@ -100,15 +104,28 @@ def test_goal_evidence_sums_log_probabilities_and_moves_greedily():
     table = np.radians([[0, 0], [3, 0], [-3, 0], [0, -3], [0, 3]])
     evidence = GoalEvidence(2, views, table)
     heads = np.zeros((2, 2)) + np.radians([0.0, 20.0])
+    outputs = np.zeros((2, 5))  # the action head, ignored while the goal head speaks
+
+    def act(goal_logits, slots):
+        return policy_actions(
+            outputs[: len(slots)], goal_logits, heads[slots], None, evidence, slots
+        )
+
     # slot 0: view 1 a little better; slot 1: view 0 much better
-    first = evidence.act(np.array([[0.0, 0.5, -5.0], [3.0, 0.0, -5.0]]), heads, np.arange(2))
+    first = act(np.array([[0.0, 0.5, -5.0], [3.0, 0.0, -5.0]]), np.arange(2))
     assert list(first) == [1, 2]  # pan left (+) towards +30, pan right towards -30
     # a frame that favours view 0 a little does not turn slot 0 around...
-    assert evidence.act(np.array([[0.4, 0.0, -5.0]]), heads[:1], np.array([0]))[0] == 1
+    assert act(np.array([[0.4, 0.0, -5.0]]), np.array([0]))[0] == 1
     # ...but lasting evidence does; log-softmax sums, not raw logits
     for _ in range(3):
-        action = evidence.act(np.array([[2.0, 0.0, -5.0]]), heads[:1], np.array([0]))[0]
+        action = act(np.array([[2.0, 0.0, -5.0]]), np.array([0]))[0]
     assert action == 2
+    # without goal logits: the action head's argmax; a continuous policy's clipped output
+    assert list(policy_actions(np.array([[0, 3, 1, 0, 0.0]]), None, heads[:1])) == [1]
+    np.testing.assert_array_equal(
+        policy_actions(np.array([[2.0, -0.5]]), None, heads[:1], np.radians([10, 10])),
+        [[1.0, -0.5]],
+    )
     evidence.reset()
     assert not evidence.evidence.any()
     assert list(greedy_actions(heads, views[[2, 2]], table)) == [4, 4]  # tilt down towards 45

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from activevision.envs.actions import action_table, continuous_moves, greedy_actions
+from activevision.envs.actions import action_table, greedy_actions
 from activevision.envs.config import EnvConfig
 from activevision.envs.observations import IMAGE_KEY, Observation, flatten_vectors, vector_keys
 from activevision.envs.robots import RobotsConfig
@@ -26,7 +26,7 @@ from activevision.geometry import field_landmarks
 from activevision.geometry.angles import wrap_angle
 from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
 from activevision.rendering.appearance import AppearanceConfig
-from activevision.runtime.goal_evidence import GoalEvidence
+from activevision.runtime.goal_evidence import GoalEvidence, policy_actions
 from activevision.runtime.metadata import PolicyFileError
 from activevision.typecheck import config_from_dict
 
@@ -247,16 +247,17 @@ class LearnedPolicy:
                 torch.from_numpy(vector[None]).to(self.device),
             )
             head = np.asarray(info["head"], dtype=np.float64)[None]
+            action = policy_actions(
+                logits.cpu().numpy(),
+                None if goal_logits is None else goal_logits.cpu().numpy(),
+                head,
+                self.max_move,
+                self.goal_evidence,
+            )[0]
             if self.max_move is not None:
-                move = logits.cpu().numpy().astype(np.float64).clip(-1.0, 1.0)
-                if self.goal_evidence is not None and goal_logits is not None:
-                    target = self.goal_evidence.target(goal_logits.cpu().numpy(), np.zeros(1, int))
-                    move = continuous_moves(head, target, self.max_move)
-                pan, tilt = head[0] + move[0] * self.max_move
+                pan, tilt = head[0] + action * self.max_move
                 return HeadTarget(float(pan), float(tilt))
-            if self.goal_evidence is None or goal_logits is None:
-                return int(logits.argmax(dim=1).item())
-            return int(self.goal_evidence.act(goal_logits.cpu().numpy(), head, np.zeros(1, int))[0])
+            return int(action)
 
 
 def with_world(

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from activevision.runtime.goal_evidence import GoalEvidence, continuous_moves
+from activevision.runtime.goal_evidence import GoalEvidence, policy_actions
 from activevision.runtime.metadata import (
     CameraModel,
     PolicyFileError,
@@ -250,33 +250,27 @@ class HeadController:
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
         self._fill_vector(pan, tilt, pose, proposal, pose_error)
         scores = self.q_values(frame, color_order)
-        if self._max_move is not None:
-            return self._continuous_command(scores, pan, tilt)
-        action = int(np.argmax(scores))
         goal_logits = self.last_goal_logits
-        if self._evidence is not None and goal_logits is not None:
-            # move towards the goal view with the most evidence so far
-            head = np.array([[pan, tilt]])
-            action = int(self._evidence.act(goal_logits[None], head, np.zeros(1, int))[0])
-        if len(self._history):
-            self._history[:-1] = self._history[1:]
-            self._history[-1] = action
-        d_pan, d_tilt = self._table[action]
+        # the argmax action or the continuous move; with goal evidence, the move towards
+        # the goal view with the most evidence so far
+        chosen = policy_actions(
+            scores[None],
+            None if goal_logits is None else goal_logits[None],
+            np.array([[pan, tilt]]),
+            self._max_move,
+            self._evidence,
+        )[0]
+        if self._max_move is not None:
+            action = -1
+            d_pan, d_tilt = (float(v) for v in chosen * self._max_move)
+        else:
+            action = int(chosen)
+            if len(self._history):
+                self._history[:-1] = self._history[1:]
+                self._history[-1] = action
+            d_pan, d_tilt = self._table[action]
         target_pan, target_tilt = self.metadata.head_limits.clip(pan + d_pan, tilt + d_tilt)
         return HeadCommand(action, d_pan, d_tilt, target_pan, target_tilt)
-
-    def _continuous_command(self, output: np.ndarray, pan: float, tilt: float) -> HeadCommand:
-        """The move of a continuous policy: its output, or with goal evidence the move
-        straight towards the best-supported view, times ``max_move``."""
-        assert self._max_move is not None
-        move = np.clip(np.asarray(output, dtype=np.float64), -1.0, 1.0)
-        goal_logits = self.last_goal_logits
-        if self._evidence is not None and goal_logits is not None:
-            target = self._evidence.target(goal_logits[None], np.zeros(1, int))
-            move = continuous_moves(np.array([[pan, tilt]]), target, self._max_move)[0]
-        d_pan, d_tilt = (float(v) for v in move * self._max_move)
-        target_pan, target_tilt = self.metadata.head_limits.clip(pan + d_pan, tilt + d_tilt)
-        return HeadCommand(-1, d_pan, d_tilt, target_pan, target_tilt)
 
     def _fill_vector(
         self,

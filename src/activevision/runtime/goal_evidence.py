@@ -66,6 +66,30 @@ class GoalEvidence:
         goals: np.ndarray = self.views[np.argmax(self.evidence[slots], axis=1)]
         return goals
 
-    def act(self, goal_logits: np.ndarray, heads: np.ndarray, slots: np.ndarray) -> np.ndarray:
-        """:meth:`target`, then the greedy discrete moves towards it from ``heads`` (M, 2)."""
-        return greedy_actions(heads, self.target(goal_logits, slots), self.table)
+
+def policy_actions(
+    outputs: np.ndarray,
+    goal_logits: np.ndarray | None,
+    heads: np.ndarray,
+    max_move: np.ndarray | None = None,
+    evidence: GoalEvidence | None = None,
+    slots: np.ndarray | None = None,
+) -> np.ndarray:
+    """The actions of a student policy for M heads ((M, 2) pan, tilt rad) from its outputs:
+    the argmax of its action logits (M, A), (M,) int, or for a continuous policy
+    (``max_move``: pan, tilt rad) its move (M, 2) clipped to [-1, 1]. With ``evidence`` and
+    ``goal_logits`` (M, V): the move towards the view its summed goal evidence picks for
+    slots ``slots`` (default: the first M) instead: a move of the evidence's action table,
+    or the continuous move straight there. The trainer, the evaluator and the robot runtime
+    all act through this function."""
+    if evidence is not None and goal_logits is not None:
+        rows = np.arange(len(heads)) if slots is None else slots
+        target = evidence.target(goal_logits, rows)
+        if max_move is None:
+            return greedy_actions(heads, target, evidence.table)
+        return continuous_moves(heads, target, max_move)
+    if max_move is None:
+        actions: np.ndarray = np.argmax(outputs, axis=1)
+        return actions
+    moves: np.ndarray = np.clip(np.asarray(outputs, dtype=np.float64), -1.0, 1.0)
+    return moves

@@ -50,7 +50,7 @@ from activevision.envs.observations import (
 )
 from activevision.envs.simulation import EpisodeBatch
 from activevision.rendering.appearance import LOOK_FIELDS
-from activevision.runtime.goal_evidence import GoalEvidence
+from activevision.runtime.goal_evidence import GoalEvidence, policy_actions
 from activevision.training import checkpoint as ckpt
 from activevision.training.config import TrainConfig
 from activevision.training.cpu import configure_torch_cpu, resolve_device
@@ -394,15 +394,13 @@ def student_actions(
             torch.from_numpy(image).to(device), torch.from_numpy(vector).to(device)
         )
     continuous = sim.cfg.action_type == "continuous"
-    if evidence is None or goal_logits is None:
-        if continuous:
-            moves: np.ndarray = logits.cpu().numpy().astype(np.float64).clip(-1.0, 1.0)
-            return moves
-        actions: np.ndarray = logits.argmax(dim=1).cpu().numpy()
-        return actions
-    target = evidence.target(goal_logits.cpu().numpy(), slots)
-    return oracle_actions(
-        sim.head[slots], target, sim.cfg.action_type, sim.actions, sim.cfg.max_move
+    return policy_actions(
+        logits.cpu().numpy(),
+        None if goal_logits is None else goal_logits.cpu().numpy(),
+        sim.head[slots],
+        np.asarray(sim.cfg.max_move) if continuous else None,
+        evidence,
+        slots,
     )
 
 
