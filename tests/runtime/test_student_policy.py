@@ -131,6 +131,38 @@ def test_goal_evidence_sums_log_probabilities_and_moves_greedily():
     assert list(greedy_actions(heads, views[[2, 2]], table)) == [4, 4]  # tilt down towards 45
 
 
+def test_switch_margin_keeps_the_goal_until_another_view_leads_by_it():
+    """Hand-computed: views 0 and 1 equally likely, so log-softmax differences are the
+    logit differences. With a 1-nat margin the goal moves to view 1 only once its summed
+    evidence leads by 1 nat; without one, at the first frame that favours it."""
+    views = np.radians([[-30.0, 20.0], [30.0, 20.0]])
+    table = np.radians([[0, 0], [3, 0], [-3, 0]])
+    sticky, plain = GoalEvidence(1, views, table, 1.0), GoalEvidence(1, views, table)
+    slot = np.array([0])
+    frames = [[0.5, 0.0], [0.0, 0.4], [0.0, 0.4], [0.0, 0.4], [0.0, 0.4]]
+    goals = []
+    for frame in frames:  # 1 where the goal is view 1 (pan +30)
+        goals.append([int(e.target(np.array([frame]), slot)[0, 0] > 0) for e in (sticky, plain)])
+    # summed lead of view 1: -0.5, -0.1, 0.3, 0.7, 1.1
+    assert [g for g, _ in goals] == [0, 0, 0, 0, 1]
+    assert [g for _, g in goals] == [0, 0, 1, 1, 1]
+    sticky.reset()
+    assert sticky.current[0] == -1  # a new episode takes the best view at once
+    assert sticky.target(np.array([[0.0, 0.1]]), slot)[0, 0] > 0
+    with pytest.raises(ValueError, match="switch_margin"):
+        GoalEvidence(1, views, table, -1.0)
+
+
+def test_policy_json_carries_the_switch_margin(tmp_path):
+    from activevision.runtime import PolicyFileError
+
+    _, paths = continuous_export(tmp_path / "a", act_by="goal", goal_switch_margin=2.5)
+    assert HeadController(paths.model_path).metadata.goal_switch_margin == 2.5
+    with pytest.raises(PolicyFileError, match="goal_switch_margin"):
+        _, paths = continuous_export(tmp_path / "b", act_by="goal", goal_switch_margin=-1)
+        HeadController(paths.model_path)
+
+
 def continuous_export(tmp_path, act_by: str = "action", **metadata_changes):
     config = EnvConfig(observation="image+head", action_type="continuous")
     torch.manual_seed(1)

@@ -164,10 +164,12 @@ def test_continuous_student_reaches_goals_in_fewer_steps_and_exports(tmp_path):
             "dagger.updates_per_rollout": 8,
             "learner.batch_size": 64,
             "learner.learning_rate": 1e-3,
+            "dagger.switch_margin": 1.0,  # hysteresis in training, evaluation and runtime
         },
     )
     train_dagger(config, tmp_path)
     learned = LearnedPolicy.from_run(tmp_path)
+    assert learned.goal_evidence is not None and learned.goal_evidence.switch_margin == 1.0
     env = ActiveVisionEnv(config.env)
     records, summary, _ = evaluate_policy(learned, 40, seed=500, env=env)
     assert summary["success"].mean >= 0.5
@@ -178,7 +180,7 @@ def test_continuous_student_reaches_goals_in_fewer_steps_and_exports(tmp_path):
     assert np.median(solved) <= 0.6 * oracle["success_duration"].mean
     # HeadController (ONNX, goal evidence in NumPy) plays the same episodes
     onnx = OnnxPolicy(export_run(tmp_path).model_path)
-    assert onnx.controller.continuous
+    assert onnx.controller.continuous and onnx.controller.metadata.goal_switch_margin == 1.0
     onnx_records, _, _ = evaluate_policy(onnx, 40, seed=500, env=env)
     assert [r["steps"] for r in onnx_records] == [r["steps"] for r in records]
     assert [r["success"] for r in onnx_records] == [r["success"] for r in records]

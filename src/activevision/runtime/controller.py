@@ -150,7 +150,9 @@ class HeadController:
         if meta.act_by == "goal":
             assert meta.goal_output_name is not None and meta.goal_views is not None
             self._outputs.append(meta.goal_output_name)
-            self._evidence = GoalEvidence(1, meta.goal_views, meta.action_table)
+            self._evidence = GoalEvidence(
+                1, meta.goal_views, meta.action_table, meta.goal_switch_margin
+            )
         self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
         # policy.json's reader requires max_move_deg with continuous actions
         continuous = meta.action_type == "continuous"

@@ -12,6 +12,8 @@ action head, 0% with goal evidence). NumPy only: the trainer (batched), the eval
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -48,22 +50,41 @@ class GoalEvidence:
         n: episodes (slots) tracked at once.
         views: (V, 2) the candidate views (pan, tilt) rad, in the goal head's order.
         table: (A, 2) the head moves (d_pan, d_tilt) rad of the actions.
+        switch_margin: hysteresis (nats): once a slot has a goal, another view takes over
+            only when its evidence leads by at least this much. 0: always the best-supported
+            view. Frames that keep favouring whichever view the head is not at can then no
+            longer swing it between the two (README: continuous head control).
     """
 
-    def __init__(self, n: int, views: np.ndarray, table: np.ndarray) -> None:
+    def __init__(
+        self, n: int, views: np.ndarray, table: np.ndarray, switch_margin: float = 0.0
+    ) -> None:
+        if not (math.isfinite(switch_margin) and switch_margin >= 0):
+            raise ValueError(f"switch_margin must be a number >= 0, got {switch_margin!r}")
         self.views = np.asarray(views, dtype=np.float64)
         self.table = np.asarray(table, dtype=np.float64)
+        self.switch_margin = float(switch_margin)
         self.evidence = np.zeros((n, len(self.views)))
+        self.current = np.full(n, -1, dtype=np.int64)  #: each slot's goal index (-1: none yet)
 
     def reset(self, slots: np.ndarray | slice = slice(None)) -> None:
         """Slots ``slots`` start new episodes: no evidence yet."""
         self.evidence[slots] = 0.0
+        self.current[slots] = -1
 
     def target(self, goal_logits: np.ndarray, slots: np.ndarray) -> np.ndarray:
         """Add this step's ``goal_logits`` (M, V) to slots ``slots`` (M,) and return the
-        best-supported view (M, 2) of each."""
+        goal view (M, 2) of each: the best-supported one, unless the slot's current goal is
+        within ``switch_margin`` of it."""
         self.evidence[slots] += log_softmax(np.asarray(goal_logits, dtype=np.float64))
-        goals: np.ndarray = self.views[np.argmax(self.evidence[slots], axis=1)]
+        evidence = self.evidence[slots]
+        best = np.argmax(evidence, axis=1)
+        current = self.current[slots]
+        rows = np.arange(len(evidence))
+        lead = evidence[rows, best] - evidence[rows, np.maximum(current, 0)]
+        goal = np.where((current >= 0) & (lead < self.switch_margin), current, best)
+        self.current[slots] = goal
+        goals: np.ndarray = self.views[goal]
         return goals
 
 

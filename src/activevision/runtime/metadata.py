@@ -343,6 +343,8 @@ class PolicyMetadata:
     act_by: str = "action"
     goal_output_name: str | None = None
     goal_views: np.ndarray | None = field(default=None, repr=False)  #: (V, 2) rad
+    #: with act_by "goal": the evidence (nats) another view needs over the current goal
+    goal_switch_margin: float = 0.0
     #: "discrete": the output scores the action table's rows; "continuous": it is the move
     #: (pan, tilt) in [-1, 1], times ``max_move``
     action_type: str = "discrete"
@@ -404,6 +406,7 @@ class PolicyMetadata:
             act_by=read.act_by(),
             goal_output_name=read.optional_str("goal_output_name"),
             goal_views=read.goal_views(),
+            goal_switch_margin=read.goal_switch_margin(),
             action_type=read.action_type(),
             max_move=read.max_move(),
             camera=read.camera(),
@@ -445,6 +448,12 @@ class _MetadataReader:
         if value == "goal" and not isinstance(self.values.get("goal_output_name"), str):
             raise self.fail("'act_by' is 'goal' but no 'goal_output_name' is given")
         return str(value)
+
+    def goal_switch_margin(self) -> float:
+        value = self.values.get("goal_switch_margin", 0.0)
+        if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value < 1e6:
+            raise self.fail(f"'goal_switch_margin' must be a number >= 0, got {value!r}")
+        return float(value)
 
     def action_type(self) -> str:
         value = self.values.get("action_type", "discrete")

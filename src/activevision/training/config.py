@@ -144,6 +144,9 @@ class DaggerConfig:
     #: towards the view its goal head supports most, evidence summed over the episode
     #: (``runtime.goal_evidence``: ends the swinging between two views) (T)
     act_by: typing.Literal["action", "goal"] = "goal"
+    #: with act_by "goal": another view becomes the goal only when its summed evidence
+    #: leads the current goal's by this many nats (hysteresis; 0: always the best) (T)
+    switch_margin: float = field(default=0.0, metadata=_range(0.0, 1000.0))
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)

@@ -183,7 +183,7 @@ class DaggerTrainer(StudentRun):
         if self.config.dagger.act_by != "goal":
             return None
         grid = self.sim.localisation.grid
-        return GoalEvidence(n, grid.views, self.sim.actions)
+        return GoalEvidence(n, grid.views, self.sim.actions, self.config.dagger.switch_margin)
 
     @property
     def teacher_share(self) -> float:
@@ -320,6 +320,7 @@ class DaggerTrainer(StudentRun):
             "action_history": cfg.action_history,
             "vector_keys": list(self.keys),
             "act_by": self.config.dagger.act_by,
+            "goal_switch_margin": self.config.dagger.switch_margin,
             "max_move_deg": list(cfg.max_move_deg),
             "goal_views_deg": np.degrees(grid.views).tolist(),
             "step": self.step,
