@@ -176,9 +176,10 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     "dagger_head": (lambda: dagger("image+head", 400_000), "DAgger on the image + head angles"),
     # continuous head control (the paper's future work): moves of up to 10 degrees, so an
     # episode takes about a third of the steps; 200,000 steps make about as many updates as
-    # dagger_head's 400,000 (README: continuous head control)
+    # dagger_head's 400,000; goal-evidence hysteresis of 3 nats, as dagger_prior_continuous
+    # (README: continuous head control)
     "dagger_head_continuous": (
-        lambda: dagger("image+head", 200_000, action_type="continuous"),
+        lambda: with_switch_margin(dagger("image+head", 200_000, action_type="continuous"), 3.0),
         "dagger_head with continuous moves of up to 10 degrees a step",
     ),
     "dagger_image_continuous": (
