@@ -319,6 +319,7 @@ def privileged(info: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """``info`` with the robot's knowledge replaced by the simulator's truth: the belief's
     mean by the true pose and the ball model by the true ball (in the true robot frame)."""
     pose, ball = info["pose"], info["ball"]
+    # envs.match.dynamics.to_robot_frame, over all N matches at once
     gap = ball[:, :2] - pose[:, :2]
     c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
     relative = np.column_stack([c * gap[:, 0] + s * gap[:, 1], -s * gap[:, 0] + c * gap[:, 1]])
