@@ -3,6 +3,7 @@
 import csv
 from pathlib import Path
 
+import numpy as np
 import pytest
 from PIL import Image
 
@@ -34,6 +35,18 @@ def test_a_continuous_match(tmp_path, capsys):
         assert [r["method"] for r in csv.DictReader(f)] == ["ball_track", "random"]
 
 
+def test_a_match_with_walking_robots_draws_them_in_the_clip(tmp_path, capsys):
+    out, plain = tmp_path / "m", tmp_path / "plain"
+    argv = [*TINY, "--methods", "ball_track", "--ticks", "3"]
+    assert main([*argv, "--robots", "4", "--robot-speed", "0.3", "--out", str(out)]) == 0
+    assert "4 other robots walking at 0.3 m/s" in capsys.readouterr().out
+    assert main([*argv, "--out", str(plain)]) == 0
+    # the same matches without robots: the clip's first frame differs by the four discs
+    with_robots = np.asarray(Image.open(out / "match_clip.gif").convert("RGB"), dtype=int)
+    without = np.asarray(Image.open(plain / "match_clip.gif").convert("RGB"), dtype=int)
+    assert (np.abs(with_robots - without).sum(axis=2) > 60).sum() > 4 * 20
+
+
 def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     out = tmp_path / "m"
     assert main([*TINY, "--out", str(out)]) == 0
@@ -51,6 +64,9 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
         (["match", "--step-deg", "90"], "--step-deg"),
         (["match", "--walk", "home"], "--walk"),
         (["match", "--action-type", "diagonal"], "--action-type"),
+        (["match", "--robots", "9"], "--robots"),
+        (["match", "--robots", "two"], "--robots"),
+        (["match", "--robot-speed", "-0.1"], "--robot-speed"),
         (["match", "--model", "missing.onnx", "--matches", "1"], "missing.onnx"),
         (["match", "--methods", "random", "--clip-method", "ball_track"], "--clip-method"),
     ],

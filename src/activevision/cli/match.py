@@ -29,6 +29,30 @@ def _step_deg(text: str) -> float:
     return value
 
 
+def _robot_count(text: str) -> int:
+    if not text.isdigit() or not 0 <= int(text) <= 8:
+        raise argparse.ArgumentTypeError(f"must be a whole number from 0 to 8, got {text!r}")
+    return int(text)
+
+
+def _robot_speed(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"must lie in [0, 1] m/s, got {text!r}")
+    return value
+
+
+def _others_text(args: argparse.Namespace) -> str:
+    """``", 4 other robots walking at 0.2 m/s"``, or nothing without other robots."""
+    if not args.robots:
+        return ""
+    moving = f"walking at {args.robot_speed:g} m/s" if args.robot_speed else "standing"
+    return f", {args.robots} other robots {moving}"
+
+
 def cmd_match(args: argparse.Namespace) -> None:
     """Play every chosen strategy through the same matches; print, write and plot."""
     out: Path = args.out
@@ -49,7 +73,8 @@ def cmd_match(args: argparse.Namespace) -> None:
 
     import numpy as np
 
-    from activevision.envs.match.config import MatchConfig, WalkConfig
+    from activevision.envs.match.config import MatchConfig, OthersConfig, WalkConfig
+    from activevision.envs.robots import RobotsConfig
     from activevision.experiments.match import (
         compare_matches,
         csv_rows,
@@ -66,6 +91,8 @@ def cmd_match(args: argparse.Namespace) -> None:
         action_type=args.action_type,
         max_move_deg=(args.step_deg, args.step_deg),
         walk=WalkConfig(target=args.walk),
+        robots=RobotsConfig(count=(args.robots, args.robots)),
+        others=OthersConfig(speed=args.robot_speed),
     )
     minutes = args.ticks * config.tick_seconds / 60
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
@@ -73,7 +100,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         f"{len(methods)} methods x {args.matches} matches of {args.ticks} ticks"
         f" ({minutes:.1f} min of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
-        f" walking to {args.walk}"
+        f" walking to {args.walk}{_others_text(args)}"
     )
     print(table_header(), flush=True)
     results = compare_matches(
@@ -97,7 +124,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     write_csv(csv_path, csv_rows(results, args.matches, args.seed))
     title = (
         f"{args.matches} matches x {minutes:.1f} min, seed {args.seed},"
-        f" {args.action_type} head {args.step_deg:g} deg/tick"
+        f" {args.action_type} head {args.step_deg:g} deg/tick{_others_text(args)}"
     )
     points = {
         r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()} for r in results
@@ -119,6 +146,8 @@ def cmd_match(args: argparse.Namespace) -> None:
         f"{clip_method}, match seed {args.seed}",
         config.tick_seconds,
         every=max(1, args.ticks // 150),
+        robots=np.array(clip.robots),
+        robot_radius=config.robots.radius,
     )
     save_gif(frames, clip_path, fps=10)
     print(f"wrote {', '.join(str(f) for f in files)}")
@@ -161,6 +190,20 @@ def add_parsers(sub: Any) -> None:
         choices=("waypoints", "ball"),
         default="waypoints",
         help="our robot walks to random waypoints, or to the ball",
+    )
+    p.add_argument(
+        "--robots",
+        type=_robot_count,
+        default=0,
+        help="other robots on the field (0-8), occluding landmarks and the ball, which"
+        " bounces off them",
+    )
+    p.add_argument(
+        "--robot-speed",
+        type=_robot_speed,
+        default=0.0,
+        help="m/s the other robots walk at between random waypoints (0: they stand; KidSize"
+        " robots walk 0.1-0.3)",
     )
     p.add_argument(
         "--model",

@@ -43,7 +43,8 @@ SHARES = ("lost_share", "ball_in_view")
 
 @dataclass
 class MatchClip:
-    """One match tick by tick, for the clip: true pose, belief, head and ball."""
+    """One match tick by tick, for the clip: true pose, belief, head, ball and the other
+    robots."""
 
     pose: list[np.ndarray] = field(default_factory=list)
     mean: list[np.ndarray] = field(default_factory=list)
@@ -51,6 +52,7 @@ class MatchClip:
     head: list[np.ndarray] = field(default_factory=list)
     ball: list[np.ndarray] = field(default_factory=list)
     ball_in_view: list[bool] = field(default_factory=list)
+    robots: list[np.ndarray] = field(default_factory=list)
 
     def add(self, info: dict[str, np.ndarray], i: int) -> None:
         self.pose.append(info["pose"][i].copy())
@@ -59,6 +61,7 @@ class MatchClip:
         self.head.append(info["head"][i].copy())
         self.ball.append(info["ball"][i].copy())
         self.ball_in_view.append(bool(info["ball_in_view"][i]))
+        self.robots.append(info["robots"][i].copy())
 
 
 @dataclass(frozen=True)

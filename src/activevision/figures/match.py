@@ -9,7 +9,7 @@ import os
 from collections.abc import Collection, Mapping, Sequence
 
 import numpy as np
-from matplotlib.patches import Ellipse, Polygon
+from matplotlib.patches import Circle, Ellipse, Polygon
 
 from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
 from activevision.figures.topview import draw_field
@@ -100,10 +100,13 @@ def clip_frames(
     title: str,
     tick_seconds: float,
     every: int = 3,
+    robots: np.ndarray | None = None,
+    robot_radius: float = 0.12,
 ) -> list[np.ndarray]:
     """RGB frames of one match from above: the true robot (red) with its camera's view
     wedge, the belief's mean and 2-sigma ellipse (blue), the ball (orange, hollow when out
-    of view). Every ``every``-th tick of ``pose`` (T, 3) etc."""
+    of view), the other robots (grey discs of ``robot_radius``; ``robots`` (T, R, 4),
+    height 0 an empty slot). Every ``every``-th tick of ``pose`` (T, 3) etc."""
     frames = []
     fig = new_figure(figsize=(6.4, 4.6), layout="constrained")
     for t in range(0, len(pose), every):
@@ -120,6 +123,9 @@ def clip_frames(
             (x + reach * math.cos(yaw - half), y + reach * math.sin(yaw - half)),
         ]
         ax.add_patch(Polygon(wedge, closed=True, color="yellow", alpha=0.25, zorder=2))
+        for rx, ry, height, _ in [] if robots is None else robots[t]:
+            if height > 0:
+                ax.add_patch(Circle((rx, ry), robot_radius, color="0.35", zorder=4))
         ax.plot(pose[: t + 1, 0], pose[: t + 1, 1], color="red", lw=0.8, alpha=0.6, zorder=3)
         ax.plot(x, y, "o", color="red", ms=7, zorder=4)
         ax.plot(

@@ -73,6 +73,23 @@ class BallConfig:
 
 
 @dataclass(frozen=True)
+class OthersConfig:
+    """How the other robots (``MatchConfig.robots``) move. Each walks straight to a random
+    waypoint on the field at ``speed``, and draws the next when it gets there or when its
+    step would bring it within ``robots.min_spacing`` of another robot or ours (it stands
+    that tick: robots give way). Standing still by default. The ball bounces off every
+    robot's body, keeping ``ball_restitution`` of its speed towards it (a body gives; a
+    robot's legs and torso are not a wall)."""
+
+    #: walking speed (m/s); KidSize 0.1-0.3, as ``WalkConfig.speed``
+    speed: float = field(default=0.0, metadata=in_range(0.0, 1.0))
+    ball_restitution: float = field(default=0.5, metadata=in_range(0.0, 1.0))
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+
+
+@dataclass(frozen=True)
 class DetectionConfig:
     """The landmark detector. A landmark in view is detected with a probability falling
     linearly from ``near`` at the robot to ``far`` at its detection range (small, distant
@@ -145,8 +162,10 @@ class MatchConfig:
     reward: MatchRewardConfig = dataclasses.field(default_factory=MatchRewardConfig)
     #: randomised appearance, drawn per match (``rendering.appearance``; off: clean)
     appearance: AppearanceConfig = dataclasses.field(default_factory=AppearanceConfig)
-    #: other robots, standing still for the match (``envs.robots``; none by default)
+    #: other robots, placed as in the episodic env (``envs.robots``; none by default)
     robots: RobotsConfig = dataclasses.field(default_factory=RobotsConfig)
+    #: how they move (standing still by default) and what the ball does when it meets one
+    others: OthersConfig = dataclasses.field(default_factory=OthersConfig)
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)

@@ -58,6 +58,13 @@ class ActiveVisionMatchEnv(gym.Env):
     6. the robot's ball model takes the ball's measured position when it is in view, and is
        carried along by odometry when it is not.
 
+    Other robots (``robots``; none by default) are placed as in the episodic env and hide
+    the landmarks and the ball behind them (the sight line from the camera passes through
+    a robot's body or head: :mod:`activevision.geometry.occlusion`). With
+    ``others.speed > 0`` they walk between random waypoints, giving way to each other and
+    to ours (:mod:`activevision.envs.match.others`); standing or walking, the ball bounces
+    off them (step 3, after it rolled).
+
     ## Action Space
     ``Discrete(9)``: stay, then the 8 head moves of ``ActiveVision-v0`` (pan positive to the
     left, tilt positive down), clipped to the head's limits. ``action_type="continuous"``:
@@ -87,7 +94,8 @@ class ActiveVisionMatchEnv(gym.Env):
     ``ball_age`` (ticks since seen), ``declared_lost``, ``detections_accepted`` and
     ``detections_gated`` (cumulative). What only the simulator knows: ``pose``, ``ball``,
     ``position_error`` (m), ``heading_error`` (rad), ``ball_in_view``, ``detected_mask``
-    ((K,) bool: landmarks detected this tick), ``waypoint``, ``tick``.
+    ((K,) bool: landmarks detected this tick), ``waypoint``, ``robots`` ((R, 4): the other
+    robots' ``x, y, height, grey``; height 0 marks an empty slot), ``tick``.
 
     ## Arguments
     ``gymnasium.make("ActiveVisionMatch-v0", config=MatchConfig(...))`` or any

@@ -14,6 +14,7 @@ from activevision.envs.actions import action_table, head_moves
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.dynamics import to_robot_frame
 from activevision.envs.match.kernels import MatchParams, MatchState, move_kernel, sense_kernel
+from activevision.envs.match.others import bounce_ball, walk_others
 from activevision.envs.robots import draw_robots
 from activevision.geometry import field_landmarks
 from activevision.geometry.angles import wrap_angle
@@ -41,7 +42,8 @@ _POINT_TYPES = (
     LandmarkType.PENALTY_MARK,
 )
 #: uniforms drawn per match per tick besides the K miss draws: false detection (4), kick (3),
-#: next waypoint (2) and its pause (1)
+#: next waypoint (2) and its pause (1); then, when other robots walk, a next waypoint (2)
+#: for each of them
 _EXTRA_UNIFORMS = 10
 #: normals per tick besides the 2 K measurement draws: odometry (3), ball detector (2)
 _EXTRA_NORMALS = 5
@@ -81,10 +83,14 @@ class MatchBatch:
         self.gated = np.zeros(num_envs, dtype=np.int64)
         self.declared_lost = np.zeros(num_envs, dtype=bool)
         self.robots = np.zeros((num_envs, cfg.robots.max_count, 4))
+        self.robot_waypoints = np.zeros((num_envs, cfg.robots.max_count, 2))
+        #: whether the other robots walk (then they draw their waypoints every tick)
+        self._others_walk = cfg.robots.max_count > 0 and cfg.others.speed > 0
         self.hidden = np.zeros((num_envs, k), dtype=bool)
         self.looks = neutral_looks(num_envs)
         self.tone = np.repeat(identity_tone()[None], num_envs, axis=0)
-        self._uniforms = np.zeros((num_envs, k + _EXTRA_UNIFORMS))
+        walker_draws = 2 * cfg.robots.max_count if self._others_walk else 0
+        self._uniforms = np.zeros((num_envs, k + _EXTRA_UNIFORMS + walker_draws))
         self._normals = np.zeros((num_envs, 2 * k + _EXTRA_NORMALS))
         self.reward = np.zeros(num_envs)
         self._rngs: list[np.random.Generator] = [np.random.default_rng(0)] * num_envs
@@ -202,6 +208,8 @@ class MatchBatch:
                     cfg.field.ball_radius,
                     cam.camera_height,
                 )
+                # standing on their waypoints: each draws its first in the first tick
+                self.robot_waypoints[slot] = self.robots[slot, :, :2]
             if cfg.appearance.enabled:
                 self.looks[slot] = draw_looks(cfg.appearance, rng)
         idx = np.asarray(indices, dtype=np.int64)
@@ -260,6 +268,7 @@ class MatchBatch:
         )
         ball_hidden = np.zeros(len(idx), dtype=bool)
         if self.cfg.robots.max_count:
+            self._move_others(idx, uniforms)
             self._update_hidden(idx)
             ball_hidden = self._ball_hidden(idx)
         errors = sense_kernel(
@@ -283,6 +292,35 @@ class MatchBatch:
         self.tick[idx] += 1
         reward[idx] = self.reward[idx]
         return reward
+
+    def _move_others(self, idx: np.ndarray, uniforms: np.ndarray) -> None:
+        """The other robots of matches ``idx`` walk (when they do), then the balls that
+        meet them bounce off."""
+        cfg = self.cfg
+        robots, ball, velocity = self.robots[idx], self.ball[idx], self.ball_velocity[idx]
+        if self._others_walk:
+            waypoints = self.robot_waypoints[idx]
+            draws = uniforms[:, -2 * cfg.robots.max_count :].reshape(len(idx), -1, 2)
+            walk_others(
+                robots,
+                waypoints,
+                self.pose[idx, :2],
+                draws,
+                cfg.others.speed * cfg.tick_seconds,
+                cfg.robots.min_spacing,
+                (cfg.field.half_length, cfg.field.half_width),
+            )
+            self.robots[idx] = robots
+            self.robot_waypoints[idx] = waypoints
+        bounce_ball(
+            ball,
+            velocity,
+            robots,
+            cfg.robots.radius,
+            cfg.field.ball_radius,
+            cfg.others.ball_restitution,
+        )
+        self.ball[idx], self.ball_velocity[idx] = ball, velocity
 
     def _draw(self, idx: np.ndarray) -> None:
         """This tick's random numbers of matches ``idx``: always the same count."""
@@ -386,5 +424,6 @@ class MatchBatch:
             "detections_gated": self.gated.copy(),
             "declared_lost": self.declared_lost.copy(),
             "waypoint": self.waypoint.copy(),
+            "robots": self.robots.copy(),
             "tick": self.tick.copy(),
         }

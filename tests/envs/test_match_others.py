@@ -1,0 +1,157 @@
+"""Other robots in a match: their walk and the ball bouncing off them, by hand and through
+whole matches (``envs.match.others``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from activevision.envs.match.config import BallConfig, MatchConfig, OthersConfig
+from activevision.envs.match.others import bounce_ball, walk_others
+from activevision.envs.match.simulation import MatchBatch
+from activevision.envs.robots import RobotsConfig
+
+HALF = (4.5, 3.0)
+
+
+def _robots(*xy: tuple[float, float], height: float = 0.6) -> np.ndarray:
+    """One match's robots ``(x, y, height, grey)`` (1, R, 4)."""
+    return np.array([[(x, y, height, 100.0) for x, y in xy]])
+
+
+def _walk(robots, waypoints, own=(4.0, 2.5), draws=None, step=0.1, spacing=0.6):
+    draws = np.full((*robots.shape[:2], 2), 0.5) if draws is None else np.asarray(draws)
+    walk_others(robots, waypoints, np.array([own], float), draws, step, spacing, HALF)
+
+
+def test_a_robot_steps_towards_its_waypoint():
+    robots = _robots((0.0, 0.0))
+    waypoints = np.array([[[3.0, 4.0]]])  # 5 m away, along (0.6, 0.8)
+    _walk(robots, waypoints)
+    np.testing.assert_allclose(robots[0, 0, :2], [0.06, 0.08])
+    np.testing.assert_allclose(waypoints[0, 0], [3.0, 4.0])
+    np.testing.assert_allclose(robots[0, 0, 2:], [0.6, 100.0])  # height and grey kept
+
+
+def test_a_robot_on_its_waypoint_takes_a_new_one_from_its_draws():
+    robots = _robots((1.0, 1.0))
+    waypoints = np.array([[[1.0, 1.0]]])
+    _walk(robots, waypoints, draws=[[[0.75, 0.25]]])
+    np.testing.assert_allclose(robots[0, 0, :2], [1.0, 1.0])  # stands this tick
+    np.testing.assert_allclose(waypoints[0, 0], [2.25, -1.5])  # 4.5 * 0.5, 3 * -0.5
+
+
+def test_the_last_step_ends_on_the_waypoint():
+    robots = _robots((0.0, 0.0))
+    waypoints = np.array([[[0.05, 0.0]]])
+    _walk(robots, waypoints)
+    np.testing.assert_allclose(robots[0, 0, :2], [0.05, 0.0])
+
+
+def test_robots_closing_in_give_way_and_turn():
+    robots = _robots((0.0, 0.0), (0.65, 0.0))
+    waypoints = np.array([[[2.0, 0.0], [-2.0, 0.0]]])  # straight at each other
+    _walk(robots, waypoints, draws=[[[1.0, 0.5], [0.0, 0.5]]])
+    np.testing.assert_allclose(robots[0, :, :2], [[0.0, 0.0], [0.65, 0.0]])
+    np.testing.assert_allclose(waypoints[0], [[4.5, 0.0], [-4.5, 0.0]])
+
+
+def test_a_robot_too_close_may_still_walk_away():
+    robots = _robots((0.0, 0.0), (0.3, 0.0))
+    waypoints = np.array([[[-2.0, 0.0], [0.3, 0.0]]])
+    _walk(robots, waypoints)
+    np.testing.assert_allclose(robots[0, 0, :2], [-0.1, 0.0])
+
+
+def test_robots_give_way_to_ours_and_ignore_empty_slots():
+    robots = _robots((0.0, 0.0), (0.3, 0.0))
+    robots[0, 1, 2] = 0.0  # an empty slot next to the first robot
+    waypoints = np.array([[[2.0, 0.0], [5.0, 5.0]]])
+    _walk(robots, waypoints, own=(5.0, 0.0))
+    np.testing.assert_allclose(robots[0, :, :2], [[0.1, 0.0], [0.3, 0.0]])
+    np.testing.assert_allclose(waypoints[0, 1], [5.0, 5.0])  # an empty slot never turns
+    _walk(robots, waypoints, own=(0.75, 0.0))  # ours 0.65 m ahead: closing in stops
+    np.testing.assert_allclose(robots[0, 0, :2], [0.1, 0.0])
+
+
+def test_a_ball_rolling_into_a_robot_bounces_off_it():
+    robots = _robots((1.0, 0.0))
+    ball = np.array([[0.9, 0.0]])
+    velocity = np.array([[1.0, 0.5]])
+    bounce_ball(ball, velocity, robots, 0.12, 0.05, 0.5)
+    np.testing.assert_allclose(ball, [[0.83, 0.0]])  # at contact, 0.12 + 0.05 from the centre
+    # the normal component (1 towards the robot) comes back at half speed
+    np.testing.assert_allclose(velocity, [[-0.5, 0.5]])
+
+
+def test_a_ball_leaving_a_robot_keeps_its_velocity_and_a_clear_ball_is_untouched():
+    robots = _robots((1.0, 0.0), (-2.0, 0.0))
+    ball = np.array([[1.0, 0.1], [0.0, 0.0]])
+    velocity = np.array([[0.0, 2.0], [1.0, 0.0]])
+    robots = np.concatenate([robots, robots])  # two matches, the same robots
+    bounce_ball(ball, velocity, robots, 0.12, 0.05, 0.5)
+    np.testing.assert_allclose(ball, [[1.0, 0.17], [0.0, 0.0]])
+    np.testing.assert_allclose(velocity, [[0.0, 2.0], [1.0, 0.0]])
+
+
+def _config(speed: float, ticks: int = 200) -> MatchConfig:
+    return MatchConfig(
+        ticks=ticks,
+        robots=RobotsConfig(count=(4, 4)),
+        others=OthersConfig(speed=speed),
+        # kicks often and hard, so the ball meets robots within a short test
+        ball=BallConfig(kick_rate=0.2, kick_speed=(1.5, 3.0)),
+    )
+
+
+def _play(cfg: MatchConfig, seeds: list[int], ticks: int):
+    batch = MatchBatch(cfg, len(seeds))
+    batch.reset(np.arange(len(seeds)), [np.random.default_rng(s) for s in seeds])
+    robots, balls = [batch.robots.copy()], [batch.ball.copy()]
+    for t in range(ticks):
+        batch.step(np.full(len(seeds), t % 9))
+        robots.append(batch.robots.copy())
+        balls.append(batch.ball.copy())
+    return np.stack(robots), np.stack(balls)
+
+
+@pytest.fixture(scope="module")
+def walking():
+    cfg = _config(0.3)
+    return cfg, *_play(cfg, [3, 4, 5], 300)
+
+
+def test_walking_robots_move_at_their_speed_keep_apart_and_stay_on_the_field(walking):
+    cfg, robots, _ = walking
+    step = cfg.others.speed * cfg.tick_seconds
+    xy = robots[..., :2]
+    moved = np.hypot(*np.moveaxis(np.diff(xy, axis=0), -1, 0))
+    assert moved.max() <= step + 1e-9
+    assert (moved > 0).mean() > 0.5  # they walk most of the time
+    assert np.abs(xy[..., 0]).max() <= cfg.field.half_length + 1e-9
+    assert np.abs(xy[..., 1]).max() <= cfg.field.half_width + 1e-9
+    # pairs check each other's standing positions, so two closing in at once end at most
+    # a step each inside the spacing
+    d = xy[:, :, :, None, :] - xy[:, :, None, :, :]
+    pair = np.hypot(d[..., 0], d[..., 1]) + np.eye(4) * 99
+    assert pair.min() >= cfg.robots.min_spacing - 2 * step - 1e-9
+    height_grey = robots[..., 2:]
+    np.testing.assert_array_equal(height_grey, np.broadcast_to(height_grey[:1], height_grey.shape))
+
+
+def test_the_ball_never_ends_a_tick_inside_a_robot_and_does_meet_them(walking):
+    cfg, robots, balls = walking
+    d = balls[:, :, None, :] - robots[..., :2]
+    distance = np.hypot(d[..., 0], d[..., 1])
+    contact = cfg.robots.radius + cfg.field.ball_radius
+    assert distance[1:].min() >= contact - 1e-9
+    assert (distance[1:] < contact + 0.02).any()  # a few contacts did happen
+
+
+def test_standing_robots_stay_put_and_a_match_depends_on_its_seed_only(walking):
+    cfg, robots, balls = walking
+    still, _ = _play(_config(0.0), [3], 50)
+    np.testing.assert_array_equal(still, np.broadcast_to(still[:1], still.shape))
+    alone_robots, alone_balls = _play(cfg, [4], 300)  # match 4 alone, not in a batch of 3
+    np.testing.assert_array_equal(alone_robots[:, 0], robots[:, 1])
+    np.testing.assert_array_equal(alone_balls[:, 0], balls[:, 1])
