@@ -229,7 +229,8 @@ def test_runtime_imports_and_runs_without_torch(policy):
         from activevision.runtime import HeadController
         controller = HeadController({str(policy.model_path)!r})
         command = controller.act(np.zeros((480, 640, 3), np.uint8), 0.0, 0.3)
-        loaded = [m for m in ("numba", "onnx", "scipy") if m in sys.modules]
+        # numba (the frame resize) is allowed, and with it whatever numba loads (scipy)
+        loaded = [m for m in ("onnx", "matplotlib") if m in sys.modules]
         print(command.action, loaded)
     """)
     result = subprocess.run(

@@ -23,6 +23,17 @@ def test_integer_multiple_grey_is_exact_block_mean(frames, width, height):
         np.testing.assert_array_equal(prep(frame[:, :, None]), expected)  # (H, W, 1)
 
 
+def test_views_of_a_larger_frame_resize_as_their_copies(helpers):
+    """Crops, flips and channel-reversed views (not C-contiguous) through the compiled path."""
+    big = helpers.colourise(
+        np.random.default_rng(3).integers(0, 256, (500, 700), dtype=np.uint8), seed=3
+    )
+    for view in (big[10:490, 30:670], big[:480, :640][::-1], big[:480, :640, ::-1]):
+        want = prep(np.ascontiguousarray(view))
+        np.testing.assert_array_equal(prep(view), want)
+        assert np.abs(want.astype(int) - helpers.reference_preprocess(view, "rgb")).max() <= 1
+
+
 def test_block_mean_rounds_half_up():
     frame = np.zeros((240, 320), dtype=np.uint8)
     frame[0, 0] = 2  # block sum 2 -> mean 0.5 -> 1

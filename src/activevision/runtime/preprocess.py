@@ -18,10 +18,15 @@ into the network's size, with no OpenCV and no per-pixel Python loops:
     downscaling). Upscaling degenerates to nearest-neighbour sampling. The aspect ratio is
     not preserved: the frame is stretched to 160 x 120.
 
-* Colour conversion and averaging are both linear, so for colour frames the block sums are
-  taken first, on integers, and the luma weights applied to the 160 x 120 sums.
-* Everything is plain single-threaded NumPy (no BLAS calls, which could start OpenBLAS
-  worker threads on the robot).
+* Colour conversion and averaging are both linear, so for colour frames the sums over each
+  block's rows are taken first, on integers, the luma weights applied to them, and the
+  results added over the block's columns.
+* Integer-multiple sizes (every usual camera mode) run in one compiled pass over the frame
+  (:func:`block_mean_kernel`, numba, on the calling thread): it reads each byte once, ~2.5x
+  faster than NumPy's reshape-and-reduce, which took 0.22 ms of a 0.47 ms decision for a
+  640 x 480 RGB frame.
+  Other sizes are plain single-threaded NumPy. No BLAS calls, which could start OpenBLAS
+  worker threads on the robot.
 * The result is rounded half up, ``floor(mean + 0.5)``, to uint8. For grey frames of an
   integer-multiple size this is computed in integer arithmetic and is exact.
 """
@@ -32,6 +37,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from numba import njit
 
 ColorOrder = Literal["rgb", "bgr"]
 
@@ -136,6 +142,10 @@ class FramePreprocessor:
         self.height = int(height)
         self.width = int(width)
         self._plans: dict[tuple[int, int], _ResizePlan] = {}
+        # compile (or load from numba's cache) now, not in the robot's first decision
+        block_mean_kernel(
+            np.zeros((1, 1, 3), np.uint8), 1, 1, np.ones(3, np.float32), np.empty((1, 1), np.uint8)
+        )
 
     def __call__(
         self, frame: np.ndarray, color_order: ColorOrder = "rgb", out: np.ndarray | None = None
@@ -154,9 +164,9 @@ class FramePreprocessor:
         plan = self._plan(frame.shape[0], frame.shape[1])
         channels = frame.shape[2]
         if plan.factor_y:
-            if channels == 1:
-                return self._block_mean_grey(frame[:, :, 0], plan, out)
-            return self._block_mean_colour(frame, weights, plan, out)
+            scale = weights / np.float32(plan.factor_y * plan.factor_x)
+            block_mean_kernel(np.ascontiguousarray(frame), plan.factor_y, plan.factor_x, scale, out)
+            return out
         grey = frame[:, :, 0].astype(np.float32) if channels == 1 else _luma(frame, weights)
         return round_to_uint8(self._resample(grey, plan), out)
 
@@ -185,36 +195,6 @@ class FramePreprocessor:
             self._plans[(in_height, in_width)] = plan
         return plan
 
-    def _block_sums(self, frame: np.ndarray, plan: _ResizePlan) -> np.ndarray:
-        """(height, width, fx * C) integer sums over ``fy`` rows of each block."""
-        fy, fx = plan.factor_y, plan.factor_x
-        dtype = np.uint16 if fy * fx * 255 <= np.iinfo(np.uint16).max else np.uint32
-        frame = np.ascontiguousarray(frame)
-        if fy == 1:
-            rows = frame.astype(dtype)
-        else:
-            rows = frame.reshape(self.height, fy, -1).sum(axis=1, dtype=dtype)
-        return rows.reshape(self.height, self.width, -1)
-
-    def _block_mean_grey(self, grey: np.ndarray, plan: _ResizePlan, out: np.ndarray) -> np.ndarray:
-        fy, fx = plan.factor_y, plan.factor_x
-        if fy == 1 and fx == 1:
-            out[...] = grey
-            return out
-        sums = self._block_sums(grey, plan).sum(axis=2, dtype=np.uint32)
-        count = fy * fx
-        out[...] = (sums + count // 2) // count  # exact round-half-up of the block mean
-        return out
-
-    def _block_mean_colour(
-        self, frame: np.ndarray, weights: np.ndarray, plan: _ResizePlan, out: np.ndarray
-    ) -> np.ndarray:
-        fy, fx = plan.factor_y, plan.factor_x
-        sums = self._block_sums(frame, plan).reshape(self.height * self.width, fx * 3)
-        tap_weights = np.tile(weights, fx) / np.float32(fy * fx)
-        # einsum's own loop, not a BLAS gemv, which may wake OpenBLAS worker threads
-        return round_to_uint8(np.einsum("ij,j->i", sums.astype(np.float32), tap_weights), out)
-
     def _resample(self, grey: np.ndarray, plan: _ResizePlan) -> np.ndarray:
         assert plan.rows is not None and plan.cols is not None
         (row_index, row_weight), (col_index, col_weight) = plan.rows, plan.cols
@@ -233,3 +213,47 @@ def _luma(frame: np.ndarray, weights: np.ndarray) -> np.ndarray:
     grey += frame[:, :, 1] * weights[1]
     grey += frame[:, :, 2] * weights[2]
     return grey
+
+
+@njit(cache=True, nogil=True)
+def block_mean_kernel(
+    frame: np.ndarray, fy: int, fx: int, scale: np.ndarray, out: np.ndarray
+) -> None:
+    """``out`` (h, w) uint8: the means of the ``fy x fx`` blocks of ``frame`` (h fy, w fx, C)
+    uint8, C-contiguous. Grey (C = 1): the exact integer mean, rounded half up. Colour
+    (C = 3): the luma (``scale`` (3,) float32: the weights over ``fy fx``) of each column's
+    integer sums over the block's rows, added over the block's columns, rounded half up.
+
+    Each output row first sums its ``fy`` input rows into one integer row (a plain loop the
+    compiler vectorises), then weighs the channels of each column once and adds ``fx``
+    columns per output pixel."""
+    height, width = out.shape
+    channels = frame.shape[2]
+    columns = frame.shape[1]
+    rows = frame.reshape(frame.shape[0], columns * channels)
+    acc = np.empty(columns * channels, dtype=np.int32)
+    luma = np.empty(columns, dtype=np.float32)
+    count = fy * fx
+    half = np.float32(0.5)
+    for i in range(height):
+        first = rows[i * fy]
+        for k in range(acc.shape[0]):
+            acc[k] = first[k]
+        for a in range(1, fy):
+            src = rows[i * fy + a]
+            for k in range(acc.shape[0]):
+                acc[k] += src[k]
+        if channels == 1:
+            for j in range(width):
+                total = 0
+                for t in range(j * fx, (j + 1) * fx):
+                    total += acc[t]
+                out[i, j] = (total + count // 2) // count
+            continue
+        for p in range(columns):
+            luma[p] = acc[3 * p] * scale[0] + acc[3 * p + 1] * scale[1] + acc[3 * p + 2] * scale[2]
+        for j in range(width):
+            v = half
+            for t in range(j * fx, (j + 1) * fx):
+                v += luma[t]
+            out[i, j] = min(max(v, np.float32(0.0)), np.float32(255.0))
