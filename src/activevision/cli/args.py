@@ -73,6 +73,34 @@ def positive_float(text: str) -> float:
     return value
 
 
+def float_in(low: float, high: float, unit: str = "") -> Callable[[str], float]:
+    """An argument type: a number in ``[low, high]`` (``unit`` named in the error)."""
+
+    def parse(text: str) -> float:
+        value = _finite(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"must lie in [{low:g}, {high:g}]{' ' + unit if unit else ''}, got {text!r}"
+            )
+        return value
+
+    return parse
+
+
+def int_in(low: int, high: int) -> Callable[[str], int]:
+    """An argument type: an integer in ``[low, high]``."""
+
+    def parse(text: str) -> int:
+        value = _integer(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"must be an integer from {low} to {high}, got {text!r}"
+            )
+        return value
+
+    return parse
+
+
 def error_levels(text: str) -> list[float]:
     """``0:2:0.25`` (start:stop:step, stop included) or ``0,0.5,1``: finite levels >= 0."""
     import numpy as np

@@ -7,7 +7,14 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from activevision.cli.args import add_overwrite, choice_list, positive_int, seed
+from activevision.cli.args import (
+    add_overwrite,
+    choice_list,
+    float_in,
+    int_in,
+    positive_int,
+    seed,
+)
 from activevision.cli.outputs import OutputError, check_outputs, is_training_run
 
 OUTPUT_FILES = ("match.csv", "match_pareto.png", "match_error.png", "match_clip.gif")
@@ -17,32 +24,6 @@ def _method_names() -> tuple[str, ...]:
     from activevision.experiments.match_methods import match_method_names
 
     return match_method_names()
-
-
-def _step_deg(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
-    if not 0.1 <= value <= 30:
-        raise argparse.ArgumentTypeError(f"must lie in [0.1, 30] degrees, got {text!r}")
-    return value
-
-
-def _robot_count(text: str) -> int:
-    if not text.isdigit() or not 0 <= int(text) <= 8:
-        raise argparse.ArgumentTypeError(f"must be a whole number from 0 to 8, got {text!r}")
-    return int(text)
-
-
-def _robot_speed(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
-    if not 0 <= value <= 1:
-        raise argparse.ArgumentTypeError(f"must lie in [0, 1] m/s, got {text!r}")
-    return value
 
 
 def _others_text(args: argparse.Namespace) -> str:
@@ -175,7 +156,10 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--ticks", type=positive_int, default=600, help="ticks per match (0.32 s each)")
     p.add_argument("--seed", type=seed, default=0, help="match i plays seed SEED + i")
     p.add_argument(
-        "--step-deg", type=_step_deg, default=3.0, help="head move per tick (paper: 3 degrees)"
+        "--step-deg",
+        type=float_in(0.1, 30, "degrees"),
+        default=3.0,
+        help="head move per tick (paper: 3 degrees)",
     )
     p.add_argument(
         "--action-type",
@@ -193,14 +177,14 @@ def add_parsers(sub: Any) -> None:
     )
     p.add_argument(
         "--robots",
-        type=_robot_count,
+        type=int_in(0, 8),
         default=0,
         help="other robots on the field (0-8), occluding landmarks and the ball, which"
         " bounces off them",
     )
     p.add_argument(
         "--robot-speed",
-        type=_robot_speed,
+        type=float_in(0, 1, "m/s"),
         default=0.0,
         help="m/s the other robots walk at between random waypoints (0: they stand; KidSize"
         " robots walk 0.1-0.3)",
