@@ -5,15 +5,17 @@ Renders random realistic camera states (robot on the field, head within its limi
 appearance factor on at its robust range, 4 other robots), and prints the randomised
 world's speed as a ratio of the clean one's measured in the same run. Every figure is the
 best of several timed chunks over several rounds (the machine's capability; medians are
-printed too, and differ when other processes compete for the cores). Prints a table, then
-one JSON line.
+printed too, and differ when other processes compete for the cores). ``--factors`` also
+times each appearance factor alone (the time it adds as a share of a clean frame's). Prints
+a table, then one JSON line.
 
-    python bench/render.py [--seconds 1] [--rounds 3] [--reference-frames 50]
+    python bench/render.py [--seconds 1] [--rounds 3] [--reference-frames 50] [--factors]
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -60,17 +62,67 @@ def time_calls(fn, seconds: float, chunk: int = 5) -> tuple[float, float]:
     return float(np.min(chunks)), float(np.median(chunks))
 
 
+def frame_looks(
+    config: AppearanceConfig, pool: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """``pool`` looks drawn from ``config`` with a 3-degree head move per frame (or none) on
+    each axis, and their tone curves."""
+    looks = np.stack([draw_looks(config, rng) for _ in range(pool)])
+    looks[:, LOOK["move_pan"]] = np.radians(3.0) * rng.choice([-1.0, 0.0, 1.0], pool)
+    looks[:, LOOK["move_tilt"]] = np.radians(3.0) * rng.choice([-1.0, 0.0, 1.0], pool)
+    looks[:, LOOK["frame"]] = rng.integers(0, 20, pool)
+    return looks, tone_curves(looks)
+
+
+def factor_costs(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, float]:
+    """Batched (N = 64) time per frame that each appearance factor adds alone, at its robust
+    range, as a share of a clean frame's time measured in the same rounds: where the
+    randomised world's time goes."""
+    full = AppearanceConfig.randomised()
+    pool = len(pose)
+    out = np.empty((64, *renderer.image_shape), dtype=np.uint8)
+    counter = [0]
+
+    def batch_of(looks, tone):
+        def batch() -> None:
+            k = counter[0] = (counter[0] + 64) % (pool - 64)
+            s = slice(k, k + 64)
+            renderer.render(
+                pose[s], pan[s], tilt[s], ball[s], out=out, looks=looks[s], tone=tone[s]
+            )
+
+        return batch
+
+    def clean() -> None:
+        k = counter[0] = (counter[0] + 64) % (pool - 64)
+        s = slice(k, k + 64)
+        renderer.render(pose[s], pan[s], tilt[s], ball[s], out=out)
+
+    calls = {"clean": clean}
+    for f in dataclasses.fields(AppearanceConfig):
+        if f.name == "stripe_width":  # the stripes' width, not a factor of its own
+            continue
+        config = AppearanceConfig().replace(**{f.name: getattr(full, f.name)})
+        if f.name == "stripes":
+            config = config.replace(stripe_width=full.stripe_width)
+        calls[f.name] = batch_of(*frame_looks(config, pool, rng))
+    for fn in calls.values():
+        fn()  # compile
+    best = dict.fromkeys(calls, np.inf)
+    for _ in range(args.rounds):
+        for name, fn in calls.items():
+            best[name] = min(best[name], time_calls(fn, args.seconds / 4)[0])
+    return {
+        name: (t - best["clean"]) / best["clean"] for name, t in best.items() if name != "clean"
+    }
+
+
 def randomised_world(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, float]:
     """Single-frame and N=64 batched speed with every appearance factor drawn at its robust
     range (``AppearanceConfig.randomised()``), a 3-degree head move per frame (motion blur)
     and 4 other robots 1-4 m around each camera."""
     pool = len(pose)
-    config = AppearanceConfig.randomised()
-    looks = np.stack([draw_looks(config, rng) for _ in range(pool)])
-    looks[:, LOOK["move_pan"]] = np.radians(3.0) * rng.choice([-1.0, 0.0, 1.0], pool)
-    looks[:, LOOK["move_tilt"]] = np.radians(3.0) * rng.choice([-1.0, 0.0, 1.0], pool)
-    looks[:, LOOK["frame"]] = rng.integers(0, 20, pool)
-    tone = tone_curves(looks)
+    looks, tone = frame_looks(AppearanceConfig.randomised(), pool, rng)
     angle = rng.uniform(-np.pi, np.pi, (pool, 4))
     dist = rng.uniform(1.0, 4.0, (pool, 4))
     robots = np.stack(
@@ -146,6 +198,9 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3, help="rounds of all measurements")
     parser.add_argument("--reference-frames", type=int, default=50)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--factors", action="store_true", help="also time each appearance factor alone"
+    )
     args = parser.parse_args()
 
     camera = CameraConfig()
@@ -233,6 +288,12 @@ def main() -> None:
         f"({looked['randomised_batched_ratio']:.2f} of the clean batch's; target >= 0.60)"
     )
     results.update(looked)
+    if args.factors:
+        shares = factor_costs(renderer, pose, pan, tilt, ball, rng, args)
+        print("time each appearance factor adds alone, as a share of a clean frame (N=64):")
+        for name, share in sorted(shares.items(), key=lambda kv: -kv[1]):
+            print(f"  {name:15s} {share:+6.2f}")
+        results["factor_extra_share"] = shares
 
     m = args.reference_frames
     render_reference(pose[:1], pan[:1], tilt[:1])
