@@ -14,7 +14,10 @@ still detected on either side of it.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from activevision.geometry.landmarks import LandmarkSet
 
@@ -52,26 +55,12 @@ def hidden_points(camera: np.ndarray, points: np.ndarray, cylinders: np.ndarray)
 
     The part of the sight line inside a cylinder's circle (on the ground plan) spans the
     heights between its entry and exit; the point is hidden when that span meets the
-    cylinder's ``[bottom, top]`` and lies between the camera and the point."""
-    cam = camera[:, None, None, :]  # N, 1, 1, 3
-    pts = points[:, :, None, :]  # N, M, 1, 3
-    cyl = cylinders[:, None, :, :]  # N, 1, C, 6
-    d = pts - cam  # sight lines, t in [0, 1]
-    dxy2 = d[..., 0] ** 2 + d[..., 1] ** 2
-    rel_x = cyl[..., 0] - cam[..., 0]
-    rel_y = cyl[..., 1] - cam[..., 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_mid = np.where(dxy2 > 0, (rel_x * d[..., 0] + rel_y * d[..., 1]) / dxy2, 0.0)
-        miss2 = (rel_x - t_mid * d[..., 0]) ** 2 + (rel_y - t_mid * d[..., 1]) ** 2
-        half = np.sqrt(np.maximum(cyl[..., 2] ** 2 - miss2, 0.0) / np.maximum(dxy2, 1e-300))
-    crosses = (cyl[..., 2] > 0) & (miss2 < cyl[..., 2] ** 2) & (dxy2 > 0)
-    t0 = np.clip(t_mid - half, 0.0, 1.0)
-    t1 = np.clip(t_mid + half, 0.0, 1.0)
-    z0 = cam[..., 2] + t0 * d[..., 2]
-    z1 = cam[..., 2] + t1 * d[..., 2]
-    low, high = np.minimum(z0, z1), np.maximum(z0, z1)
-    hit = crosses & (t1 > t0) & (low < cyl[..., 4]) & (high > cyl[..., 3])
-    hidden: np.ndarray = hit.any(axis=-1)
+    cylinder's ``[bottom, top]`` and lies between the camera and the point. Compiled
+    (:func:`_sight_line_hidden`): the envs ask every tick for every landmark of every match,
+    and a NumPy version's temporaries over (N, points, cylinders) cost most of a tick."""
+    camera, points, cylinders = _float64(camera), _float64(points), _float64(cylinders)
+    hidden = np.zeros(points.shape[:2], dtype=bool)
+    _hidden_points_kernel(camera, points, cylinders, hidden)
     return hidden
 
 
@@ -80,11 +69,73 @@ def hidden_landmarks(
 ) -> np.ndarray:
     """(N, K) bool: the landmarks each camera (N, 3) cannot see at all past ``cylinders``
     (N, C, 6), sampled at :data:`LANDMARK_SAMPLES` points along each (on the ground)."""
-    n, k = len(camera), len(landmarks)
     f = np.linspace(0.0, 1.0, LANDMARK_SAMPLES)
     seg = landmarks.segments  # K, 2, 2
     along = seg[:, None, 0] + f[None, :, None] * (seg[:, None, 1] - seg[:, None, 0])  # K, S, 2
-    pts = np.zeros((n, k * LANDMARK_SAMPLES, 3))
-    pts[..., :2] = along.reshape(-1, 2)[None]
-    hidden = hidden_points(camera, pts, cylinders).reshape(n, k, LANDMARK_SAMPLES)
-    return np.asarray(hidden.all(axis=-1))
+    hidden = np.zeros((len(camera), len(landmarks)), dtype=bool)
+    _hidden_landmarks_kernel(_float64(camera), _float64(along), _float64(cylinders), hidden)
+    return hidden
+
+
+def _float64(values: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.float64)
+
+
+@njit(cache=True)
+def _sight_line_hidden(
+    cx: float, cy: float, cz: float, px: float, py: float, pz: float, cylinders: np.ndarray
+) -> bool:
+    """Whether the segment from the camera ``(cx, cy, cz)`` to ``(px, py, pz)`` passes
+    through one of ``cylinders`` (C, 6) (see :func:`hidden_points`)."""
+    dx, dy, dz = px - cx, py - cy, pz - cz
+    dxy2 = dx * dx + dy * dy
+    if dxy2 <= 0.0:  # a point straight below the camera: nothing stands between
+        return False
+    for c in range(cylinders.shape[0]):
+        r = cylinders[c, 2]
+        if r <= 0.0:
+            continue
+        rel_x, rel_y = cylinders[c, 0] - cx, cylinders[c, 1] - cy
+        t_mid = (rel_x * dx + rel_y * dy) / dxy2  # closest approach to the axis
+        mx, my = rel_x - t_mid * dx, rel_y - t_mid * dy
+        miss2 = mx * mx + my * my
+        if miss2 >= r * r:
+            continue
+        half = math.sqrt((r * r - miss2) / dxy2)
+        t0 = min(max(t_mid - half, 0.0), 1.0)
+        t1 = min(max(t_mid + half, 0.0), 1.0)
+        if t1 <= t0:
+            continue
+        z0, z1 = cz + t0 * dz, cz + t1 * dz
+        if min(z0, z1) < cylinders[c, 4] and max(z0, z1) > cylinders[c, 3]:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _hidden_points_kernel(
+    camera: np.ndarray, points: np.ndarray, cylinders: np.ndarray, hidden: np.ndarray
+) -> None:
+    for n in range(points.shape[0]):
+        cx, cy, cz = camera[n, 0], camera[n, 1], camera[n, 2]
+        for m in range(points.shape[1]):
+            p = points[n, m]
+            hidden[n, m] = _sight_line_hidden(cx, cy, cz, p[0], p[1], p[2], cylinders[n])
+
+
+@njit(cache=True)
+def _hidden_landmarks_kernel(
+    camera: np.ndarray, samples: np.ndarray, cylinders: np.ndarray, hidden: np.ndarray
+) -> None:
+    """``hidden`` (N, K): every sample (K, S, 2) of landmark k hidden from camera n (the
+    first sample in view ends the landmark's test)."""
+    for n in range(camera.shape[0]):
+        cx, cy, cz = camera[n, 0], camera[n, 1], camera[n, 2]
+        for k in range(samples.shape[0]):
+            every = True
+            for s in range(samples.shape[1]):
+                q = samples[k, s]
+                if not _sight_line_hidden(cx, cy, cz, q[0], q[1], 0.0, cylinders[n]):
+                    every = False
+                    break
+            hidden[n, k] = every
