@@ -55,6 +55,16 @@ def test_gymnasium_env_checker(observation):
     assert env.observation_space.contains(obs)
 
 
+def test_gymnasium_env_checker_with_a_whole_config_and_walking_robots():
+    """A ``config=`` argument is deep-copied by the checker: every part of it must copy."""
+    from activevision.envs.match.config import MatchConfig, OthersConfig
+    from activevision.envs.robots import RobotsConfig
+
+    config = MatchConfig(ticks=30, robots=RobotsConfig(count=(2, 3)), others=OthersConfig(0.3))
+    env = gym.make("ActiveVisionMatch-v0", config=config)
+    check_env(env.unwrapped, skip_render_check=True)
+
+
 def test_same_seed_same_bytes_and_truncation():
     actions = np.random.default_rng(0).integers(0, 9, TICKS)
     a = rollout(ActiveVisionMatchEnv(ticks=TICKS), 7, actions)

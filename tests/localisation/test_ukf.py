@@ -223,3 +223,19 @@ def test_measurement_noise_grows_with_range():
     r3 = measurement_noise(3.0, LandmarkType.L_CORNER)
     assert r3[0, 0] > r1[0, 0] and r3[1, 1] == r1[1, 1]
     assert r1[0, 0] == pytest.approx((0.05 + 0.1) ** 2)
+
+
+def test_config_pickles_and_deep_copies_with_its_read_only_noise():
+    import copy
+    import pickle
+    from types import MappingProxyType
+
+    from activevision.localisation.config import RangeBearingNoise
+
+    noise = dict(UKFConfig().noise)
+    noise[LandmarkType.L_CORNER] = RangeBearingNoise(0.2, 0.1, 0.05)
+    cfg = UKFConfig(noise=MappingProxyType(noise), initial_std=(0.3, 0.3, 0.2))
+    for twin in (pickle.loads(pickle.dumps(cfg)), copy.deepcopy(cfg)):
+        assert twin == cfg and twin is not cfg
+        assert isinstance(twin.noise, MappingProxyType)  # still read-only
+        assert twin.noise[LandmarkType.L_CORNER] == RangeBearingNoise(0.2, 0.1, 0.05)

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -91,6 +92,14 @@ class UKFConfig:
         if not all(s > 0 and math.isfinite(s) for s in stds):
             raise ValueError("UKFConfig odometry_base and initial_std must be positive")
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle and deep-copy through a plain dict of the noise (a ``MappingProxyType``
+        is neither): configs travel to worker processes, and Gymnasium's env checker
+        deep-copies an env's arguments."""
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        values["noise"] = dict(self.noise)
+        return (_ukf_config, (values,))
+
     @property
     def n(self) -> int:
         """State dimension."""
@@ -114,6 +123,11 @@ class UKFConfig:
             np.array([r.range_fraction for r in rows], dtype=np.float64),
             np.array([r.bearing for r in rows], dtype=np.float64),
         )
+
+
+def _ukf_config(values: dict[str, Any]) -> UKFConfig:
+    """A :class:`UKFConfig` from :meth:`UKFConfig.__reduce__`'s values."""
+    return UKFConfig(**{**values, "noise": MappingProxyType(dict(values["noise"]))})
 
 
 #: The default configuration (a module-level constant so it can be a default argument).
