@@ -1,7 +1,8 @@
 """Other robots on the field: how many, how tall, where (drawn per episode).
 
 Each is a KidSize robot as :func:`activevision.geometry.occlusion.robot_cylinders` builds it
-(a body cylinder and a narrower head), standing still for the episode. Placement: uniform on
+(a body cylinder and a narrower head), standing still for an episode (in a match they may
+walk: ``envs.match.others``). Placement: uniform on
 the field of play, at least ``min_spacing`` from every other robot (ours included) and
 ``ball_clearance`` from the ball; a placement that would hide the ball from our camera is
 drawn again, so every start keeps the ball in view.
