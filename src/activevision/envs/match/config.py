@@ -83,6 +83,8 @@ class OthersConfig:
 
     #: walking speed (m/s); KidSize 0.1-0.3, as ``WalkConfig.speed``
     speed: float = field(default=0.0, metadata=in_range(0.0, 1.0))
+    #: share of its speed towards a robot that a ball keeps in the bounce (a reasoned
+    #: guess: no KidSize measurement is published)
     ball_restitution: float = field(default=0.5, metadata=in_range(0.0, 1.0))
 
     def __post_init__(self) -> None:
