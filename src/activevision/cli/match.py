@@ -31,7 +31,7 @@ def _others_text(args: argparse.Namespace) -> str:
     if not args.robots:
         return ""
     moving = f"walking at {args.robot_speed:g} m/s" if args.robot_speed else "standing"
-    return f", {args.robots} other robots {moving}"
+    return f", {args.robots} other robot{'s' if args.robots > 1 else ''} {moving}"
 
 
 def cmd_match(args: argparse.Namespace) -> None:
