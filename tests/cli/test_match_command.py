@@ -47,6 +47,17 @@ def test_a_match_with_walking_robots_draws_them_in_the_clip(tmp_path, capsys):
     assert (np.abs(with_robots - without).sum(axis=2) > 60).sum() > 4 * 20
 
 
+def test_a_sparser_detector_localises_worse(tmp_path, capsys):
+    argv = [*TINY, "--methods", "nubots_6point", "--matches", "4", "--ticks", "60"]
+    rmse = {}
+    for name, extra in (("default", []), ("sparse", ["--detection", "0.5", "0.1", "0.3"])):
+        assert main([*argv, *extra, "--out", str(tmp_path / name)]) == 0
+        with (tmp_path / name / "match.csv").open() as f:
+            rmse[name] = float(next(csv.DictReader(f))["position_rmse"])
+    assert "detector 0.5/0.1/0.3" in capsys.readouterr().out
+    assert rmse["sparse"] > rmse["default"]
+
+
 def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     out = tmp_path / "m"
     assert main([*TINY, "--out", str(out)]) == 0
@@ -67,6 +78,9 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
         (["match", "--robots", "9"], "--robots"),
         (["match", "--robots", "two"], "--robots"),
         (["match", "--robot-speed", "-0.1"], "--robot-speed"),
+        (["match", "--detection", "0.9", "0.5"], "--detection"),
+        (["match", "--detection", "0.9", "0.5", "1.5"], "--detection"),
+        (["match", "--detection", "0.5", "0.9", "0.1", "--matches", "1"], "far"),
         (["match", "--model", "missing.onnx", "--matches", "1"], "missing.onnx"),
         (["match", "--methods", "random", "--clip-method", "ball_track"], "--clip-method"),
     ],

@@ -26,12 +26,16 @@ def _method_names() -> tuple[str, ...]:
     return match_method_names()
 
 
-def _others_text(args: argparse.Namespace) -> str:
-    """``", 4 other robots walking at 0.2 m/s"``, or nothing without other robots."""
-    if not args.robots:
-        return ""
-    moving = f"walking at {args.robot_speed:g} m/s" if args.robot_speed else "standing"
-    return f", {args.robots} other robot{'s' if args.robots > 1 else ''} {moving}"
+def _world_text(args: argparse.Namespace) -> str:
+    """What differs from the default world: ``", 4 other robots walking at 0.2 m/s,
+    detector 0.6/0.15/0.2"``, or nothing."""
+    text = ""
+    if args.robots:
+        moving = f"walking at {args.robot_speed:g} m/s" if args.robot_speed else "standing"
+        text += f", {args.robots} other robot{'s' if args.robots > 1 else ''} {moving}"
+    if args.detection:
+        text += ", detector {:g}/{:g}/{:g}".format(*args.detection)
+    return text
 
 
 def cmd_match(args: argparse.Namespace) -> None:
@@ -54,7 +58,12 @@ def cmd_match(args: argparse.Namespace) -> None:
 
     import numpy as np
 
-    from activevision.envs.match.config import MatchConfig, OthersConfig, WalkConfig
+    from activevision.envs.match.config import (
+        DetectionConfig,
+        MatchConfig,
+        OthersConfig,
+        WalkConfig,
+    )
     from activevision.envs.robots import RobotsConfig
     from activevision.experiments.match import (
         compare_matches,
@@ -74,6 +83,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         walk=WalkConfig(target=args.walk),
         robots=RobotsConfig(count=(args.robots, args.robots)),
         others=OthersConfig(speed=args.robot_speed),
+        detection=DetectionConfig(*args.detection) if args.detection else DetectionConfig(),
     )
     minutes = args.ticks * config.tick_seconds / 60
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
@@ -81,7 +91,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         f"{len(methods)} methods x {args.matches} matches of {args.ticks} ticks"
         f" ({minutes:.1f} min of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
-        f" walking to {args.walk}{_others_text(args)}"
+        f" walking to {args.walk}{_world_text(args)}"
     )
     print(table_header(), flush=True)
     results = compare_matches(
@@ -105,7 +115,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     write_csv(csv_path, csv_rows(results, args.matches, args.seed))
     title = (
         f"{args.matches} matches x {minutes:.1f} min, seed {args.seed},"
-        f" {args.action_type} head {args.step_deg:g} deg/tick{_others_text(args)}"
+        f" {args.action_type} head {args.step_deg:g} deg/tick{_world_text(args)}"
     )
     points = {
         r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()} for r in results
@@ -188,6 +198,14 @@ def add_parsers(sub: Any) -> None:
         default=0.0,
         help="m/s the other robots walk at between random waypoints (0: they stand; KidSize"
         " robots walk 0.1-0.3)",
+    )
+    p.add_argument(
+        "--detection",
+        nargs=3,
+        type=float_in(0, 1),
+        metavar=("NEAR", "FAR", "FALSE"),
+        help="the landmark detector: probability of detecting a landmark in view at the robot"
+        " and at its detection range, and false detections per tick (default 0.95 0.5 0.05)",
     )
     p.add_argument(
         "--model",
