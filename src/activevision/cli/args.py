@@ -11,7 +11,7 @@ import contextlib
 import math
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn
+from typing import TYPE_CHECKING, NoReturn, TypeVar
 
 if TYPE_CHECKING:
     from activevision.envs import EnvConfig
@@ -22,6 +22,10 @@ class ArgumentParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+#: an argument's number type (int or float)
+Number = TypeVar("Number", int, float)
 
 
 def _integer(text: str) -> int:
@@ -73,32 +77,29 @@ def positive_float(text: str) -> float:
     return value
 
 
-def float_in(low: float, high: float, unit: str = "") -> Callable[[str], float]:
-    """An argument type: a number in ``[low, high]`` (``unit`` named in the error)."""
+def _bounded(
+    convert: Callable[[str], Number], low: float, high: float, wanted: str
+) -> Callable[[str], Number]:
+    """An argument type: ``convert(text)`` checked to lie in ``[low, high]`` (``wanted``
+    says what, in the error)."""
 
-    def parse(text: str) -> float:
-        value = _finite(text)
+    def parse(text: str) -> Number:
+        value = convert(text)
         if not low <= value <= high:
-            raise argparse.ArgumentTypeError(
-                f"must lie in [{low:g}, {high:g}]{' ' + unit if unit else ''}, got {text!r}"
-            )
+            raise argparse.ArgumentTypeError(f"{wanted}, got {text!r}")
         return value
 
     return parse
+
+
+def float_in(low: float, high: float, unit: str = "") -> Callable[[str], float]:
+    """An argument type: a number in ``[low, high]`` (``unit`` named in the error)."""
+    return _bounded(_finite, low, high, f"must lie in [{low:g}, {high:g}] {unit}".rstrip())
 
 
 def int_in(low: int, high: int) -> Callable[[str], int]:
     """An argument type: an integer in ``[low, high]``."""
-
-    def parse(text: str) -> int:
-        value = _integer(text)
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(
-                f"must be an integer from {low} to {high}, got {text!r}"
-            )
-        return value
-
-    return parse
+    return _bounded(_integer, low, high, f"must be an integer from {low} to {high}")
 
 
 def error_levels(text: str) -> list[float]:
