@@ -85,13 +85,27 @@ def vector_rollout(envs, seed, actions):
     return out
 
 
+@pytest.mark.parametrize("robots", [False, True], ids=["empty", "walking-robots"])
 @pytest.mark.parametrize("mode", ["sync", "async"])
-def test_every_vectorizer_agrees_with_the_native_one(mode):
+def test_every_vectorizer_agrees_with_the_native_one(mode, robots):
     """Gymnasium's Sync and Async vectorizers over single envs and the native vector env
-    give the same batches, byte for byte, across an autoreset."""
+    give the same batches, byte for byte, across an autoreset (also with other robots
+    walking: their draws, the occlusion and the bounces)."""
+    from activevision.envs.match.config import MatchConfig, OthersConfig
+    from activevision.envs.robots import RobotsConfig
+
     n, ticks = 3, 12
     actions = np.random.default_rng(2).integers(0, 9, (ticks + 3, n))
-    kwargs = {"observation": "image+head+belief", "ticks": ticks}
+    kwargs: dict = {"observation": "image+head+belief", "ticks": ticks}
+    if robots:
+        kwargs = {
+            "config": MatchConfig(
+                observation="image+head+belief",
+                ticks=ticks,
+                robots=RobotsConfig(count=(1, 4)),
+                others=OthersConfig(speed=0.3),
+            )
+        }
     native = gym.make_vec(
         "ActiveVisionMatch-v0", num_envs=n, vectorization_mode="vector_entry_point", **kwargs
     )
