@@ -58,6 +58,47 @@ def test_a_sparser_detector_localises_worse(tmp_path, capsys):
     assert rmse["sparse"] > rmse["default"]
 
 
+def test_paired_differences_from_a_baseline(tmp_path, capsys):
+    out = tmp_path / "m"
+    assert main([*TINY, "--baseline", "ball_track", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "paired differences from ball_track" in printed
+    with (out / "match.csv").open() as f:
+        rows = {r["method"]: r for r in csv.DictReader(f)}
+    with (out / "match_paired.csv").open() as f:
+        (paired,) = list(csv.DictReader(f))
+    assert (paired["method"], paired["baseline"]) == ("random", "ball_track")
+    gap = float(rows["random"]["position_rmse"]) - float(rows["ball_track"]["position_rmse"])
+    assert float(paired["position_rmse_diff"]) == pytest.approx(gap)
+    # without --baseline the file is neither written nor in the way
+    plain = tmp_path / "plain"
+    assert main([*TINY, "--out", str(plain)]) == 0
+    assert not (plain / "match_paired.csv").exists()
+
+
+def test_several_models_play_side_by_side(tmp_path, capsys):
+    """Two copies of the shipped policy play as two onnx_policy results, named after their
+    folders, on the same matches: the same results, every paired difference zero."""
+    from activevision.runtime import pretrained_policy_path
+
+    shipped = pretrained_policy_path()
+    models = []
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        for suffix in (".onnx", ".json"):
+            target = tmp_path / name / f"policy{suffix}"
+            target.write_bytes(shipped.with_suffix(suffix).read_bytes())
+        models.append(str(tmp_path / name / "policy.onnx"))
+    out = tmp_path / "m"
+    argv = [*TINY, "--methods", "onnx_policy", "--model", *models]
+    assert main([*argv, "--baseline", "onnx_policy[a]", "--out", str(out)]) == 0
+    assert "2 methods" in capsys.readouterr().out
+    with (out / "match_paired.csv").open() as f:
+        (paired,) = list(csv.DictReader(f))
+    assert paired["method"] == "onnx_policy[b]"
+    assert float(paired["position_rmse_diff"]) == 0.0 == float(paired["head_travel_diff"])
+
+
 def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     out = tmp_path / "m"
     assert main([*TINY, "--out", str(out)]) == 0
@@ -83,6 +124,8 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
         (["match", "--detection", "0.5", "0.9", "0.1", "--matches", "1"], "far"),
         (["match", "--model", "missing.onnx", "--matches", "1"], "missing.onnx"),
         (["match", "--methods", "random", "--clip-method", "ball_track"], "--clip-method"),
+        (["match", "--methods", "random", "--baseline", "ball_track"], "--baseline"),
+        (["match", "--methods", "random", "--baseline", "random"], "--baseline"),
     ],
 )
 def test_bad_input_is_one_clear_line(tmp_path, argv, needle, one_clear_line):

@@ -4,6 +4,7 @@ matches, the metrics are what they say, and the strategies aim where they claim.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +15,10 @@ from activevision.experiments.match import (
     MatchClip,
     MethodResult,
     csv_rows,
+    expand_methods,
+    format_difference,
+    paired_differences,
+    paired_rows,
     pareto_front,
     play_matches,
 )
@@ -102,6 +107,47 @@ def test_pareto_front_by_hand():
     assert pareto_front(results) == ["a", "b", "d"]  # c is beaten by a on both
     rows = csv_rows(results, 4, 0)
     assert rows[0]["position_rmse"] == pytest.approx(0.1) and rows[0]["matches"] == 4
+
+
+def test_paired_differences_by_hand():
+    """Matches that vary far more than the methods: a is 1 cm better in every match, which
+    the paired interval resolves ([-0.01, -0.01]) and the per-method intervals do not."""
+    base = np.array([0.05, 0.10, 0.15, 0.20])
+    a, b = fake("a", 0.0, 0.3), fake("b", 0.0, 0.3)
+    a.per_match["position_rmse"][:] = base - 0.01
+    b.per_match["position_rmse"][:] = base
+    a.per_match["ball_in_view"][:] = [0.3, 0.4, 0.5, 0.6]  # differences 0, .1, .2, .3
+    differences = paired_differences([a, b], "b")
+    assert list(differences) == ["a"]
+    rmse = differences["a"]["position_rmse"]
+    assert (rmse.mean, rmse.low, rmse.high) == pytest.approx((-0.01, -0.01, -0.01))
+    alone = [r.summary()["position_rmse"] for r in (a, b)]
+    assert alone[0].high > alone[1].low  # the intervals of each method overlap
+    ball = differences["a"]["ball_in_view"]
+    half = 1.959964 * np.std([0, 0.1, 0.2, 0.3], ddof=1) / 2  # z * s / sqrt(4)
+    assert (ball.mean, ball.high - ball.mean) == pytest.approx((0.15, half), rel=1e-5)
+    assert format_difference("a", differences["a"]).split()[:2] == ["a", "-0.010"]
+    row = paired_rows(differences, "b", 4, 7)[0]
+    assert (row["method"], row["baseline"], row["seed"]) == ("a", "b", 7)
+    assert row["ball_in_view_diff_low"] == pytest.approx(0.15 - half, rel=1e-5)
+    with pytest.raises(ValueError, match="baseline 'c'"):
+        paired_differences([a, b], "c")
+
+
+def test_onnx_policy_plays_once_per_model():
+    one, two = Path("runs/a/policy.onnx"), Path("runs/b/policy.onnx")
+    assert expand_methods(["ball_track", "onnx_policy"]) == [
+        ("ball_track", "ball_track", None),
+        ("onnx_policy", "onnx_policy", None),
+    ]
+    assert expand_methods(["onnx_policy"], [one]) == [("onnx_policy", "onnx_policy", one)]
+    labels = [label for label, _, _ in expand_methods(["onnx_policy"], [one, two])]
+    assert labels == ["onnx_policy[a]", "onnx_policy[b]"]
+    same = [Path("x/m.onnx"), Path("y/m.onnx")]
+    assert [lab for lab, _, _ in expand_methods(["onnx_policy"], same)] == [
+        "onnx_policy[m-1]",
+        "onnx_policy[m-2]",
+    ]
 
 
 def test_references_neither_join_nor_beat_the_front():

@@ -18,6 +18,7 @@ from activevision.cli.args import (
 from activevision.cli.outputs import OutputError, check_outputs, is_training_run
 
 OUTPUT_FILES = ("match.csv", "match_pareto.png", "match_error.png", "match_clip.gif")
+PAIRED_FILE = "match_paired.csv"  #: with --baseline
 
 
 def _method_names() -> tuple[str, ...]:
@@ -44,17 +45,26 @@ def cmd_match(args: argparse.Namespace) -> None:
     if is_training_run(out):
         raise OutputError(f"refusing to write into the training run {out}; choose another --out")
     files = [out / name for name in OUTPUT_FILES]
-    check_outputs(named=files, overwrite=args.overwrite)
-    if args.model is not None and not args.model.is_file():
-        raise ValueError(f"--model {args.model}: no such file")
+    paired_path = out / PAIRED_FILE
+    check_outputs(named=files + ([paired_path] if args.baseline else []), overwrite=args.overwrite)
+    models: list[Path] = list(dict.fromkeys(args.model or ()))
+    for model in models:
+        if not model.is_file():
+            raise ValueError(f"--model {model}: no such file")
+    from activevision.experiments.match import expand_methods
     from activevision.experiments.match_methods import default_match_methods, privileged_methods
 
     if args.run is not None and not (args.run / "config.json").is_file():
         raise ValueError(f"--run {args.run}: not a training run (no config.json)")
     methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
-    clip_method = args.clip_method or methods[0]
-    if clip_method not in methods:
-        raise ValueError(f"--clip-method {clip_method} is not among --methods")
+    labels = [label for label, _, _ in expand_methods(methods, models)]
+    clip_method = args.clip_method or labels[0]
+    if clip_method not in labels:
+        raise ValueError(f"--clip-method {clip_method} is not among: {', '.join(labels)}")
+    if args.baseline is not None and args.baseline not in labels:
+        raise ValueError(f"--baseline {args.baseline} is not among: {', '.join(labels)}")
+    if args.baseline is not None and len(labels) < 2:
+        raise ValueError("--baseline needs at least one other method to compare with")
 
     import numpy as np
 
@@ -66,9 +76,13 @@ def cmd_match(args: argparse.Namespace) -> None:
     )
     from activevision.envs.robots import RobotsConfig
     from activevision.experiments.match import (
+        NAME_WIDTH,
         compare_matches,
         csv_rows,
+        format_difference,
         format_result,
+        paired_differences,
+        paired_rows,
         pareto_front,
         table_header,
     )
@@ -88,20 +102,21 @@ def cmd_match(args: argparse.Namespace) -> None:
     minutes = args.ticks * config.tick_seconds / 60
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
     print(
-        f"{len(methods)} methods x {args.matches} matches of {args.ticks} ticks"
+        f"{len(labels)} methods x {args.matches} matches of {args.ticks} ticks"
         f" ({minutes:.1f} min of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
         f" walking to {args.walk}{_world_text(args)}"
     )
-    print(table_header(), flush=True)
+    width = max(NAME_WIDTH, max(len(label) for label in labels) + 2)
+    print(table_header(width), flush=True)
     results = compare_matches(
         methods,
         config,
         args.matches,
         args.seed,
-        args.model,
+        models,
         args.run,
-        progress=lambda r: print(f"{format_result(r)}   ({r.seconds:.0f} s)", flush=True),
+        progress=lambda r: print(f"{format_result(r, width)}   ({r.seconds:.0f} s)", flush=True),
     )
     references = privileged_methods() & set(methods)
     front = pareto_front(results, references)
@@ -113,6 +128,14 @@ def cmd_match(args: argparse.Namespace) -> None:
     csv_path, pareto_path, error_path, clip_path = files
     out.mkdir(parents=True, exist_ok=True)
     write_csv(csv_path, csv_rows(results, args.matches, args.seed))
+    if args.baseline is not None:
+        differences = paired_differences(results, args.baseline)
+        print(f"paired differences from {args.baseline}, match by match (mean [95% interval]):")
+        print(table_header(width))
+        for method, metrics in differences.items():
+            print(format_difference(method, metrics, width))
+        write_csv(paired_path, paired_rows(differences, args.baseline, args.matches, args.seed))
+        files.append(paired_path)
     title = (
         f"{args.matches} matches x {minutes:.1f} min, seed {args.seed},"
         f" {args.action_type} head {args.step_deg:g} deg/tick{_world_text(args)}"
@@ -210,11 +233,19 @@ def add_parsers(sub: Any) -> None:
     p.add_argument(
         "--model",
         type=Path,
-        help="an exported policy.onnx for onnx_policy (default: the shipped one)",
+        nargs="+",
+        help="exported policies (policy.onnx) for onnx_policy (default: the shipped one);"
+        " with several, onnx_policy plays each, named onnx_policy[RUN] after its run folder",
     )
     p.add_argument("--run", type=Path, help="a training run for the learned strategy")
     p.add_argument(
         "--clip-method", help="the strategy shown in match_clip.gif (default: the first)"
+    )
+    p.add_argument(
+        "--baseline",
+        metavar="NAME",
+        help="also print and write (match_paired.csv) every other strategy's difference from"
+        " this one, match by match on the same seeds, with 95%% intervals",
     )
     p.add_argument("--out", type=Path, default=Path("match-results"), help="output directory")
     add_overwrite(p)

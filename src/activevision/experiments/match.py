@@ -11,7 +11,11 @@ Per match (then mean and 95% interval over matches):
 * ``head_travel``: how far the head moved, degrees per second.
 
 Match ``i`` of every method is reset with seed ``seed + i``: the same start, ball and walk
-draws. Strategies only change where the head looks, and so what is detected.
+draws. Strategies only change where the head looks, and so what is detected. So two methods
+are best compared match by match: :func:`paired_differences` gives each metric's mean
+difference from a baseline with the 95% interval of the per-match differences, which is
+far narrower than either method's own interval when the matches' difficulty varies more
+than the methods do.
 """
 
 from __future__ import annotations
@@ -93,10 +97,11 @@ def play_matches(
     model: Path | None = None,
     run: Path | None = None,
     clip_match: int = 0,
+    label: str | None = None,
 ) -> MethodResult:
     """Play ``matches`` matches of ``config`` with strategy ``method`` in lock-step
     (``model``: an exported policy for ``onnx_policy``, ``run``: a training run for
-    ``learned``)."""
+    ``learned``); the result is named ``label`` (default: ``method``)."""
     start = time.perf_counter()
     policy = make_match_policy(method, config, model, run)
     env = ActiveVisionMatchVectorEnv(matches, config)
@@ -127,7 +132,37 @@ def play_matches(
         "entropy": np.mean(entropy, axis=0),
         "head_travel": travel.sum(axis=0) / (ticks * config.tick_seconds),
     }
-    return MethodResult(method, per_match, position, clip, time.perf_counter() - start)
+    name = label or method
+    return MethodResult(name, per_match, position, clip, time.perf_counter() - start)
+
+
+def model_labels(models: Sequence[Path]) -> list[str]:
+    """What each exported policy plays as: ``onnx_policy`` for one model, else
+    ``onnx_policy[NAME]`` with NAME its training run's folder (``runs/NAME/policy.onnx``) or
+    its file name's stem, numbered where two coincide."""
+    if len(models) <= 1:
+        return ["onnx_policy"]
+    names = [m.parent.name if m.stem == "policy" and m.parent.name else m.stem for m in models]
+    labels = []
+    for i, name in enumerate(names):
+        if names.count(name) > 1:
+            name = f"{name}-{names[: i + 1].count(name)}"
+        labels.append(f"onnx_policy[{name}]")
+    return labels
+
+
+def expand_methods(
+    methods: Sequence[str], models: Sequence[Path] = ()
+) -> list[tuple[str, str, Path | None]]:
+    """``(label, method, model)`` for every result to play: ``onnx_policy`` once per model
+    (once with the shipped policy when there is none), every other method once."""
+    entries: list[tuple[str, str, Path | None]] = []
+    for name in methods:
+        if name == "onnx_policy" and models:
+            entries += [(lab, name, m) for lab, m in zip(model_labels(models), models, strict=True)]
+        else:
+            entries.append((name, name, None))
+    return entries
 
 
 def compare_matches(
@@ -135,33 +170,37 @@ def compare_matches(
     config: MatchConfig,
     matches: int,
     seed: int,
-    model: Path | None = None,
+    models: Sequence[Path] = (),
     run: Path | None = None,
     progress: Callable[[MethodResult], None] | None = None,
 ) -> list[MethodResult]:
-    """:func:`play_matches` for each method, on the same seeds."""
+    """:func:`play_matches` for each method (``onnx_policy`` for each of ``models``: see
+    :func:`expand_methods`), on the same seeds."""
     results = []
-    for name in methods:
-        result = play_matches(name, config, matches, seed, model, run)
+    for label, name, model in expand_methods(methods, models):
+        result = play_matches(name, config, matches, seed, model, run, label=label)
         results.append(result)
         if progress is not None:
             progress(result)
     return results
 
 
-def table_header() -> str:
+NAME_WIDTH = 18  #: the method column's width, unless a name needs more
+
+
+def table_header(width: int = NAME_WIDTH) -> str:
     cols = "".join(f"{header:>22}" for header, _ in MATCH_METRICS.values())
-    return f"{'method':<18}{cols}"
+    return f"{'method':<{width}}{cols}"
 
 
-def format_result(result: MethodResult) -> str:
+def format_result(result: MethodResult, width: int = NAME_WIDTH) -> str:
     """One table row: each metric's mean and 95% interval."""
     summary = result.summary()
     cells = []
     for name, (_, fmt) in MATCH_METRICS.items():
         iv = summary[name]
         cells.append(f"{fmt.format(iv.mean)} [{fmt.format(iv.low)},{fmt.format(iv.high)}]")
-    return f"{result.method:<18}" + "".join(f"{c:>22}" for c in cells)
+    return f"{result.method:<{width}}" + "".join(f"{c:>22}" for c in cells)
 
 
 def csv_rows(results: Sequence[MethodResult], matches: int, seed: int) -> list[dict]:
@@ -174,6 +213,56 @@ def csv_rows(results: Sequence[MethodResult], matches: int, seed: int) -> list[d
             row[f"{name}_low"] = iv.low
             row[f"{name}_high"] = iv.high
         row["seconds"] = round(r.seconds, 2)
+        rows.append(row)
+    return rows
+
+
+def paired_differences(
+    results: Sequence[MethodResult], baseline: str
+) -> dict[str, dict[str, Interval]]:
+    """Per method other than ``baseline``: each metric's mean difference ``method -
+    baseline`` over the same matches, with the 95% interval of the per-match differences."""
+    base = next((r for r in results if r.method == baseline), None)
+    if base is None:
+        raise ValueError(f"the baseline {baseline!r} is not among the methods played")
+    return {
+        r.method: {
+            name: mean_interval((values - base.per_match[name]).tolist())
+            for name, values in r.per_match.items()
+        }
+        for r in results
+        if r.method != baseline
+    }
+
+
+def format_difference(
+    method: str, differences: dict[str, Interval], width: int = NAME_WIDTH
+) -> str:
+    """One row of the paired table: each metric's difference and its 95% interval."""
+    cells = []
+    for name, (_, fmt) in MATCH_METRICS.items():
+        iv = differences[name]
+        signed = fmt.replace("{:", "{:+")
+        cells.append(f"{signed.format(iv.mean)} [{fmt.format(iv.low)},{fmt.format(iv.high)}]")
+    return f"{method:<{width}}" + "".join(f"{c:>22}" for c in cells)
+
+
+def paired_rows(
+    differences: dict[str, dict[str, Interval]], baseline: str, matches: int, seed: int
+) -> list[dict]:
+    """One CSV row per method: every metric's paired difference from ``baseline``."""
+    rows = []
+    for method, metrics in differences.items():
+        row: dict[str, object] = {
+            "method": method,
+            "baseline": baseline,
+            "matches": matches,
+            "seed": seed,
+        }
+        for name, iv in metrics.items():
+            row[f"{name}_diff"] = iv.mean
+            row[f"{name}_diff_low"] = iv.low
+            row[f"{name}_diff_high"] = iv.high
         rows.append(row)
     return rows
 
