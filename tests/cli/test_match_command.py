@@ -76,6 +76,15 @@ def test_paired_differences_from_a_baseline(tmp_path, capsys):
     assert not (plain / "match_paired.csv").exists()
 
 
+def test_entropy_track_at_several_margins(tmp_path):
+    out = tmp_path / "m"
+    argv = [*TINY, "--methods", "entropy_track", "ball_track", "--track-margin", "0", "20"]
+    assert main([*argv, "--baseline", "ball_track", "--out", str(out)]) == 0
+    with (out / "match_paired.csv").open() as f:
+        methods = [r["method"] for r in csv.DictReader(f)]
+    assert methods == ["entropy_track[0deg]", "entropy_track[20deg]"]
+
+
 def test_several_models_play_side_by_side(tmp_path, capsys):
     """Two copies of the shipped policy play as two onnx_policy results, named after their
     folders, on the same matches: the same results, every paired difference zero."""
@@ -126,6 +135,7 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
         (["match", "--methods", "random", "--clip-method", "ball_track"], "--clip-method"),
         (["match", "--methods", "random", "--baseline", "ball_track"], "--baseline"),
         (["match", "--methods", "random", "--baseline", "random"], "--baseline"),
+        (["match", "--track-margin", "30"], "--track-margin"),
     ],
 )
 def test_bad_input_is_one_clear_line(tmp_path, argv, needle, one_clear_line):

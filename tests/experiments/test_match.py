@@ -24,14 +24,18 @@ from activevision.experiments.match import (
 )
 from activevision.experiments.match_methods import (
     BHumanCycle,
+    EntropyTrack,
     NUbots6Point,
+    StrategyOptions,
     ball_direction,
+    ball_on_field,
     default_match_methods,
     make_match_policy,
     move_towards,
     privileged,
     privileged_methods,
 )
+from activevision.geometry import field_landmarks
 
 SMALL = MatchConfig(ticks=12)
 
@@ -77,7 +81,7 @@ def test_move_towards_by_hand():
 def test_a_q_network_refuses_a_continuous_match(tmp_path):
     (tmp_path / "config.json").write_text('{"algo": "ddqn"}')
     with pytest.raises(ValueError, match="discrete matches only"):
-        make_match_policy("learned", CONTINUOUS, run=tmp_path)
+        make_match_policy("learned", CONTINUOUS, StrategyOptions(run=tmp_path))
 
 
 def test_same_seeds_same_matches():
@@ -137,16 +141,30 @@ def test_paired_differences_by_hand():
 def test_onnx_policy_plays_once_per_model():
     one, two = Path("runs/a/policy.onnx"), Path("runs/b/policy.onnx")
     assert expand_methods(["ball_track", "onnx_policy"]) == [
-        ("ball_track", "ball_track", None),
-        ("onnx_policy", "onnx_policy", None),
+        ("ball_track", "ball_track", StrategyOptions()),
+        ("onnx_policy", "onnx_policy", StrategyOptions()),
     ]
-    assert expand_methods(["onnx_policy"], [one]) == [("onnx_policy", "onnx_policy", one)]
+    assert expand_methods(["onnx_policy"], [one]) == [
+        ("onnx_policy", "onnx_policy", StrategyOptions(model=one))
+    ]
     labels = [label for label, _, _ in expand_methods(["onnx_policy"], [one, two])]
     assert labels == ["onnx_policy[a]", "onnx_policy[b]"]
     same = [Path("x/m.onnx"), Path("y/m.onnx")]
     assert [lab for lab, _, _ in expand_methods(["onnx_policy"], same)] == [
         "onnx_policy[m-1]",
         "onnx_policy[m-2]",
+    ]
+
+
+def test_entropy_track_plays_once_per_margin():
+    assert expand_methods(["entropy_track"], margins=[7.5]) == [
+        ("entropy_track", "entropy_track", StrategyOptions(track_margin_deg=7.5))
+    ]
+    entries = expand_methods(["entropy_track", "ball_track"], margins=[0, 20])
+    assert [(label, o.track_margin_deg) for label, _, o in entries] == [
+        ("entropy_track[0deg]", 0),
+        ("entropy_track[20deg]", 20),
+        ("ball_track", 5.0),
     ]
 
 
@@ -209,6 +227,63 @@ def test_bhuman_cycle_narrows_when_walking():
     for t in range(60):  # walking 0.2 m/s: 0.064 m per tick
         target = policy.targets(info_for([[0.0, 0.3]], ball, [[0.064 * t, 0.0, 0.0]]))
     assert math.degrees(abs(target[0, 0])) == pytest.approx(15.0, abs=0.5)
+
+
+def test_entropy_track_keeps_the_ball_inside_its_margin():
+    """From real match states: every target lies within half the field of view less the
+    margin of the ball's direction; widening the margin can only cost expected entropy (the
+    views allowed shrink), and a margin near half the view is ball tracking."""
+    from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+    from activevision.localisation import LocalisationConfig, best_viewpoints
+
+    config = MatchConfig()
+    env = ActiveVisionMatchVectorEnv(16, config)
+    _, info = env.reset(seed=4)
+    for _ in range(20):  # the robots walk off, the balls roll: varied states
+        _, _, _, _, info = env.step(np.zeros(16, dtype=np.int64))
+    cam, ball = config.camera, ball_direction(info, config)
+    search = best_viewpoints(
+        info["belief_mean"],
+        info["belief_cov"],
+        ball_on_field(info),
+        field_landmarks(config.field),
+        cam,
+        grid=EntropyTrack.grid,
+        ukf=LocalisationConfig().ukf,
+        ball_views_only=True,
+    )
+    views = {tuple(v): i for i, v in enumerate(EntropyTrack.grid.views)}
+    entropies = []
+    for margin in (0.0, 10.0, 20.0):
+        policy = EntropyTrack(config, margin)
+        policy.reset(16, np.random.default_rng(0))
+        target = policy.targets(info)
+        gap = np.abs(target - ball)
+        inside = (gap[:, 0] <= cam.hfov / 2 - math.radians(margin) + 1e-12) & (
+            gap[:, 1] <= cam.vfov / 2 - math.radians(margin) + 1e-12
+        )
+        on_grid = np.array([tuple(t) in views for t in target])
+        assert (inside | ~on_grid).all()  # a grid view keeps the ball; else the ball itself
+        assert on_grid.sum() >= 8  # the others have the ball behind them
+        chosen = [views.get(tuple(t), -1) for t in target]
+        entropies.append(
+            [search.entropies[i, v] if v >= 0 else np.inf for i, v in enumerate(chosen)]
+        )
+        # the least expected entropy of the views allowed, by brute force
+        for i, v in enumerate(chosen):
+            if v >= 0:
+                gaps = np.abs(EntropyTrack.grid.views - ball[i])
+                ok = (gaps[:, 0] <= cam.hfov / 2 - math.radians(margin)) & (
+                    gaps[:, 1] <= cam.vfov / 2 - math.radians(margin)
+                )
+                ok &= search.ball_visible[i] & np.isfinite(search.entropies[i])
+                assert search.entropies[i, v] == np.min(search.entropies[i][ok])
+    by_margin = np.array(entropies)  # inf: no view keeps the ball
+    assert (by_margin[1:] >= by_margin[:-1]).all()
+    tracking = EntropyTrack(config, 28.0)
+    tracking.reset(16, np.random.default_rng(0))
+    near = np.abs(tracking.targets(info) - ball)
+    assert (near <= math.radians(2.5) + 1e-9).all()  # within half a grid step of the ball
 
 
 def test_six_point_look_visits_its_points_in_turn():

@@ -57,7 +57,9 @@ def cmd_match(args: argparse.Namespace) -> None:
     if args.run is not None and not (args.run / "config.json").is_file():
         raise ValueError(f"--run {args.run}: not a training run (no config.json)")
     methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
-    labels = [label for label, _, _ in expand_methods(methods, models)]
+    margins = list(dict.fromkeys(args.track_margin or ()))
+    entries = expand_methods(methods, models, margins, args.run)
+    labels = [label for label, _, _ in entries]
     clip_method = args.clip_method or labels[0]
     if clip_method not in labels:
         raise ValueError(f"--clip-method {clip_method} is not among: {', '.join(labels)}")
@@ -110,12 +112,10 @@ def cmd_match(args: argparse.Namespace) -> None:
     width = max(NAME_WIDTH, max(len(label) for label in labels) + 2)
     print(table_header(width), flush=True)
     results = compare_matches(
-        methods,
+        entries,
         config,
         args.matches,
         args.seed,
-        models,
-        args.run,
         progress=lambda r: print(f"{format_result(r, width)}   ({r.seconds:.0f} s)", flush=True),
     )
     references = privileged_methods() & set(methods)
@@ -238,6 +238,14 @@ def add_parsers(sub: Any) -> None:
         " with several, onnx_policy plays each, named onnx_policy[RUN] after its run folder",
     )
     p.add_argument("--run", type=Path, help="a training run for the learned strategy")
+    p.add_argument(
+        "--track-margin",
+        type=float_in(0, 29, "degrees"),
+        nargs="+",
+        metavar="DEG",
+        help="how far inside the image entropy_track keeps the ball (default 5); with"
+        " several, entropy_track plays each, named entropy_track[DEGdeg]",
+    )
     p.add_argument(
         "--clip-method", help="the strategy shown in match_clip.gif (default: the first)"
     )

@@ -30,7 +30,7 @@ import numpy as np
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.experiments.evaluate import Interval, mean_interval
-from activevision.experiments.match_methods import make_match_policy
+from activevision.experiments.match_methods import StrategyOptions, make_match_policy
 
 LOST_M = 0.5  #: position error (m) beyond which a robot counts as lost
 #: per-match metrics, in table order: name -> (column header, format)
@@ -94,16 +94,15 @@ def play_matches(
     config: MatchConfig,
     matches: int,
     seed: int,
-    model: Path | None = None,
-    run: Path | None = None,
+    options: StrategyOptions | None = None,
     clip_match: int = 0,
     label: str | None = None,
 ) -> MethodResult:
     """Play ``matches`` matches of ``config`` with strategy ``method`` in lock-step
-    (``model``: an exported policy for ``onnx_policy``, ``run``: a training run for
-    ``learned``); the result is named ``label`` (default: ``method``)."""
+    (``options``: its model, run or margin); the result is named ``label`` (default:
+    ``method``)."""
     start = time.perf_counter()
-    policy = make_match_policy(method, config, model, run)
+    policy = make_match_policy(method, config, options)
     env = ActiveVisionMatchVectorEnv(matches, config)
     obs, info = env.reset(seed=seed)
     policy.reset(matches, np.random.default_rng(seed))
@@ -152,33 +151,40 @@ def model_labels(models: Sequence[Path]) -> list[str]:
 
 
 def expand_methods(
-    methods: Sequence[str], models: Sequence[Path] = ()
-) -> list[tuple[str, str, Path | None]]:
-    """``(label, method, model)`` for every result to play: ``onnx_policy`` once per model
-    (once with the shipped policy when there is none), every other method once."""
-    entries: list[tuple[str, str, Path | None]] = []
+    methods: Sequence[str],
+    models: Sequence[Path] = (),
+    margins: Sequence[float] = (),
+    run: Path | None = None,
+) -> list[tuple[str, str, StrategyOptions]]:
+    """``(label, method, options)`` for every result to play: ``onnx_policy`` once per
+    model (:func:`model_labels`; the shipped policy when there is none), ``entropy_track``
+    once per margin (``entropy_track[10deg]`` where there are several), the others once."""
+    entries: list[tuple[str, str, StrategyOptions]] = []
     for name in methods:
         if name == "onnx_policy" and models:
-            entries += [(lab, name, m) for lab, m in zip(model_labels(models), models, strict=True)]
+            for label, model in zip(model_labels(models), models, strict=True):
+                entries.append((label, name, StrategyOptions(model=model)))
+        elif name == "entropy_track" and margins:
+            for margin in margins:
+                label = name if len(margins) == 1 else f"{name}[{margin:g}deg]"
+                entries.append((label, name, StrategyOptions(track_margin_deg=margin)))
         else:
-            entries.append((name, name, None))
+            entries.append((name, name, StrategyOptions(run=run)))
     return entries
 
 
 def compare_matches(
-    methods: Sequence[str],
+    entries: Sequence[tuple[str, str, StrategyOptions]],
     config: MatchConfig,
     matches: int,
     seed: int,
-    models: Sequence[Path] = (),
-    run: Path | None = None,
     progress: Callable[[MethodResult], None] | None = None,
 ) -> list[MethodResult]:
-    """:func:`play_matches` for each method (``onnx_policy`` for each of ``models``: see
-    :func:`expand_methods`), on the same seeds."""
+    """:func:`play_matches` for each ``(label, method, options)`` of
+    :func:`expand_methods`, on the same seeds."""
     results = []
-    for label, name, model in expand_methods(methods, models):
-        result = play_matches(name, config, matches, seed, model, run, label=label)
+    for label, name, options in entries:
+        result = play_matches(name, config, matches, seed, options, label=label)
         results.append(result)
         if progress is not None:
             progress(result)

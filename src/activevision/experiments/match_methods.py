@@ -24,6 +24,9 @@ port:
 * ``entropy_greedy``: Seekircher et al. 2010 / Czarnetzki et al. 2010 -- every ``k`` ticks,
   Algorithm 1 from the current belief (mean *and* covariance) picks the view with the least
   expected entropy that keeps the ball; move there at head speed.
+* ``entropy_track``: this package's variant of it -- every tick, Algorithm 1 from the belief
+  over a 5-degree grid, among the views that keep the ball model at least
+  ``track_margin_deg`` inside the image; the margin trades localisation for ball in view.
 * ``onnx_policy``: an exported policy through the robot runtime's ``HeadController``; by
   default the package's shipped episodic policy, run every tick, its goal (Algorithm 1's
   proposal from the believed pose) re-planned every ``k`` ticks.
@@ -53,7 +56,7 @@ from activevision.envs.actions import action_table, oracle_actions
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.observations import IMAGE_KEY, Observation
 from activevision.geometry import LandmarkSet, clip_head, field_landmarks
-from activevision.localisation import LocalisationConfig, best_viewpoints
+from activevision.localisation import LocalisationConfig, ViewpointGrid, best_viewpoints
 
 
 class MatchPolicy(Protocol):
@@ -225,6 +228,48 @@ class EntropyGreedy(TargetPolicy):
         return self.goal
 
 
+class EntropyTrack(TargetPolicy):
+    """Every tick: Algorithm 1 from the belief (mean and covariance) and the ball model over a
+    5-degree grid (pan -90..90 at 37 points, tilt 5..65 at 13), among the views whose centre
+    lies within half the field of view less ``margin_deg`` of the ball model's direction on
+    each axis -- so the ball stays in the image while the robot and the ball move; the ball's
+    direction itself where no view does. ``margin_deg`` 0 looks wherever the ball is merely
+    in view; about 25 is ``ball_track``."""
+
+    name = "entropy_track"
+    grid = ViewpointGrid(n_pan=37, n_tilt=13)
+
+    def __init__(self, config: MatchConfig, margin_deg: float = 5.0) -> None:
+        super().__init__(config)
+        self.margin = math.radians(margin_deg)
+        self.landmarks = field_landmarks(config.field)
+        self.localisation = LocalisationConfig(ukf=config.tracker.ukf)
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        ball = ball_direction(info, self.config)
+        result = best_viewpoints(
+            info["belief_mean"],
+            info["belief_cov"],
+            ball_on_field(info),
+            self.landmarks,
+            self.config.camera,
+            grid=self.grid,
+            ukf=self.localisation.ukf,
+            ball_radius=self.config.field.ball_radius,
+            ball_views_only=True,
+        )
+        cam = self.config.camera
+        near_ball = (np.abs(self.grid.pans[None] - ball[:, :1]) <= cam.hfov / 2 - self.margin) & (
+            np.abs(self.grid.tilts[None] - ball[:, 1:]) <= cam.vfov / 2 - self.margin
+        )
+        # entropies are NaN where the view misses the ball (ball_views_only)
+        allowed = near_ball & result.ball_visible & np.isfinite(result.entropies)
+        entropy = np.where(allowed, result.entropies, np.inf)
+        pick = np.argmin(entropy, axis=1)
+        found = allowed[np.arange(len(pick)), pick]
+        return np.where(found[:, None], self.grid.views[pick], ball)
+
+
 def ball_on_field(info: dict[str, np.ndarray]) -> np.ndarray:
     """The ball model's position (N, 2) on the field, through the believed pose."""
     mean, rel = info["belief_mean"], info["ball_relative"]
@@ -393,10 +438,19 @@ class RandomMoves:
 
 
 @dataclass(frozen=True)
+class StrategyOptions:
+    """What some strategies take beyond the match's config."""
+
+    model: Path | None = None  #: onnx_policy: an exported policy (None: the shipped one)
+    run: Path | None = None  #: learned: a training run
+    track_margin_deg: float = 5.0  #: entropy_track: how far inside the image the ball stays
+
+
+@dataclass(frozen=True)
 class MatchMethod:
     name: str
-    #: (config, model: an exported policy file, run: a training run) -> a fresh strategy
-    factory: Callable[[MatchConfig, Path | None, Path | None], MatchPolicy]
+    #: (config, options) -> a fresh strategy
+    factory: Callable[[MatchConfig, StrategyOptions], MatchPolicy]
     help: str
     needs_images: bool  #: plays from camera images (the others need no rendering)
     needs_run: bool = False  #: needs ``--run`` (a trained match policy)
@@ -407,46 +461,50 @@ class MatchMethod:
 MATCH_METHODS: dict[str, MatchMethod] = {
     m.name: m
     for m in (
-        MatchMethod("ball_track", lambda c, _m, _r: BallTrack(c), "keep the ball centred", False),
+        MatchMethod("ball_track", lambda c, _o: BallTrack(c), "keep the ball centred", False),
+        MatchMethod("bhuman_cycle", lambda c, _o: BHumanCycle(c), "B-Human-style pan cycle", False),
         MatchMethod(
-            "bhuman_cycle", lambda c, _m, _r: BHumanCycle(c), "B-Human-style pan cycle", False
+            "bitbots_search", lambda c, _o: BitBotsSearch(c), "Bit-Bots-style search", False
         ),
         MatchMethod(
-            "bitbots_search", lambda c, _m, _r: BitBotsSearch(c), "Bit-Bots-style search", False
-        ),
-        MatchMethod(
-            "nubots_6point", lambda c, _m, _r: NUbots6Point(c), "NUbots-style 6-point look", False
+            "nubots_6point", lambda c, _o: NUbots6Point(c), "NUbots-style 6-point look", False
         ),
         MatchMethod(
             "entropy_greedy",
-            lambda c, _m, _r: EntropyGreedy(c),
+            lambda c, _o: EntropyGreedy(c),
             "Algorithm 1 from the belief every 5 ticks",
             False,
         ),
         MatchMethod(
+            "entropy_track",
+            lambda c, o: EntropyTrack(c, o.track_margin_deg),
+            "Algorithm 1 every tick among views that keep the ball inside by --track-margin",
+            False,
+        ),
+        MatchMethod(
             "onnx_policy",
-            lambda c, model, _r: OnnxMatchPolicy(c, model),
+            lambda c, o: OnnxMatchPolicy(c, o.model),
             "an exported policy (--model; default: the shipped episodic one), goal re-planned",
             True,
         ),
         MatchMethod(
             "learned",
-            lambda c, _m, run: LearnedMatchPolicy(c, run),  # type: ignore[arg-type]
+            lambda c, o: LearnedMatchPolicy(c, o.run),  # type: ignore[arg-type]
             "a training run's image Q-network (--run), e.g. --preset match_ddqn",
             True,
             needs_run=True,
         ),
-        MatchMethod("random", lambda c, _m, _r: RandomMoves(c), "uniformly random moves", False),
+        MatchMethod("random", lambda c, _o: RandomMoves(c), "uniformly random moves", False),
         MatchMethod(
             "oracle_ball",
-            lambda c, _m, _r: OracleBall(c),
+            lambda c, _o: OracleBall(c),
             "privileged reference: ball_track on the true ball",
             False,
             privileged=True,
         ),
         MatchMethod(
             "oracle_entropy",
-            lambda c, _m, _r: OracleEntropy(c),
+            lambda c, _o: OracleEntropy(c),
             "privileged reference: entropy_greedy from the true pose on the true ball",
             False,
             privileged=True,
@@ -470,11 +528,12 @@ def default_match_methods(run: Path | None) -> tuple[str, ...]:
 
 
 def make_match_policy(
-    name: str, config: MatchConfig, model: Path | None = None, run: Path | None = None
+    name: str, config: MatchConfig, options: StrategyOptions | None = None
 ) -> MatchPolicy:
     """A fresh strategy ``name`` for matches of ``config``."""
+    options = options or StrategyOptions()
     if name not in MATCH_METHODS:
         raise ValueError(f"unknown match method {name!r}; choose from {', '.join(MATCH_METHODS)}")
-    if MATCH_METHODS[name].needs_run and run is None:
+    if MATCH_METHODS[name].needs_run and options.run is None:
         raise ValueError(f"the {name} strategy needs a training run (--run runs/NAME)")
-    return MATCH_METHODS[name].factory(config, model, run)
+    return MATCH_METHODS[name].factory(config, options)
