@@ -231,10 +231,11 @@ class EntropyGreedy(TargetPolicy):
 class EntropyTrack(TargetPolicy):
     """Every tick: Algorithm 1 from the belief (mean and covariance) and the ball model over a
     5-degree grid (pan -90..90 at 37 points, tilt 5..65 at 13), among the views whose centre
-    lies within half the field of view less ``margin_deg`` of the ball model's direction on
-    each axis -- so the ball stays in the image while the robot and the ball move; the ball's
-    direction itself where no view does. ``margin_deg`` 0 looks wherever the ball is merely
-    in view; about 25 is ``ball_track``."""
+    lies within half the field of view less ``margin_deg`` of the ball model's direction
+    (clipped to the head's limits) on each axis -- so the ball stays in the image while the
+    robot and the ball move, and a ball behind the robot is waited for at the nearest limit
+    while the head localises there. ``margin_deg`` 0 looks wherever the ball is about in
+    view; about 25 is ``ball_track``."""
 
     name = "entropy_track"
     grid = ViewpointGrid(n_pan=37, n_tilt=13)
@@ -256,14 +257,13 @@ class EntropyTrack(TargetPolicy):
             grid=self.grid,
             ukf=self.localisation.ukf,
             ball_radius=self.config.field.ball_radius,
-            ball_views_only=True,
         )
         cam = self.config.camera
-        near_ball = (np.abs(self.grid.pans[None] - ball[:, :1]) <= cam.hfov / 2 - self.margin) & (
+        # an angular box, not the projection: the views near a ball behind the robot count
+        # too (measured: 0.081 m against 0.085 where only views that show the ball do)
+        allowed = (np.abs(self.grid.pans[None] - ball[:, :1]) <= cam.hfov / 2 - self.margin) & (
             np.abs(self.grid.tilts[None] - ball[:, 1:]) <= cam.vfov / 2 - self.margin
         )
-        # entropies are NaN where the view misses the ball (ball_views_only)
-        allowed = near_ball & result.ball_visible & np.isfinite(result.entropies)
         entropy = np.where(allowed, result.entropies, np.inf)
         pick = np.argmin(entropy, axis=1)
         found = allowed[np.arange(len(pick)), pick]
