@@ -9,6 +9,7 @@ import os
 from collections.abc import Collection, Mapping, Sequence
 
 import numpy as np
+from matplotlib import colormaps
 from matplotlib.patches import Circle, Ellipse, Polygon
 
 from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
@@ -30,33 +31,51 @@ def plot_pareto(
 ) -> None:
     """Position RMSE (y, lower is better) against the share of ticks with the ball in view
     (x, higher is better), with 95% whiskers; the Pareto front joined by a line, privileged
-    ``references`` drawn as crosses."""
-    fig = new_figure(figsize=(7.0, 5.0), layout="constrained")
-    ax = fig.add_subplot()
-    for name, p in points.items():
-        bx, by = p["ball_in_view"], p["position_rmse"]
-        ax.errorbar(
-            100 * bx[0],
-            by[0],
-            xerr=[[100 * (bx[0] - bx[1])], [100 * (bx[2] - bx[0])]],
-            yerr=[[by[0] - by[1]], [by[2] - by[0]]],
-            fmt="x" if name in references else "o" if name in front else "s",
-            ms=7,
-            capsize=3,
-            label=name
-            + (" (front)" if name in front else " (privileged)" if name in references else ""),
-        )
+    ``references`` drawn as crosses. Beside it the same, zoomed on the front and the
+    references (where the strategies that matter lie close together)."""
+    fig = new_figure(figsize=(12.0, 5.0), layout="constrained")
+    whole, zoom = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    # tab20 for many strategies: the default cycle repeats its colours after ten
+    colours = _colours(len(points))
     on_front = sorted(
         (100 * points[n]["ball_in_view"][0], points[n]["position_rmse"][0]) for n in front
     )
-    if len(on_front) > 1:
-        ax.plot(*zip(*on_front, strict=True), color="grey", lw=1, ls="--", zorder=0)
-    ax.set_xlabel("ball in view (% of ticks)  ->  better")
-    ax.set_ylabel("position RMSE (m)  <-  better")
-    ax.set_title(title, fontsize=9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    for ax in (whole, zoom):
+        for colour, (name, p) in zip(colours, points.items(), strict=True):
+            bx, by = p["ball_in_view"], p["position_rmse"]
+            ax.errorbar(
+                100 * bx[0],
+                by[0],
+                xerr=[[100 * (bx[0] - bx[1])], [100 * (bx[2] - bx[0])]],
+                yerr=[[by[0] - by[1]], [by[2] - by[0]]],
+                fmt="x" if name in references else "o" if name in front else "s",
+                color=colour,
+                ms=7,
+                capsize=3,
+                label=name
+                + (" (front)" if name in front else " (privileged)" if name in references else ""),
+            )
+        if len(on_front) > 1:
+            ax.plot(*zip(*on_front, strict=True), color="grey", lw=1, ls="--", zorder=0)
+        ax.set_xlabel("ball in view (% of ticks)  ->  better")
+        ax.set_ylabel("position RMSE (m)  <-  better")
+        ax.grid(alpha=0.3)
+    near = [points[n] for n in (*front, *references) if n in points]
+    xs = [100 * v for p in near for v in p["ball_in_view"]]
+    ys = [v for p in near for v in p["position_rmse"]]
+    pad_x, pad_y = max(1.0, 0.1 * (max(xs) - min(xs))), max(1e-3, 0.1 * (max(ys) - min(ys)))
+    zoom.set_xlim(min(xs) - pad_x, max(xs) + pad_x)
+    zoom.set_ylim(min(ys) - pad_y, max(ys) + pad_y)
+    zoom.set_title("zoomed on the front and the references", fontsize=9)
+    whole.set_title(title, fontsize=9)
+    whole.legend(fontsize=7)
     save_figure(fig, path, dpi=120)
+
+
+def _colours(n: int) -> list[tuple[float, float, float, float]]:
+    """``n`` distinct colours: matplotlib's default ten, tab20 beyond."""
+    cmap = colormaps["tab10" if n <= 10 else "tab20"]
+    return [cmap(i % cmap.N) for i in range(n)]
 
 
 def plot_error_over_time(
