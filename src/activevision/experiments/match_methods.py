@@ -52,11 +52,19 @@ from typing import Protocol
 
 import numpy as np
 
-from activevision.envs.actions import action_table, oracle_actions
+from activevision.envs.actions import action_table
 from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.heads import (
+    DEFAULT_TRACK_MARGIN_DEG,
+    TRACK_GRID,
+    EntropyTrackTeacher,
+    ball_direction,
+    ball_on_field,
+    move_towards,
+)
 from activevision.envs.match.observations import IMAGE_KEY, Observation
 from activevision.geometry import LandmarkSet, clip_head, field_landmarks
-from activevision.localisation import LocalisationConfig, ViewpointGrid, best_viewpoints
+from activevision.localisation import LocalisationConfig, best_viewpoints
 
 
 class MatchPolicy(Protocol):
@@ -69,23 +77,6 @@ class MatchPolicy(Protocol):
 
     def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
         """The actions for this tick: (N,) discrete, or (N, 2) continuous in [-1, 1]."""
-
-
-def ball_direction(info: dict[str, np.ndarray], config: MatchConfig) -> np.ndarray:
-    """Head angles (N, 2) that centre the ball of the ball model (clipped to the limits)."""
-    rel = info["ball_relative"]
-    pan = np.arctan2(rel[:, 1], rel[:, 0])
-    distance = np.maximum(np.hypot(rel[:, 0], rel[:, 1]), 0.05)
-    tilt = np.arctan2(config.camera.camera_height - config.field.ball_radius, distance)
-    return np.column_stack(clip_head(pan, tilt, config.camera))
-
-
-def move_towards(head: np.ndarray, target: np.ndarray, config: MatchConfig) -> np.ndarray:
-    """The actions of ``config``'s kind that move heads (N, 2) towards targets (N, 2) rad at
-    head speed: the discrete move of ``step_deg`` that ends closest, or the continuous move
-    straight there, at most ``max_move_deg`` per axis."""
-    table = action_table(config.step_deg, "8way")
-    return oracle_actions(head, target, config.action_type, table, config.max_move)
 
 
 class TargetPolicy:
@@ -229,54 +220,18 @@ class EntropyGreedy(TargetPolicy):
 
 
 class EntropyTrack(TargetPolicy):
-    """Every tick: Algorithm 1 from the belief (mean and covariance) and the ball model over a
-    5-degree grid (pan -90..90 at 37 points, tilt 5..65 at 13), among the views whose centre
-    lies within half the field of view less ``margin_deg`` of the ball model's direction
-    (clipped to the head's limits) on each axis -- so the ball stays in the image while the
-    robot and the ball move, and a ball behind the robot is waited for at the nearest limit
-    while the head localises there. ``margin_deg`` 0 looks wherever the ball is about in
-    view; about 25 is ``ball_track``."""
+    """Every tick: Algorithm 1 from the belief among the views that keep the ball model at
+    least ``margin_deg`` inside the image (``envs.match.heads.entropy_track_targets``)."""
 
     name = "entropy_track"
-    grid = ViewpointGrid(n_pan=37, n_tilt=13)
+    grid = TRACK_GRID
 
-    def __init__(self, config: MatchConfig, margin_deg: float = 5.0) -> None:
+    def __init__(self, config: MatchConfig, margin_deg: float = DEFAULT_TRACK_MARGIN_DEG) -> None:
         super().__init__(config)
-        self.margin = math.radians(margin_deg)
-        self.landmarks = field_landmarks(config.field)
-        self.localisation = LocalisationConfig(ukf=config.tracker.ukf)
+        self.teacher = EntropyTrackTeacher(config, margin_deg)
 
     def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
-        ball = ball_direction(info, self.config)
-        result = best_viewpoints(
-            info["belief_mean"],
-            info["belief_cov"],
-            ball_on_field(info),
-            self.landmarks,
-            self.config.camera,
-            grid=self.grid,
-            ukf=self.localisation.ukf,
-            ball_radius=self.config.field.ball_radius,
-        )
-        cam = self.config.camera
-        # an angular box, not the projection: the views near a ball behind the robot count
-        # too (measured: 0.081 m against 0.085 where only views that show the ball do)
-        allowed = (np.abs(self.grid.pans[None] - ball[:, :1]) <= cam.hfov / 2 - self.margin) & (
-            np.abs(self.grid.tilts[None] - ball[:, 1:]) <= cam.vfov / 2 - self.margin
-        )
-        entropy = np.where(allowed, result.entropies, np.inf)
-        pick = np.argmin(entropy, axis=1)
-        found = allowed[np.arange(len(pick)), pick]
-        return np.where(found[:, None], self.grid.views[pick], ball)
-
-
-def ball_on_field(info: dict[str, np.ndarray]) -> np.ndarray:
-    """The ball model's position (N, 2) on the field, through the believed pose."""
-    mean, rel = info["belief_mean"], info["ball_relative"]
-    c, s = np.cos(mean[:, 2]), np.sin(mean[:, 2])
-    return np.column_stack(
-        [mean[:, 0] + c * rel[:, 0] - s * rel[:, 1], mean[:, 1] + s * rel[:, 0] + c * rel[:, 1]]
-    )
+        return self.teacher.targets(info)
 
 
 def plan_views(
@@ -443,7 +398,8 @@ class StrategyOptions:
 
     model: Path | None = None  #: onnx_policy: an exported policy (None: the shipped one)
     run: Path | None = None  #: learned: a training run
-    track_margin_deg: float = 5.0  #: entropy_track: how far inside the image the ball stays
+    #: entropy_track: how far inside the image the ball stays (degrees)
+    track_margin_deg: float = DEFAULT_TRACK_MARGIN_DEG
 
 
 @dataclass(frozen=True)
