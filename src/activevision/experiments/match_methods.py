@@ -30,8 +30,8 @@ port:
 * ``onnx_policy``: an exported policy through the robot runtime's ``HeadController``; by
   default the package's shipped episodic policy, run every tick, its goal (Algorithm 1's
   proposal from the believed pose) re-planned every ``k`` ticks.
-* ``learned``: a training run's network (``--run``; e.g. ``--preset match_ddqn``), greedy,
-  batched over the matches.
+* ``learned``: a training run's network (``--run``: ``--preset match_dagger``, a student of
+  ``entropy_track``, or ``match_ddqn``), greedy, batched over the matches.
 * ``random``: uniformly random moves.
 
 Two references are *privileged* -- they read what only the simulator knows, so no robot
@@ -62,7 +62,12 @@ from activevision.envs.match.heads import (
     ball_on_field,
     move_towards,
 )
-from activevision.envs.match.observations import IMAGE_KEY, Observation
+from activevision.envs.match.observations import (
+    IMAGE_KEY,
+    Observation,
+    knowledge_vectors,
+    vector_keys,
+)
 from activevision.geometry import LandmarkSet, clip_head, field_landmarks
 from activevision.localisation import LocalisationConfig, best_viewpoints
 
@@ -346,8 +351,11 @@ class OracleEntropy(EntropyGreedy):
 
 
 class LearnedMatchPolicy:
-    """A training run's network (an image Q-network, e.g. ``--preset match_ddqn``): greedy
-    actions for every match in one batched forward pass (discrete matches only)."""
+    """A training run's network, greedy, every match in one batched forward pass: an image
+    Q-network (``--preset match_ddqn``; discrete matches), or a match student
+    (``--preset match_dagger``, ``match_dagger_continuous``: fed the image and what the
+    robot knows, as ``ActiveVisionMatch-v0``'s ``"image+head+belief"`` observation has it;
+    a match of its own action type)."""
 
     name = "learned"
 
@@ -355,25 +363,40 @@ class LearnedMatchPolicy:
         import torch
 
         from activevision.training import load_config, load_policy
+        from activevision.training.config import MATCH_ENV_ID
 
         run_config = load_config(run / "config.json")
-        if run_config.algo != "ddqn":
+        self.student = run_config.algo == "dagger" and run_config.env_id == MATCH_ENV_ID
+        if not self.student and run_config.algo != "ddqn":
             raise ValueError(
-                f"{run}: the match plays image Q-networks (algo ddqn), not {run_config.algo}"
+                f"{run}: the match plays image Q-networks (algo ddqn) and match students"
+                f" (--preset match_dagger), not {run_config.algo} on {run_config.env_id}"
             )
-        if config.action_type != "discrete":
-            raise ValueError(f"{run}: an image Q-network plays discrete matches only")
+        trained = run_config.match.action_type if self.student else "discrete"
+        if config.action_type != trained:
+            raise ValueError(
+                f"{run}: its policy makes {trained} moves; play it with --action-type {trained}"
+            )
         self.torch = torch
+        self.config = config
+        self.keys = vector_keys(run_config.match) if self.student else ()
         self.net = load_policy(run).eval()
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         pass
 
     def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
-        images = obs[IMAGE_KEY] if isinstance(obs, dict) else obs
+        images = np.ascontiguousarray(obs[IMAGE_KEY] if isinstance(obs, dict) else obs)
         with self.torch.inference_mode():
-            q = self.net(self.torch.from_numpy(np.ascontiguousarray(images)))
-        return np.asarray(q.argmax(dim=1).numpy(), dtype=np.int64)
+            image = self.torch.from_numpy(images)
+            if self.student:
+                vector = knowledge_vectors(info, self.keys, self.config.tick_seconds)
+                out = self.net(image, self.torch.from_numpy(vector))
+                if self.config.action_type == "continuous":
+                    return np.asarray(out.numpy(), dtype=np.float64)
+            else:
+                out = self.net(image)
+        return np.asarray(out.argmax(dim=1).numpy(), dtype=np.int64)
 
 
 class RandomMoves:
@@ -446,7 +469,7 @@ MATCH_METHODS: dict[str, MatchMethod] = {
         MatchMethod(
             "learned",
             lambda c, o: LearnedMatchPolicy(c, o.run),  # type: ignore[arg-type]
-            "a training run's image Q-network (--run), e.g. --preset match_ddqn",
+            "a training run's policy (--run): --preset match_dagger or match_ddqn",
             True,
             needs_run=True,
         ),

@@ -81,6 +81,20 @@ class UKFConfig:
     initial_std: tuple[float, float, float] = (0.5, 0.5, 0.3)
 
     def __post_init__(self) -> None:
+        # as read back from JSON (a run's config.json): type ids as keys, noise as objects,
+        # lists for tuples; stored in one canonical form so that equal configs compare equal
+        try:
+            noise = {
+                LandmarkType(int(kind)): value
+                if isinstance(value, RangeBearingNoise)
+                else RangeBearingNoise(**value)
+                for kind, value in self.noise.items()
+            }
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"UKFConfig.noise: {error}") from None
+        object.__setattr__(self, "noise", MappingProxyType(noise))
+        for name in ("odometry_base", "initial_std"):
+            object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
         if not self.alpha > 0:
             raise ValueError(f"UKFConfig.alpha must be positive, got {self.alpha!r}")
         if not self.lambda_ + 3 > 0:

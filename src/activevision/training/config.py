@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from activevision.envs.config import EnvConfig
+from activevision.envs.match.config import MatchConfig
 from activevision.io import write_text
 from activevision.typecheck import check_dataclass_fields, config_from_dict, config_to_dict
 from activevision.typecheck import in_range as _range
@@ -147,6 +148,9 @@ class DaggerConfig:
     #: with act_by "goal": another view becomes the goal only when its summed evidence
     #: leads the current goal's by this many nats (hysteresis; 0: always the best) (T)
     switch_margin: float = field(default=0.0, metadata=_range(0.0, 1000.0))
+    #: on the match env: the teacher (``envs.match.heads.EntropyTrackTeacher``) keeps the
+    #: ball this many degrees inside the image (README: the match section) (T)
+    track_margin_deg: float = field(default=5.0, metadata=_range(0.0, 29.0))
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
@@ -199,6 +203,8 @@ class TrainConfig:
     #: made with ``gymnasium.make(env_id)``, or handed to the Trainer by a factory)
     env_id: str = "ActiveVision-v0"
     env: EnvConfig = field(default_factory=EnvConfig)
+    #: configures ActiveVisionMatch-v0 when ``env_id`` names it
+    match: MatchConfig = field(default_factory=MatchConfig)
     learner: LearnerConfig = field(default_factory=LearnerConfig)
     exploration: ExplorationConfig = field(default_factory=ExplorationConfig)
     replay: ReplayConfig = field(default_factory=ReplayConfig)
@@ -214,8 +220,13 @@ class TrainConfig:
         check_dataclass_fields(self)
         if not self.env_id:
             raise ValueError("TrainConfig.env_id: must not be empty")
-        if self.algo == "dagger" and self.env_id != "ActiveVision-v0":
-            raise ValueError("TrainConfig.algo: 'dagger' needs ActiveVision-v0 (its oracle)")
+        if self.algo == "dagger" and self.env_id not in ("ActiveVision-v0", MATCH_ENV_ID):
+            raise ValueError(
+                f"TrainConfig.algo: 'dagger' trains on ActiveVision-v0 (the oracle teaches) or"
+                f" {MATCH_ENV_ID} (the entropy_track planner teaches), not {self.env_id!r}"
+            )
+        if self.algo == "dagger" and self.env_id == MATCH_ENV_ID:
+            self._check_match_dagger()
         if self.algo == "dagger" and self.env.frame_stack != 1:
             raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")
         if self.algo == "ddqn" and self.env.action_type == "continuous":
@@ -229,6 +240,23 @@ class TrainConfig:
             raise ValueError(
                 "TrainConfig.env.observation: the DDQN learner takes images only; train Dict"
                 " observations with algo='dagger', 'sac', 'td3' or 'ppo'"
+            )
+
+    def _check_match_dagger(self) -> None:
+        if self.match.observation != "image+head+belief":
+            raise ValueError(
+                "TrainConfig.match.observation: the match student needs what its teacher"
+                " plans from, 'image+head+belief'"
+            )
+        if self.match.appearance.enabled:
+            raise ValueError(
+                "TrainConfig.match.appearance: the match student trains in the clean world"
+                " (its dataset re-renders states without their looks)"
+            )
+        if self.run.eval_interval:
+            raise ValueError(
+                "TrainConfig.run.eval_interval: a match student is not validated during"
+                " training; measure it with `activevision match --run` (set 0)"
             )
 
     def _check_sb3(self) -> None:
@@ -264,6 +292,10 @@ class TrainConfig:
 
 
 SECTIONS = ("env", "learner", "exploration", "replay", "run", "dagger", "sb3")
+#: sections set by their full dotted path only (``match.detection.near_probability``): their
+#: leaf names repeat the episodic env's (``step_deg``, ``observation``)
+PATH_ONLY_SECTIONS = ("match",)
+MATCH_ENV_ID = "ActiveVisionMatch-v0"
 
 
 def field_paths() -> dict[str, str]:
@@ -271,7 +303,11 @@ def field_paths() -> dict[str, str]:
     (``learning_rate`` -> ``learner.learning_rate``). Fields of a section's nested configs
     are settable one by one by their full path (``env.camera.hfov``), or whole as an object
     (``env.camera={"hfov": 1.2}``, the other fields taking their defaults)."""
-    paths = {f.name: f.name for f in dataclasses.fields(TrainConfig) if f.name not in SECTIONS}
+    paths = {
+        f.name: f.name
+        for f in dataclasses.fields(TrainConfig)
+        if f.name not in SECTIONS + PATH_ONLY_SECTIONS
+    }
     leaves: dict[str, list[str]] = {}
     hints = typing.get_type_hints(TrainConfig)
     for section in SECTIONS:
@@ -281,6 +317,8 @@ def field_paths() -> dict[str, str]:
             paths[path] = path
             leaves.setdefault(f.name, []).append(path)
             paths.update({p: p for p in _nested_paths(path, section_hints[f.name])})
+    hints_match = hints["match"]
+    paths.update({p: p for p in _nested_paths("match", hints_match)})
     for leaf, found in leaves.items():
         if len(found) == 1 and leaf not in paths:
             paths[leaf] = found[0]

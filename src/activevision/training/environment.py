@@ -9,15 +9,20 @@ import gymnasium as gym
 import numpy as np
 
 from activevision.training.aux_targets import is_active_vision
-from activevision.training.config import TrainConfig
+from activevision.training.config import MATCH_ENV_ID, TrainConfig
 
 #: builds a run's environment (the trainer calls it for training and for validation)
 EnvFactory = Callable[[], gym.Env]
 
 
 def make_env(config: TrainConfig) -> gym.Env:
-    """``gymnasium.make(config.env_id)``; activevision's own env gets ``config.env``."""
-    kwargs: dict[str, Any] = {"config": config.env} if is_active_vision(config.env_id) else {}
+    """``gymnasium.make(config.env_id)``; activevision's own envs get their config
+    (``config.env``, or ``config.match`` for the match env)."""
+    kwargs: dict[str, Any] = {}
+    if is_active_vision(config.env_id):
+        kwargs = {"config": config.env}
+    elif config.env_id.removeprefix("activevision:") == MATCH_ENV_ID:
+        kwargs = {"config": config.match}
     try:
         return gym.make(config.env_id, **kwargs)
     except gym.error.Error as error:  # e.g. NameNotFound: one clear line, not a traceback

@@ -56,22 +56,44 @@ def observe(frames: np.ndarray, sim: MatchBatch) -> Observation:
     keys = vector_keys(sim.cfg)
     if not keys:
         return frames.copy()
+    known = {
+        "head": sim.head,
+        "belief_mean": sim.mean,
+        "belief_cov": sim.cov,
+        "ball_relative": sim.ball_relative,
+        "ball_age": sim.ball_age,
+    }
     obs: dict[str, np.ndarray] = {IMAGE_KEY: frames.copy()}
     for key in keys:
-        obs[key] = np.clip(_vector(key, sim), -_BOUND, _BOUND).astype(np.float32)
+        obs[key] = knowledge_vector(key, known, sim.cfg.tick_seconds)
     return obs
 
 
-def _vector(key: str, sim: MatchBatch) -> np.ndarray:
+def knowledge_vector(key: str, info: dict[str, np.ndarray], tick_seconds: float) -> np.ndarray:
+    """The vector ``key`` (N, size) float32 from what the robot knows, as the env's info
+    holds it (``head``, ``belief_mean``, ``belief_cov``, ``ball_relative``, ``ball_age``):
+    what a match student is fed, in the env and in ``activevision match``."""
     if key == "head":
-        return sim.head
-    if key == "pose":
-        theta = sim.mean[:, 2]
-        return np.column_stack([sim.mean[:, :2], np.cos(theta), np.sin(theta)])
-    if key == "belief":
-        return np.sqrt(np.diagonal(sim.cov, axis1=1, axis2=2))
-    age = sim.ball_age * sim.cfg.tick_seconds
-    return np.column_stack([sim.ball_relative, age])
+        value = info["head"]
+    elif key == "pose":
+        mean = info["belief_mean"]
+        value = np.column_stack([mean[:, :2], np.cos(mean[:, 2]), np.sin(mean[:, 2])])
+    elif key == "belief":
+        value = np.sqrt(np.diagonal(info["belief_cov"], axis1=1, axis2=2))
+    elif key == "ball":
+        age = info["ball_age"] * tick_seconds
+        value = np.column_stack([info["ball_relative"], age])
+    else:
+        raise ValueError(f"unknown match observation key {key!r}")
+    vector: np.ndarray = np.clip(value, -_BOUND, _BOUND).astype(np.float32)
+    return vector
+
+
+def knowledge_vectors(
+    info: dict[str, np.ndarray], keys: tuple[str, ...] | list[str], tick_seconds: float
+) -> np.ndarray:
+    """A match student's vector input (N, V) float32: the vectors ``keys`` concatenated."""
+    return np.concatenate([knowledge_vector(k, info, tick_seconds) for k in keys], axis=1)
 
 
 def single(obs: Observation, i: int = 0) -> Observation:

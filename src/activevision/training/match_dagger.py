@@ -1,0 +1,261 @@
+"""DAgger on the match (``ActiveVisionMatch-v0``): a student network learns to aim the head
+from what the robot knows -- the camera image, its head angles, its belief (mean and
+std) and its ball model (the observation ``"image+head+belief"``).
+
+The teacher is this package's match planner, ``entropy_track``
+(:class:`~activevision.envs.match.heads.EntropyTrackTeacher`: Algorithm 1 every tick among
+the views that keep the ball ``dagger.track_margin_deg`` inside the image). It reads the
+same knowledge as the student, nothing privileged: the student learns to plan as it does in
+one forward pass (about 0.3 ms on one core, where the planner's search over 481 views and
+every landmark costs a few milliseconds per robot), and to act on the image besides.
+
+One round: ``dagger.num_envs`` fresh matches (seeded from the run's generator) played to
+the end together in the native vector env; at each tick the executed action is the
+teacher's with probability ``beta`` (decayed linearly from ``teacher_initial`` to 0 over
+``teacher_fraction`` of the run), else the student's greedy one; every visited state is
+stored with the teacher's action. Then ``updates_per_rollout`` minibatches of stored
+states, re-rendered by the exact renderer, train the student (cross-entropy on the
+teacher's discrete move; squared error on its continuous one).
+
+The run directory is a DAgger run's (``config.json``, ``metrics.csv`` with one row per
+round crossing an ``epoch_steps`` boundary and one ``episodes.csv`` row per match,
+``policy.safetensors``, ``checkpoints/``; rounds start fresh matches, so a checkpoint holds
+everything and ``resume`` continues exactly). It is not validated during training: play it
+on held-out seeds with ``activevision match --run RUN --methods learned``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch.nn import functional as F
+
+from activevision.agents.student import StudentNetwork
+from activevision.envs.actions import action_table
+from activevision.envs.match.heads import EntropyTrackTeacher
+from activevision.envs.match.observations import (
+    IMAGE_KEY,
+    VECTOR_SIZES,
+    knowledge_vectors,
+    vector_keys,
+)
+from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+from activevision.geometry.occlusion import robot_cylinders
+from activevision.training import checkpoint as ckpt
+from activevision.training.config import MATCH_ENV_ID, TrainConfig
+from activevision.training.cpu import configure_torch_cpu, resolve_device
+from activevision.training.dagger import StateDataset
+from activevision.training.loggers import Logger
+from activevision.training.student_runs import StudentRun
+
+
+class MatchDaggerTrainer(StudentRun):
+    """Trains a :class:`~activevision.agents.student.StudentNetwork` on the match by DAgger."""
+
+    def __init__(
+        self,
+        config: TrainConfig,
+        run_dir: str | os.PathLike[str],
+        *,
+        loggers: Sequence[Logger] | None = None,
+        _resuming: bool = False,
+    ) -> None:
+        if config.algo != "dagger" or config.env_id != MATCH_ENV_ID:
+            raise ValueError(
+                f"MatchDaggerTrainer trains algo='dagger' on {MATCH_ENV_ID}, got"
+                f" {config.algo!r} on {config.env_id!r}"
+            )
+        self.config = config
+        self.device = resolve_device(config.run.device)
+        match, dag = config.match, config.dagger
+        self.continuous = match.action_type == "continuous"
+        self.keys = vector_keys(match)
+        self.n_actions = len(action_table(match.step_deg, "8way"))
+        self.env = ActiveVisionMatchVectorEnv(dag.num_envs, match)
+        self.teacher = EntropyTrackTeacher(match, dag.track_margin_deg)
+        trainer_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(2)
+        self.rng = np.random.default_rng(int(trainer_seed))
+        vector_size = sum(VECTOR_SIZES[k] for k in self.keys)
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(init_seed))
+            self.network = StudentNetwork(
+                2 if self.continuous else self.n_actions,
+                vector_size,
+                (match.camera.height, match.camera.width),
+                dag.downsample,
+                continuous=self.continuous,
+            )
+        self.network.to(self.device)
+        self.optimizer = torch.optim.Adam(
+            self.network.parameters(), lr=config.learner.learning_rate
+        )
+        self.dataset = StateDataset(
+            dag.dataset_size,
+            vector_size,
+            robots=match.robots.max_count,
+            continuous=self.continuous,
+        )
+        configure_torch_cpu(config.run.num_threads)
+        self.step = 0
+        self._round_share = 1.0
+        self._open_run(run_dir, loggers, _resuming)
+
+    @property
+    def teacher_share(self) -> float:
+        """beta: the probability that the teacher's action is executed now."""
+        dag, total = self.config.dagger, self.config.run.total_timesteps
+        span = dag.teacher_fraction * total
+        if span <= 0:
+            return 0.0
+        return dag.teacher_initial * max(0.0, 1.0 - self.step / span)
+
+    # ------------------------------------------------------------------ the loop
+    def train(self, steps: int | None = None) -> list[dict[str, float]]:
+        """Run rounds until ``steps`` more ticks are done (default: to ``total_timesteps``);
+        returns this call's ``metrics.csv`` rows."""
+        run = self.config.run
+        target = (
+            run.total_timesteps if steps is None else min(self.step + steps, run.total_timesteps)
+        )
+        rows: list[dict[str, float]] = []
+        while self.step < target:
+            before, t0 = self.step, time.perf_counter()
+            self._rollout()
+            for _ in range(self.config.dagger.updates_per_rollout):
+                self.epoch_log.losses.append(self._update())
+            rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
+            if self.step // run.epoch_steps > before // run.epoch_steps:
+                rows.append(self.finish_epoch(self._round_share, rate))
+            interval = run.checkpoint_interval
+            if interval and self.step // interval > before // interval and self.step < target:
+                self.save_checkpoint()
+        self.save_checkpoint()
+        self.logger.flush()
+        return rows
+
+    def _rollout(self) -> None:
+        """One round: ``num_envs`` fresh matches to the end, every tick labelled."""
+        env, match = self.env, self.config.match
+        beta = self._round_share = self.teacher_share
+        obs, info = env.reset(seed=int(self.rng.integers(0, 2**31 - 1 - env.num_envs)))
+        reward = np.zeros(env.num_envs)
+        for _ in range(match.ticks):
+            assert isinstance(obs, dict)
+            vector = knowledge_vectors(info, self.keys, match.tick_seconds)
+            teacher = self.teacher.actions(info)
+            world = {"robots": info["robots"]} if "robots" in self.dataset.arrays else {}
+            self.dataset.add(
+                pose=info["pose"],
+                head=info["head"],
+                ball=info["ball"],
+                vector=vector,
+                action=teacher,
+                goal=np.zeros(env.num_envs, dtype=np.int64),
+                **world,
+            )
+            student = self.act(obs[IMAGE_KEY], vector)
+            use_teacher = self.rng.random(env.num_envs) < beta
+            if self.continuous:
+                use_teacher = use_teacher[:, None]
+            obs, r, _, _, info = env.step(np.where(use_teacher, teacher, student))
+            reward += r
+            self.step += env.num_envs
+        for i in range(env.num_envs):  # every match ends together, after ``ticks`` ticks
+            # a match has no success rate (NaN, not 0, in metrics.csv)
+            self.record_episode(float(reward[i]), match.ticks, {"success_rate": math.nan})
+
+    def act(self, image: np.ndarray, vector: np.ndarray) -> np.ndarray:
+        """The student's greedy actions from images (N, 1, H, W) and vectors (N, V)."""
+        return student_match_actions(self.network, self.device, image, vector)
+
+    def _update(self) -> float:
+        """One minibatch of re-rendered dataset states; returns the imitation loss."""
+        data, match = self.dataset.arrays, self.config.match
+        b = self.rng.integers(0, self.dataset.size, size=self.config.learner.batch_size)
+        cylinders = (
+            robot_cylinders(data["robots"][b], match.robots.radius) if "robots" in data else None
+        )
+        head = data["head"][b]
+        images = self.env.sim.renderer.render(
+            data["pose"][b], head[:, 0], head[:, 1], data["ball"][b], cylinders=cylinders
+        )
+        image = torch.from_numpy(images[:, None]).to(self.device)
+        vector = torch.from_numpy(data["vector"][b]).to(self.device)
+        output = self.network(image, vector)
+        teacher = torch.from_numpy(data["action"][b]).to(self.device)
+        loss = F.mse_loss(output, teacher) if self.continuous else F.cross_entropy(output, teacher)
+        self.optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(self.network.parameters(), self.config.learner.max_grad_norm)
+        self.optimizer.step()
+        return float(loss.item())
+
+    # ------------------------------------------------------------------ files
+    def metadata(self) -> dict[str, Any]:
+        """The policy files' metadata: the network's shape, the step and the observation."""
+        match = self.config.match
+        return {
+            **self.network.metadata(),
+            "env_id": MATCH_ENV_ID,
+            "observation": match.observation,
+            "vector_keys": list(self.keys),
+            "act_by": "action",
+            "max_move_deg": list(match.max_move_deg),
+            "step": self.step,
+        }
+
+    def save_checkpoint(self) -> Path:
+        """Write a checkpoint (atomically) and ``policy.safetensors``."""
+        return self.write_checkpoint(
+            self.network,
+            self.metadata(),
+            self.optimizer.state_dict(),
+            self.dataset.state_dict(),
+            self.run_state("dagger", rng=self.rng.bit_generator.state),
+        )
+
+    def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
+        self.network.load_state_dict(weights)
+        self.optimizer.load_state_dict(ckpt.load_torch_state(path / "optimizer.pt"))
+        self.dataset.load(ckpt.load_arrays(path / "replay.npz"))
+        self.step = int(state["step"])
+        self.rng.bit_generator.state = state["rng"]
+
+    def close(self) -> None:
+        self.env.close()
+        super().close()
+
+
+def student_match_actions(
+    network: StudentNetwork, device: torch.device, image: np.ndarray, vector: np.ndarray
+) -> np.ndarray:
+    """A match student's greedy actions: the argmax of its logits (N,), or its move (N, 2)."""
+    with torch.inference_mode():
+        output = network(torch.from_numpy(image).to(device), torch.from_numpy(vector).to(device))
+    if network.continuous:
+        return np.asarray(output.cpu().numpy(), dtype=np.float64)
+    return np.asarray(output.argmax(dim=1).cpu().numpy(), dtype=np.int64)
+
+
+def train_match_dagger(
+    config: TrainConfig,
+    run_dir: str | os.PathLike[str],
+    *,
+    loggers: Sequence[Logger] | None = None,
+) -> list[dict[str, float]]:
+    """Train a fresh match DAgger run to ``config.run.total_timesteps``."""
+    trainer = MatchDaggerTrainer(config, run_dir, loggers=loggers)
+    try:
+        return trainer.train()
+    finally:
+        trainer.close()
+
+
+__all__ = ["MatchDaggerTrainer", "student_match_actions", "train_match_dagger"]
