@@ -1,0 +1,166 @@
+"""DAgger on the match: the labels are entropy_track's moves, the teacher's rounds replay
+entropy_track's matches, resume is exact, the config travels through config.json, and the
+student plays in ``activevision match`` in either action type."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from activevision.envs.match.config import DetectionConfig, MatchConfig
+from activevision.envs.match.heads import EntropyTrackTeacher
+from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+from activevision.experiments.match import play_matches
+from activevision.experiments.match_methods import StrategyOptions
+from activevision.training import load_policy
+from activevision.training.config import TrainConfig, apply_overrides, load_config, save_config
+from activevision.training.match_dagger import MatchDaggerTrainer, train_match_dagger
+from activevision.training.presets import preset
+from activevision.training.runs import reopen_run
+
+TICKS = 12
+
+
+def tiny(steps: int = 4 * TICKS, action_type: str = "discrete", **extra) -> TrainConfig:
+    config = preset("match_dagger_continuous" if action_type == "continuous" else "match_dagger")
+    return config.replace(
+        **{
+            "match.ticks": TICKS,
+            "run.total_timesteps": steps,
+            "run.epoch_steps": 2 * TICKS,
+            "run.tensorboard": False,
+            "run.progress_bar": False,
+            "dagger.num_envs": 2,
+            "dagger.updates_per_rollout": 2,
+            "learner.batch_size": 8,
+            **extra,
+        }
+    )
+
+
+def test_run_layout_and_records(tmp_path):
+    rows = train_match_dagger(tiny(), tmp_path)
+    for name in ("config.json", "metrics.csv", "episodes.csv", "policy.safetensors"):
+        assert (tmp_path / name).exists(), name
+    assert len(rows) == 2 and all(np.isfinite(r["loss"]) for r in rows)
+    assert all(math.isnan(r["success_rate"]) for r in rows)  # a match has none
+    with (tmp_path / "episodes.csv").open() as f:
+        episodes = list(csv.DictReader(f))
+    assert len(episodes) == 4 * TICKS // TICKS and {e["length"] for e in episodes} == {"12"}
+    network = load_policy(tmp_path)
+    assert network.vector_size == 2 + 4 + 3 + 3 and network.n_actions == 9
+
+
+def first_round_seed(config: TrainConfig, num_envs: int) -> int:
+    """The env seed of the trainer's first round (its generator's first draw)."""
+    trainer_seed, _ = np.random.SeedSequence(config.seed).generate_state(2)
+    rng = np.random.default_rng(int(trainer_seed))
+    return int(rng.integers(0, 2**31 - 1 - num_envs))
+
+
+def test_labels_are_entropy_tracks_moves_and_the_teacher_plays_its_matches(tmp_path):
+    """With the teacher acting throughout, the first round is entropy_track's matches: the
+    same head path as ``activevision match --methods entropy_track`` on its seeds, and every
+    stored label is the teacher's move from the state the robot was in."""
+    config = tiny(**{"dagger.teacher_fraction": 1.0})
+    trainer = MatchDaggerTrainer(config, tmp_path, loggers=[])
+    trainer._rollout()
+    data = trainer.dataset.arrays
+    assert trainer.dataset.size == 2 * TICKS
+    seed = first_round_seed(config, 2)
+    played = play_matches("entropy_track", config.match, 2, seed)
+    heads = np.array(played.clip.head[:TICKS])  # match 0 of the pair, tick by tick
+    np.testing.assert_array_equal(data["head"][0 : 2 * TICKS : 2], heads)
+    # relabel by hand: the teacher's move from each stored tick of match 0
+    env = ActiveVisionMatchVectorEnv(2, config.match)
+    _, info = env.reset(seed=seed)
+    teacher = EntropyTrackTeacher(config.match, config.dagger.track_margin_deg)
+    for t in range(TICKS):
+        action = teacher.actions(info)
+        np.testing.assert_array_equal(data["action"][2 * t : 2 * t + 2], action)
+        _, _, _, _, info = env.step(action)
+    trainer.close()
+
+
+def test_resume_ends_with_the_same_weights(tmp_path):
+    config = tiny(steps=6 * TICKS, **{"run.checkpoint_interval": 2 * TICKS})
+    train_match_dagger(config, tmp_path / "whole")
+    trainer = MatchDaggerTrainer(config, tmp_path / "split")
+    trainer.train(2 * TICKS)
+    trainer.close()
+    resumed = reopen_run(tmp_path / "split")
+    assert isinstance(resumed, MatchDaggerTrainer)
+    resumed.train()
+    resumed.close()
+    a = load_policy(tmp_path / "whole").state_dict()
+    b = load_policy(tmp_path / "split").state_dict()
+    for key in a:
+        assert np.array_equal(a[key].numpy(), b[key].numpy()), key
+    whole = (tmp_path / "whole" / "episodes.csv").read_text().splitlines()
+    split = (tmp_path / "split" / "episodes.csv").read_text().splitlines()
+    assert [r.split(",")[:4] for r in whole] == [r.split(",")[:4] for r in split]
+
+
+def test_the_match_config_travels_through_config_json(tmp_path):
+    config = apply_overrides(tiny(), ["match.detection.far=0.2", "match.walk.speed=0.1"])
+    assert config.match.detection == DetectionConfig(near=0.6, far=0.2, false_rate=0.2)
+    save_config(config, tmp_path / "config.json")
+    assert load_config(tmp_path / "config.json") == config
+    # the episodic env's short names still name the episodic env's fields
+    assert apply_overrides(config, ["step_deg=4"]).env.step_deg == 4
+    assert apply_overrides(config, ["step_deg=4"]).match.step_deg == 3
+
+
+@pytest.mark.parametrize(
+    ("change", "needle"),
+    [
+        ({"match.observation": "image"}, "what its teacher plans from"),
+        ({"match.appearance.gain": [0.8, 1.2]}, "clean world"),
+        ({"run.eval_interval": 24}, "activevision match --run"),
+        ({"env_id": "CartPole-v1"}, "CartPole-v1"),
+    ],
+)
+def test_bad_match_dagger_configs_are_refused(change, needle):
+    with pytest.raises(ValueError, match=needle):
+        tiny(**change)
+
+
+def test_a_continuous_student_regresses_straight_moves_and_plays(tmp_path):
+    config = tiny(action_type="continuous")
+    trainer = MatchDaggerTrainer(config, tmp_path, loggers=[])
+    trainer.train()
+    trainer.close()
+    moves = trainer.dataset.arrays["action"][: trainer.dataset.size]
+    assert moves.shape == (4 * TICKS, 2) and np.abs(moves).max() <= 1.0
+    assert (np.abs(moves) == 1.0).any() and (np.abs(moves) < 1.0).any()  # capped and not
+    match = MatchConfig(ticks=6, action_type="continuous", max_move_deg=(3.0, 3.0))
+    result = play_matches("learned", match, 2, 7, StrategyOptions(run=tmp_path))
+    assert np.isfinite(result.per_match["position_rmse"]).all()
+    with pytest.raises(ValueError, match="--action-type continuous"):
+        play_matches("learned", MatchConfig(ticks=6), 2, 7, StrategyOptions(run=tmp_path))
+
+
+def test_the_student_learns_to_keep_the_ball_in_view(tmp_path):
+    """A few hundred updates on the teacher's matches: the student sees the ball far more
+    than random head moves do in the same matches (a test that fails for an untrained or
+    mislabelled student)."""
+    config = tiny(
+        steps=16 * 40,
+        **{
+            "match.ticks": 40,
+            "run.epoch_steps": 160,
+            "dagger.num_envs": 4,
+            "dagger.updates_per_rollout": 60,
+            "dagger.teacher_fraction": 1.0,
+            "learner.batch_size": 64,
+        },
+    )
+    train_match_dagger(config, tmp_path)
+    match = config.match.replace(ticks=60)
+    options = StrategyOptions(run=tmp_path)
+    learned = play_matches("learned", match, 8, 11, options).per_match["ball_in_view"].mean()
+    random = play_matches("random", match, 8, 11).per_match["ball_in_view"].mean()
+    assert learned > random + 0.1
