@@ -164,3 +164,34 @@ def test_the_student_learns_to_keep_the_ball_in_view(tmp_path):
     learned = play_matches("learned", match, 8, 11, options).per_match["ball_in_view"].mean()
     random = play_matches("random", match, 8, 11).per_match["ball_in_view"].mean()
     assert learned > random + 0.1
+
+
+@pytest.mark.parametrize("action_type", ["discrete", "continuous"])
+def test_the_exported_student_plays_as_the_run_does(tmp_path, action_type):
+    """Exported to ONNX, the student runs through HeadController (torch-free), fed the
+    belief and the ball model by onnx_policy: the same matches, tick for tick, as the run's
+    PyTorch network (discrete: the same moves exactly; continuous: the same to float32
+    rounding of the two runtimes)."""
+    from activevision.export import export_run
+    from activevision.runtime import HeadController
+
+    train_match_dagger(tiny(action_type=action_type), tmp_path)
+    export_run(tmp_path, tmp_path / "policy.onnx")
+    controller = HeadController(tmp_path / "policy.onnx")
+    assert controller.inputs == ("pose", "belief", "ball")
+    with pytest.raises(ValueError, match="needs belief"):
+        controller.act(np.zeros((120, 160), np.uint8), 0.0, 0.3, pose=(0, 0, 0), ball=(1, 0, 0))
+    match = MatchConfig(ticks=20, action_type=action_type, max_move_deg=(3.0, 3.0))
+    run = play_matches("learned", match, 3, 5, StrategyOptions(run=tmp_path))
+    onnx = play_matches("onnx_policy", match, 3, 5, StrategyOptions(model=tmp_path / "policy.onnx"))
+    tolerance = 0.0 if action_type == "discrete" else 1e-6
+    np.testing.assert_allclose(np.array(run.clip.head), np.array(onnx.clip.head), atol=tolerance)
+    for name, values in run.per_match.items():
+        np.testing.assert_allclose(values, onnx.per_match[name], atol=tolerance, err_msg=name)
+
+
+def test_head_controller_bounds_the_vectors_as_the_match_env_does():
+    from activevision.envs.match.observations import VECTOR_BOUND
+    from activevision.runtime.controller import MATCH_VECTOR_BOUND
+
+    assert MATCH_VECTOR_BOUND == VECTOR_BOUND

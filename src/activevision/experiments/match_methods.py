@@ -268,9 +268,10 @@ def plan_views(
 
 class OnnxMatchPolicy:
     """An exported policy (default: the shipped episodic one) through ``HeadController``,
-    every tick; a policy that takes them is fed the belief as its prior pose and Algorithm
-    1's proposal, re-planned every ``every`` ticks (from the believed pose with the episodic
-    start covariance, as it was trained)."""
+    every tick; an episodic policy that takes them is fed the belief as its prior pose and
+    Algorithm 1's proposal, re-planned every ``every`` ticks (from the believed pose with the
+    episodic start covariance, as it was trained); a match student (``--preset
+    match_dagger``) its belief's mean and stds and the ball model."""
 
     name = "onnx_policy"
 
@@ -296,6 +297,7 @@ class OnnxMatchPolicy:
         self.tick += 1
         images = obs[IMAGE_KEY] if isinstance(obs, dict) else obs
         mean, cov = info["belief_mean"], info["belief_cov"]
+        ball, age = info["ball_relative"], info["ball_age"] * self.config.tick_seconds
         commands = []
         for i, controller in enumerate(self.controllers):
             inputs = controller.inputs
@@ -310,6 +312,8 @@ class OnnxMatchPolicy:
                     pose_error=float(np.sqrt(cov[i, 0, 0] + cov[i, 1, 1]))
                     if "pose_error" in inputs
                     else None,
+                    belief=tuple(np.sqrt(np.diag(cov[i]))) if "belief" in inputs else None,
+                    ball=(*ball[i], age[i]) if "ball" in inputs else None,
                 )
             )
         if self.config.action_type == "discrete" and not self.controllers[0].continuous:

@@ -11,6 +11,7 @@ import numpy as np
 
 from activevision.export.onnx_export import ExportedPolicy, export_onnx, policy_metadata
 from activevision.runtime.metadata import MODEL_FILENAME
+from activevision.training.config import MATCH_ENV_ID
 
 CONFIG_FILENAME = "config.json"
 
@@ -44,8 +45,17 @@ def export_run(
         config_bytes = config_path.read_bytes()
     except FileNotFoundError as error:
         raise FileNotFoundError(f"{run_dir} is not a training run: no {CONFIG_FILENAME}") from error
-    env = load_config(config_path).env
+    config = load_config(config_path)
     network = load_policy(run_dir, weights=weights)
+    if config.env_id == MATCH_ENV_ID:
+        # a policy trained on the match: its world, observation and moves are the match's
+        return export_onnx(
+            network,
+            out_path or run_dir / MODEL_FILENAME,
+            _match_metadata(config, hashlib.sha256(config_bytes).hexdigest()),
+            **export_options,
+        )
+    env = config.env
     stack = getattr(network, "stack", 1)
     if stack != env.frame_stack:
         raise ValueError(
@@ -67,7 +77,6 @@ def export_run(
     metadata["action_type"] = env.action_type
     if env.action_type == "continuous":
         metadata["max_move_deg"] = list(env.max_move_deg)
-    config = load_config(config_path)
     if config.algo == "dagger":
         from activevision.localisation import LocalisationConfig
 
@@ -76,3 +85,31 @@ def export_run(
         metadata["goal_switch_margin"] = config.dagger.switch_margin
         metadata["goal_views_deg"] = np.degrees(grid.views).tolist()
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)
+
+
+def _match_metadata(config: Any, config_sha256: str) -> dict[str, Any]:
+    """policy.json's record of a policy trained on ``ActiveVisionMatch-v0`` (``config`` a
+    TrainConfig): the match's 3-degree moves (or continuous ones), camera, world and
+    observation (a DDQN's image; a match student's image, head, belief and ball model)."""
+    from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
+    from activevision.envs.match.observations import vector_keys
+
+    match = config.match
+    metadata = policy_metadata(
+        action_table(match.step_deg, "8way"),
+        match.camera,
+        training_config_sha256=config_sha256,
+        action_names=ACTION_NAMES_8WAY,
+        camera=match.camera,
+        world={"appearance": match.appearance, "robots": match.robots},
+    )
+    metadata["step_deg"] = match.step_deg
+    metadata["action_set"] = "8way"
+    metadata["observation"] = match.observation if config.algo == "dagger" else "image"
+    metadata["vector_keys"] = list(vector_keys(match)) if config.algo == "dagger" else []
+    metadata["action_type"] = match.action_type
+    if match.action_type == "continuous":
+        metadata["max_move_deg"] = list(match.max_move_deg)
+    if config.algo == "dagger":
+        metadata["act_by"] = "action"
+    return metadata

@@ -26,6 +26,10 @@ from activevision.runtime.metadata import (
 )
 from activevision.runtime.preprocess import ColorOrder, FramePreprocessor, luma_weights
 
+#: A match student's vectors are clipped to +-this, as the match env clips its observations
+#: (``envs.match.observations``: belief stds and the ball's age, in m, rad and s)
+MATCH_VECTOR_BOUND = 10.0
+
 
 class CameraMismatchWarning(UserWarning):
     """The robot's camera (``HeadController(..., camera=...)``) differs from the one the
@@ -169,8 +173,9 @@ class HeadController:
     @property
     def inputs(self) -> tuple[str, ...]:
         """What :meth:`act` needs besides the frame and head angles: some of ``"pose"``,
-        ``"pose_error"`` and ``"proposal"`` (none for the paper's image-only policy)."""
-        keys = ("pose", "pose_error", "proposal")
+        ``"pose_error"`` and ``"proposal"`` (episodic policies; none for the paper's
+        image-only one), or ``"pose"``, ``"belief"`` and ``"ball"`` (a match student)."""
+        keys = ("pose", "belief", "ball", "pose_error", "proposal")
         return tuple(k for k in self.metadata.vector_keys if k in keys)
 
     # ------------------------------------------------------------------ public API
@@ -229,6 +234,8 @@ class HeadController:
         proposal: tuple[float, float] | None = None,
         color_order: ColorOrder | None = None,
         pose_error: float | None = None,
+        belief: tuple[float, float, float] | None = None,
+        ball: tuple[float, float, float] | None = None,
     ) -> HeadCommand:
         """The greedy head command for a camera ``frame`` taken at head angles ``(pan, tilt)``.
 
@@ -245,12 +252,16 @@ class HeadController:
                 pose (``activevision.localisation.best_viewpoint``), or ``(nan, nan)`` when
                 no view shows the ball; for a policy whose :attr:`inputs` include it.
             color_order: overrides the controller's ``color_order`` for this frame.
+            belief: the belief's standard deviations ``(x m, y m, theta rad)``, for a match
+                student (whose :attr:`inputs` include ``"belief"``; with ``pose``).
+            ball: the robot's ball model ``(x m, y m, seconds since seen)``, x forward and
+                y left of the robot, for a match student.
 
         Raises:
             ValueError: an input the policy needs is missing, or one it does not take is given.
         """
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
-        self._fill_vector(pan, tilt, pose, proposal, pose_error)
+        self._fill_vector(pan, tilt, pose, proposal, pose_error, belief, ball)
         scores = self.q_values(frame, color_order)
         goal_logits = self.last_goal_logits
         # the argmax action or the continuous move; with goal evidence, the move towards
@@ -281,10 +292,19 @@ class HeadController:
         pose: tuple[float, float, float] | None,
         proposal: tuple[float, float] | None,
         pose_error: float | None,
+        belief: tuple[float, float, float] | None = None,
+        ball: tuple[float, float, float] | None = None,
     ) -> None:
-        """The vector input, laid out as ``activevision.envs.observations`` builds it."""
+        """The vector input, laid out as ``activevision.envs.observations`` (and
+        ``envs.match.observations``) build it."""
         keys = self.metadata.vector_keys
-        given = (("pose", pose), ("pose_error", pose_error), ("proposal", proposal))
+        given = (
+            ("pose", pose),
+            ("pose_error", pose_error),
+            ("proposal", proposal),
+            ("belief", belief),
+            ("ball", ball),
+        )
         for name, value in given:
             if name in keys and value is None:
                 raise ValueError(
@@ -305,6 +325,10 @@ class HeadController:
                 parts.append(np.array([x, y, math.cos(theta), math.sin(theta)]))
             elif key == "pose_error":
                 parts.append(_finite_vector("pose_error", pose_error, 1))
+            elif key in ("belief", "ball"):
+                # the match env's bound on its vectors (stds, ball age in seconds)
+                known = _finite_vector(key, belief if key == "belief" else ball, 3)
+                parts.append(np.clip(known, -MATCH_VECTOR_BOUND, MATCH_VECTOR_BOUND))
             elif key == "proposal":
                 parts.append(_proposal_vector(proposal, pan, tilt))
             else:

@@ -98,8 +98,17 @@ _ACTION_SIGNS = {
 #: The env's action names, in its order (activevision.envs.actions.ACTION_NAMES_8WAY).
 STANDARD_ACTION_NAMES = tuple(_ACTION_SIGNS)
 #: The vector inputs a policy may take, in the order the network concatenates them, and the
-#: size of each (activevision.envs.observations; "actions" is per remembered action).
-VECTOR_KEY_SIZES = {"head": 2, "pose": 4, "pose_error": 1, "proposal": 5, "actions": 1}
+#: size of each (activevision.envs.observations, and envs.match.observations for "belief"
+#: and "ball"; "actions" is per remembered action).
+VECTOR_KEY_SIZES = {
+    "head": 2,
+    "pose": 4,
+    "belief": 3,
+    "ball": 3,
+    "pose_error": 1,
+    "proposal": 5,
+    "actions": 1,
+}
 
 
 #: Keys of policy.json's ``camera`` record -> :class:`CameraModel` field (the suffix says the

@@ -23,7 +23,7 @@ from activevision.envs.match.simulation import MatchBatch
 
 IMAGE_KEY = "image"
 VECTOR_SIZES = {"head": 2, "pose": 4, "belief": 3, "ball": 3}
-_BOUND = 10.0
+VECTOR_BOUND = 10.0  #: every vector is clipped to +-this (HeadController does the same)
 
 Observation = np.ndarray | dict[str, np.ndarray]
 
@@ -45,7 +45,7 @@ def observation_space(cfg: MatchConfig) -> spaces.Box | spaces.Dict:
     if cfg.observation == "image":
         return image
     vectors = {
-        key: spaces.Box(-_BOUND, _BOUND, (VECTOR_SIZES[key],), dtype=np.float32)
+        key: spaces.Box(-VECTOR_BOUND, VECTOR_BOUND, (VECTOR_SIZES[key],), dtype=np.float32)
         for key in vector_keys(cfg)
     }
     return spaces.Dict({IMAGE_KEY: image, **vectors})
@@ -85,7 +85,7 @@ def knowledge_vector(key: str, info: dict[str, np.ndarray], tick_seconds: float)
         value = np.column_stack([info["ball_relative"], age])
     else:
         raise ValueError(f"unknown match observation key {key!r}")
-    vector: np.ndarray = np.clip(value, -_BOUND, _BOUND).astype(np.float32)
+    vector: np.ndarray = np.clip(value, -VECTOR_BOUND, VECTOR_BOUND).astype(np.float32)
     return vector
 
 
