@@ -79,10 +79,16 @@ def _draw_validation(ax: Axes, x: np.ndarray, table: Columns, validation: Column
 
 
 def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> None:
-    """``curve`` from ``table`` (its source's columns; empty: "no data yet"), with the greedy
-    ``validation`` over the success rate when given."""
+    """``curve`` from ``table`` (its source's columns; empty: "no data yet"; all NaN: "not
+    measured in this task"), with the greedy ``validation`` over the success rate when
+    given."""
     if not table:
         ax.text(0.5, 0.5, "no data yet", ha="center", va="center", transform=ax.transAxes)
+    elif not np.isfinite(np.asarray(table[curve.y], dtype=float)).any():
+        # e.g. a match run: a match has no success and no goal view
+        ax.text(
+            0.5, 0.5, "not measured in this task", ha="center", va="center", transform=ax.transAxes
+        )
     else:
         x, y = np.asarray(table[curve.x]), np.asarray(table[curve.y])
         if curve.source == "episodes":  # noisy: raw values faint, moving average on top

@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from activevision.training.config import load_config
+from activevision.training.config import MATCH_ENV_ID, load_config
 from activevision.training.metrics import read_csv_columns
 
 #: the loss curve's title where it is not DDQN's TD loss
@@ -35,8 +35,11 @@ def plot_run(
     out = Path(out_dir) if out_dir is not None else run_dir / "plots"
     config = load_config(run_dir / "config.json") if (run_dir / "config.json").exists() else None
     loss_title = _LOSS_TITLES.get(config.algo, None) if config is not None else None
-    if config is not None and config.algo == "dagger" and config.env.action_type == "continuous":
-        loss_title = "imitation loss (squared error + goal cross-entropy)"
+    if config is not None and config.algo == "dagger":
+        if config.env_id == MATCH_ENV_ID and config.match.action_type == "continuous":
+            loss_title = "imitation loss (squared error)"
+        elif config.env_id != MATCH_ENV_ID and config.env.action_type == "continuous":
+            loss_title = "imitation loss (squared error + goal cross-entropy)"
     return plot_training(
         tables, out, title=run_dir.name, validation=validation, loss_title=loss_title
     )
