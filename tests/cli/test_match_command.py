@@ -136,6 +136,8 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
         (["match", "--methods", "random", "--baseline", "ball_track"], "--baseline"),
         (["match", "--methods", "random", "--baseline", "random"], "--baseline"),
         (["match", "--track-margin", "30"], "--track-margin"),
+        (["match", "--methods", "random", "--track-margin", "5"], "--track-margin"),
+        (["match", "--methods", "random", "--model", "README.md"], "--model"),
     ],
 )
 def test_bad_input_is_one_clear_line(tmp_path, argv, needle, one_clear_line):

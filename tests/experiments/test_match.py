@@ -80,7 +80,7 @@ def test_move_towards_by_hand():
 
 def test_a_q_network_refuses_a_continuous_match(tmp_path):
     (tmp_path / "config.json").write_text('{"algo": "ddqn"}')
-    with pytest.raises(ValueError, match="discrete matches only"):
+    with pytest.raises(ValueError, match="play it with --action-type discrete"):
         make_match_policy("learned", CONTINUOUS, StrategyOptions(run=tmp_path))
 
 

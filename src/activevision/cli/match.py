@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from activevision.cli.args import (
     add_overwrite,
@@ -16,6 +16,9 @@ from activevision.cli.args import (
     seed,
 )
 from activevision.cli.outputs import OutputError, check_outputs, is_training_run
+
+if TYPE_CHECKING:
+    from activevision.experiments.match_methods import StrategyOptions
 
 OUTPUT_FILES = ("match.csv", "match_pareto.png", "match_error.png", "match_clip.gif")
 PAIRED_FILE = "match_paired.csv"  #: with --baseline
@@ -39,6 +42,27 @@ def _world_text(args: argparse.Namespace) -> str:
     return text
 
 
+def _strategies(args: argparse.Namespace) -> list[tuple[str, str, StrategyOptions]]:
+    """``(label, method, options)`` of every result to play (checked: the files exist and
+    the options name strategies that are played)."""
+    from activevision.experiments.match import expand_methods
+    from activevision.experiments.match_methods import default_match_methods
+
+    models: list[Path] = list(dict.fromkeys(args.model or ()))
+    for model in models:
+        if not model.is_file():
+            raise ValueError(f"--model {model}: no such file")
+    if args.run is not None and not (args.run / "config.json").is_file():
+        raise ValueError(f"--run {args.run}: not a training run (no config.json)")
+    methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
+    margins = list(dict.fromkeys(args.track_margin or ()))
+    if margins and "entropy_track" not in methods:
+        raise ValueError("--track-margin sets entropy_track's margin: add it to --methods")
+    if models and "onnx_policy" not in methods:
+        raise ValueError("--model is played by onnx_policy: add it to --methods")
+    return list(expand_methods(methods, models, margins, args.run))
+
+
 def cmd_match(args: argparse.Namespace) -> None:
     """Play every chosen strategy through the same matches; print, write and plot."""
     out: Path = args.out
@@ -47,18 +71,8 @@ def cmd_match(args: argparse.Namespace) -> None:
     files = [out / name for name in OUTPUT_FILES]
     paired_path = out / PAIRED_FILE
     check_outputs(named=files + ([paired_path] if args.baseline else []), overwrite=args.overwrite)
-    models: list[Path] = list(dict.fromkeys(args.model or ()))
-    for model in models:
-        if not model.is_file():
-            raise ValueError(f"--model {model}: no such file")
-    from activevision.experiments.match import expand_methods
-    from activevision.experiments.match_methods import default_match_methods, privileged_methods
-
-    if args.run is not None and not (args.run / "config.json").is_file():
-        raise ValueError(f"--run {args.run}: not a training run (no config.json)")
-    methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
-    margins = list(dict.fromkeys(args.track_margin or ()))
-    entries = expand_methods(methods, models, margins, args.run)
+    entries = _strategies(args)
+    methods = list(dict.fromkeys(method for _, method, _ in entries))
     labels = [label for label, _, _ in entries]
     clip_method = args.clip_method or labels[0]
     if clip_method not in labels:
@@ -67,7 +81,6 @@ def cmd_match(args: argparse.Namespace) -> None:
         raise ValueError(f"--baseline {args.baseline} is not among: {', '.join(labels)}")
     if args.baseline is not None and len(labels) < 2:
         raise ValueError("--baseline needs at least one other method to compare with")
-
     import numpy as np
 
     from activevision.envs.match.config import (
@@ -88,6 +101,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         pareto_front,
         table_header,
     )
+    from activevision.experiments.match_methods import privileged_methods
     from activevision.figures.match import clip_frames, plot_error_over_time, plot_pareto, save_gif
     from activevision.io import write_csv
 

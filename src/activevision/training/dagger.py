@@ -127,7 +127,89 @@ def goal_indices(sim: EpisodeBatch) -> np.ndarray:
     return index
 
 
-class DaggerTrainer(StudentRun):
+class ImitationRun(StudentRun):
+    """What DAgger on the episodes (:class:`DaggerTrainer`) and on the match
+    (:class:`~activevision.training.match_dagger.MatchDaggerTrainer`) share: the teacher's
+    decaying share, rounds of rollouts and updates, checkpoints. Subclasses set
+    ``network``, ``optimizer``, ``dataset`` and ``rng`` and implement :meth:`_rollout` and
+    :meth:`_update`."""
+
+    network: StudentNetwork
+    optimizer: torch.optim.Optimizer
+    dataset: StateDataset
+    rng: np.random.Generator
+    _round_share: float = 1.0
+
+    @property
+    def teacher_share(self) -> float:
+        """beta: the probability that the teacher's action is executed now."""
+        dag, total = self.config.dagger, self.config.run.total_timesteps
+        span = dag.teacher_fraction * total
+        if span <= 0:
+            return 0.0
+        return dag.teacher_initial * max(0.0, 1.0 - self.step / span)
+
+    def train(self, steps: int | None = None) -> list[dict[str, float]]:
+        """Run rounds until ``steps`` more environment steps are done (default: to
+        ``total_timesteps``); returns this call's ``metrics.csv`` rows."""
+        run = self.config.run
+        target = (
+            run.total_timesteps if steps is None else min(self.step + steps, run.total_timesteps)
+        )
+        rows: list[dict[str, float]] = []
+        while self.step < target:
+            before, t0 = self.step, time.perf_counter()
+            self._rollout()
+            for _ in range(self.config.dagger.updates_per_rollout):
+                self.epoch_log.losses.append(self._update())
+            rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
+            if self.step // run.epoch_steps > before // run.epoch_steps:
+                # epsilon: the teacher's share in the round just played
+                rows.append(self.finish_epoch(self._round_share, rate))
+            if run.eval_interval and self.step // run.eval_interval > before // run.eval_interval:
+                self.validate()
+            interval = run.checkpoint_interval
+            if interval and self.step // interval > before // interval and self.step < target:
+                self.save_checkpoint()
+        self.save_checkpoint()
+        self.logger.flush()
+        return rows
+
+    def _rollout(self) -> None:
+        """One round of rollouts, every visited state labelled by the teacher."""
+        raise NotImplementedError
+
+    def _update(self) -> float:
+        """One minibatch update; returns the imitation loss."""
+        raise NotImplementedError
+
+    def validate(self) -> dict[str, float]:
+        """Greedy validation (with ``run.eval_interval``)."""
+        raise NotImplementedError
+
+    def metadata(self) -> dict[str, Any]:
+        """The policy files' metadata."""
+        raise NotImplementedError
+
+    def save_checkpoint(self) -> Path:
+        """Write a checkpoint (atomically) and ``policy.safetensors``."""
+        return self.write_checkpoint(
+            self.network,
+            self.metadata(),
+            self.optimizer.state_dict(),
+            self.dataset.state_dict(),
+            self.run_state("dagger", rng=self.rng.bit_generator.state),
+        )
+
+    def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
+        self.network.load_state_dict(weights)
+        self.optimizer.load_state_dict(ckpt.load_torch_state(path / "optimizer.pt"))
+        self.dataset.load(ckpt.load_arrays(path / "replay.npz"))
+        self.step = int(state["step"])
+        self.rng.bit_generator.state = state["rng"]
+
+
+class DaggerTrainer(ImitationRun):
     """Trains a :class:`~activevision.agents.student.StudentNetwork` by DAgger."""
 
     def __init__(
@@ -176,7 +258,6 @@ class DaggerTrainer(StudentRun):
         self.evidence = self._goal_evidence(dag.num_envs)
         configure_torch_cpu(config.run.num_threads)
         self.step = 0
-        self._round_share = 1.0
         self._open_run(run_dir, loggers, _resuming)
 
     def _goal_evidence(self, n: int) -> GoalEvidence | None:
@@ -185,42 +266,7 @@ class DaggerTrainer(StudentRun):
         grid = self.sim.localisation.grid
         return GoalEvidence(n, grid.views, self.sim.actions, self.config.dagger.switch_margin)
 
-    @property
-    def teacher_share(self) -> float:
-        """beta: the probability that the teacher's action is executed now."""
-        dag, total = self.config.dagger, self.config.run.total_timesteps
-        span = dag.teacher_fraction * total
-        if span <= 0:
-            return 0.0
-        return dag.teacher_initial * max(0.0, 1.0 - self.step / span)
-
     # ------------------------------------------------------------------ the loop
-    def train(self, steps: int | None = None) -> list[dict[str, float]]:
-        """Run rounds until ``steps`` more environment steps are done (default: to
-        ``total_timesteps``); returns this call's ``metrics.csv`` rows."""
-        run = self.config.run
-        target = (
-            run.total_timesteps if steps is None else min(self.step + steps, run.total_timesteps)
-        )
-        rows: list[dict[str, float]] = []
-        while self.step < target:
-            before, t0 = self.step, time.perf_counter()
-            self._rollout()
-            for _ in range(self.config.dagger.updates_per_rollout):
-                self.epoch_log.losses.append(self._update())
-            rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
-            if self.step // run.epoch_steps > before // run.epoch_steps:
-                # epsilon: the teacher's share in the round just played
-                rows.append(self.finish_epoch(self._round_share, rate))
-            if run.eval_interval and self.step // run.eval_interval > before // run.eval_interval:
-                self.validate()
-            interval = run.checkpoint_interval
-            if interval and self.step // interval > before // interval and self.step < target:
-                self.save_checkpoint()
-        self.save_checkpoint()
-        self.logger.flush()
-        return rows
-
     def _rollout(self) -> None:
         """One round of ``num_envs`` fresh episodes, every visited state labelled."""
         sim = self.sim
@@ -325,23 +371,6 @@ class DaggerTrainer(StudentRun):
             "goal_views_deg": np.degrees(grid.views).tolist(),
             "step": self.step,
         }
-
-    def save_checkpoint(self) -> Path:
-        """Write a checkpoint (atomically) and ``policy.safetensors``."""
-        return self.write_checkpoint(
-            self.network,
-            self.metadata(),
-            self.optimizer.state_dict(),
-            self.dataset.state_dict(),
-            self.run_state("dagger", rng=self.rng.bit_generator.state),
-        )
-
-    def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
-        self.network.load_state_dict(weights)
-        self.optimizer.load_state_dict(ckpt.load_torch_state(path / "optimizer.pt"))
-        self.dataset.load(ckpt.load_arrays(path / "replay.npz"))
-        self.step = int(state["step"])
-        self.rng.bit_generator.state = state["rng"]
 
 
 def play_episodes(

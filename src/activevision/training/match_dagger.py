@@ -29,9 +29,7 @@ from __future__ import annotations
 
 import math
 import os
-import time
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -49,15 +47,13 @@ from activevision.envs.match.observations import (
 )
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.geometry.occlusion import robot_cylinders
-from activevision.training import checkpoint as ckpt
 from activevision.training.config import MATCH_ENV_ID, TrainConfig
 from activevision.training.cpu import configure_torch_cpu, resolve_device
-from activevision.training.dagger import StateDataset
+from activevision.training.dagger import ImitationRun, StateDataset
 from activevision.training.loggers import Logger
-from activevision.training.student_runs import StudentRun
 
 
-class MatchDaggerTrainer(StudentRun):
+class MatchDaggerTrainer(ImitationRun):
     """Trains a :class:`~activevision.agents.student.StudentNetwork` on the match by DAgger."""
 
     def __init__(
@@ -105,42 +101,9 @@ class MatchDaggerTrainer(StudentRun):
         )
         configure_torch_cpu(config.run.num_threads)
         self.step = 0
-        self._round_share = 1.0
         self._open_run(run_dir, loggers, _resuming)
 
-    @property
-    def teacher_share(self) -> float:
-        """beta: the probability that the teacher's action is executed now."""
-        dag, total = self.config.dagger, self.config.run.total_timesteps
-        span = dag.teacher_fraction * total
-        if span <= 0:
-            return 0.0
-        return dag.teacher_initial * max(0.0, 1.0 - self.step / span)
-
     # ------------------------------------------------------------------ the loop
-    def train(self, steps: int | None = None) -> list[dict[str, float]]:
-        """Run rounds until ``steps`` more ticks are done (default: to ``total_timesteps``);
-        returns this call's ``metrics.csv`` rows."""
-        run = self.config.run
-        target = (
-            run.total_timesteps if steps is None else min(self.step + steps, run.total_timesteps)
-        )
-        rows: list[dict[str, float]] = []
-        while self.step < target:
-            before, t0 = self.step, time.perf_counter()
-            self._rollout()
-            for _ in range(self.config.dagger.updates_per_rollout):
-                self.epoch_log.losses.append(self._update())
-            rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
-            if self.step // run.epoch_steps > before // run.epoch_steps:
-                rows.append(self.finish_epoch(self._round_share, rate))
-            interval = run.checkpoint_interval
-            if interval and self.step // interval > before // interval and self.step < target:
-                self.save_checkpoint()
-        self.save_checkpoint()
-        self.logger.flush()
-        return rows
-
     def _rollout(self) -> None:
         """One round: ``num_envs`` fresh matches to the end, every tick labelled."""
         env, match = self.env, self.config.match
@@ -211,23 +174,6 @@ class MatchDaggerTrainer(StudentRun):
             "max_move_deg": list(match.max_move_deg),
             "step": self.step,
         }
-
-    def save_checkpoint(self) -> Path:
-        """Write a checkpoint (atomically) and ``policy.safetensors``."""
-        return self.write_checkpoint(
-            self.network,
-            self.metadata(),
-            self.optimizer.state_dict(),
-            self.dataset.state_dict(),
-            self.run_state("dagger", rng=self.rng.bit_generator.state),
-        )
-
-    def _restore(self, path: Path, state: dict[str, Any], weights: dict[str, torch.Tensor]) -> None:
-        self.network.load_state_dict(weights)
-        self.optimizer.load_state_dict(ckpt.load_torch_state(path / "optimizer.pt"))
-        self.dataset.load(ckpt.load_arrays(path / "replay.npz"))
-        self.step = int(state["step"])
-        self.rng.bit_generator.state = state["rng"]
 
     def close(self) -> None:
         self.env.close()
