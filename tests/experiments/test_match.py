@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.heads import TRACK_GRID
 from activevision.experiments.match import (
     MATCH_METRICS,
     MatchClip,
@@ -249,10 +250,10 @@ def test_entropy_track_keeps_the_ball_inside_its_margin():
         ball_on_field(info),
         field_landmarks(config.field),
         cam,
-        grid=EntropyTrack.grid,
+        grid=TRACK_GRID,
         ukf=config.tracker.ukf,
     )
-    views = {tuple(v): i for i, v in enumerate(EntropyTrack.grid.views)}
+    views = {tuple(v): i for i, v in enumerate(TRACK_GRID.views)}
     entropies = []
     for margin in (0.0, 10.0, 20.0):
         policy = EntropyTrack(config, margin)
@@ -267,7 +268,7 @@ def test_entropy_track_keeps_the_ball_inside_its_margin():
         entropies.append([search.entropies[i, v] for i, v in enumerate(chosen)])
         # the least expected entropy of the views allowed, by brute force
         for i, v in enumerate(chosen):
-            gaps = np.abs(EntropyTrack.grid.views - ball[i])
+            gaps = np.abs(TRACK_GRID.views - ball[i])
             ok = (gaps[:, 0] <= cam.hfov / 2 - math.radians(margin)) & (
                 gaps[:, 1] <= cam.vfov / 2 - math.radians(margin)
             )
@@ -276,6 +277,10 @@ def test_entropy_track_keeps_the_ball_inside_its_margin():
     assert (by_margin[1:] >= by_margin[:-1]).all() and (by_margin[2] > by_margin[0]).any()
     behind = np.abs(ball[:, 0]) >= cam.pan_max - 1e-9
     assert behind.any()  # some balls lie beyond the head's reach: covered above
+    # beyond half the vertical view no view is allowed: the ball's direction itself
+    tracking = EntropyTrack(config, math.degrees(cam.vfov / 2) + 1.0)
+    tracking.reset(16, np.random.default_rng(0))
+    np.testing.assert_array_equal(tracking.targets(info), ball)
 
 
 def test_six_point_look_visits_its_points_in_turn():

@@ -239,3 +239,22 @@ def test_config_pickles_and_deep_copies_with_its_read_only_noise():
         assert twin == cfg and twin is not cfg
         assert isinstance(twin.noise, MappingProxyType)  # still read-only
         assert twin.noise[LandmarkType.L_CORNER] == RangeBearingNoise(0.2, 0.1, 0.05)
+
+
+def test_config_read_back_from_json_is_the_same_config():
+    """config.json holds the noise by type id with plain objects and lists for tuples: the
+    config rebuilt from that equals the original; malformed values are one clear error."""
+    import dataclasses
+    import json
+
+    cfg = UKFConfig(initial_std=(0.3, 0.3, 0.2))
+    values = {f.name: getattr(cfg, f.name) for f in dataclasses.fields(cfg)}
+    values["noise"] = {
+        str(int(kind)): dataclasses.asdict(noise) for kind, noise in cfg.noise.items()
+    }
+    values = json.loads(json.dumps(values))  # tuples -> lists
+    assert UKFConfig(**values) == cfg
+    with pytest.raises(ValueError, match="odometry_base: expects 3 numbers"):
+        UKFConfig(odometry_base=0.1)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"UKFConfig\.noise"):
+        UKFConfig(noise={"0": {"range": 1.0}})  # type: ignore[dict-item]

@@ -190,8 +190,36 @@ def test_the_exported_student_plays_as_the_run_does(tmp_path, action_type):
         np.testing.assert_allclose(values, onnx.per_match[name], atol=tolerance, err_msg=name)
 
 
-def test_head_controller_bounds_the_vectors_as_the_match_env_does():
+def test_head_controller_bounds_the_vectors_as_the_match_env_does(tmp_path):
+    """A ball unseen for 30 s and a belief 50 m wide reach the network as the env clips
+    them: 10 s and 10 m."""
     from activevision.envs.match.observations import VECTOR_BOUND
-    from activevision.runtime.controller import MATCH_VECTOR_BOUND
+    from activevision.export import export_run
+    from activevision.runtime import HeadController
 
-    assert MATCH_VECTOR_BOUND == VECTOR_BOUND
+    train_match_dagger(tiny(steps=2 * TICKS), tmp_path)
+    controller = HeadController(export_run(tmp_path).model_path)
+    frame = np.zeros((120, 160), np.uint8)
+    controller.act(frame, 0.1, 0.3, pose=(1, 2, 0.5), belief=(50, 0.2, 0.1), ball=(2, -1, 30))
+    vector = controller._vector[0]  # head 2, pose 4, belief 3, ball 3
+    np.testing.assert_allclose(vector[6:], [VECTOR_BOUND, 0.2, 0.1, 2, -1, VECTOR_BOUND])
+
+
+def test_a_student_refuses_what_it_was_not_trained_for(tmp_path, capsys):
+    from activevision.cli import main
+
+    train_match_dagger(tiny(steps=2 * TICKS), tmp_path / "run")
+    run, out = str(tmp_path / "run"), str(tmp_path / "m")
+    base = ["match", "--matches", "1", "--ticks", "3", "--out", out]
+    for argv, needle in (
+        ([*base, "--methods", "ball_track", "--run", run], "add it to --methods"),
+        (
+            [*base, "--methods", "ball_track", "learned", "--run", run, "--step-deg", "6"],
+            "--step-deg 3",
+        ),
+        (["evaluate", "--run", run, "--episodes", "2"], "activevision match --run"),
+    ):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert needle in err and "Traceback" not in err
+    assert not (tmp_path / "m").exists()  # refused before any strategy played

@@ -18,6 +18,7 @@ from activevision.cli.args import (
 from activevision.cli.outputs import OutputError, check_outputs, is_training_run
 
 if TYPE_CHECKING:
+    from activevision.envs.match.config import MatchConfig
     from activevision.experiments.match_methods import StrategyOptions
 
 OUTPUT_FILES = ("match.csv", "match_pareto.png", "match_error.png", "match_clip.gif")
@@ -42,11 +43,38 @@ def _world_text(args: argparse.Namespace) -> str:
     return text
 
 
-def _strategies(args: argparse.Namespace) -> list[tuple[str, str, StrategyOptions]]:
-    """``(label, method, options)`` of every result to play (checked: the files exist and
-    the options name strategies that are played)."""
+def _match_config(args: argparse.Namespace) -> MatchConfig:
+    """The matches the command line asks for."""
+    from activevision.envs.match.config import (
+        DetectionConfig,
+        MatchConfig,
+        OthersConfig,
+        WalkConfig,
+    )
+    from activevision.envs.robots import RobotsConfig
+
+    return MatchConfig(
+        ticks=args.ticks,
+        step_deg=args.step_deg,
+        action_type=args.action_type,
+        max_move_deg=(args.step_deg, args.step_deg),
+        walk=WalkConfig(target=args.walk),
+        robots=RobotsConfig(count=(args.robots, args.robots)),
+        others=OthersConfig(speed=args.robot_speed),
+        detection=DetectionConfig(*args.detection) if args.detection else DetectionConfig(),
+    )
+
+
+def _strategies(
+    args: argparse.Namespace, config: MatchConfig
+) -> list[tuple[str, str, StrategyOptions]]:
+    """``(label, method, options)`` of every result to play, each checked before any plays:
+    the files exist, the options name strategies that are played, and every strategy can
+    be made for ``config`` (a run's moves fit the match)."""
+    import numpy as np
+
     from activevision.experiments.match import expand_methods
-    from activevision.experiments.match_methods import default_match_methods
+    from activevision.experiments.match_methods import default_match_methods, make_match_policy
 
     models: list[Path] = list(dict.fromkeys(args.model or ()))
     for model in models:
@@ -60,7 +88,12 @@ def _strategies(args: argparse.Namespace) -> list[tuple[str, str, StrategyOption
         raise ValueError("--track-margin sets entropy_track's margin: add it to --methods")
     if models and "onnx_policy" not in methods:
         raise ValueError("--model is played by onnx_policy: add it to --methods")
-    return list(expand_methods(methods, models, margins, args.run))
+    if args.run is not None and "learned" not in methods:
+        raise ValueError("--run is played by learned: add it to --methods")
+    entries = expand_methods(methods, models, margins, args.run)
+    for _, method, options in entries:  # loads each run and model once: errors come first
+        make_match_policy(method, config, options).reset(1, np.random.default_rng(0))
+    return entries
 
 
 def cmd_match(args: argparse.Namespace) -> None:
@@ -71,7 +104,8 @@ def cmd_match(args: argparse.Namespace) -> None:
     files = [out / name for name in OUTPUT_FILES]
     paired_path = out / PAIRED_FILE
     check_outputs(named=files + ([paired_path] if args.baseline else []), overwrite=args.overwrite)
-    entries = _strategies(args)
+    config = _match_config(args)
+    entries = _strategies(args, config)
     methods = list(dict.fromkeys(method for _, method, _ in entries))
     labels = [label for label, _, _ in entries]
     clip_method = args.clip_method or labels[0]
@@ -83,13 +117,6 @@ def cmd_match(args: argparse.Namespace) -> None:
         raise ValueError("--baseline needs at least one other method to compare with")
     import numpy as np
 
-    from activevision.envs.match.config import (
-        DetectionConfig,
-        MatchConfig,
-        OthersConfig,
-        WalkConfig,
-    )
-    from activevision.envs.robots import RobotsConfig
     from activevision.experiments.match import (
         NAME_WIDTH,
         compare_matches,
@@ -105,16 +132,6 @@ def cmd_match(args: argparse.Namespace) -> None:
     from activevision.figures.match import clip_frames, plot_error_over_time, plot_pareto, save_gif
     from activevision.io import write_csv
 
-    config = MatchConfig(
-        ticks=args.ticks,
-        step_deg=args.step_deg,
-        action_type=args.action_type,
-        max_move_deg=(args.step_deg, args.step_deg),
-        walk=WalkConfig(target=args.walk),
-        robots=RobotsConfig(count=(args.robots, args.robots)),
-        others=OthersConfig(speed=args.robot_speed),
-        detection=DetectionConfig(*args.detection) if args.detection else DetectionConfig(),
-    )
     minutes = args.ticks * config.tick_seconds / 60
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
     print(
@@ -142,6 +159,8 @@ def cmd_match(args: argparse.Namespace) -> None:
     csv_path, pareto_path, error_path, clip_path = files
     out.mkdir(parents=True, exist_ok=True)
     write_csv(csv_path, csv_rows(results, args.matches, args.seed))
+    if args.baseline is None and args.overwrite and paired_path.exists():
+        paired_path.unlink()  # --overwrite (match.csv was there): not this run's pairs
     if args.baseline is not None:
         differences = paired_differences(results, args.baseline)
         print(f"paired differences from {args.baseline}, match by match (mean [95% interval]):")
@@ -254,11 +273,12 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--run", type=Path, help="a training run for the learned strategy")
     p.add_argument(
         "--track-margin",
-        type=float_in(0, 29, "degrees"),
+        type=float_in(0, 22, "degrees"),
         nargs="+",
         metavar="DEG",
-        help="how far inside the image entropy_track keeps the ball (default 5); with"
-        " several, entropy_track plays each, named entropy_track[DEGdeg]",
+        help="how far inside the image entropy_track keeps the ball (default 5; 22, half"
+        " the camera's vertical view, is ball tracking); with several, entropy_track plays"
+        " each, named entropy_track[DEGdeg]",
     )
     p.add_argument(
         "--clip-method", help="the strategy shown in match_clip.gif (default: the first)"

@@ -56,7 +56,6 @@ from activevision.envs.actions import action_table
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import (
     DEFAULT_TRACK_MARGIN_DEG,
-    TRACK_GRID,
     EntropyTrackTeacher,
     ball_direction,
     ball_on_field,
@@ -229,7 +228,6 @@ class EntropyTrack(TargetPolicy):
     least ``margin_deg`` inside the image (``envs.match.heads.entropy_track_targets``)."""
 
     name = "entropy_track"
-    grid = TRACK_GRID
 
     def __init__(self, config: MatchConfig, margin_deg: float = DEFAULT_TRACK_MARGIN_DEG) -> None:
         super().__init__(config)
@@ -366,8 +364,13 @@ class LearnedMatchPolicy:
     def __init__(self, config: MatchConfig, run: Path) -> None:
         import torch
 
+        from activevision.agents.student import StudentNetwork
         from activevision.training import load_config, load_policy
         from activevision.training.config import MATCH_ENV_ID
+        from activevision.training.match_dagger import student_match_actions
+
+        self.student_actions = student_match_actions
+        self.student_class = StudentNetwork
 
         run_config = load_config(run / "config.json")
         self.student = run_config.algo == "dagger" and run_config.env_id == MATCH_ENV_ID
@@ -381,6 +384,17 @@ class LearnedMatchPolicy:
             raise ValueError(
                 f"{run}: its policy makes {trained} moves; play it with --action-type {trained}"
             )
+        # the head move the network's outputs stand for, and the match's
+        world = run_config.match if run_config.env_id == MATCH_ENV_ID else run_config.env
+        if trained == "continuous":
+            trained_move, move = max(world.max_move_deg), max(config.max_move_deg)
+        else:
+            trained_move, move = world.step_deg, config.step_deg
+        if not math.isclose(move, trained_move):
+            raise ValueError(
+                f"{run}: its policy was trained with moves of up to {trained_move:g} degrees;"
+                f" play it with --step-deg {trained_move:g}"
+            )
         self.torch = torch
         self.config = config
         self.keys = vector_keys(run_config.match) if self.student else ()
@@ -391,16 +405,14 @@ class LearnedMatchPolicy:
 
     def act(self, obs: Observation, info: dict[str, np.ndarray]) -> np.ndarray:
         images = np.ascontiguousarray(obs[IMAGE_KEY] if isinstance(obs, dict) else obs)
+        if self.student:
+            vector = knowledge_vectors(info, self.keys, self.config.tick_seconds)
+            net = self.net
+            assert isinstance(net, self.student_class)  # the run's algo said so
+            return self.student_actions(net, self.torch.device("cpu"), images, vector)
         with self.torch.inference_mode():
-            image = self.torch.from_numpy(images)
-            if self.student:
-                vector = knowledge_vectors(info, self.keys, self.config.tick_seconds)
-                out = self.net(image, self.torch.from_numpy(vector))
-                if self.config.action_type == "continuous":
-                    return np.asarray(out.numpy(), dtype=np.float64)
-            else:
-                out = self.net(image)
-        return np.asarray(out.argmax(dim=1).numpy(), dtype=np.int64)
+            q = self.net(self.torch.from_numpy(images))
+        return np.asarray(q.argmax(dim=1).numpy(), dtype=np.int64)
 
 
 class RandomMoves:

@@ -216,6 +216,11 @@ class LearnedPolicy:
         from activevision.training import load_config, load_policy
 
         config = load_config(Path(run_dir) / "config.json")
+        if config.algo == "dagger" and config.env_id == "ActiveVisionMatch-v0":
+            raise ValueError(
+                f"{run_dir} is a match student (it takes the belief and the ball model): play"
+                f" it with `activevision match --run {run_dir}`"
+            )
         keys = vector_keys(config.env)
         evidence = None
         if config.algo == "dagger" and config.dagger.act_by == "goal":

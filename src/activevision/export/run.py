@@ -27,8 +27,8 @@ def export_run(
 
     Reads the weights with :func:`activevision.training.load_policy`, the action table,
     head limits, camera and world (appearance ranges, other robots) from the run's
-    environment settings (``config.json``'s ``env``) and records the SHA-256 of
-    ``config.json`` in the metadata.
+    environment settings (``config.json``'s ``env``, or ``match`` for a run trained on
+    ``ActiveVisionMatch-v0``) and records the SHA-256 of ``config.json`` in the metadata.
 
     Args:
         run_dir: a run directory written by :mod:`activevision.training`.
@@ -89,7 +89,7 @@ def export_run(
 
 def _match_metadata(config: Any, config_sha256: str) -> dict[str, Any]:
     """policy.json's record of a policy trained on ``ActiveVisionMatch-v0`` (``config`` a
-    TrainConfig): the match's 3-degree moves (or continuous ones), camera, world and
+    TrainConfig): the match's moves of ``step_deg`` (or continuous ones), camera, world and
     observation (a DDQN's image; a match student's image, head, belief and ball model)."""
     from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
     from activevision.envs.match.observations import vector_keys

@@ -94,7 +94,15 @@ class UKFConfig:
             raise ValueError(f"UKFConfig.noise: {error}") from None
         object.__setattr__(self, "noise", MappingProxyType(noise))
         for name in ("odometry_base", "initial_std"):
-            object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
+            try:
+                values = tuple(float(v) for v in getattr(self, name))
+            except (TypeError, ValueError):
+                values = ()
+            if len(values) != 3:
+                raise ValueError(
+                    f"UKFConfig.{name}: expects 3 numbers (m, m, rad), got {getattr(self, name)!r}"
+                )
+            object.__setattr__(self, name, values)
         if not self.alpha > 0:
             raise ValueError(f"UKFConfig.alpha must be positive, got {self.alpha!r}")
         if not self.lambda_ + 3 > 0:

@@ -124,7 +124,8 @@ class RunConfig:
 @dataclass(frozen=True)
 class DaggerConfig:
     """DAgger (Ross et al. 2011) with the simulator's oracle as the privileged teacher
-    ("Learning by Cheating", Chen et al. 2019): not in the paper, values tuned here (T).
+    ("Learning by Cheating", Chen et al. 2019) on the episodes, and the ``entropy_track``
+    planner (nothing privileged) on the match: not in the paper, values tuned here (T).
     The student's optimiser takes ``learner.learning_rate``, ``learner.batch_size`` and
     ``learner.max_grad_norm``."""
 
@@ -253,6 +254,11 @@ class TrainConfig:
                 "TrainConfig.match.appearance: the match student trains in the clean world"
                 " (its dataset re-renders states without their looks)"
             )
+        if self.dagger.act_by != "action":
+            raise ValueError(
+                "TrainConfig.dagger.act_by: a match student acts by its action head ('action');"
+                " its teacher names no goal view"
+            )
         if self.run.eval_interval:
             raise ValueError(
                 "TrainConfig.run.eval_interval: a match student is not validated during"
@@ -292,7 +298,7 @@ class TrainConfig:
 
 
 SECTIONS = ("env", "learner", "exploration", "replay", "run", "dagger", "sb3")
-#: sections set by their full dotted path only (``match.detection.near_probability``): their
+#: sections set by their full dotted path only (``match.detection.near``): their
 #: leaf names repeat the episodic env's (``step_deg``, ``observation``)
 PATH_ONLY_SECTIONS = ("match",)
 MATCH_ENV_ID = "ActiveVisionMatch-v0"

@@ -108,7 +108,13 @@ def match_dagger(total_timesteps: int, action_type: ActionType = "discrete") -> 
         env_id="ActiveVisionMatch-v0",
         match=match,
         learner=LearnerConfig(batch_size=256, learning_rate=1e-3),
-        dagger=DaggerConfig(num_envs=16, updates_per_rollout=150, dataset_size=400_000),
+        dagger=DaggerConfig(
+            num_envs=16,
+            updates_per_rollout=150,
+            dataset_size=400_000,
+            act_by="action",  # the planner's views change every tick: no goal to name
+            goal_class_weight=0.0,
+        ),
         run=RunConfig(
             total_timesteps=total_timesteps,
             epoch_steps=9600,

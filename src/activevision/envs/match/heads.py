@@ -9,7 +9,8 @@ belief over a 5-degree grid among the views that keep the ball model's direction
 the head's limits) at least ``margin`` inside the image on both axes (an angular box, not
 the projection, so that the views near a ball behind the robot count too: measured, 0.081 m
 against 0.085 where only views that show the ball do). The margin trades localisation for
-ball in view: 0 looks wherever the ball is about in view, about 25 degrees is ball tracking.
+ball in view: 0 looks wherever the ball is about in view; from half the vertical field of
+view (22.6 degrees for the default camera) no view is allowed and it is ball tracking.
 """
 
 from __future__ import annotations
