@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +36,6 @@ def export_run(
         out_path: ``.onnx`` file or directory to write to; default ``run_dir/policy.onnx``.
         **export_options: passed on to :func:`export_onnx` (``opset``, ``dynamic_batch``...).
     """
-    from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
     from activevision.envs.observations import vector_keys
     from activevision.training import load_config, load_policy
 
@@ -47,13 +47,24 @@ def export_run(
         raise FileNotFoundError(f"{run_dir} is not a training run: no {CONFIG_FILENAME}") from error
     config = load_config(config_path)
     network = load_policy(run_dir, weights=weights)
+    sha256 = hashlib.sha256(config_bytes).hexdigest()
     if config.env_id == MATCH_ENV_ID:
         # a policy trained on the match: its world, observation and moves are the match's
+        from activevision.envs.match.observations import vector_keys as match_keys
+
+        match = config.match
+        student = config.algo == "dagger"
+        metadata = _world_metadata(
+            match,
+            "8way",
+            match.observation if student else "image",
+            match_keys(match) if student else (),
+            sha256,
+        )
+        if student:
+            metadata["act_by"] = "action"
         return export_onnx(
-            network,
-            out_path or run_dir / MODEL_FILENAME,
-            _match_metadata(config, hashlib.sha256(config_bytes).hexdigest()),
-            **export_options,
+            network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options
         )
     env = config.env
     stack = getattr(network, "stack", 1)
@@ -61,22 +72,8 @@ def export_run(
         raise ValueError(
             f"{run_dir}: the network stacks {stack} frames but the environment {env.frame_stack}"
         )
-    metadata = policy_metadata(
-        action_table(env.step_deg, env.action_set),
-        env.camera,
-        training_config_sha256=hashlib.sha256(config_bytes).hexdigest(),
-        action_names=ACTION_NAMES_8WAY,
-        camera=env.camera,
-        world={"appearance": env.appearance, "robots": env.robots},
-    )
-    metadata["step_deg"] = env.step_deg
-    metadata["action_set"] = env.action_set
-    metadata["observation"] = env.observation
-    metadata["vector_keys"] = list(vector_keys(env))
+    metadata = _world_metadata(env, env.action_set, env.observation, vector_keys(env), sha256)
     metadata["action_history"] = env.action_history
-    metadata["action_type"] = env.action_type
-    if env.action_type == "continuous":
-        metadata["max_move_deg"] = list(env.max_move_deg)
     if config.algo == "dagger":
         from activevision.localisation import LocalisationConfig
 
@@ -87,29 +84,26 @@ def export_run(
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)
 
 
-def _match_metadata(config: Any, config_sha256: str) -> dict[str, Any]:
-    """policy.json's record of a policy trained on ``ActiveVisionMatch-v0`` (``config`` a
-    TrainConfig): the match's moves of ``step_deg`` (or continuous ones), camera, world and
-    observation (a DDQN's image; a match student's image, head, belief and ball model)."""
+def _world_metadata(
+    world: Any, action_set: str, observation: str, keys: Sequence[str], config_sha256: str
+) -> dict[str, Any]:
+    """policy.json's record of the world a policy was trained in (``world`` an ``EnvConfig``
+    or a ``MatchConfig``): its moves, camera, appearance and robots, and the observation."""
     from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
-    from activevision.envs.match.observations import vector_keys
 
-    match = config.match
     metadata = policy_metadata(
-        action_table(match.step_deg, "8way"),
-        match.camera,
+        action_table(world.step_deg, action_set),
+        world.camera,
         training_config_sha256=config_sha256,
         action_names=ACTION_NAMES_8WAY,
-        camera=match.camera,
-        world={"appearance": match.appearance, "robots": match.robots},
+        camera=world.camera,
+        world={"appearance": world.appearance, "robots": world.robots},
     )
-    metadata["step_deg"] = match.step_deg
-    metadata["action_set"] = "8way"
-    metadata["observation"] = match.observation if config.algo == "dagger" else "image"
-    metadata["vector_keys"] = list(vector_keys(match)) if config.algo == "dagger" else []
-    metadata["action_type"] = match.action_type
-    if match.action_type == "continuous":
-        metadata["max_move_deg"] = list(match.max_move_deg)
-    if config.algo == "dagger":
-        metadata["act_by"] = "action"
+    metadata["step_deg"] = world.step_deg
+    metadata["action_set"] = action_set
+    metadata["observation"] = observation
+    metadata["vector_keys"] = list(keys)
+    metadata["action_type"] = world.action_type
+    if world.action_type == "continuous":
+        metadata["max_move_deg"] = list(world.max_move_deg)
     return metadata
