@@ -13,8 +13,8 @@ from activevision.experiments.evaluate import evaluate_policy
 from activevision.experiments.policies import LearnedPolicy, OraclePolicy
 from activevision.training import load_policy
 from activevision.training.config import TrainConfig
-from activevision.training.dagger import DaggerTrainer, resume_dagger, train_dagger
-from activevision.training.runs import reopen_run
+from activevision.training.dagger import DaggerTrainer
+from activevision.training.runs import reopen_run, resume, train
 
 
 def tiny(observation: str = "image+head+pose+proposal", steps: int = 600, **extra) -> TrainConfig:
@@ -37,7 +37,7 @@ def tiny(observation: str = "image+head+pose+proposal", steps: int = 600, **extr
 
 
 def test_run_layout_and_records(tmp_path):
-    rows = train_dagger(tiny(**{"run.eval_interval": 300, "run.eval_episodes": 5}), tmp_path)
+    rows = train(tiny(**{"run.eval_interval": 300, "run.eval_episodes": 5}), tmp_path)
     for name in (
         "config.json",
         "metrics.csv",
@@ -59,11 +59,11 @@ def test_run_layout_and_records(tmp_path):
 
 def test_resume_ends_with_the_same_weights(tmp_path):
     config = tiny(steps=900, **{"run.epoch_steps": 100, "run.checkpoint_interval": 300})
-    train_dagger(config, tmp_path / "whole")
+    train(config, tmp_path / "whole")
     trainer = DaggerTrainer(config, tmp_path / "split")
     trainer.train(350)  # stops at the first round past 350 steps, with a checkpoint
     trainer.close()
-    resume_dagger(tmp_path / "split")
+    resume(tmp_path / "split")
     a = load_policy(tmp_path / "whole").state_dict()
     b = load_policy(tmp_path / "split").state_dict()
     for key in a:
@@ -97,7 +97,7 @@ def test_student_learns_to_follow_an_exact_proposal(tmp_path):
             "learner.learning_rate": 1e-3,
         },
     )
-    train_dagger(config, tmp_path)
+    train(config, tmp_path)
     policy = LearnedPolicy.from_run(tmp_path)
     env = ActiveVisionEnv(config.env)
     _, summary, _ = evaluate_policy(policy, 40, seed=500, env=env)
@@ -167,7 +167,7 @@ def test_continuous_student_reaches_goals_in_fewer_steps_and_exports(tmp_path):
             "dagger.switch_margin": 1.0,  # hysteresis in training, evaluation and runtime
         },
     )
-    train_dagger(config, tmp_path)
+    train(config, tmp_path)
     learned = LearnedPolicy.from_run(tmp_path)
     assert learned.goal_evidence is not None and learned.goal_evidence.switch_margin == 1.0
     env = ActiveVisionEnv(config.env)
@@ -184,3 +184,15 @@ def test_continuous_student_reaches_goals_in_fewer_steps_and_exports(tmp_path):
     onnx_records, _, _ = evaluate_policy(onnx, 40, seed=500, env=env)
     assert [r["steps"] for r in onnx_records] == [r["steps"] for r in records]
     assert [r["success"] for r in onnx_records] == [r["success"] for r in records]
+
+
+def test_the_library_entry_points_pick_the_learner_and_refuse_an_env_factory(tmp_path):
+    from activevision.training import make_env, start_run
+
+    config = tiny()
+    with pytest.raises(ValueError, match="builds its own environments"):
+        train(config, tmp_path / "a", env_factory=make_env)
+    assert not (tmp_path / "a").exists()  # refused before anything is written
+    trainer = start_run(config, tmp_path / "b", loggers=[])
+    assert isinstance(trainer, DaggerTrainer)
+    trainer.close()

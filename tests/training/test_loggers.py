@@ -19,7 +19,8 @@ from activevision.training.loggers import (
     default_loggers,
 )
 from activevision.training.metrics import EPISODE_FIELDS, EPOCH_FIELDS, TENSORBOARD_TAGS
-from activevision.training.trainer import Trainer, resume, train
+from activevision.training.runs import resume, train
+from activevision.training.trainer import Trainer
 from activevision.training.validation import EVALUATION_FIELDS
 
 

@@ -13,7 +13,8 @@ from activevision.training.config import TrainConfig
 from activevision.training.metrics import EPOCH_FIELDS, TIMING_FIELDS
 from activevision.training.plots import plot_run
 from activevision.training.policy_files import load_policy
-from activevision.training.trainer import Trainer, resume, train
+from activevision.training.runs import resume, train
+from activevision.training.trainer import Trainer
 from activevision.training.validation import greedy_episodes, summarise_validation
 
 

@@ -39,8 +39,9 @@ _EXPORTS = {
     "goal_offset": "aux_targets",
     "load_policy": "policy_files",
     "make_env": "environment",
-    "resume": "trainer",
-    "train": "trainer",
+    "resume": "runs",
+    "start_run": "runs",
+    "train": "runs",
 }
 
 if TYPE_CHECKING:
@@ -58,9 +59,9 @@ if TYPE_CHECKING:
     from activevision.training.plots import plot_run
     from activevision.training.policy_files import load_policy
     from activevision.training.presets import preset
-    from activevision.training.runs import reopen_run
+    from activevision.training.runs import reopen_run, resume, start_run, train
     from activevision.training.state import TrainerState
-    from activevision.training.trainer import Trainer, resume, train
+    from activevision.training.trainer import Trainer
 
 
 def __getattr__(name: str) -> Any:
@@ -88,5 +89,6 @@ __all__ = [
     "reopen_run",
     "resume",
     "save_config",
+    "start_run",
     "train",
 ]

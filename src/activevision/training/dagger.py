@@ -465,31 +465,3 @@ def play_greedy(
         record,
     )
     return records
-
-
-def train_dagger(
-    config: TrainConfig,
-    run_dir: str | os.PathLike[str],
-    *,
-    loggers: Sequence[Logger] | None = None,
-) -> list[dict[str, float]]:
-    """Train a fresh DAgger run to ``config.run.total_timesteps``."""
-    trainer = DaggerTrainer(config, run_dir, loggers=loggers)
-    try:
-        return trainer.train()
-    finally:
-        trainer.close()
-
-
-def resume_dagger(
-    run_dir: str | os.PathLike[str],
-    steps: int | None = None,
-    *,
-    loggers: Sequence[Logger] | None = None,
-) -> list[dict[str, float]]:
-    """Continue a DAgger run from its newest checkpoint."""
-    trainer = DaggerTrainer.resume(run_dir, loggers=loggers)
-    try:
-        return trainer.train(steps)
-    finally:
-        trainer.close()

@@ -191,18 +191,4 @@ def student_match_actions(
     return np.asarray(output.argmax(dim=1).cpu().numpy(), dtype=np.int64)
 
 
-def train_match_dagger(
-    config: TrainConfig,
-    run_dir: str | os.PathLike[str],
-    *,
-    loggers: Sequence[Logger] | None = None,
-) -> list[dict[str, float]]:
-    """Train a fresh match DAgger run to ``config.run.total_timesteps``."""
-    trainer = MatchDaggerTrainer(config, run_dir, loggers=loggers)
-    try:
-        return trainer.train()
-    finally:
-        trainer.close()
-
-
-__all__ = ["MatchDaggerTrainer", "student_match_actions", "train_match_dagger"]
+__all__ = ["MatchDaggerTrainer", "student_match_actions"]

@@ -36,7 +36,7 @@ from activevision.training import checkpoint as ckpt
 from activevision.training import state as run_state
 from activevision.training.aux_targets import AuxTarget, aux_dim, aux_vector, resolve_aux_target
 from activevision.training.build import build_learning
-from activevision.training.config import MATCH_ENV_ID, TrainConfig, load_config, save_config
+from activevision.training.config import TrainConfig, load_config, save_config
 from activevision.training.cpu import configure_torch_cpu, resolve_device
 from activevision.training.environment import EnvFactory, chw_shape, discrete_actions, make_env
 from activevision.training.loggers import Logger, LoggerGroup, default_loggers
@@ -361,58 +361,4 @@ class Trainer:
         return np.asarray(obs, dtype=np.uint8).reshape(self.obs_shape)
 
 
-# ---------------------------------------------------------------------- library functions
-def train(
-    config: TrainConfig,
-    run_dir: str | os.PathLike[str],
-    env_factory: EnvFactory | None = None,
-    *,
-    aux_target: AuxTarget | None = None,
-    loggers: Sequence[Logger] | None = None,
-) -> list[dict[str, float]]:
-    """Train a fresh run to ``config.run.total_timesteps``; returns the per-epoch metrics.
-    A config with ``algo="dagger"`` is trained by :mod:`activevision.training.dagger` (on
-    the match env by :mod:`activevision.training.match_dagger`), one
-    with "sac", "td3" or "ppo" by :mod:`activevision.training.sb3_learners`."""
-    if config.algo != "ddqn" and (env_factory is not None or aux_target is not None):
-        raise ValueError(f"algo={config.algo!r} trains on ActiveVision-v0 itself: no env_factory")
-    if config.algo == "dagger" and config.env_id == MATCH_ENV_ID:
-        from activevision.training.match_dagger import train_match_dagger
-
-        return train_match_dagger(config, run_dir, loggers=loggers)
-    if config.algo == "dagger":
-        from activevision.training.dagger import train_dagger
-
-        return train_dagger(config, run_dir, loggers=loggers)
-    if config.algo != "ddqn":
-        from activevision.training.sb3_learners import Sb3Trainer  # SB3 loads only here
-
-        sb3 = Sb3Trainer(config, run_dir, loggers=loggers)
-        try:
-            return sb3.train()
-        finally:
-            sb3.close()
-    trainer = Trainer(config, run_dir, env_factory, aux_target=aux_target, loggers=loggers)
-    try:
-        return trainer.train()
-    finally:
-        trainer.close()
-
-
-def resume(
-    run_dir: str | os.PathLike[str],
-    env_factory: EnvFactory | None = None,
-    steps: int | None = None,
-    *,
-    aux_target: AuxTarget | None = None,
-    loggers: Sequence[Logger] | None = None,
-) -> list[dict[str, float]]:
-    """Continue an interrupted run from its newest checkpoint (to the end by default)."""
-    trainer = Trainer.resume(run_dir, env_factory, aux_target=aux_target, loggers=loggers)
-    try:
-        return trainer.train(steps)
-    finally:
-        trainer.close()
-
-
-__all__ = ["Trainer", "make_env", "resume", "train"]
+__all__ = ["Trainer", "make_env"]
