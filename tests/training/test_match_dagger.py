@@ -17,9 +17,9 @@ from activevision.experiments.match import play_matches
 from activevision.experiments.match_methods import StrategyOptions
 from activevision.training import load_policy
 from activevision.training.config import TrainConfig, apply_overrides, load_config, save_config
-from activevision.training.match_dagger import MatchDaggerTrainer, train_match_dagger
+from activevision.training.match_dagger import MatchDaggerTrainer
 from activevision.training.presets import preset
-from activevision.training.runs import reopen_run
+from activevision.training.runs import reopen_run, train
 
 TICKS = 12
 
@@ -42,7 +42,7 @@ def tiny(steps: int = 4 * TICKS, action_type: str = "discrete", **extra) -> Trai
 
 
 def test_run_layout_and_records(tmp_path):
-    rows = train_match_dagger(tiny(), tmp_path)
+    rows = train(tiny(), tmp_path)
     for name in ("config.json", "metrics.csv", "episodes.csv", "policy.safetensors"):
         assert (tmp_path / name).exists(), name
     assert len(rows) == 2 and all(np.isfinite(r["loss"]) for r in rows)
@@ -87,7 +87,7 @@ def test_labels_are_entropy_tracks_moves_and_the_teacher_plays_its_matches(tmp_p
 
 def test_resume_ends_with_the_same_weights(tmp_path):
     config = tiny(steps=6 * TICKS, **{"run.checkpoint_interval": 2 * TICKS})
-    train_match_dagger(config, tmp_path / "whole")
+    train(config, tmp_path / "whole")
     trainer = MatchDaggerTrainer(config, tmp_path / "split")
     trainer.train(2 * TICKS)
     trainer.close()
@@ -109,9 +109,13 @@ def test_the_match_config_travels_through_config_json(tmp_path):
     assert config.match.detection == DetectionConfig(near=0.6, far=0.2, false_rate=0.2)
     save_config(config, tmp_path / "config.json")
     assert load_config(tmp_path / "config.json") == config
-    # the episodic env's short names still name the episodic env's fields
-    assert apply_overrides(config, ["step_deg=4"]).env.step_deg == 4
-    assert apply_overrides(config, ["step_deg=4"]).match.step_deg == 3
+    # a short name means the episodic env's field, which a match run never reads: refused
+    with pytest.raises(ValueError, match=r"'step_deg' sets env.step_deg.*set match.step_deg"):
+        apply_overrides(config, ["step_deg=4"])
+    assert apply_overrides(config, ["match.step_deg=4"]).match.step_deg == 4
+    # the same short name on the episodic env (named in the same --set) is the env's field
+    episodic = apply_overrides(config, ["env_id=ActiveVision-v0", "algo=ddqn", "step_deg=4"])
+    assert episodic.env.step_deg == 4
 
 
 @pytest.mark.parametrize(
@@ -158,7 +162,7 @@ def test_the_student_learns_to_keep_the_ball_in_view(tmp_path):
             "learner.batch_size": 64,
         },
     )
-    train_match_dagger(config, tmp_path)
+    train(config, tmp_path)
     match = config.match.replace(ticks=60)
     options = StrategyOptions(run=tmp_path)
     learned = play_matches("learned", match, 8, 11, options).per_match["ball_in_view"].mean()
@@ -175,7 +179,7 @@ def test_the_exported_student_plays_as_the_run_does(tmp_path, action_type):
     from activevision.export import export_run
     from activevision.runtime import HeadController
 
-    train_match_dagger(tiny(action_type=action_type), tmp_path)
+    train(tiny(action_type=action_type), tmp_path)
     export_run(tmp_path, tmp_path / "policy.onnx")
     controller = HeadController(tmp_path / "policy.onnx")
     assert controller.inputs == ("pose", "belief", "ball")
@@ -197,7 +201,7 @@ def test_head_controller_bounds_the_vectors_as_the_match_env_does(tmp_path):
     from activevision.export import export_run
     from activevision.runtime import HeadController
 
-    train_match_dagger(tiny(steps=2 * TICKS), tmp_path)
+    train(tiny(steps=2 * TICKS), tmp_path)
     controller = HeadController(export_run(tmp_path).model_path)
     frame = np.zeros((120, 160), np.uint8)
     controller.act(frame, 0.1, 0.3, pose=(1, 2, 0.5), belief=(50, 0.2, 0.1), ball=(2, -1, 30))
@@ -208,7 +212,7 @@ def test_head_controller_bounds_the_vectors_as_the_match_env_does(tmp_path):
 def test_a_student_refuses_what_it_was_not_trained_for(tmp_path, capsys):
     from activevision.cli import main
 
-    train_match_dagger(tiny(steps=2 * TICKS), tmp_path / "run")
+    train(tiny(steps=2 * TICKS), tmp_path / "run")
     run, out = str(tmp_path / "run"), str(tmp_path / "m")
     base = ["match", "--matches", "1", "--ticks", "3", "--out", out]
     for argv, needle in (

@@ -351,10 +351,19 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
     unknown key or a bad value."""
     paths = field_paths()
     nested = config_to_dict(config)
+    env_id = next(
+        (v for k, v in changes.items() if paths.get(k.strip()) == "env_id"), config.env_id
+    )
     for key, value in changes.items():
         path = paths.get(key.strip()) or _env_alias(key.strip())
         if path is None:
             raise ValueError(f"unknown TrainConfig key {key!r}")
+        if env_id == MATCH_ENV_ID and path.startswith("env.") and key.strip() != path:
+            # a short name means the episodic env's field, which a match run never reads
+            raise ValueError(
+                f"{key.strip()!r} sets {path}, the episodic env's field; this run trains on"
+                f" {MATCH_ENV_ID}: set match.{path.removeprefix('env.')} (full path) instead"
+            )
         *parents, leaf = path.split(".")
         target = nested
         for part in parents:
