@@ -141,3 +141,20 @@ def test_every_field_is_checked_on_read(change, needle):
 def test_not_an_object_is_refused(text, needle):
     with pytest.raises(ckpt.CheckpointError, match=needle):
         TrainerState.from_json(text)
+
+
+def test_the_same_weights_and_metadata_are_the_same_bytes(tmp_path):
+    import torch
+
+    # safetensors keeps metadata in a hash map whose order changes map to map: five saves
+    # of twelve keys come out in (almost surely) different orders unless the writer sorts
+    tensors = {"b.weight": torch.arange(6.0).reshape(2, 3), "a.bias": torch.ones(3)}
+    metadata = {f"key{i}": [i, "ü"] for i in range(12)}
+    files = []
+    for i in range(5):
+        ckpt.save_tensors(tmp_path / f"{i}.safetensors", tensors, dict(reversed(metadata.items())))
+        files.append((tmp_path / f"{i}.safetensors").read_bytes())
+    assert len(set(files)) == 1
+    loaded, read = ckpt.load_tensors(tmp_path / "0.safetensors")
+    assert read == metadata
+    assert all(torch.equal(loaded[k], tensors[k]) for k in tensors)

@@ -34,7 +34,8 @@ from typing import Any, cast
 import numpy as np
 import torch
 from safetensors import SafetensorError
-from safetensors.torch import load_file, safe_open, save_file
+from safetensors.torch import load_file, safe_open
+from safetensors.torch import save as serialise_tensors
 
 from activevision.io import fsync_path
 
@@ -162,7 +163,19 @@ def save_tensors(
     plain = {name: t.detach().cpu().contiguous() for name, t in tensors.items()}
     header = {k: json.dumps(v) for k, v in metadata.items()}
     header[_CHECKSUM_KEY] = _content_digest(plain, header)
-    save_file(plain, str(path), metadata=header)
+    Path(path).write_bytes(_sorted_header(serialise_tensors(plain, metadata=header)))
+
+
+def _sorted_header(data: bytes) -> bytes:
+    """safetensors writes its metadata in hash-map order, which changes from process to
+    process; the same metadata in sorted order makes the same weights the same bytes."""
+    size = int.from_bytes(data[:8], "little")
+    header = json.loads(data[8 : 8 + size])
+    header["__metadata__"] = dict(sorted(header["__metadata__"].items()))
+    text = json.dumps(header, separators=(",", ":"), ensure_ascii=False).encode()
+    if len(text) > size:  # not the library's compact JSON: keep its bytes
+        return data
+    return data[:8] + text.ljust(size) + data[8 + size :]
 
 
 def load_tensors(path: Path) -> tuple[dict[str, torch.Tensor], dict[str, Any]]:
