@@ -130,15 +130,61 @@ def goal_indices(sim: EpisodeBatch) -> np.ndarray:
 class ImitationRun(StudentRun):
     """What DAgger on the episodes (:class:`DaggerTrainer`) and on the match
     (:class:`~activevision.training.match_dagger.MatchDaggerTrainer`) share: the teacher's
-    decaying share, rounds of rollouts and updates, checkpoints. Subclasses set
-    ``network``, ``optimizer``, ``dataset`` and ``rng`` and implement :meth:`_rollout` and
-    :meth:`_update`."""
+    decaying share, the student and its dataset (:meth:`_start`), rounds of rollouts and
+    updates, checkpoints. Subclasses implement :meth:`_rollout` and :meth:`_update`."""
 
     network: StudentNetwork
     optimizer: torch.optim.Optimizer
     dataset: StateDataset
     rng: np.random.Generator
+    device: torch.device
+    continuous: bool
     _round_share: float = 1.0
+
+    def _start(
+        self,
+        run_dir: str | os.PathLike[str],
+        loggers: Sequence[Logger] | None,
+        resuming: bool,
+        *,
+        outputs: int,
+        vector_size: int,
+        image_shape: tuple[int, int],
+        n_goals: int = 0,
+        look_size: int = 0,
+        robots: int = 0,
+    ) -> None:
+        """Build the generator, the student (``outputs`` actions, or a continuous move),
+        its optimiser and the state dataset, all seeded from ``config.seed``, and open the
+        run directory. Subclasses set ``config`` and ``continuous`` first."""
+        config, dag = self.config, self.config.dagger
+        self.device = resolve_device(config.run.device)
+        trainer_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(2)
+        self.rng = np.random.default_rng(int(trainer_seed))
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(init_seed))
+            self.network = StudentNetwork(
+                2 if self.continuous else outputs,
+                vector_size,
+                image_shape,
+                dag.downsample,
+                n_goals=n_goals,
+                continuous=self.continuous,
+            )
+        self.network.to(self.device)
+        self.optimizer = torch.optim.Adam(
+            self.network.parameters(), lr=config.learner.learning_rate
+        )
+        self.dataset = StateDataset(
+            dag.dataset_size,
+            vector_size,
+            look_size=look_size,
+            robots=robots,
+            continuous=self.continuous,
+        )
+        configure_torch_cpu(config.run.num_threads)
+        self.step = 0
+        self._open_run(run_dir, loggers, resuming)
 
     @property
     def teacher_share(self) -> float:
@@ -223,42 +269,24 @@ class DaggerTrainer(ImitationRun):
         if config.algo != "dagger":
             raise ValueError(f"DaggerTrainer trains algo='dagger', got {config.algo!r}")
         self.config = config
-        self.device = resolve_device(config.run.device)
         cfg, dag = config.env, config.dagger
         self.sim = EpisodeBatch(cfg, dag.num_envs)
         self.n_actions = len(self.sim.actions)
         self.continuous = cfg.action_type == "continuous"
         self.keys = vector_keys(cfg)
         self.observations = ObservationBuilder(cfg, dag.num_envs, self.n_actions)
-        trainer_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(2)
-        self.rng = np.random.default_rng(int(trainer_seed))
-        vector_size = sum(vector_sizes(cfg, self.n_actions).values())
-        with torch.random.fork_rng(devices=[]):
-            torch.manual_seed(int(init_seed))
-            self.network = StudentNetwork(
-                2 if self.continuous else self.n_actions,
-                vector_size,
-                (cfg.camera.height, cfg.camera.width),
-                dag.downsample,
-                n_goals=len(self.sim.localisation.grid) if dag.goal_class_weight > 0 else 0,
-                continuous=self.continuous,
-            )
-        self.network.to(self.device)
-        self.optimizer = torch.optim.Adam(
-            self.network.parameters(), lr=config.learner.learning_rate
-        )
-        env = config.env
-        self.dataset = StateDataset(
-            dag.dataset_size,
-            vector_size,
-            look_size=len(LOOK_FIELDS) if env.appearance.enabled else 0,
-            robots=env.robots.max_count,
-            continuous=self.continuous,
-        )
         self.evidence = self._goal_evidence(dag.num_envs)
-        configure_torch_cpu(config.run.num_threads)
-        self.step = 0
-        self._open_run(run_dir, loggers, _resuming)
+        self._start(
+            run_dir,
+            loggers,
+            _resuming,
+            outputs=self.n_actions,
+            vector_size=sum(vector_sizes(cfg, self.n_actions).values()),
+            image_shape=(cfg.camera.height, cfg.camera.width),
+            n_goals=len(self.sim.localisation.grid) if dag.goal_class_weight > 0 else 0,
+            look_size=len(LOOK_FIELDS) if cfg.appearance.enabled else 0,
+            robots=cfg.robots.max_count,
+        )
 
     def _goal_evidence(self, n: int) -> GoalEvidence | None:
         if self.config.dagger.act_by != "goal":

@@ -48,8 +48,7 @@ from activevision.envs.match.observations import (
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.geometry.occlusion import robot_cylinders
 from activevision.training.config import MATCH_ENV_ID, TrainConfig
-from activevision.training.cpu import configure_torch_cpu, resolve_device
-from activevision.training.dagger import ImitationRun, StateDataset
+from activevision.training.dagger import ImitationRun
 from activevision.training.loggers import Logger
 
 
@@ -70,38 +69,21 @@ class MatchDaggerTrainer(ImitationRun):
                 f" {config.algo!r} on {config.env_id!r}"
             )
         self.config = config
-        self.device = resolve_device(config.run.device)
         match, dag = config.match, config.dagger
         self.continuous = match.action_type == "continuous"
         self.keys = vector_keys(match)
         self.n_actions = len(action_table(match.step_deg, "8way"))
         self.env = ActiveVisionMatchVectorEnv(dag.num_envs, match)
         self.teacher = EntropyTrackTeacher(match, dag.track_margin_deg)
-        trainer_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(2)
-        self.rng = np.random.default_rng(int(trainer_seed))
-        vector_size = sum(VECTOR_SIZES[k] for k in self.keys)
-        with torch.random.fork_rng(devices=[]):
-            torch.manual_seed(int(init_seed))
-            self.network = StudentNetwork(
-                2 if self.continuous else self.n_actions,
-                vector_size,
-                (match.camera.height, match.camera.width),
-                dag.downsample,
-                continuous=self.continuous,
-            )
-        self.network.to(self.device)
-        self.optimizer = torch.optim.Adam(
-            self.network.parameters(), lr=config.learner.learning_rate
-        )
-        self.dataset = StateDataset(
-            dag.dataset_size,
-            vector_size,
+        self._start(
+            run_dir,
+            loggers,
+            _resuming,
+            outputs=self.n_actions,
+            vector_size=sum(VECTOR_SIZES[k] for k in self.keys),
+            image_shape=(match.camera.height, match.camera.width),
             robots=match.robots.max_count,
-            continuous=self.continuous,
         )
-        configure_torch_cpu(config.run.num_threads)
-        self.step = 0
-        self._open_run(run_dir, loggers, _resuming)
 
     # ------------------------------------------------------------------ the loop
     def _rollout(self) -> None:
