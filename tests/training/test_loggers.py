@@ -199,10 +199,16 @@ def test_tensorboard_logger_keeps_the_tags_and_purges_on_resume(tmp_path):
     logger.flush()
     logger.close()
     found = scalars(tmp_path / "tb")
+    # an episodic run's validation rows carry no match columns: those tags are not written
+    match_tags = {"eval/position_rmse", "eval/ball_in_view"}
     expected = {*TENSORBOARD_TAGS.values(), *EPISODE_TAGS.values(), *VALIDATION_TAGS.values()}
-    assert set(found) == expected
+    assert set(found) == expected - match_tags
     assert set(EPISODE_TAGS.values()) == {"charts/episodic_return", "charts/episodic_length"}
-    assert set(VALIDATION_TAGS.values()) == {"eval/success_rate", "eval/mean_episodic_return"}
+    assert set(VALIDATION_TAGS.values()) == {
+        "eval/success_rate",
+        "eval/mean_episodic_return",
+        *match_tags,
+    }
     assert found["losses/td_loss"] == [(10, 0.5), (30, 0.5)]  # NaN is left out
     assert found["charts/SPS"] == [
         (s, float(EPOCH_FIELDS.index("steps_per_s"))) for s in (10, 20, 30)
@@ -226,3 +232,22 @@ def test_a_training_run_writes_todays_tensorboard_tags(tmp_path, fake_env_factor
     assert {"charts/episodic_return", "eval/success_rate", "charts/epsilon"} <= set(found)
     assert [step for step, _ in found["charts/epsilon"]] == [60, 120]
     assert [step for step, _ in found["eval/mean_episodic_return"]] == [40, 80, 120]
+
+
+def test_a_match_runs_validation_goes_to_its_own_columns_and_tags(tmp_path):
+    from activevision.training.validation import MATCH_EVALUATION_FIELDS
+
+    row = {"step": 12, "episodes": 3, "position_rmse": 0.08, "ball_in_view": 0.3}
+    row |= {"episode_reward": -5.0, "best": 1}
+    csv_logger = CsvLogger(tmp_path, MATCH_EVALUATION_FIELDS)
+    csv_logger.start(None)
+    csv_logger.record_validation(row, 12)
+    lines = (tmp_path / "evaluations.csv").read_text().splitlines()
+    assert lines == [",".join(MATCH_EVALUATION_FIELDS), "12,3,0.08,0.3,-5.0,1"]
+    logger = TensorBoardLogger(tmp_path / "tb")
+    logger.start(None)
+    logger.record_validation(row, 12)
+    logger.close()
+    found = scalars(tmp_path / "tb")
+    assert set(found) == {"eval/position_rmse", "eval/ball_in_view", "eval/mean_episodic_return"}
+    assert found["eval/position_rmse"] == [(12, pytest.approx(0.08))]

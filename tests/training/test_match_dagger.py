@@ -9,17 +9,21 @@ import math
 
 import numpy as np
 import pytest
+import torch
 
 from activevision.envs.match.config import DetectionConfig, MatchConfig
 from activevision.envs.match.heads import EntropyTrackTeacher
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+from activevision.envs.seeding import episode_seed
 from activevision.experiments.match import play_matches
 from activevision.experiments.match_methods import StrategyOptions
-from activevision.training import load_policy
+from activevision.training import load_policy, plot_run
+from activevision.training.checkpoint import load_tensors
 from activevision.training.config import TrainConfig, apply_overrides, load_config, save_config
-from activevision.training.match_dagger import MatchDaggerTrainer
+from activevision.training.match_dagger import MatchDaggerTrainer, play_student_matches
 from activevision.training.presets import preset
 from activevision.training.runs import reopen_run, train
+from activevision.training.validation import MATCH_EVALUATION_FIELDS
 
 TICKS = 12
 
@@ -86,7 +90,14 @@ def test_labels_are_entropy_tracks_moves_and_the_teacher_plays_its_matches(tmp_p
 
 
 def test_resume_ends_with_the_same_weights(tmp_path):
-    config = tiny(steps=6 * TICKS, **{"run.checkpoint_interval": 2 * TICKS})
+    config = tiny(
+        steps=6 * TICKS,
+        **{
+            "run.checkpoint_interval": 2 * TICKS,
+            "run.eval_interval": 2 * TICKS,
+            "run.eval_episodes": 2,
+        },
+    )
     train(config, tmp_path / "whole")
     trainer = MatchDaggerTrainer(config, tmp_path / "split")
     trainer.train(2 * TICKS)
@@ -102,6 +113,11 @@ def test_resume_ends_with_the_same_weights(tmp_path):
     whole = (tmp_path / "whole" / "episodes.csv").read_text().splitlines()
     split = (tmp_path / "split" / "episodes.csv").read_text().splitlines()
     assert [r.split(",")[:4] for r in whole] == [r.split(",")[:4] for r in split]
+    evaluations = [(tmp_path / d / "evaluations.csv").read_text() for d in ("whole", "split")]
+    assert evaluations[0] == evaluations[1] and len(evaluations[0].splitlines()) == 4
+    best = [load_tensors(tmp_path / d / "best_policy.safetensors") for d in ("whole", "split")]
+    assert best[0][1] == best[1][1]
+    assert all(torch.equal(best[0][0][k], best[1][0][k]) for k in best[0][0])
 
 
 def test_the_match_config_travels_through_config_json(tmp_path):
@@ -123,7 +139,6 @@ def test_the_match_config_travels_through_config_json(tmp_path):
     [
         ({"match.observation": "image"}, "what its teacher plans from"),
         ({"match.appearance.gain": [0.8, 1.2]}, "clean world"),
-        ({"run.eval_interval": 24}, "activevision match --run"),
         ({"env_id": "CartPole-v1"}, "CartPole-v1"),
     ],
 )
@@ -227,3 +242,48 @@ def test_a_student_refuses_what_it_was_not_trained_for(tmp_path, capsys):
         err = capsys.readouterr().err
         assert needle in err and "Traceback" not in err
     assert not (tmp_path / "m").exists()  # refused before any strategy played
+
+
+def test_validation_matches_log_rmse_and_ball_and_keep_the_best_weights(tmp_path):
+    config = tiny(**{"run.eval_interval": 2 * TICKS, "run.eval_episodes": 3})
+    train(config, tmp_path)
+    with (tmp_path / "evaluations.csv").open() as f:
+        reader = csv.DictReader(f)
+        rows = list(reader)
+    assert tuple(reader.fieldnames or ()) == MATCH_EVALUATION_FIELDS
+    assert [int(r["step"]) for r in rows] == [2 * TICKS, 4 * TICKS]
+    rewards = [float(r["episode_reward"]) for r in rows]
+    best = int(np.argmax(rewards))
+    assert [int(r["best"]) for r in rows] == ([1, 0] if best == 0 else [1, 1])
+    _, meta = load_tensors(tmp_path / "best_policy.safetensors")
+    assert meta["step"] == 2 * TICKS * (best + 1)
+    assert meta["validation_episode_reward"] == pytest.approx(rewards[best])
+    # the last validation played the final weights: the same matches, played by the
+    # `learned` strategy of `activevision match` (consecutive seeds from 17), agree
+    network = load_policy(tmp_path)
+    mine = play_student_matches(network, torch.device("cpu"), config.match, [17, 18, 19])
+    theirs = play_matches("learned", config.match, 3, 17, StrategyOptions(run=tmp_path))
+    np.testing.assert_allclose(
+        [m["position_rmse"] for m in mine], theirs.per_match["position_rmse"], rtol=1e-12
+    )
+    np.testing.assert_allclose(
+        [m["ball_in_view"] for m in mine], theirs.per_match["ball_in_view"], rtol=1e-12
+    )
+    # and the logged means are those of the validation seeds, not of these
+    seeds = [episode_seed(config.run.eval_seed, i) for i in range(3)]
+    validation = play_student_matches(network, torch.device("cpu"), config.match, seeds)
+    assert float(rows[-1]["position_rmse"]) == pytest.approx(
+        np.mean([m["position_rmse"] for m in validation])
+    )
+    assert float(rows[-1]["episode_reward"]) == pytest.approx(
+        np.mean([m["reward"] for m in validation])
+    )
+    # validating draws nothing from the run's generators: the same final weights as without
+    train(tiny(), tmp_path / "unvalidated")
+    unvalidated = load_policy(tmp_path / "unvalidated").state_dict()
+    assert all(torch.equal(t, unvalidated[k]) for k, t in network.state_dict().items())
+    # the training figure shows them where an episodic run shows its success rate
+    figure = plot_run(tmp_path)
+    names = {p.name for p in figure.parent.iterdir()}
+    assert {"validation_position_rmse.png", "validation_ball_in_view.png"} <= names
+    assert "success_rate.png" not in names

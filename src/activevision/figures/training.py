@@ -24,7 +24,7 @@ class Curve:
     """One training curve: which CSV column against which, and how to label it."""
 
     file: str  # PNG written for this curve alone
-    source: str  # "episodes" or "metrics"
+    source: str  # "episodes", "metrics" or "validation"
     x: str
     y: str
     title: str
@@ -45,6 +45,27 @@ CURVES = (
         "ball_loss_duration",
         "Ball-loss duration",
         "steps",
+    ),
+)
+
+#: a match run's curves: a match has no success, so its validation matches take those panels
+MATCH_CURVES = (
+    *CURVES[:2],
+    Curve(
+        "validation_position_rmse.png",
+        "validation",
+        "step",
+        "position_rmse",
+        "Validation matches: position RMSE",
+        "m",
+    ),
+    Curve(
+        "validation_ball_in_view.png",
+        "validation",
+        "step",
+        "ball_in_view",
+        "Validation matches: ball in view",
+        "share of ticks",
     ),
 )
 
@@ -83,7 +104,8 @@ def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> N
     measured in this task"), with the greedy ``validation`` over the success rate when
     given."""
     if not table:
-        ax.text(0.5, 0.5, "no data yet", ha="center", va="center", transform=ax.transAxes)
+        text = "no validation (run.eval_interval = 0)" if curve.source == "validation" else None
+        ax.text(0.5, 0.5, text or "no data yet", ha="center", va="center", transform=ax.transAxes)
     elif not np.isfinite(np.asarray(table[curve.y], dtype=float)).any():
         # e.g. a match run: a match has no success and no goal view
         ax.text(
@@ -112,28 +134,32 @@ def plot_training(
     title: str,
     validation: Columns | None = None,
     loss_title: str | None = None,
+    curves: Sequence[Curve] = CURVES,
 ) -> Path:
-    """Each of :data:`CURVES` as its own PNG in ``out_dir`` and all of them in
-    ``training.png`` (titled "Training: ``title``"); returns the latter. ``tables`` maps each
-    curve source ("episodes", "metrics") to its columns; ``loss_title`` renames the loss
-    curve (a DAgger run's is an imitation loss, not a TD loss)."""
+    """Each of ``curves`` (:data:`CURVES`, a match run's :data:`MATCH_CURVES`) as its own
+    PNG in ``out_dir`` and all of them in ``training.png`` (titled "Training: ``title``");
+    returns the latter. ``tables`` maps each curve source ("episodes", "metrics") to its
+    columns, ``validation`` is ``evaluations.csv``'s; ``loss_title`` renames the loss curve
+    (a DAgger run's is an imitation loss, not a TD loss)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     validation = validation or {}
+    tables = {**tables, "validation": validation}
     curves = tuple(
         dataclasses.replace(c, title=loss_title) if loss_title and c.y == "loss" else c
-        for c in CURVES
+        for c in curves
     )
     for curve in curves:
         fig = new_figure(figsize=(6, 4), layout="constrained")
         draw_curve(fig.subplots(), curve, tables[curve.source], validation)
         save_figure(fig, out_dir / curve.file, dpi=120)
 
-    fig = new_figure(figsize=(15, 8), layout="constrained")
-    axes = fig.subplots(2, 3)
+    fig = new_figure(figsize=(15, 8) if len(curves) > 4 else (10, 8), layout="constrained")
+    axes = fig.subplots(2, 3) if len(curves) > 4 else fig.subplots(2, 2)
     for ax, curve in zip(axes.flat, curves, strict=False):
         draw_curve(ax, curve, tables[curve.source], validation)
-    axes.flat[-1].set_axis_off()
+    for ax in axes.flat[len(curves) :]:
+        ax.set_axis_off()
     fig.suptitle(f"Training: {title}")
     combined = out_dir / "training.png"
     save_figure(fig, combined, dpi=110)

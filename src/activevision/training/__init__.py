@@ -3,15 +3,17 @@
 Modules: ``config`` (TrainConfig), ``trainer`` (the loop), ``build`` (what a config builds),
 ``state`` (checkpoint state and I/O over ``checkpoint``), ``policy_files`` (``load_policy``),
 ``loggers`` (CSV and TensorBoard), ``aux_targets`` (the auxiliary head's target),
-``dagger`` (imitation of the oracle, ``algo="dagger"``), ``runs`` (a run's trainer),
-``environment``, ``metrics``, ``validation``, ``plots``.
+``dagger`` (imitation of the oracle, ``algo="dagger"``), ``match_dagger`` (of the match
+planner), ``sb3_learners`` (SAC, TD3, PPO), ``runs`` (``train``, ``resume``: a run's
+trainer, whichever ``algo``), ``environment``, ``metrics``, ``validation``, ``plots``.
 
 Typical use::
 
-    from activevision.training import TrainConfig, Trainer, load_policy, plot_run
+    from activevision.training import TrainConfig, load_policy, plot_run, preset, resume, train
 
     config = TrainConfig().replace(**{"env.frame_stack": 1, "run.total_timesteps": 30_000})
-    Trainer(config, "runs/paper").train()      # or train(config, "runs/paper")
+    train(config, "runs/paper")                 # DDQN: or Trainer(config, "runs/paper").train()
+    train(preset("dagger_head"), "runs/head")   # any algo; resume("runs/head") continues it
     policy = load_policy("runs/paper")          # QNetwork, eval mode
     plot_run("runs/paper")                      # training.png and one PNG per curve
 """

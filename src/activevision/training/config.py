@@ -259,11 +259,6 @@ class TrainConfig:
                 "TrainConfig.dagger.act_by: a match student acts by its action head ('action');"
                 " its teacher names no goal view"
             )
-        if self.run.eval_interval:
-            raise ValueError(
-                "TrainConfig.run.eval_interval: a match student is not validated during"
-                " training; measure it with `activevision match --run` (set 0)"
-            )
 
     def _check_sb3(self) -> None:
         if self.env_id != "ActiveVision-v0":

@@ -22,14 +22,14 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from activevision.training.config import TrainConfig
+from activevision.training.config import MATCH_ENV_ID, TrainConfig
 from activevision.training.metrics import EPISODE_FIELDS, EPOCH_FIELDS, TENSORBOARD_TAGS, CsvLog
-from activevision.training.validation import EVALUATION_FIELDS
+from activevision.training.validation import EVALUATION_FIELDS, MATCH_EVALUATION_FIELDS
 
 Record = Mapping[str, float]
 
@@ -43,6 +43,8 @@ EPISODE_TAGS = {"reward": "charts/episodic_return", "length": "charts/episodic_l
 VALIDATION_TAGS = {
     "success_rate": "eval/success_rate",
     "episode_reward": "eval/mean_episodic_return",
+    "position_rmse": "eval/position_rmse",  # match runs
+    "ball_in_view": "eval/ball_in_view",  # match runs
 }
 
 
@@ -114,8 +116,13 @@ class CsvLogger:
     """``metrics.csv``, ``episodes.csv`` and ``evaluations.csv`` in ``run_dir``, a flushed
     row per record (:class:`~activevision.training.metrics.CsvLog`)."""
 
-    def __init__(self, run_dir: str | os.PathLike[str]) -> None:
+    def __init__(
+        self,
+        run_dir: str | os.PathLike[str],
+        evaluation_fields: Sequence[str] = EVALUATION_FIELDS,
+    ) -> None:
         self.run_dir = Path(run_dir)
+        self.evaluation_fields = tuple(evaluation_fields)
         self._logs: dict[str, CsvLog] | None = None
 
     def start(self, resume: LogPosition | None) -> None:
@@ -123,7 +130,7 @@ class CsvLogger:
         self._logs = {
             METRICS_CSV: CsvLog(self.run_dir / METRICS_CSV, EPOCH_FIELDS),
             EPISODES_CSV: CsvLog(self.run_dir / EPISODES_CSV, EPISODE_FIELDS),
-            EVALUATIONS_CSV: CsvLog(self.run_dir / EVALUATIONS_CSV, EVALUATION_FIELDS),
+            EVALUATIONS_CSV: CsvLog(self.run_dir / EVALUATIONS_CSV, self.evaluation_fields),
         }
         rows = (0, 0, 0) if resume is None else (resume.epochs, resume.episodes, resume.validations)
         for log, keep in zip(self._logs.values(), rows, strict=True):
@@ -177,7 +184,8 @@ class TensorBoardLogger:
 
     def record_validation(self, row: Record, step: int) -> None:
         for key, tag in VALIDATION_TAGS.items():
-            self._add(tag, row[key], step)
+            if key in row:  # an episodic run's columns, or a match run's
+                self._add(tag, row[key], step)
 
     def flush(self) -> None:
         if self._writer is not None:
@@ -198,7 +206,10 @@ class TensorBoardLogger:
 
 def default_loggers(config: TrainConfig, run_dir: str | os.PathLike[str]) -> list[Logger]:
     """The CSV logs, and TensorBoard's with ``config.run.tensorboard`` (SB3's ``configure``)."""
-    loggers: list[Logger] = [CsvLogger(run_dir)]
+    match = config.env_id == MATCH_ENV_ID
+    loggers: list[Logger] = [
+        CsvLogger(run_dir, MATCH_EVALUATION_FIELDS if match else EVALUATION_FIELDS)
+    ]
     if config.run.tensorboard:
         loggers.append(TensorBoardLogger(Path(run_dir) / TENSORBOARD_DIR))
     return loggers

@@ -21,8 +21,11 @@ teacher's discrete move; squared error on its continuous one).
 The run directory is a DAgger run's (``config.json``, ``metrics.csv`` with one row per
 round crossing an ``epoch_steps`` boundary and one ``episodes.csv`` row per match,
 ``policy.safetensors``, ``checkpoints/``; rounds start fresh matches, so a checkpoint holds
-everything and ``resume`` continues exactly). It is not validated during training: play it
-on held-out seeds with ``activevision match --run RUN --methods learned``.
+everything and ``resume`` continues exactly). With ``run.eval_interval`` the student plays
+``run.eval_episodes`` greedy validation matches (:meth:`MatchDaggerTrainer.validate`; their
+position RMSE, ball in view and mean reward go to ``evaluations.csv``) and the weights of the
+best mean match reward to ``best_policy.safetensors``. Measure it on held-out seeds with
+``activevision match --run RUN --methods learned``.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from torch.nn import functional as F
 
 from activevision.agents.student import StudentNetwork
 from activevision.envs.actions import action_table
+from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import EntropyTrackTeacher
 from activevision.envs.match.observations import (
     IMAGE_KEY,
@@ -50,6 +54,7 @@ from activevision.geometry.occlusion import robot_cylinders
 from activevision.training.config import MATCH_ENV_ID, TrainConfig
 from activevision.training.dagger import ImitationRun
 from activevision.training.loggers import Logger
+from activevision.training.validation import MATCH_EVALUATION_FIELDS
 
 
 class MatchDaggerTrainer(ImitationRun):
@@ -143,6 +148,18 @@ class MatchDaggerTrainer(ImitationRun):
         self.optimizer.step()
         return float(loss.item())
 
+    def validate(self) -> dict[str, float]:
+        """The student's greedy matches on the validation seeds (``run.eval_episodes``
+        matches seeded ``episode_seed(run.eval_seed, i)``, never the consecutive seeds that
+        ``activevision match --seed S`` plays); keeps the weights of the best mean reward."""
+
+        def play(network: StudentNetwork, seeds: Sequence[int]) -> list[dict[str, float]]:
+            return play_student_matches(network, self.device, self.config.match, seeds)
+
+        return self.validate_network(
+            self.network, play, self.metadata(), MATCH_EVALUATION_FIELDS, "episode_reward"
+        )
+
     # ------------------------------------------------------------------ files
     def metadata(self) -> dict[str, Any]:
         """The policy files' metadata: the network's shape, the step and the observation."""
@@ -162,6 +179,34 @@ class MatchDaggerTrainer(ImitationRun):
         super().close()
 
 
+def play_student_matches(
+    network: StudentNetwork, device: torch.device, match: MatchConfig, seeds: Sequence[int]
+) -> list[dict[str, float]]:
+    """One greedy match of ``network`` from each seed (sub-environment ``i`` reset with
+    ``seeds[i]``), played in lock-step: each match's total reward, position RMSE (m) and
+    share of ticks with the ball in view."""
+    env = ActiveVisionMatchVectorEnv(len(seeds), match)
+    keys = vector_keys(match)
+    obs, info = env.reset(seed=[int(s) for s in seeds])
+    reward = np.zeros(len(seeds))
+    squared_error = np.zeros(len(seeds))
+    ball = np.zeros(len(seeds))
+    for _ in range(match.ticks):
+        assert isinstance(obs, dict)
+        vector = knowledge_vectors(info, keys, match.tick_seconds)
+        actions = student_match_actions(network, device, obs[IMAGE_KEY], vector)
+        obs, r, _, _, info = env.step(actions)
+        reward += r
+        squared_error += info["position_error"] ** 2
+        ball += info["ball_in_view"]
+    env.close()
+    rmse = np.sqrt(squared_error / match.ticks)
+    return [
+        {"reward": reward[i], "position_rmse": rmse[i], "ball_in_view": ball[i] / match.ticks}
+        for i in range(len(seeds))
+    ]
+
+
 def student_match_actions(
     network: StudentNetwork, device: torch.device, image: np.ndarray, vector: np.ndarray
 ) -> np.ndarray:
@@ -173,4 +218,4 @@ def student_match_actions(
     return np.asarray(output.argmax(dim=1).cpu().numpy(), dtype=np.int64)
 
 
-__all__ = ["MatchDaggerTrainer", "student_match_actions"]
+__all__ = ["MatchDaggerTrainer", "play_student_matches", "student_match_actions"]

@@ -23,7 +23,7 @@ def plot_run(
 ) -> Path:
     """Draw each curve as its own PNG and all of them in ``training.png`` (in
     ``run_dir/plots`` unless ``out_dir``); returns the latter."""
-    from activevision.figures.training import plot_training
+    from activevision.figures.training import CURVES, MATCH_CURVES, plot_training
 
     run_dir = Path(run_dir)
     tables = {
@@ -40,6 +40,12 @@ def plot_run(
             loss_title = "imitation loss (squared error)"
         elif config.env_id != MATCH_ENV_ID and config.env.action_type == "continuous":
             loss_title = "imitation loss (squared error + goal cross-entropy)"
+    match = config is not None and config.env_id == MATCH_ENV_ID
     return plot_training(
-        tables, out, title=run_dir.name, validation=validation, loss_title=loss_title
+        tables,
+        out,
+        title=run_dir.name,
+        validation=validation,
+        loss_title=loss_title,
+        curves=MATCH_CURVES if match else CURVES,
     )

@@ -4,7 +4,8 @@ A run directory holds
 
 * ``policy.safetensors`` — the newest online weights, rewritten with every checkpoint;
 * ``best_policy.safetensors`` — with ``eval_interval``: the weights with the best greedy
-  validation score so far (metadata ``step`` and ``validation_success_rate``).
+  validation score so far (metadata ``step`` and ``validation_success_rate``, a match
+  run's ``validation_episode_reward``).
 
 Both are written atomically with :func:`activevision.training.checkpoint.save_tensors`
 (checksummed) and carry the network's shape in their metadata, so :func:`load_policy` builds
@@ -61,12 +62,13 @@ def write_best_policy(
     weights: Mapping[str, torch.Tensor],
     metadata: Mapping[str, Any],
     step: int,
-    success_rate: float,
+    score: float,
+    score_name: str = "success_rate",
 ) -> Path:
     """Write (atomically) ``best_policy.safetensors``: weights of ``step`` that scored the
-    best validation ``success_rate``."""
+    best validation ``score`` (metadata ``validation_<score_name>``)."""
     path = run_dir / BEST_POLICY_FILE
-    full = {**metadata, "step": step, "validation_success_rate": success_rate}
+    full = {**metadata, "step": step, f"validation_{score_name}": score}
     with atomic_path(path) as tmp:
         ckpt.save_tensors(tmp, weights, full)
     return path
@@ -76,7 +78,9 @@ def write_best_policy(
 class BestWeights:
     """The weights with the best greedy validation score so far (SB3 ``EvalCallback``)."""
 
-    score: float = -math.inf  #: validation success rate (-inf: no validation yet)
+    score: float = (
+        -math.inf
+    )  #: validation score: success rate, a match run's mean reward (-inf: none yet)
     step: int = 0  #: the step the weights are of
     weights: dict[str, torch.Tensor] | None = None  #: a copy of the network's state dict
 
@@ -89,11 +93,13 @@ class BestWeights:
         self.weights = {k: v.detach().clone() for k, v in weights.items()}
         self.step, self.score = step, score
 
-    def write(self, run_dir: Path, metadata: Mapping[str, Any]) -> Path:
+    def write(
+        self, run_dir: Path, metadata: Mapping[str, Any], score_name: str = "success_rate"
+    ) -> Path:
         """Write ``best_policy.safetensors`` (``metadata``: :func:`network_metadata`)."""
         if self.weights is None:
             raise ValueError("no best weights to write: nothing was validated yet")
-        return write_best_policy(run_dir, self.weights, metadata, self.step, self.score)
+        return write_best_policy(run_dir, self.weights, metadata, self.step, self.score, score_name)
 
 
 def load_policy(

@@ -96,7 +96,8 @@ def match_dagger(total_timesteps: int, action_type: ActionType = "discrete") -> 
     the weaker-detector world of the README's match table (0.6 near, 0.15 at range, 20%
     false detections per tick: where the strategies differ in localisation): 16 matches a
     round, 150 updates of 256 re-rendered states after each, the paper's 3-degree head
-    (``action_type="continuous"``: any move of up to 3 degrees per axis)."""
+    (``action_type="continuous"``: any move of up to 3 degrees per axis); validated four
+    times on 64 matches."""
     match = MatchConfig(
         observation="image+head+belief",
         action_type=action_type,
@@ -119,7 +120,8 @@ def match_dagger(total_timesteps: int, action_type: ActionType = "discrete") -> 
             total_timesteps=total_timesteps,
             epoch_steps=9600,
             checkpoint_interval=0,
-            eval_interval=0,
+            eval_interval=total_timesteps // 4,
+            eval_episodes=64,
         ),
     )
 

@@ -23,7 +23,7 @@ from activevision.training.config import TrainConfig, load_config, save_config
 from activevision.training.loggers import Logger, LoggerGroup, LogPosition, default_loggers
 from activevision.training.metrics import EpochAccumulator, episode_record
 from activevision.training.policy_files import BestWeights, write_policy
-from activevision.training.validation import summarise_validation
+from activevision.training.validation import EVALUATION_FIELDS, summarise_validation
 
 #: ``(network, seeds) -> episodes.csv-style records``: one greedy episode per seed
 PlayGreedy = Callable[[StudentNetwork, Sequence[int]], list[dict[str, float]]]
@@ -75,18 +75,25 @@ class StudentRun:
         return row
 
     def validate_network(
-        self, network: StudentNetwork, play: PlayGreedy, metadata: dict[str, Any]
+        self,
+        network: StudentNetwork,
+        play: PlayGreedy,
+        metadata: dict[str, Any],
+        fields: Sequence[str] = EVALUATION_FIELDS,
+        score: str = "success_rate",
     ) -> dict[str, float]:
         """Greedy episodes of ``network`` on the validation seeds (the episodes of
-        ``activevision evaluate --seed eval_seed``); keeps the best weights."""
+        ``activevision evaluate --seed eval_seed``), logged as ``fields``; keeps the weights
+        with the best ``score``."""
         run = self.config.run
         seeds = [episode_seed(run.eval_seed, i) for i in range(run.eval_episodes)]
-        row = summarise_validation(self.step, play(network, seeds), self.best.score)
+        records = play(network, seeds)
+        row = summarise_validation(self.step, records, self.best.score, fields, score)
         self.logger.record_validation(row, self.step)
         self._validations_logged += 1
         if row["best"]:
-            self.best.keep(network, self.step, row["success_rate"])
-            self.best.write(self.run_dir, metadata)
+            self.best.keep(network, self.step, row[score])
+            self.best.write(self.run_dir, metadata, score)
         return row
 
     # ------------------------------------------------------------------ checkpoints

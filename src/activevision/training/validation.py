@@ -22,6 +22,15 @@ from activevision.training.metrics import episode_record, nan_mean
 
 #: columns of ``evaluations.csv``
 EVALUATION_FIELDS = ("step", "episodes", "success_rate", "success", "episode_reward", "best")
+#: columns of a match run's ``evaluations.csv`` (a match has no success; best by reward)
+MATCH_EVALUATION_FIELDS = (
+    "step",
+    "episodes",
+    "position_rmse",
+    "ball_in_view",
+    "episode_reward",
+    "best",
+)
 
 
 def greedy_episodes(
@@ -51,15 +60,19 @@ def greedy_episodes(
 
 
 def summarise_validation(
-    step: int, records: Sequence[Mapping[str, float]], best_before: float
+    step: int,
+    records: Sequence[Mapping[str, float]],
+    best_before: float,
+    fields: Sequence[str] = EVALUATION_FIELDS,
+    score: str = "success_rate",
 ) -> dict[str, float]:
-    """The ``evaluations.csv`` row of one validation; ``best`` is 1 if it beat ``best_before``."""
-    success_rate = nan_mean([r["success_rate"] for r in records])
-    return {
-        "step": step,
-        "episodes": len(records),
-        "success_rate": success_rate,
-        "success": nan_mean([r["success"] for r in records]),
-        "episode_reward": nan_mean([r["reward"] for r in records]),
-        "best": int(success_rate > best_before),
-    }
+    """The ``evaluations.csv`` row (``fields``) of one validation: the records' mean of each
+    field (``episode_reward``: of their ``reward``); ``best`` is 1 if its ``score`` beat
+    ``best_before``."""
+    row: dict[str, float] = {"step": step, "episodes": len(records)}
+    for name in fields:
+        if name not in ("step", "episodes", "best"):
+            key = "reward" if name == "episode_reward" else name
+            row[name] = nan_mean([r[key] for r in records])
+    row["best"] = int(row[score] > best_before)
+    return row
