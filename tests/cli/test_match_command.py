@@ -138,6 +138,7 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
         (["match", "--track-margin", "30"], "--track-margin"),
         (["match", "--methods", "random", "--track-margin", "5"], "--track-margin"),
         (["match", "--methods", "random", "--model", "README.md"], "--model"),
+        (["match", "--methods", "random", "--weights", "best"], "--weights"),
     ],
 )
 def test_bad_input_is_one_clear_line(tmp_path, argv, needle, one_clear_line):

@@ -278,6 +278,14 @@ def test_validation_matches_log_rmse_and_ball_and_keep_the_best_weights(tmp_path
     assert float(rows[-1]["episode_reward"]) == pytest.approx(
         np.mean([m["reward"] for m in validation])
     )
+    # `activevision match --weights best` plays the kept weights
+    best_network = load_policy(tmp_path, weights="best")
+    mine = play_student_matches(best_network, torch.device("cpu"), config.match, [17, 18])
+    options = StrategyOptions(run=tmp_path, weights="best")
+    theirs = play_matches("learned", config.match, 2, 17, options)
+    np.testing.assert_allclose(
+        [m["position_rmse"] for m in mine], theirs.per_match["position_rmse"], rtol=1e-12
+    )
     # validating draws nothing from the run's generators: the same final weights as without
     train(tiny(), tmp_path / "unvalidated")
     unvalidated = load_policy(tmp_path / "unvalidated").state_dict()

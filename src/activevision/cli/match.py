@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 from activevision.cli.args import (
     add_overwrite,
+    add_weights,
     choice_list,
     float_in,
     int_in,
@@ -90,7 +91,9 @@ def _strategies(
         raise ValueError("--model is played by onnx_policy: add it to --methods")
     if args.run is not None and "learned" not in methods:
         raise ValueError("--run is played by learned: add it to --methods")
-    entries = expand_methods(methods, models, margins, args.run)
+    if args.weights != "final" and args.run is None:
+        raise ValueError("--weights picks the weights of --run's learned policy: give --run")
+    entries = expand_methods(methods, models, margins, args.run, args.weights)
     for _, method, options in entries:  # loads each run and model once: errors come first
         make_match_policy(method, config, options).reset(1, np.random.default_rng(0))
     return entries
@@ -271,6 +274,7 @@ def add_parsers(sub: Any) -> None:
         " with several, onnx_policy plays each, named onnx_policy[RUN] after its run folder",
     )
     p.add_argument("--run", type=Path, help="a training run for the learned strategy")
+    add_weights(p)
     p.add_argument(
         "--track-margin",
         type=float_in(0, 22, "degrees"),

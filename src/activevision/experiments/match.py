@@ -155,10 +155,12 @@ def expand_methods(
     models: Sequence[Path] = (),
     margins: Sequence[float] = (),
     run: Path | None = None,
+    weights: str = "final",
 ) -> list[tuple[str, str, StrategyOptions]]:
     """``(label, method, options)`` for every result to play: ``onnx_policy`` once per
     model (:func:`model_labels`; the shipped policy when there is none), ``entropy_track``
-    once per margin (``entropy_track[10deg]`` where there are several), the others once."""
+    once per margin (``entropy_track[10deg]`` where there are several), the others once
+    (``learned``: ``run``'s ``weights``)."""
     entries: list[tuple[str, str, StrategyOptions]] = []
     for name in methods:
         if name == "onnx_policy" and models:
@@ -169,7 +171,7 @@ def expand_methods(
                 label = name if len(margins) == 1 else f"{name}[{margin:g}deg]"
                 entries.append((label, name, StrategyOptions(track_margin_deg=margin)))
         else:
-            entries.append((name, name, StrategyOptions(run=run)))
+            entries.append((name, name, StrategyOptions(run=run, weights=weights)))
     return entries
 
 

@@ -361,7 +361,7 @@ class LearnedMatchPolicy:
 
     name = "learned"
 
-    def __init__(self, config: MatchConfig, run: Path) -> None:
+    def __init__(self, config: MatchConfig, run: Path, weights: str = "final") -> None:
         import torch
 
         from activevision.agents.student import StudentNetwork
@@ -398,7 +398,7 @@ class LearnedMatchPolicy:
         self.torch = torch
         self.config = config
         self.keys = vector_keys(run_config.match) if self.student else ()
-        self.net = load_policy(run).eval()
+        self.net = load_policy(run, weights=weights).eval()
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         pass
@@ -437,6 +437,7 @@ class StrategyOptions:
 
     model: Path | None = None  #: onnx_policy: an exported policy (None: the shipped one)
     run: Path | None = None  #: learned: a training run
+    weights: str = "final"  #: learned: the run's final weights, or "best" validated ones
     #: entropy_track: how far inside the image the ball stays (degrees)
     track_margin_deg: float = DEFAULT_TRACK_MARGIN_DEG
 
@@ -484,7 +485,7 @@ MATCH_METHODS: dict[str, MatchMethod] = {
         ),
         MatchMethod(
             "learned",
-            lambda c, o: LearnedMatchPolicy(c, o.run),  # type: ignore[arg-type]
+            lambda c, o: LearnedMatchPolicy(c, o.run, o.weights),  # type: ignore[arg-type]
             "a training run's policy (--run): --preset match_dagger or match_ddqn",
             True,
             needs_run=True,
