@@ -50,7 +50,8 @@ CURVES = (
 
 #: a match run's curves: a match has no success, so its validation matches take those panels
 MATCH_CURVES = (
-    *CURVES[:2],
+    dataclasses.replace(CURVES[0], title="Total reward per match"),
+    CURVES[1],
     Curve(
         "validation_position_rmse.png",
         "validation",
