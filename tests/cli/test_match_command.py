@@ -155,9 +155,14 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
     """--preset match_ddqn trains the package's DDQN on ActiveVisionMatch-v0; the run plays
     as ``learned`` (PyTorch, batched) and, exported, as ``onnx_policy`` (HeadController)."""
     run = tmp_path / "match_run"
-    argv = [*tiny_train, "--out", str(run)]
+    argv = [*tiny_train, "--out", str(run), "--set", "eval_interval=30", "--set", "eval_episodes=2"]
     argv[argv.index("quickstart_ddqn")] = "match_ddqn"
     assert main(argv) == 0
+    # validated as DDQN runs are (its episodes, success rate), not as a match student
+    with (run / "evaluations.csv").open() as f:
+        reader = csv.DictReader(f)
+        assert len(list(reader)) == 2 and "success_rate" in (reader.fieldnames or ())
+    assert (run / "plots" / "success_rate.png").exists()
     out = tmp_path / "m"
     assert main([*TINY, "--out", str(out), "--run", str(run), "--methods", "learned"]) == 0
     assert main(["export", str(run), "-o", str(tmp_path / "policy.onnx")]) == 0

@@ -128,6 +128,8 @@ def test_the_match_config_travels_through_config_json(tmp_path):
     # a short name means the episodic env's field, which a match run never reads: refused
     with pytest.raises(ValueError, match=r"'step_deg' sets env.step_deg.*set match.step_deg"):
         apply_overrides(config, ["step_deg=4"])
+    with pytest.raises(ValueError, match=r"'frame_stack' sets env.frame_stack.*no such setting"):
+        apply_overrides(config, ["frame_stack=1"])
     assert apply_overrides(config, ["match.step_deg=4"]).match.step_deg == 4
     # the same short name on the episodic env (named in the same --set) is the env's field
     episodic = apply_overrides(config, ["env_id=ActiveVision-v0", "algo=ddqn", "step_deg=4"])

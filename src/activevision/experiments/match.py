@@ -1,14 +1,9 @@
 """Play head-control strategies through whole matches on the same seeds and measure what a
 RoboCup team cares about (``activevision match``).
 
-Per match (then mean and 95% interval over matches):
-
-* ``position_rmse`` (m) and ``heading_rmse`` (deg): root mean square of the belief's error
-  over every tick;
-* ``lost_share``: the share of ticks with the position error above ``LOST_M`` (0.5 m);
-* ``ball_in_view``: the share of ticks with the ball in the image;
-* ``entropy``: the belief's mean entropy (nats);
-* ``head_travel``: how far the head moved, degrees per second.
+Per match (:mod:`activevision.envs.match.scores`), then mean and 95% interval over
+matches: position and heading RMSE, the share of ticks lost (error above 0.5 m) and with the
+ball in view, the mean entropy and the head's travel.
 
 Match ``i`` of every method is reset with seed ``seed + i``: the same start, ball and walk
 draws. Strategies only change where the head looks, and so what is detected. So two methods
@@ -28,11 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.scores import MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.experiments.evaluate import Interval, mean_interval
 from activevision.experiments.match_methods import StrategyOptions, make_match_policy
 
-LOST_M = 0.5  #: position error (m) beyond which a robot counts as lost
 #: per-match metrics, in table order: name -> (column header, format)
 MATCH_METRICS = {
     "position_rmse": ("pos RMSE m", "{:.3f}"),
@@ -106,33 +101,17 @@ def play_matches(
     env = ActiveVisionMatchVectorEnv(matches, config)
     obs, info = env.reset(seed=seed)
     policy.reset(matches, np.random.default_rng(seed))
-    ticks = config.ticks
-    position = np.zeros((ticks, matches))
-    heading = np.zeros((ticks, matches))
-    ball = np.zeros((ticks, matches), dtype=bool)
-    entropy = np.zeros((ticks, matches))
-    travel = np.zeros((ticks, matches))
+    scores = MatchScores(config.ticks, matches, config.tick_seconds)
     clip = MatchClip()
     clip.add(info, clip_match)
-    for t in range(ticks):
-        obs, _, _, _, info = env.step(policy.act(obs, info))
-        position[t] = info["position_error"]
-        heading[t] = info["heading_error"]
-        ball[t] = info["ball_in_view"]
-        entropy[t] = info["entropy"]
-        travel[t] = np.degrees(np.hypot(*info["head_move"].T))
+    for _ in range(config.ticks):
+        obs, reward, _, _, info = env.step(policy.act(obs, info))
+        scores.add(info, reward)
         clip.add(info, clip_match)
     env.close()
-    per_match = {
-        "position_rmse": np.sqrt(np.mean(position**2, axis=0)),
-        "heading_rmse": np.degrees(np.sqrt(np.mean(heading**2, axis=0))),
-        "lost_share": np.mean(position > LOST_M, axis=0),
-        "ball_in_view": np.mean(ball, axis=0),
-        "entropy": np.mean(entropy, axis=0),
-        "head_travel": travel.sum(axis=0) / (ticks * config.tick_seconds),
-    }
     name = label or method
-    return MethodResult(name, per_match, position, clip, time.perf_counter() - start)
+    seconds = time.perf_counter() - start
+    return MethodResult(name, scores.per_match(), scores.position, clip, seconds)
 
 
 def model_labels(models: Sequence[Path]) -> list[str]:

@@ -373,7 +373,7 @@ class LearnedMatchPolicy:
         self.student_class = StudentNetwork
 
         run_config = load_config(run / "config.json")
-        self.student = run_config.algo == "dagger" and run_config.env_id == MATCH_ENV_ID
+        self.student = run_config.match_student
         if not self.student and run_config.algo != "ddqn":
             raise ValueError(
                 f"{run}: the match plays image Q-networks (algo ddqn) and match students"

@@ -105,9 +105,9 @@ def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> N
     measured in this task"), with the greedy ``validation`` over the success rate when
     given."""
     if not table:
-        text = "no validation (run.eval_interval = 0)" if curve.source == "validation" else None
+        text = "no validation yet" if curve.source == "validation" else None
         ax.text(0.5, 0.5, text or "no data yet", ha="center", va="center", transform=ax.transAxes)
-    elif not np.isfinite(np.asarray(table[curve.y], dtype=float)).any():
+    elif curve.y not in table or not np.isfinite(np.asarray(table[curve.y], dtype=float)).any():
         # e.g. a match run: a match has no success and no goal view
         ax.text(
             0.5, 0.5, "not measured in this task", ha="center", va="center", transform=ax.transAxes

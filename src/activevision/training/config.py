@@ -217,6 +217,11 @@ class TrainConfig:
     dagger: DaggerConfig = field(default_factory=DaggerConfig)
     sb3: Sb3Config = field(default_factory=Sb3Config)
 
+    @property
+    def match_student(self) -> bool:
+        """DAgger on the match env: a student of the match planner."""
+        return self.algo == "dagger" and self.env_id == MATCH_ENV_ID
+
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
         if not self.env_id:
@@ -226,7 +231,7 @@ class TrainConfig:
                 f"TrainConfig.algo: 'dagger' trains on ActiveVision-v0 (the oracle teaches) or"
                 f" {MATCH_ENV_ID} (the entropy_track planner teaches), not {self.env_id!r}"
             )
-        if self.algo == "dagger" and self.env_id == MATCH_ENV_ID:
+        if self.match_student:
             self._check_match_dagger()
         if self.algo == "dagger" and self.env.frame_stack != 1:
             raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")
@@ -355,9 +360,13 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
             raise ValueError(f"unknown TrainConfig key {key!r}")
         if env_id == MATCH_ENV_ID and path.startswith("env.") and key.strip() != path:
             # a short name means the episodic env's field, which a match run never reads
+            twin = "match." + path.removeprefix("env.")
+            instead = (
+                f"set {twin} (full path)" if twin in paths else "the match has no such setting"
+            )
             raise ValueError(
                 f"{key.strip()!r} sets {path}, the episodic env's field; this run trains on"
-                f" {MATCH_ENV_ID}: set match.{path.removeprefix('env.')} (full path) instead"
+                f" {MATCH_ENV_ID}: {instead}"
             )
         *parents, leaf = path.split(".")
         target = nested

@@ -27,9 +27,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from activevision.training.config import MATCH_ENV_ID, TrainConfig
+from activevision.training.config import TrainConfig
 from activevision.training.metrics import EPISODE_FIELDS, EPOCH_FIELDS, TENSORBOARD_TAGS, CsvLog
-from activevision.training.validation import EVALUATION_FIELDS, MATCH_EVALUATION_FIELDS
+from activevision.training.validation import EVALUATION_FIELDS, evaluation_fields
 
 Record = Mapping[str, float]
 
@@ -114,7 +114,9 @@ class LoggerGroup:
 
 class CsvLogger:
     """``metrics.csv``, ``episodes.csv`` and ``evaluations.csv`` in ``run_dir``, a flushed
-    row per record (:class:`~activevision.training.metrics.CsvLog`)."""
+    row per record (:class:`~activevision.training.metrics.CsvLog`). ``evaluation_fields``:
+    the validation columns, a match student's ``MATCH_EVALUATION_FIELDS``
+    (``validation.evaluation_fields(config)`` gives a run's)."""
 
     def __init__(
         self,
@@ -206,10 +208,7 @@ class TensorBoardLogger:
 
 def default_loggers(config: TrainConfig, run_dir: str | os.PathLike[str]) -> list[Logger]:
     """The CSV logs, and TensorBoard's with ``config.run.tensorboard`` (SB3's ``configure``)."""
-    match = config.env_id == MATCH_ENV_ID
-    loggers: list[Logger] = [
-        CsvLogger(run_dir, MATCH_EVALUATION_FIELDS if match else EVALUATION_FIELDS)
-    ]
+    loggers: list[Logger] = [CsvLogger(run_dir, evaluation_fields(config))]
     if config.run.tensorboard:
         loggers.append(TensorBoardLogger(Path(run_dir) / TENSORBOARD_DIR))
     return loggers

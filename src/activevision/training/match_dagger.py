@@ -49,6 +49,7 @@ from activevision.envs.match.observations import (
     knowledge_vectors,
     vector_keys,
 )
+from activevision.envs.match.scores import MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.geometry.occlusion import robot_cylinders
 from activevision.training.config import MATCH_ENV_ID, TrainConfig
@@ -183,26 +184,22 @@ def play_student_matches(
     network: StudentNetwork, device: torch.device, match: MatchConfig, seeds: Sequence[int]
 ) -> list[dict[str, float]]:
     """One greedy match of ``network`` from each seed (sub-environment ``i`` reset with
-    ``seeds[i]``), played in lock-step: each match's total reward, position RMSE (m) and
-    share of ticks with the ball in view."""
+    ``seeds[i]``), played in lock-step: each match's total reward and the metrics of
+    :mod:`activevision.envs.match.scores`."""
     env = ActiveVisionMatchVectorEnv(len(seeds), match)
     keys = vector_keys(match)
     obs, info = env.reset(seed=[int(s) for s in seeds])
-    reward = np.zeros(len(seeds))
-    squared_error = np.zeros(len(seeds))
-    ball = np.zeros(len(seeds))
+    scores = MatchScores(match.ticks, len(seeds), match.tick_seconds)
     for _ in range(match.ticks):
         assert isinstance(obs, dict)
         vector = knowledge_vectors(info, keys, match.tick_seconds)
         actions = student_match_actions(network, device, obs[IMAGE_KEY], vector)
-        obs, r, _, _, info = env.step(actions)
-        reward += r
-        squared_error += info["position_error"] ** 2
-        ball += info["ball_in_view"]
+        obs, reward, _, _, info = env.step(actions)
+        scores.add(info, reward)
     env.close()
-    rmse = np.sqrt(squared_error / match.ticks)
+    per_match = scores.per_match()
     return [
-        {"reward": reward[i], "position_rmse": rmse[i], "ball_in_view": ball[i] / match.ticks}
+        {"reward": scores.reward[i], **{k: v[i] for k, v in per_match.items()}}
         for i in range(len(seeds))
     ]
 

@@ -40,7 +40,7 @@ def plot_run(
             loss_title = "imitation loss (squared error)"
         elif config.env_id != MATCH_ENV_ID and config.env.action_type == "continuous":
             loss_title = "imitation loss (squared error + goal cross-entropy)"
-    match = config is not None and config.env_id == MATCH_ENV_ID
+    match = config is not None and config.match_student
     return plot_training(
         tables,
         out,

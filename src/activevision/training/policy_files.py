@@ -78,9 +78,8 @@ def write_best_policy(
 class BestWeights:
     """The weights with the best greedy validation score so far (SB3 ``EvalCallback``)."""
 
-    score: float = (
-        -math.inf
-    )  #: validation score: success rate, a match run's mean reward (-inf: none yet)
+    #: the validation score: success rate; a match run's mean reward (-inf: none yet)
+    score: float = -math.inf
     step: int = 0  #: the step the weights are of
     weights: dict[str, torch.Tensor] | None = None  #: a copy of the network's state dict
 
@@ -145,7 +144,8 @@ def _weights_file(path: Path, weights: str) -> Path:
         path = path / BEST_POLICY_FILE
         if not path.exists():
             raise ckpt.CheckpointError(
-                f"no {path.name} in {path.parent}: train with eval_interval > 0 to keep one"
+                f"no {path.name} in {path.parent}: no validation has run (a run keeps one from"
+                " its first validation, every eval_interval steps when that is > 0)"
             )
     elif path.is_dir():
         path = path / POLICY_FILE if (path / POLICY_FILE).exists() else path / "model.safetensors"

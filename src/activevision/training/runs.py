@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from activevision.training.aux_targets import AuxTarget
-from activevision.training.config import MATCH_ENV_ID, TrainConfig, load_config
+from activevision.training.config import TrainConfig, load_config
 from activevision.training.dagger import DaggerTrainer
 from activevision.training.environment import EnvFactory
 from activevision.training.loggers import Logger
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
 
 
 def _trainer_class(config: TrainConfig) -> type[DaggerTrainer | MatchDaggerTrainer | Sb3Trainer]:
-    if config.algo == "dagger" and config.env_id == MATCH_ENV_ID:
+    if config.match_student:
         return MatchDaggerTrainer
     if config.algo == "dagger":
         return DaggerTrainer

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from activevision.training.config import TrainConfig
 from activevision.training.metrics import episode_record, nan_mean
 
 #: columns of ``evaluations.csv``
@@ -31,6 +32,12 @@ MATCH_EVALUATION_FIELDS = (
     "episode_reward",
     "best",
 )
+
+
+def evaluation_fields(config: TrainConfig) -> tuple[str, ...]:
+    """The ``evaluations.csv`` columns of a run of ``config``: a match student's, or the
+    episodes' (every other run, a DDQN run on the match included)."""
+    return MATCH_EVALUATION_FIELDS if config.match_student else EVALUATION_FIELDS
 
 
 def greedy_episodes(
