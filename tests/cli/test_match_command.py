@@ -170,3 +170,67 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
     assert main([*TINY, "--out", str(out), "--overwrite", *onnx]) == 0
     with (out / "match.csv").open() as f:
         assert [r["method"] for r in csv.DictReader(f)] == ["onnx_policy"]
+
+
+MIRROR = """
+from activevision.experiments.match_methods import BallTrack
+
+
+class Mirror(BallTrack):
+    name = "mirror"  # ball_track under another name: the same matches, move for move
+
+
+def not_a_strategy(config):
+    return object()
+"""
+
+
+def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
+    """--strategy FILE.py:NAME plays the user's class on the same seeds: a copy of
+    ball_track differs from it by exactly nothing, match by match; the README's example
+    file plays too, in the discrete and the continuous match."""
+    mine = tmp_path / "mine.py"
+    mine.write_text(MIRROR)
+    out = tmp_path / "m"
+    example = Path(__file__).parents[2] / "examples" / "uncertainty_glance.py"
+    argv = [*TINY, "--out", str(out), "--baseline", "ball_track"]
+    strategies = ["--strategy", f"{mine}:Mirror", f"{example}:UncertaintyGlance"]
+    assert main([*argv, *strategies]) == 0
+    with (out / "match_paired.csv").open() as f:
+        paired = {r["method"]: r for r in csv.DictReader(f)}
+    assert set(paired) == {"random", "mirror", "uncertainty_glance"}
+    for metric in ("position_rmse", "ball_in_view", "head_travel"):
+        assert float(paired["mirror"][f"{metric}_diff"]) == 0.0
+        assert float(paired["mirror"][f"{metric}_diff_high"]) == 0.0
+    continuous = [*argv, "--overwrite", "--action-type", "continuous", *strategies]
+    assert main(continuous) == 0
+
+
+@pytest.mark.parametrize(
+    ("spec", "needle"),
+    [
+        ("mine.py", "FILE.py:NAME"),
+        ("missing.py:Mirror", "no such file"),
+        ("mine.py:Nothing", "defines no class or function Nothing"),
+        ("mine.py:not_a_strategy", "no reset or act method"),
+        ("no_such_module_xyz:Thing", "cannot import it"),
+        ("mine.py:Mirror mine.py:Mirror", None),  # the same spec twice plays once
+    ],
+)
+def test_a_bad_strategy_is_one_clear_line(tmp_path, monkeypatch, spec, needle, one_clear_line):
+    (tmp_path / "mine.py").write_text(MIRROR)
+    monkeypatch.chdir(tmp_path)
+    argv = [*TINY, "--out", str(tmp_path / "m"), "--strategy", *spec.split()]
+    if needle is None:
+        assert main(argv) == 0
+        return
+    assert main(argv) == 2
+    one_clear_line(needle)
+
+
+def test_two_strategies_of_one_name_are_refused(tmp_path, one_clear_line):
+    (tmp_path / "a.py").write_text(MIRROR)
+    (tmp_path / "b.py").write_text(MIRROR)
+    specs = [f"{tmp_path / 'a.py'}:Mirror", f"{tmp_path / 'b.py'}:Mirror"]
+    assert main([*TINY, "--out", str(tmp_path / "m"), "--strategy", *specs]) == 2
+    one_clear_line("two strategies are named mirror")

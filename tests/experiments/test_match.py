@@ -283,6 +283,59 @@ def test_entropy_track_keeps_the_ball_inside_its_margin():
     np.testing.assert_array_equal(tracking.targets(info), ball)
 
 
+def test_glance_track_tracks_the_ball_unless_unsure_or_the_ball_is_out_of_reach():
+    """Row by row, from real match states made sure, unsure, and with the ball behind: a
+    sure robot with the ball in reach looks at the ball; an unsure one takes entropy_track's
+    target (margin 0); a ball beyond reach gives the least expected entropy of all views
+    (brute force over Algorithm 1's search). The batch gives each row what it gets alone."""
+    from activevision.envs.match.heads import (
+        entropy_track_targets,
+        glance_track_targets,
+    )
+    from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+    from activevision.localisation import best_viewpoints
+
+    config = MatchConfig()
+    env = ActiveVisionMatchVectorEnv(9, config)
+    _, info = env.reset(seed=11)
+    for _ in range(10):
+        _, _, _, _, info = env.step(np.zeros(9, dtype=np.int64))
+    info = {k: np.array(v, copy=True) for k, v in info.items() if isinstance(v, np.ndarray)}
+    sure, unsure = np.diag([0.02**2, 0.02**2, 0.01]), np.diag([0.2**2, 0.2**2, 0.05])
+    info["belief_cov"][:] = sure
+    info["belief_cov"][3:6] = unsure
+    distance = np.hypot(*info["ball_relative"][6:].T)  # rows 6-8: the ball straight behind
+    info["ball_relative"][6:] = np.column_stack([-distance, np.zeros(3)])
+    std, reach = 0.1, math.radians(30.0)
+    target = glance_track_targets(info, config, std, reach)
+    np.testing.assert_array_equal(target[:3], ball_direction(info, config)[:3])
+    np.testing.assert_array_equal(target[3:6], entropy_track_targets(info, config, 0.0)[3:6])
+    search = best_viewpoints(
+        info["belief_mean"][6:],
+        info["belief_cov"][6:],
+        ball_on_field(info)[6:],
+        field_landmarks(config.field),
+        config.camera,
+        grid=TRACK_GRID,
+        ukf=config.tracker.ukf,
+    )
+    best = TRACK_GRID.views[np.argmin(search.entropies, axis=1)]
+    np.testing.assert_array_equal(target[6:], best)
+    for i in np.random.default_rng(0).permutation(9):  # alone, in shuffled order
+        row = {k: v[i : i + 1] for k, v in info.items()}
+        np.testing.assert_array_equal(
+            glance_track_targets(row, config, std, reach), target[i : i + 1]
+        )
+    # a ball just beyond the pan limit is still watched for (within the reach margin)
+    pan = config.camera.pan_max + config.camera.hfov / 2 + math.radians(10.0)
+    info["ball_relative"][6:] = distance[:, None] * np.column_stack(
+        [np.cos([pan] * 3), np.sin([pan] * 3)]
+    )
+    np.testing.assert_array_equal(
+        glance_track_targets(info, config, std, reach)[6:], ball_direction(info, config)[6:]
+    )
+
+
 def test_six_point_look_visits_its_points_in_turn():
     policy = NUbots6Point(MatchConfig())
     policy.reset(1, np.random.default_rng(0))

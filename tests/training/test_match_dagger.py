@@ -12,7 +12,7 @@ import pytest
 import torch
 
 from activevision.envs.match.config import DetectionConfig, MatchConfig
-from activevision.envs.match.heads import EntropyTrackTeacher
+from activevision.envs.match.heads import EntropyTrackTeacher, GlanceTrackTeacher
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.envs.seeding import episode_seed
 from activevision.experiments.match import play_matches
@@ -65,23 +65,28 @@ def first_round_seed(config: TrainConfig, num_envs: int) -> int:
     return int(rng.integers(0, 2**31 - 1 - num_envs))
 
 
-def test_labels_are_entropy_tracks_moves_and_the_teacher_plays_its_matches(tmp_path):
-    """With the teacher acting throughout, the first round is entropy_track's matches: the
-    same head path as ``activevision match --methods entropy_track`` on its seeds, and every
-    stored label is the teacher's move from the state the robot was in."""
-    config = tiny(**{"dagger.teacher_fraction": 1.0})
+@pytest.mark.parametrize("teacher_name", ["entropy_track", "glance_track"])
+def test_labels_are_the_teachers_moves_and_the_teacher_plays_its_matches(tmp_path, teacher_name):
+    """With the teacher acting throughout, the first round is the teacher's matches: the
+    same head path as ``activevision match --methods entropy_track`` (or glance_track) on its
+    seeds, and every stored label is the teacher's move from the state the robot was in."""
+    config = tiny(**{"dagger.teacher_fraction": 1.0, "dagger.match_teacher": teacher_name})
     trainer = MatchDaggerTrainer(config, tmp_path, loggers=[])
     trainer._rollout()
     data = trainer.dataset.arrays
     assert trainer.dataset.size == 2 * TICKS
     seed = first_round_seed(config, 2)
-    played = play_matches("entropy_track", config.match, 2, seed)
+    played = play_matches(teacher_name, config.match, 2, seed)
     heads = np.array(played.clip.head[:TICKS])  # match 0 of the pair, tick by tick
     np.testing.assert_array_equal(data["head"][0 : 2 * TICKS : 2], heads)
     # relabel by hand: the teacher's move from each stored tick of match 0
     env = ActiveVisionMatchVectorEnv(2, config.match)
     _, info = env.reset(seed=seed)
-    teacher = EntropyTrackTeacher(config.match, config.dagger.track_margin_deg)
+    teacher = (
+        GlanceTrackTeacher(config.match)
+        if teacher_name == "glance_track"
+        else EntropyTrackTeacher(config.match, config.dagger.track_margin_deg)
+    )
     for t in range(TICKS):
         action = teacher.actions(info)
         np.testing.assert_array_equal(data["action"][2 * t : 2 * t + 2], action)

@@ -75,7 +75,11 @@ def _strategies(
     import numpy as np
 
     from activevision.experiments.match import expand_methods
-    from activevision.experiments.match_methods import default_match_methods, make_match_policy
+    from activevision.experiments.match_methods import (
+        default_match_methods,
+        load_strategy,
+        make_match_policy,
+    )
 
     models: list[Path] = list(dict.fromkeys(args.model or ()))
     for model in models:
@@ -93,7 +97,8 @@ def _strategies(
         raise ValueError("--run is played by learned: add it to --methods")
     if args.weights != "final" and args.run is None:
         raise ValueError("--weights picks the weights of --run's learned policy: give --run")
-    entries = expand_methods(methods, models, margins, args.run, args.weights)
+    strategies = [load_strategy(spec) for spec in dict.fromkeys(args.strategy or ())]
+    entries = expand_methods(methods, models, margins, args.run, args.weights, strategies)
     for _, method, options in entries:  # loads each run and model once: errors come first
         make_match_policy(method, config, options).reset(1, np.random.default_rng(0))
     return entries
@@ -272,6 +277,14 @@ def add_parsers(sub: Any) -> None:
         nargs="+",
         help="exported policies (policy.onnx) for onnx_policy (default: the shipped one);"
         " with several, onnx_policy plays each, named onnx_policy[RUN] after its run folder",
+    )
+    p.add_argument(
+        "--strategy",
+        nargs="+",
+        metavar="FILE.py:NAME",
+        help="your own strategies, played beside --methods: NAME(config) in FILE.py (or"
+        " MODULE:NAME) returns an object with reset(n, rng) and act(obs, info)"
+        " (examples/uncertainty_glance.py)",
     )
     p.add_argument("--run", type=Path, help="a training run for the learned strategy")
     add_weights(p)

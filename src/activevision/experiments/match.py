@@ -26,7 +26,12 @@ from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.scores import MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.experiments.evaluate import Interval, mean_interval
-from activevision.experiments.match_methods import StrategyOptions, make_match_policy
+from activevision.experiments.match_methods import (
+    USER_STRATEGY,
+    StrategyFactory,
+    StrategyOptions,
+    make_match_policy,
+)
 
 #: per-match metrics, in table order: name -> (column header, format)
 MATCH_METRICS = {
@@ -135,11 +140,14 @@ def expand_methods(
     margins: Sequence[float] = (),
     run: Path | None = None,
     weights: str = "final",
+    strategies: Sequence[tuple[str, StrategyFactory]] = (),
 ) -> list[tuple[str, str, StrategyOptions]]:
     """``(label, method, options)`` for every result to play: ``onnx_policy`` once per
     model (:func:`model_labels`; the shipped policy when there is none), ``entropy_track``
     once per margin (``entropy_track[10deg]`` where there are several), the others once
-    (``learned``: ``run``'s ``weights``)."""
+    (``learned``: ``run``'s ``weights``), then each ``(label, factory)`` of the user's
+    ``strategies`` (:func:`~activevision.experiments.match_methods.load_strategy`).
+    ValueError if two results would share a label."""
     entries: list[tuple[str, str, StrategyOptions]] = []
     for name in methods:
         if name == "onnx_policy" and models:
@@ -151,6 +159,12 @@ def expand_methods(
                 entries.append((label, name, StrategyOptions(track_margin_deg=margin)))
         else:
             entries.append((name, name, StrategyOptions(run=run, weights=weights)))
+    for label, factory in strategies:
+        entries.append((label, USER_STRATEGY, StrategyOptions(factory=factory)))
+    labels = [label for label, _, _ in entries]
+    twice = sorted({label for label in labels if labels.count(label) > 1})
+    if twice:
+        raise ValueError(f"two strategies are named {', '.join(twice)}: rename one")
     return entries
 
 

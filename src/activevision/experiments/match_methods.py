@@ -27,12 +27,20 @@ port:
 * ``entropy_track``: this package's variant of it -- every tick, Algorithm 1 from the belief
   over a 5-degree grid, among the views that keep the ball model at least
   ``track_margin_deg`` inside the image; the margin trades localisation for ball in view.
+* ``glance_track``: this package's too -- track the ball, and look where Algorithm 1
+  expects the most while the belief's position std exceeds 0.10 m (among the views that keep
+  the ball in the image) or while the ball model lies 30 degrees beyond the head's reach (any
+  view: the ball cannot be seen then anyway).
 * ``onnx_policy``: an exported policy through the robot runtime's ``HeadController``; by
   default the package's shipped episodic policy, run every tick, its goal (Algorithm 1's
   proposal from the believed pose) re-planned every ``k`` ticks.
 * ``learned``: a training run's network (``--run``: ``--preset match_dagger``, a student of
   ``entropy_track``, or ``match_ddqn``), greedy, batched over the matches.
 * ``random``: uniformly random moves.
+
+A team's own strategy plays beside these (``--strategy FILE.py:NAME``, :func:`load_strategy`):
+any class with ``reset(n, rng)`` and ``act(obs, info)`` (:class:`MatchPolicy`), made from the
+:class:`MatchConfig`; ``examples/uncertainty_glance.py`` is one.
 
 Two references are *privileged* -- they read what only the simulator knows, so no robot
 can run them -- and bound what a learned strategy could reach from the same head:
@@ -57,6 +65,7 @@ from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import (
     DEFAULT_TRACK_MARGIN_DEG,
     EntropyTrackTeacher,
+    GlanceTrackTeacher,
     ball_direction,
     ball_on_field,
     move_towards,
@@ -72,7 +81,10 @@ from activevision.localisation import LocalisationConfig, best_viewpoints
 
 
 class MatchPolicy(Protocol):
-    """What ``activevision match`` needs of a strategy."""
+    """What ``activevision match`` needs of a strategy, built-in or the user's
+    (``--strategy FILE.py:NAME``, ``NAME(config)`` returning one). A fair strategy reads
+    only what the robot knows (the module docstring, and the env's docstring under
+    "Info"); ``info`` also holds the simulator's truth, for references."""
 
     name: str
 
@@ -232,6 +244,20 @@ class EntropyTrack(TargetPolicy):
     def __init__(self, config: MatchConfig, margin_deg: float = DEFAULT_TRACK_MARGIN_DEG) -> None:
         super().__init__(config)
         self.teacher = EntropyTrackTeacher(config, margin_deg)
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        return self.teacher.targets(info)
+
+
+class GlanceTrack(TargetPolicy):
+    """Track the ball; localise when the belief is unsure or the ball out of reach
+    (``envs.match.heads.glance_track_targets``)."""
+
+    name = "glance_track"
+
+    def __init__(self, config: MatchConfig) -> None:
+        super().__init__(config)
+        self.teacher = GlanceTrackTeacher(config)
 
     def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
         return self.teacher.targets(info)
@@ -431,10 +457,18 @@ class RandomMoves:
         return self.rng.integers(self.n_actions, size=self.n)
 
 
+#: a strategy of the user's: ``MatchConfig -> MatchPolicy`` (a class, or a function)
+StrategyFactory = Callable[[MatchConfig], MatchPolicy]
+#: the method name of a user's strategy (``--strategy``; not one of ``--methods``)
+USER_STRATEGY = "strategy"
+
+
 @dataclass(frozen=True)
 class StrategyOptions:
     """What some strategies take beyond the match's config."""
 
+    #: a user's strategy (``activevision match --strategy FILE.py:NAME``)
+    factory: StrategyFactory | None = None
     model: Path | None = None  #: onnx_policy: an exported policy (None: the shipped one)
     run: Path | None = None  #: learned: a training run
     weights: str = "final"  #: learned: the run's final weights, or "best" validated ones
@@ -448,7 +482,6 @@ class MatchMethod:
     #: (config, options) -> a fresh strategy
     factory: Callable[[MatchConfig, StrategyOptions], MatchPolicy]
     help: str
-    needs_images: bool  #: plays from camera images (the others need no rendering)
     needs_run: bool = False  #: needs ``--run`` (a trained match policy)
     #: reads the simulator's truth: a reference, not a strategy (off the Pareto front)
     privileged: bool = False
@@ -457,52 +490,47 @@ class MatchMethod:
 MATCH_METHODS: dict[str, MatchMethod] = {
     m.name: m
     for m in (
-        MatchMethod("ball_track", lambda c, _o: BallTrack(c), "keep the ball centred", False),
-        MatchMethod("bhuman_cycle", lambda c, _o: BHumanCycle(c), "B-Human-style pan cycle", False),
-        MatchMethod(
-            "bitbots_search", lambda c, _o: BitBotsSearch(c), "Bit-Bots-style search", False
-        ),
-        MatchMethod(
-            "nubots_6point", lambda c, _o: NUbots6Point(c), "NUbots-style 6-point look", False
-        ),
+        MatchMethod("ball_track", lambda c, _o: BallTrack(c), "keep the ball centred"),
+        MatchMethod("bhuman_cycle", lambda c, _o: BHumanCycle(c), "B-Human-style pan cycle"),
+        MatchMethod("bitbots_search", lambda c, _o: BitBotsSearch(c), "Bit-Bots-style search"),
+        MatchMethod("nubots_6point", lambda c, _o: NUbots6Point(c), "NUbots-style 6-point look"),
         MatchMethod(
             "entropy_greedy",
             lambda c, _o: EntropyGreedy(c),
             "Algorithm 1 from the belief every 5 ticks",
-            False,
         ),
         MatchMethod(
             "entropy_track",
             lambda c, o: EntropyTrack(c, o.track_margin_deg),
             "Algorithm 1 every tick among views that keep the ball inside by --track-margin",
-            False,
+        ),
+        MatchMethod(
+            "glance_track",
+            lambda c, _o: GlanceTrack(c),
+            "track the ball; Algorithm 1 when unsure (std > 0.10 m) or the ball out of reach",
         ),
         MatchMethod(
             "onnx_policy",
             lambda c, o: OnnxMatchPolicy(c, o.model),
             "an exported policy (--model; default: the shipped episodic one), goal re-planned",
-            True,
         ),
         MatchMethod(
             "learned",
             lambda c, o: LearnedMatchPolicy(c, o.run, o.weights),  # type: ignore[arg-type]
             "a training run's policy (--run): --preset match_dagger or match_ddqn",
-            True,
             needs_run=True,
         ),
-        MatchMethod("random", lambda c, _o: RandomMoves(c), "uniformly random moves", False),
+        MatchMethod("random", lambda c, _o: RandomMoves(c), "uniformly random moves"),
         MatchMethod(
             "oracle_ball",
             lambda c, _o: OracleBall(c),
             "privileged reference: ball_track on the true ball",
-            False,
             privileged=True,
         ),
         MatchMethod(
             "oracle_entropy",
             lambda c, _o: OracleEntropy(c),
             "privileged reference: entropy_greedy from the true pose on the true ball",
-            False,
             privileged=True,
         ),
     )
@@ -523,11 +551,64 @@ def default_match_methods(run: Path | None) -> tuple[str, ...]:
     return tuple(n for n, m in MATCH_METHODS.items() if run is not None or not m.needs_run)
 
 
+def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
+    """A user's strategy from ``"path/to/file.py:NAME"`` or ``"package.module:NAME"``:
+    ``NAME`` is a class (or function) that takes the :class:`MatchConfig` and returns a
+    :class:`MatchPolicy`. Returns its label (its ``name`` attribute, else ``NAME``) and the
+    factory; ValueError names what is wrong."""
+    import importlib
+    import importlib.util
+    import sys
+
+    where, sep, attr = spec.rpartition(":")
+    if not sep or not where or not attr.isidentifier():
+        raise ValueError(f"--strategy {spec}: write FILE.py:NAME or MODULE:NAME")
+    try:
+        if where.endswith(".py"):
+            path = Path(where)
+            if not path.is_file():
+                raise ValueError(f"--strategy {spec}: no such file {path}")
+            module_name = f"activevision_strategy_{path.stem}"
+            module_spec = importlib.util.spec_from_file_location(module_name, path)
+            if module_spec is None or module_spec.loader is None:
+                raise ValueError(f"--strategy {spec}: {path} is not a Python module")
+            module = importlib.util.module_from_spec(module_spec)
+            sys.modules[module_name] = module  # dataclasses and pickling look modules up
+            module_spec.loader.exec_module(module)
+        else:
+            module = importlib.import_module(where)
+    except ImportError as error:
+        raise ValueError(f"--strategy {spec}: cannot import it ({error})") from None
+    factory = getattr(module, attr, None)
+    if not callable(factory):
+        raise ValueError(f"--strategy {spec}: {where} defines no class or function {attr}")
+    name = getattr(factory, "name", None)
+    return (name if isinstance(name, str) and name else attr), factory
+
+
+def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> MatchPolicy:
+    """``factory(config)``, checked to be a :class:`MatchPolicy`."""
+    if factory is None:
+        raise ValueError("a user's strategy needs its factory (--strategy FILE.py:NAME)")
+    policy = factory(config)
+    missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
+    if missing:
+        label = getattr(factory, "__name__", repr(factory))
+        raise ValueError(
+            f"--strategy {label}: what it returns has no {' or '.join(missing)} method"
+            " (a strategy has reset(n, rng) and act(obs, info): see MatchPolicy)"
+        )
+    return policy
+
+
 def make_match_policy(
     name: str, config: MatchConfig, options: StrategyOptions | None = None
 ) -> MatchPolicy:
-    """A fresh strategy ``name`` for matches of ``config``."""
+    """A fresh strategy ``name`` for matches of ``config`` (:data:`USER_STRATEGY`: the
+    user's ``options.factory``)."""
     options = options or StrategyOptions()
+    if name == USER_STRATEGY:
+        return _user_strategy(config, options.factory)
     if name not in MATCH_METHODS:
         raise ValueError(f"unknown match method {name!r}; choose from {', '.join(MATCH_METHODS)}")
     if MATCH_METHODS[name].needs_run and options.run is None:

@@ -149,8 +149,11 @@ class DaggerConfig:
     #: with act_by "goal": another view becomes the goal only when its summed evidence
     #: leads the current goal's by this many nats (hysteresis; 0: always the best) (T)
     switch_margin: float = field(default=0.0, metadata=_range(0.0, 1000.0))
-    #: on the match env: the teacher (``envs.match.heads.EntropyTrackTeacher``) keeps the
-    #: ball this many degrees inside the image (README: the match section) (T)
+    #: on the match env: the teacher, the planner ``entropy_track``
+    #: (``envs.match.heads.EntropyTrackTeacher``) or ``glance_track`` (``GlanceTrackTeacher``)
+    match_teacher: typing.Literal["entropy_track", "glance_track"] = "entropy_track"
+    #: on the match env: the entropy_track teacher keeps the ball this many degrees inside the
+    #: image (README: the match section) (T)
     track_margin_deg: float = field(default=5.0, metadata=_range(0.0, 29.0))
 
     def __post_init__(self) -> None:

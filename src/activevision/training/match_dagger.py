@@ -4,11 +4,13 @@ std) and its ball model (the observation ``"image+head+belief"``).
 
 The teacher is this package's match planner, ``entropy_track``
 (:class:`~activevision.envs.match.heads.EntropyTrackTeacher`: Algorithm 1 every tick among
-the views that keep the ball ``dagger.track_margin_deg`` inside the image). It reads the
-same knowledge as the student, nothing privileged: the student learns to plan as it does in
-one forward pass (``bench/match_student.py``: 0.33 ms a decision on one core with a 640 x 480
-frame, the planner's compiled search over 481 views 0.82 ms), and to act on the image
-besides.
+the views that keep the ball ``dagger.track_margin_deg`` inside the image), or with
+``dagger.match_teacher="glance_track"`` the ball tracker that localises when unsure or while
+the ball is out of reach (:class:`~activevision.envs.match.heads.GlanceTrackTeacher`). It
+reads the same knowledge as the student, nothing privileged: the student learns to plan as
+it does in one forward pass (``bench/match_student.py``: 0.33 ms a decision on one core with
+a 640 x 480 frame, the planner's compiled search over 481 views 0.82 ms), and to act on the
+image besides.
 
 One round: ``dagger.num_envs`` fresh matches (seeded from the run's generator) played to
 the end together in the native vector env; at each tick the executed action is the
@@ -42,7 +44,7 @@ from torch.nn import functional as F
 from activevision.agents.student import StudentNetwork
 from activevision.envs.actions import action_table
 from activevision.envs.match.config import MatchConfig
-from activevision.envs.match.heads import EntropyTrackTeacher
+from activevision.envs.match.heads import EntropyTrackTeacher, GlanceTrackTeacher
 from activevision.envs.match.observations import (
     IMAGE_KEY,
     VECTOR_SIZES,
@@ -80,7 +82,11 @@ class MatchDaggerTrainer(ImitationRun):
         self.keys = vector_keys(match)
         self.n_actions = len(action_table(match.step_deg, "8way"))
         self.env = ActiveVisionMatchVectorEnv(dag.num_envs, match)
-        self.teacher = EntropyTrackTeacher(match, dag.track_margin_deg)
+        self.teacher = (
+            GlanceTrackTeacher(match)
+            if dag.match_teacher == "glance_track"
+            else EntropyTrackTeacher(match, dag.track_margin_deg)
+        )
         self._start(
             run_dir,
             loggers,

@@ -215,6 +215,11 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         lambda: match_dagger(307_200, "continuous"),
         "match_dagger with continuous moves of up to 3 degrees a tick",
     ),
+    "match_dagger_glance": (
+        lambda: match_dagger(307_200).replace(**{"dagger.match_teacher": "glance_track"}),
+        "match_dagger taught by glance_track: track the ball, localise when unsure or while"
+        " the ball is out of reach",
+    ),
     # DAgger with the oracle as teacher (training.dagger), one preset per observation; each
     # fits in 30 minutes on a 2-core CPU (README: learned head control)
     "dagger_image": (

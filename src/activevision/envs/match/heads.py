@@ -11,6 +11,12 @@ the projection, so that the views near a ball behind the robot count too: measur
 against 0.085 where only views that show the ball do). The margin trades localisation for
 ball in view: 0 looks wherever the ball is about in view; from half the vertical field of
 view (22.6 degrees for the default camera) no view is allowed and it is ball tracking.
+
+:func:`glance_track_targets` spends the head on localisation only when it pays: it tracks
+the ball, turns to entropy_track's view (margin 0) while the belief is unsure (position std
+above a threshold), and to Algorithm 1's best view anywhere while the ball model lies beyond
+the head's reach by more than a margin (the ball cannot be seen from any head angle then,
+so watching for it costs localisation and gains nothing).
 """
 
 from __future__ import annotations
@@ -88,11 +94,46 @@ def entropy_track_targets(
 
 
 DEFAULT_TRACK_MARGIN_DEG = 5.0  #: entropy_track's margin (README: the match section)
+#: glance_track's position std (m) above which it localises, and how far (deg) beyond the
+#: head's reach the ball model must lie for it to look anywhere: chosen on validation
+#: matches (seeds 3000-3049, weaker detector; README: the match section)
+DEFAULT_GLANCE_STD_M = 0.10
+DEFAULT_GLANCE_REACH_DEG = 30.0
+#: the info keys Algorithm 1 plans from: the robot's belief and ball model
+PLANNING_KEYS = ("belief_mean", "belief_cov", "ball_relative")
+
+
+def glance_track_targets(
+    info: dict[str, np.ndarray],
+    config: MatchConfig,
+    std_m: float,
+    reach_margin: float,
+    landmarks: LandmarkSet | None = None,
+    grid: ViewpointGrid = TRACK_GRID,
+) -> np.ndarray:
+    """Head targets (N, 2) rad: the ball model's direction; :func:`entropy_track_targets`
+    (margin 0) where the belief's position std exceeds ``std_m`` (m); Algorithm 1's best view
+    of all where the ball model's bearing lies more than ``reach_margin`` (rad) beyond what
+    the head can bring into the image (the pan limit plus half the field of view)."""
+    targets = ball_direction(info, config)
+    cov = info["belief_cov"]
+    unsure = np.sqrt(cov[:, 0, 0] + cov[:, 1, 1]) > std_m
+    rel = info["ball_relative"]
+    bearing = np.arctan2(rel[:, 1], rel[:, 0])
+    cam = config.camera
+    reach = cam.hfov / 2 + reach_margin
+    away = (bearing > cam.pan_max + reach) | (bearing < cam.pan_min - reach)
+    # margin -inf: every view of the grid is allowed, wherever the ball is
+    for chosen, margin in ((unsure & ~away, 0.0), (away, -math.inf)):
+        if chosen.any():
+            known = {key: info[key][chosen] for key in PLANNING_KEYS}
+            targets[chosen] = entropy_track_targets(known, config, margin, landmarks, grid)
+    return targets
 
 
 class EntropyTrackTeacher:
     """:func:`entropy_track_targets` as actions of the match's kind (the greedy discrete
-    move, or the continuous one straight there): the match student's teacher."""
+    move, or the continuous one straight there): a match student's teacher."""
 
     def __init__(self, config: MatchConfig, margin_deg: float = DEFAULT_TRACK_MARGIN_DEG) -> None:
         self.config = config
@@ -104,3 +145,21 @@ class EntropyTrackTeacher:
 
     def actions(self, info: dict[str, np.ndarray]) -> np.ndarray:
         return move_towards(info["head"], self.targets(info), self.config)
+
+
+class GlanceTrackTeacher(EntropyTrackTeacher):
+    """:func:`glance_track_targets` as actions of the match's kind: a match student's
+    teacher."""
+
+    def __init__(
+        self,
+        config: MatchConfig,
+        std_m: float = DEFAULT_GLANCE_STD_M,
+        reach_deg: float = DEFAULT_GLANCE_REACH_DEG,
+    ) -> None:
+        super().__init__(config, 0.0)
+        self.std_m = std_m
+        self.reach = math.radians(reach_deg)
+
+    def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
+        return glance_track_targets(info, self.config, self.std_m, self.reach, self.landmarks)
