@@ -326,6 +326,11 @@ def test_glance_track_tracks_the_ball_unless_unsure_or_the_ball_is_out_of_reach(
         np.testing.assert_array_equal(
             glance_track_targets(row, config, std, reach), target[i : i + 1]
         )
+    # with a finite tracking margin a sure robot takes entropy_track's view at that margin
+    margin = math.radians(15.0)
+    tracked = glance_track_targets(info, config, std, reach, track_margin=margin)
+    np.testing.assert_array_equal(tracked[:3], entropy_track_targets(info, config, margin)[:3])
+    np.testing.assert_array_equal(tracked[3:], target[3:])
     # a ball just beyond the pan limit is still watched for (within the reach margin)
     pan = config.camera.pan_max + config.camera.hfov / 2 + math.radians(10.0)
     info["ball_relative"][6:] = distance[:, None] * np.column_stack(

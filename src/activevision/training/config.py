@@ -152,6 +152,10 @@ class DaggerConfig:
     #: on the match env: the teacher, the planner ``entropy_track``
     #: (``envs.match.heads.EntropyTrackTeacher``) or ``glance_track`` (``GlanceTrackTeacher``)
     match_teacher: typing.Literal["entropy_track", "glance_track"] = "entropy_track"
+    #: the glance_track teacher, while it tracks the ball: Algorithm 1 among the views that
+    #: keep the ball this many degrees inside the image (from half the vertical field of
+    #: view, 22.6 for the default camera: the ball centred, as the glance_track strategy) (T)
+    glance_track_margin_deg: float = field(default=90.0, metadata=_range(0.0, 90.0))
     #: on the match env: the entropy_track teacher keeps the ball this many degrees inside the
     #: image (README: the match section) (T)
     track_margin_deg: float = field(default=5.0, metadata=_range(0.0, 29.0))

@@ -83,7 +83,7 @@ class MatchDaggerTrainer(ImitationRun):
         self.n_actions = len(action_table(match.step_deg, "8way"))
         self.env = ActiveVisionMatchVectorEnv(dag.num_envs, match)
         self.teacher = (
-            GlanceTrackTeacher(match)
+            GlanceTrackTeacher(match, track_margin_deg=dag.glance_track_margin_deg)
             if dag.match_teacher == "glance_track"
             else EntropyTrackTeacher(match, dag.track_margin_deg)
         )

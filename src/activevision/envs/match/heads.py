@@ -110,8 +110,10 @@ def glance_track_targets(
     reach_margin: float,
     landmarks: LandmarkSet | None = None,
     grid: ViewpointGrid = TRACK_GRID,
+    track_margin: float = math.inf,
 ) -> np.ndarray:
-    """Head targets (N, 2) rad: the ball model's direction; :func:`entropy_track_targets`
+    """Head targets (N, 2) rad: the ball model's direction (with a finite ``track_margin``,
+    rad: :func:`entropy_track_targets` with that margin); :func:`entropy_track_targets`
     (margin 0) where the belief's position std exceeds ``std_m`` (m); Algorithm 1's best view
     of all where the ball model's bearing lies more than ``reach_margin`` (rad) beyond what
     the head can bring into the image (the pan limit plus half the field of view)."""
@@ -123,8 +125,11 @@ def glance_track_targets(
     cam = config.camera
     reach = cam.hfov / 2 + reach_margin
     away = (bearing > cam.pan_max + reach) | (bearing < cam.pan_min - reach)
+    tracking = ~unsure & ~away
+    if track_margin >= max(cam.hfov, cam.vfov) / 2:  # no view keeps the ball so far inside
+        tracking[:] = False
     # margin -inf: every view of the grid is allowed, wherever the ball is
-    for chosen, margin in ((unsure & ~away, 0.0), (away, -math.inf)):
+    for chosen, margin in ((unsure & ~away, 0.0), (away, -math.inf), (tracking, track_margin)):
         if chosen.any():
             known = {key: info[key][chosen] for key in PLANNING_KEYS}
             targets[chosen] = entropy_track_targets(known, config, margin, landmarks, grid)
@@ -156,10 +161,19 @@ class GlanceTrackTeacher(EntropyTrackTeacher):
         config: MatchConfig,
         std_m: float = DEFAULT_GLANCE_STD_M,
         reach_deg: float = DEFAULT_GLANCE_REACH_DEG,
+        track_margin_deg: float = math.inf,
     ) -> None:
         super().__init__(config, 0.0)
         self.std_m = std_m
         self.reach = math.radians(reach_deg)
+        self.track_margin = math.radians(track_margin_deg)
 
     def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
-        return glance_track_targets(info, self.config, self.std_m, self.reach, self.landmarks)
+        return glance_track_targets(
+            info,
+            self.config,
+            self.std_m,
+            self.reach,
+            self.landmarks,
+            track_margin=self.track_margin,
+        )
