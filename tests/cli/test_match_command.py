@@ -214,11 +214,13 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
         ("mine.py:Nothing", "defines no class or function Nothing"),
         ("mine.py:not_a_strategy", "no reset or act method"),
         ("no_such_module_xyz:Thing", "cannot import it"),
+        ("broken.py:Mirror", "broken.py:2: "),
         ("mine.py:Mirror mine.py:Mirror", None),  # the same spec twice plays once
     ],
 )
 def test_a_bad_strategy_is_one_clear_line(tmp_path, monkeypatch, spec, needle, one_clear_line):
     (tmp_path / "mine.py").write_text(MIRROR)
+    (tmp_path / "broken.py").write_text("class Mirror:\n    def act(self\n")
     monkeypatch.chdir(tmp_path)
     argv = [*TINY, "--out", str(tmp_path / "m"), "--strategy", *spec.split()]
     if needle is None:

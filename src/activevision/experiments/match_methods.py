@@ -579,6 +579,9 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
             module = importlib.import_module(where)
     except ImportError as error:
         raise ValueError(f"--strategy {spec}: cannot import it ({error})") from None
+    except SyntaxError as error:
+        where_bad = f"{error.filename}:{error.lineno}"
+        raise ValueError(f"--strategy {spec}: {where_bad}: {error.msg}") from None
     factory = getattr(module, attr, None)
     if not callable(factory):
         raise ValueError(f"--strategy {spec}: {where} defines no class or function {attr}")
