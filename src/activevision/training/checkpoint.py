@@ -168,14 +168,15 @@ def save_tensors(
 
 def _sorted_header(data: bytes) -> bytes:
     """safetensors writes its metadata in hash-map order, which changes from process to
-    process; the same metadata in sorted order makes the same weights the same bytes."""
+    process; the same metadata in sorted order makes the same weights the same bytes. (The
+    header is JSON padded with spaces to a multiple of 8 bytes; tensor offsets count from
+    its end, so its length may change.)"""
     size = int.from_bytes(data[:8], "little")
     header = json.loads(data[8 : 8 + size])
     header["__metadata__"] = dict(sorted(header["__metadata__"].items()))
     text = json.dumps(header, separators=(",", ":"), ensure_ascii=False).encode()
-    if len(text) > size:  # not the library's compact JSON: keep its bytes
-        return data
-    return data[:8] + text.ljust(size) + data[8 + size :]
+    text = text.ljust(-(-len(text) // 8) * 8)
+    return len(text).to_bytes(8, "little") + text + data[8 + size :]
 
 
 def load_tensors(path: Path) -> tuple[dict[str, torch.Tensor], dict[str, Any]]:

@@ -57,7 +57,6 @@ from activevision.geometry.occlusion import robot_cylinders
 from activevision.training.config import MATCH_ENV_ID, TrainConfig
 from activevision.training.dagger import ImitationRun
 from activevision.training.loggers import Logger
-from activevision.training.validation import MATCH_EVALUATION_FIELDS
 
 
 class MatchDaggerTrainer(ImitationRun):
@@ -163,9 +162,7 @@ class MatchDaggerTrainer(ImitationRun):
         def play(network: StudentNetwork, seeds: Sequence[int]) -> list[dict[str, float]]:
             return play_student_matches(network, self.device, self.config.match, seeds)
 
-        return self.validate_network(
-            self.network, play, self.metadata(), MATCH_EVALUATION_FIELDS, "episode_reward"
-        )
+        return self.validate_network(self.network, play, self.metadata())
 
     # ------------------------------------------------------------------ files
     def metadata(self) -> dict[str, Any]:

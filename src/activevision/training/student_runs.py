@@ -23,7 +23,11 @@ from activevision.training.config import TrainConfig, load_config, save_config
 from activevision.training.loggers import Logger, LoggerGroup, LogPosition, default_loggers
 from activevision.training.metrics import EpochAccumulator, episode_record
 from activevision.training.policy_files import BestWeights, write_policy
-from activevision.training.validation import EVALUATION_FIELDS, summarise_validation
+from activevision.training.validation import (
+    evaluation_fields,
+    summarise_validation,
+    validation_score,
+)
 
 #: ``(network, seeds) -> episodes.csv-style records``: one greedy episode per seed
 PlayGreedy = Callable[[StudentNetwork, Sequence[int]], list[dict[str, float]]]
@@ -79,14 +83,13 @@ class StudentRun:
         network: StudentNetwork,
         play: PlayGreedy,
         metadata: dict[str, Any],
-        fields: Sequence[str] = EVALUATION_FIELDS,
-        score: str = "success_rate",
     ) -> dict[str, float]:
         """Greedy episodes of ``network`` on the validation seeds (the episodes of
-        ``activevision evaluate --seed eval_seed``), logged as ``fields``; keeps the weights
-        with the best ``score``."""
+        ``activevision evaluate --seed eval_seed``), logged as the run's evaluation fields;
+        keeps the weights with the best validation score (``validation.validation_score``)."""
         run = self.config.run
         seeds = [episode_seed(run.eval_seed, i) for i in range(run.eval_episodes)]
+        fields, score = evaluation_fields(self.config), validation_score(self.config)
         records = play(network, seeds)
         row = summarise_validation(self.step, records, self.best.score, fields, score)
         self.logger.record_validation(row, self.step)

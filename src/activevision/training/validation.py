@@ -40,6 +40,12 @@ def evaluation_fields(config: TrainConfig) -> tuple[str, ...]:
     return MATCH_EVALUATION_FIELDS if config.match_student else EVALUATION_FIELDS
 
 
+def validation_score(config: TrainConfig) -> str:
+    """The column that picks a run's best weights: a match student's mean reward (a match
+    has no success), else the success rate."""
+    return "episode_reward" if config.match_student else "success_rate"
+
+
 def greedy_episodes(
     q_values: Callable[[np.ndarray], np.ndarray],
     env: Any,
