@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 
 from activevision.envs import ActiveVisionEnv
+from activevision.envs.observations import vector_columns
 from activevision.experiments.evaluate import evaluate_policy
 from activevision.experiments.policies import LearnedPolicy, OraclePolicy
+from activevision.localisation import best_viewpoints
 from activevision.training import load_policy
 from activevision.training.config import TrainConfig
 from activevision.training.dagger import DaggerTrainer
@@ -196,3 +198,64 @@ def test_the_library_entry_points_pick_the_learner_and_refuse_an_env_factory(tmp
     trainer = start_run(config, tmp_path / "b", loggers=[])
     assert isinstance(trainer, DaggerTrainer)
     trainer.close()
+
+
+def test_redrawn_priors_keep_each_states_error_scale_and_propose_from_the_new_pose(tmp_path):
+    # dagger.redraw_prior: each minibatch sees its states with a fresh prior of the same
+    # error scale (the release's corruption: e metres off, heading exactly +-e) and
+    # Algorithm 1's proposal from that prior; exact priors and every other input stay.
+    config = tiny(
+        **{
+            "env.prior_error_range": (0.0, 2.0),
+            "env.prior_exact_share": 0.3,
+            "dagger.redraw_prior": True,
+        }
+    )
+    trainer = DaggerTrainer(config, tmp_path, loggers=[])
+    trainer._rollout()
+    data, n = trainer.dataset.arrays, trainer.dataset.size
+    stored = data["vector"][:n].copy()
+    out = trainer._redraw_priors(stored, np.arange(n))
+    columns = vector_columns(config.env, trainer.n_actions)
+    errors = stored[:, columns["pose_error"]][:, 0]
+    exact = errors == 0
+    assert exact.any() and (~exact).any()
+    np.testing.assert_array_equal(out[exact], stored[exact])
+    for key in ("head", "pose_error", "actions"):
+        np.testing.assert_array_equal(out[:, columns[key]], stored[:, columns[key]])
+    pose, true = out[:, columns["pose"]].astype(np.float64), data["pose"][:n]
+    gap = np.hypot(pose[:, 0] - true[:, 0], pose[:, 1] - true[:, 1])
+    turn = np.abs(np.angle(np.exp(1j * (np.arctan2(pose[:, 3], pose[:, 2]) - true[:, 2]))))
+    np.testing.assert_allclose(gap[~exact], errors[~exact], atol=1e-5)
+    np.testing.assert_allclose(turn[~exact], errors[~exact], atol=1e-5)
+    assert np.abs(pose[~exact] - stored[~exact][:, columns["pose"]]).max() > 0.1  # a new draw
+    # the proposal columns: Algorithm 1 from the new prior, and the move there from the head
+    rng = np.random.default_rng(5)
+    rows = np.flatnonzero(~exact)
+    prior, proposal = trainer.sim.redraw_priors(
+        true[rows], data["ball"][rows], errors[rows].astype(np.float64), None, rng
+    )
+    loc = trainer.sim.localisation
+    want = best_viewpoints(
+        prior,
+        np.broadcast_to(loc.ukf.initial_cov, (len(rows), 3, 3)),
+        data["ball"][rows],
+        trainer.sim.landmarks,
+        config.env.camera,
+        grid=loc.grid,
+        ukf=loc.ukf,
+        ball_radius=config.env.field.ball_radius,
+        ball_views_only=True,
+    )
+    np.testing.assert_array_equal(proposal[:, 2], want.ok)
+    np.testing.assert_array_equal(
+        proposal[want.ok, :2], np.column_stack([want.pan, want.tilt])[want.ok]
+    )
+    found = out[:, columns["proposal"]][:, 4] == 1
+    moves = out[:, columns["proposal"]][:, :2] - data["head"][:n]
+    np.testing.assert_allclose(out[found][:, columns["proposal"]][:, 2:4], moves[found], atol=1e-5)
+
+
+def test_redraw_prior_needs_a_prior_in_the_observation():
+    with pytest.raises(ValueError, match="redraw_prior"):
+        tiny("image+head", **{"dagger.redraw_prior": True})

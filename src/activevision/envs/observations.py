@@ -62,6 +62,28 @@ def vector_sizes(cfg: EnvConfig, n_actions: int) -> dict[str, int]:
     }
 
 
+def vector_columns(cfg: EnvConfig, n_actions: int) -> dict[str, slice]:
+    """Where each vector key lies in the concatenated vector (:func:`flatten_vectors`)."""
+    columns, start = {}, 0
+    for key, size in vector_sizes(cfg, n_actions).items():
+        columns[key] = slice(start, start + size)
+        start += size
+    return columns
+
+
+def pose_features(prior_pose: np.ndarray) -> np.ndarray:
+    """(N, 4) the ``"pose"`` key of prior poses (N, 3): x, y, cos theta, sin theta."""
+    theta = prior_pose[:, 2]
+    return np.stack([prior_pose[:, 0], prior_pose[:, 1], np.cos(theta), np.sin(theta)], 1)
+
+
+def proposal_features(proposal: np.ndarray, head: np.ndarray) -> np.ndarray:
+    """(N, 5) the ``"proposal"`` key of proposals (N, 3: pan, tilt, found) seen from heads
+    (N, 2): the view, the move there (zero where none was found), found."""
+    found = proposal[:, 2:3]
+    return np.concatenate([proposal[:, :2], (proposal[:, :2] - head) * found, found], axis=1)
+
+
 def image_space(cfg: EnvConfig) -> spaces.Box:
     shape = (cfg.frame_stack, cfg.camera.height, cfg.camera.width)
     return spaces.Box(0, 255, shape, dtype=np.uint8)
@@ -124,20 +146,15 @@ class ObservationBuilder:
         return obs
 
     def _vector(self, key: str, sim: EpisodeBatch) -> np.ndarray:
-        head, prior_pose, proposal = sim.head, sim.prior_pose, sim.proposal
         values: np.ndarray
         if key == "head":
-            values = head
+            values = sim.head
         elif key == "pose_error":
             values = sim.prior_error[:, None]
         elif key == "pose":
-            theta = prior_pose[:, 2]
-            values = np.stack([prior_pose[:, 0], prior_pose[:, 1], np.cos(theta), np.sin(theta)], 1)
+            values = pose_features(sim.prior_pose)
         elif key == "proposal":
-            found = proposal[:, 2:3]
-            values = np.concatenate(
-                [proposal[:, :2], (proposal[:, :2] - head) * found, found], axis=1
-            )
+            values = proposal_features(sim.proposal, sim.head)
         else:
             n = len(self.history)
             onehot = np.zeros((n, self.cfg.action_history, self.n_actions), dtype=np.float32)

@@ -129,10 +129,13 @@ class EpisodeBatch:
                 cfg.field.ball_radius,
                 cfg.camera.camera_height,
             )
-        camera = np.column_stack(
-            [self.pose[slots, :2], np.full(len(slots), cfg.camera.camera_height)]
-        )
-        self.hidden[slots] = hidden_landmarks(self.landmarks, camera, self.cylinders(slots))
+        self.hidden[slots] = self._hidden(self.pose[slots], self.robots[slots])
+
+    def _hidden(self, pose: np.ndarray, robots: np.ndarray) -> np.ndarray:
+        """(M, K) the landmarks that the robots (M, R, 4) hide from cameras at ``pose``."""
+        cfg = self.cfg
+        camera = np.column_stack([pose[:, :2], np.full(len(pose), cfg.camera.camera_height)])
+        return hidden_landmarks(self.landmarks, camera, robot_cylinders(robots, cfg.robots.radius))
 
     def cylinders(self, idx: np.ndarray) -> np.ndarray:
         """The other robots of slots ``idx`` as the renderer's cylinders (len(idx), 2R, 6)."""
@@ -157,31 +160,64 @@ class EpisodeBatch:
                     self.pose[slot], self.prior_error[slot], rngs[j]
                 )
         self.prior_pose[slots] = quantise_pose(self.prior_pose[slots], *cfg.prior_grid)
-        result = self._viewpoints(self.prior_pose[slots], slots)
-        self.proposal[slots, 0] = np.where(result.ok, result.pan, 0.0)
-        self.proposal[slots, 1] = np.where(result.ok, result.tilt, 0.0)
-        self.proposal[slots, 2] = result.ok
+        self.proposal[slots] = self._proposals(
+            self.prior_pose[slots], self.ball[slots], self.hidden[slots]
+        )
 
-    def _viewpoints(self, means: np.ndarray, slots: np.ndarray) -> ViewpointBatch:
-        """Algorithm 1 from ``means`` (the start covariance) for the balls of ``slots``."""
+    def redraw_priors(
+        self,
+        pose: np.ndarray,
+        ball: np.ndarray,
+        errors: np.ndarray,
+        robots: np.ndarray | None,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Stored states' priors drawn again: for true poses (M, 3), balls (M, 2), error
+        scales (M,) and other robots (M, R, 4; None: none), prior poses corrupted as an
+        episode's are (``corrupt_pose``, quantised to ``prior_grid``) from ``rng``, and the
+        proposals (M, 3) Algorithm 1 makes from them. A learner's augmentation: one
+        state seen with many priors of its error scale cannot be recognised by its prior."""
+        prior = np.stack(
+            [corrupt_pose(p, float(e), rng) for p, e in zip(pose, errors, strict=True)]
+        )
+        prior = quantise_pose(prior, *self.cfg.prior_grid)
+        hidden = (
+            self._hidden(pose, robots)
+            if robots is not None and self.cfg.robots.max_count
+            else np.zeros((len(pose), len(self.landmarks)), dtype=bool)
+        )
+        return prior, self._proposals(prior, ball, hidden)
+
+    def _proposals(self, prior: np.ndarray, ball: np.ndarray, hidden: np.ndarray) -> np.ndarray:
+        """(M, 3) Algorithm 1's view from each prior pose: (pan, tilt, found)."""
+        result = self._viewpoints(prior, ball, hidden)
+        return np.column_stack(
+            [np.where(result.ok, result.pan, 0.0), np.where(result.ok, result.tilt, 0.0), result.ok]
+        )
+
+    def _viewpoints(
+        self, means: np.ndarray, ball: np.ndarray, hidden: np.ndarray
+    ) -> ViewpointBatch:
+        """Algorithm 1 from ``means`` (the start covariance) for balls ``ball``, with the
+        landmarks ``hidden`` (M, K) behind other robots."""
         cfg, loc = self.cfg, self.localisation
         return best_viewpoints(
             means,
-            np.broadcast_to(loc.ukf.initial_cov, (len(slots), 3, 3)),
-            self.ball[slots],
+            np.broadcast_to(loc.ukf.initial_cov, (len(means), 3, 3)),
+            ball,
             self.landmarks,
             cfg.camera,
             grid=loc.grid,
             ukf=loc.ukf,
             ball_radius=cfg.field.ball_radius,
-            parallel=self.renderer.parallel and self.n > 1,
+            parallel=self.renderer.parallel and len(means) > 1,
             ball_views_only=True,
-            hidden=self.hidden[slots] if cfg.robots.max_count else None,
+            hidden=hidden if cfg.robots.max_count else None,
         )
 
     def _search_goals(self, slots: np.ndarray) -> np.ndarray:
         cfg = self.cfg
-        result = self._viewpoints(self.believed_pose[slots], slots)
+        result = self._viewpoints(self.believed_pose[slots], self.ball[slots], self.hidden[slots])
         found = result.ok
         self.goal_pan[slots] = np.where(found, result.pan, 0.0)
         self.goal_tilt[slots] = np.where(found, result.tilt, cfg.camera.tilt_min)

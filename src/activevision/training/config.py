@@ -149,6 +149,11 @@ class DaggerConfig:
     #: with act_by "goal": another view becomes the goal only when its summed evidence
     #: leads the current goal's by this many nats (hysteresis; 0: always the best) (T)
     switch_margin: float = field(default=0.0, metadata=_range(0.0, 1000.0))
+    #: each minibatch draws its states' prior poses again at their episodes' error scales,
+    #: with Algorithm 1's proposal from them (an augmentation: the student cannot recognise
+    #: a stored episode by its one prior draw, and so learns what a prior of that error
+    #: tells; README: learned head control) (T)
+    redraw_prior: bool = False
     #: on the match env: the teacher, the planner ``entropy_track``
     #: (``envs.match.heads.EntropyTrackTeacher``) or ``glance_track`` (``GlanceTrackTeacher``)
     match_teacher: typing.Literal["entropy_track", "glance_track"] = "entropy_track"
@@ -240,6 +245,14 @@ class TrainConfig:
             )
         if self.match_student:
             self._check_match_dagger()
+        if self.dagger.redraw_prior and not (
+            self.algo == "dagger" and not self.match_student and self.env.observes_prior
+        ):
+            raise ValueError(
+                "TrainConfig.dagger.redraw_prior: draws the prior pose of DAgger's episodic"
+                " states again; it needs algo='dagger' on ActiveVision-v0 with a prior pose in"
+                " env.observation ('image+head+pose...')"
+            )
         if self.algo == "dagger" and self.env.frame_stack != 1:
             raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")
         if self.algo == "ddqn" and self.env.action_type == "continuous":

@@ -45,6 +45,9 @@ from activevision.envs.actions import oracle_actions
 from activevision.envs.config import EnvConfig
 from activevision.envs.observations import (
     ObservationBuilder,
+    pose_features,
+    proposal_features,
+    vector_columns,
     vector_keys,
     vector_sizes,
 )
@@ -358,7 +361,10 @@ class DaggerTrainer(ImitationRun):
             data["pose"][b], data["head"][b], data["ball"][b], looks, robots
         )
         image = torch.from_numpy(images[:, None]).to(self.device)
-        vector = torch.from_numpy(data["vector"][b]).to(self.device)
+        vectors = data["vector"][b]
+        if self.config.dagger.redraw_prior:
+            vectors = self._redraw_priors(vectors, b)
+        vector = torch.from_numpy(vectors).to(self.device)
         logits, goal_logits = self.network.forward_with_goal(image, vector)
         teacher = torch.from_numpy(data["action"][b]).to(self.device)
         if self.continuous:
@@ -373,6 +379,28 @@ class DaggerTrainer(ImitationRun):
         torch.nn.utils.clip_grad_norm_(self.network.parameters(), self.config.learner.max_grad_norm)
         self.optimizer.step()
         return float(loss.item())
+
+    def _redraw_priors(self, vectors: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The minibatch's vectors with the prior pose and proposal of every state whose
+        prior was not exact drawn again at its error scale (``dagger.redraw_prior``)."""
+        columns, data = vector_columns(self.config.env, self.n_actions), self.dataset.arrays
+        errors = vectors[:, columns["pose_error"]][:, 0].astype(np.float64)
+        rows = np.flatnonzero(errors > 0)
+        if not len(rows):
+            return vectors
+        states = b[rows]
+        prior, proposal = self.sim.redraw_priors(
+            data["pose"][states],
+            data["ball"][states],
+            errors[rows],
+            data["robots"][states] if "robots" in data else None,
+            self.rng,
+        )
+        out = vectors.copy()
+        out[rows, columns["pose"]] = pose_features(prior)
+        if "proposal" in columns:
+            out[rows, columns["proposal"]] = proposal_features(proposal, data["head"][states])
+        return out
 
     def validate(self) -> dict[str, float]:
         """The student's greedy episodes on the validation seeds (the episodes of
