@@ -137,10 +137,6 @@ class EpisodeBatch:
         camera = np.column_stack([pose[:, :2], np.full(len(pose), cfg.camera.camera_height)])
         return hidden_landmarks(self.landmarks, camera, robot_cylinders(robots, cfg.robots.radius))
 
-    def cylinders(self, idx: np.ndarray) -> np.ndarray:
-        """The other robots of slots ``idx`` as the renderer's cylinders (len(idx), 2R, 6)."""
-        return robot_cylinders(self.robots[idx], self.cfg.robots.radius)
-
     def _draw_priors(self, slots: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """The prior pose of each new episode (after its start: the start's draws come
         first, so the images and goals of an episode do not depend on the prior), then the
