@@ -86,7 +86,7 @@ def test_export_run_writes_the_runs_world(tmp_path):
 
 
 def test_shipped_policy_records_its_randomised_world():
-    # the shipped policy is the dagger_robust preset's run
+    # the shipped policy is the dagger_robust_continuous preset's run
     world = load_metadata(pretrained_policy_path().with_suffix(".json")).world
     assert world is not None and world != clean_world()
     assert config_from_dict(AppearanceConfig, world["appearance"]) == AppearanceConfig.randomised()

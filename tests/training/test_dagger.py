@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from activevision.envs import ActiveVisionEnv
-from activevision.envs.observations import vector_columns
+from activevision.envs.observations import pose_features, proposal_features, vector_columns
 from activevision.experiments.evaluate import evaluate_policy
 from activevision.experiments.policies import LearnedPolicy, OraclePolicy
 from activevision.localisation import best_viewpoints
@@ -215,6 +215,7 @@ def test_redrawn_priors_keep_each_states_error_scale_and_propose_from_the_new_po
     trainer._rollout()
     data, n = trainer.dataset.arrays, trainer.dataset.size
     stored = data["vector"][:n].copy()
+    draws = trainer.rng.bit_generator.state
     out = trainer._redraw_priors(stored, np.arange(n))
     columns = vector_columns(config.env, trainer.n_actions)
     errors = stored[:, columns["pose_error"]][:, 0]
@@ -229,11 +230,20 @@ def test_redrawn_priors_keep_each_states_error_scale_and_propose_from_the_new_po
     np.testing.assert_allclose(gap[~exact], errors[~exact], atol=1e-5)
     np.testing.assert_allclose(turn[~exact], errors[~exact], atol=1e-5)
     assert np.abs(pose[~exact] - stored[~exact][:, columns["pose"]]).max() > 0.1  # a new draw
-    # the proposal columns: Algorithm 1 from the new prior, and the move there from the head
-    rng = np.random.default_rng(5)
+    # the columns written are those draws' prior and Algorithm 1's proposal from it (the
+    # move there from the head), and that proposal is best_viewpoints' from the new prior
+    rng = np.random.default_rng()
+    rng.bit_generator.state = draws
     rows = np.flatnonzero(~exact)
     prior, proposal = trainer.sim.redraw_priors(
         true[rows], data["ball"][rows], errors[rows].astype(np.float64), None, rng
+    )
+    np.testing.assert_array_equal(
+        out[rows][:, columns["pose"]], pose_features(prior).astype(np.float32)
+    )
+    np.testing.assert_array_equal(
+        out[rows][:, columns["proposal"]],
+        proposal_features(proposal, data["head"][rows]).astype(np.float32),
     )
     loc = trainer.sim.localisation
     want = best_viewpoints(
@@ -256,6 +266,8 @@ def test_redrawn_priors_keep_each_states_error_scale_and_propose_from_the_new_po
     np.testing.assert_allclose(out[found][:, columns["proposal"]][:, 2:4], moves[found], atol=1e-5)
 
 
-def test_redraw_prior_needs_a_prior_in_the_observation():
+def test_redraw_prior_needs_a_drawn_prior_in_the_observation():
     with pytest.raises(ValueError, match="redraw_prior"):
         tiny("image+head", **{"dagger.redraw_prior": True})
+    with pytest.raises(ValueError, match="prior_error_range"):  # the prior is the belief
+        tiny(**{"dagger.redraw_prior": True, "env.localisation_error": 0.5})

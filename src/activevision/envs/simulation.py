@@ -177,9 +177,11 @@ class EpisodeBatch:
             [corrupt_pose(p, float(e), rng) for p, e in zip(pose, errors, strict=True)]
         )
         prior = quantise_pose(prior, *self.cfg.prior_grid)
+        if self.cfg.robots.max_count and robots is None:
+            raise ValueError("redraw_priors: this world has other robots; pass the states' robots")
         hidden = (
             self._hidden(pose, robots)
-            if robots is not None and self.cfg.robots.max_count
+            if robots is not None
             else np.zeros((len(pose), len(self.landmarks)), dtype=bool)
         )
         return prior, self._proposals(prior, ball, hidden)

@@ -246,12 +246,18 @@ class TrainConfig:
         if self.match_student:
             self._check_match_dagger()
         if self.dagger.redraw_prior and not (
-            self.algo == "dagger" and not self.match_student and self.env.observes_prior
+            self.algo == "dagger"
+            and not self.match_student
+            and self.env.observes_prior
+            and self.env.prior_error_range is not None
         ):
+            # without prior_error_range the prior is the believed pose the goal was planned
+            # from: drawing it again would break the link the student should learn
             raise ValueError(
                 "TrainConfig.dagger.redraw_prior: draws the prior pose of DAgger's episodic"
-                " states again; it needs algo='dagger' on ActiveVision-v0 with a prior pose in"
-                " env.observation ('image+head+pose...')"
+                " states again at their drawn error; it needs algo='dagger' on"
+                " ActiveVision-v0 with a prior pose in env.observation ('image+head+pose...')"
+                " and env.prior_error_range"
             )
         if self.algo == "dagger" and self.env.frame_stack != 1:
             raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")

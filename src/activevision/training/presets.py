@@ -265,7 +265,7 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         "DAgger on image, head, a prior pose 0-2 m/rad off and its proposal",
     ),
     # dagger_prior with continuous moves, its priors drawn again for every minibatch and a
-    # quarter of them exact: 400,000 steps, ~23 minutes on a 2-core CPU (without the redraw,
+    # quarter of them exact: 400,000 steps, ~27 minutes on a 2-core CPU (without the redraw,
     # 100,000 steps and half exact: 85-88% success rate at e > 0, where the image + head
     # policy alone gets 94%: the student recognised episodes by their prior); a new goal
     # needs 3 nats more evidence than the current one (chosen on validation episodes:
