@@ -12,6 +12,7 @@ from activevision.envs.config import EnvConfig
 from activevision.envs.robots import RobotsConfig
 from activevision.envs.simulation import EpisodeBatch
 from activevision.geometry.kernels import ball_visible_mask
+from activevision.geometry.occlusion import hidden_landmarks, robot_cylinders
 from activevision.localisation import LocalisationConfig, best_viewpoints, entropy
 from activevision.rendering.appearance import AppearanceConfig
 
@@ -141,3 +142,59 @@ def test_stored_states_render_as_they_were_seen():
 def test_bad_robot_config_is_one_clear_error(bad):
     with pytest.raises(ValueError, match="RobotsConfig"):
         RobotsConfig(**bad)
+
+
+def test_redrawn_exact_priors_propose_the_goal_with_the_robots_occlusion():
+    # A prior drawn again with error 0 is the true pose; with no localisation error the
+    # goal was planned from that same pose with the landmarks the robots hide, so the
+    # redrawn proposal must be the goal wherever one is found; without the states' robots
+    # the call is refused rather than planning through them.
+    config = EnvConfig(
+        observation="image+head+pose+proposal",
+        prior_error_range=(0.5, 1.0),
+        robots=RobotsConfig(count=(3, 4)),
+    )
+    sim = EpisodeBatch(config, 16)
+    sim.reset(np.arange(16), [np.random.default_rng(s) for s in range(16)])
+    assert sim.hidden.any()  # the robots hide some landmarks somewhere
+    rng = np.random.default_rng(0)
+    prior, proposal = sim.redraw_priors(sim.pose, sim.ball, np.zeros(16), sim.robots, rng)
+    np.testing.assert_array_equal(prior, sim.pose)
+    found = proposal[:, 2] == 1
+    assert found.all()
+    np.testing.assert_array_equal(proposal[:, :2], sim.goal)
+    with pytest.raises(ValueError, match="robots"):
+        sim.redraw_priors(sim.pose, sim.ball, np.zeros(16), None, rng)
+    # a wall of four tall robots 0.6 m ahead along each goal view's bearing: the proposal
+    # moves (in most slots) to best_viewpoints' with the landmarks the wall hides
+    bearing = sim.pose[:, 2] + sim.goal[:, 0]
+    ahead = sim.pose[:, :2] + 0.6 * np.column_stack([np.cos(bearing), np.sin(bearing)])
+    side = np.column_stack([-np.sin(bearing), np.cos(bearing)])
+    wall = np.stack(
+        [
+            np.column_stack([ahead + k * 0.2 * side, np.full(16, 1.0), np.full(16, 100.0)])
+            for k in (-1.5, -0.5, 0.5, 1.5)
+        ],
+        axis=1,
+    )
+    _, walled = sim.redraw_priors(sim.pose, sim.ball, np.zeros(16), wall, rng)
+    assert (np.abs(walled[:, :2] - sim.goal) > 0).any(axis=1).sum() >= 4
+    camera = np.column_stack([sim.pose[:, :2], np.full(16, config.camera.camera_height)])
+    hidden = hidden_landmarks(sim.landmarks, camera, robot_cylinders(wall, config.robots.radius))
+    loc = sim.localisation
+    want = best_viewpoints(
+        sim.pose,
+        np.broadcast_to(loc.ukf.initial_cov, (16, 3, 3)),
+        sim.ball,
+        sim.landmarks,
+        config.camera,
+        grid=loc.grid,
+        ukf=loc.ukf,
+        ball_radius=config.field.ball_radius,
+        ball_views_only=True,
+        hidden=hidden,
+    )
+    np.testing.assert_array_equal(walled[:, 2], want.ok)
+    np.testing.assert_array_equal(
+        walled[want.ok, :2], np.column_stack([want.pan, want.tilt])[want.ok]
+    )
