@@ -59,8 +59,13 @@ def test_run_layout_and_records(tmp_path):
     assert network.vector_size == 2 + 4 + 1 + 5 + 18
 
 
-def test_resume_ends_with_the_same_weights(tmp_path):
-    config = tiny(steps=900, **{"run.epoch_steps": 100, "run.checkpoint_interval": 300})
+@pytest.mark.parametrize(
+    "extra",
+    [{}, {"env.prior_error_range": (0.0, 2.0), "dagger.redraw_prior": True}],
+    ids=["stored-priors", "redrawn-priors"],
+)
+def test_resume_ends_with_the_same_weights(tmp_path, extra):
+    config = tiny(steps=900, **{"run.epoch_steps": 100, "run.checkpoint_interval": 300, **extra})
     train(config, tmp_path / "whole")
     trainer = DaggerTrainer(config, tmp_path / "split")
     trainer.train(350)  # stops at the first round past 350 steps, with a checkpoint
