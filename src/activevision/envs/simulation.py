@@ -208,7 +208,7 @@ class EpisodeBatch:
             grid=loc.grid,
             ukf=loc.ukf,
             ball_radius=cfg.field.ball_radius,
-            parallel=self.renderer.parallel and len(means) > 1,
+            parallel=self.renderer.parallel,  # the search runs one row serially itself
             ball_views_only=True,
             hidden=hidden if cfg.robots.max_count else None,
         )
