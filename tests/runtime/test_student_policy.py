@@ -20,41 +20,54 @@ from activevision.export import export_onnx, policy_metadata  # noqa: E402
 from activevision.runtime import HeadController  # noqa: E402
 from activevision.runtime.goal_evidence import (  # noqa: E402
     GoalEvidence,
+    GoalFrame,
     greedy_actions,
+    offset_count,
     policy_actions,
 )
 
 KIND = "image+head+pose+proposal"
 
 
-def exported(tmp_path, observation: str = KIND, history: int = 2, act_by: str = "action"):
+def exported(
+    tmp_path,
+    observation: str = KIND,
+    history: int = 2,
+    act_by: str = "action",
+    goal_frame: GoalFrame = "body",
+):
     config = EnvConfig(
         observation=observation, action_history=history, prior_error_range=(0.0, 1.0)
     )
     keys = vector_keys(config)
     torch.manual_seed(0)
-    network = StudentNetwork(9, sum(vector_sizes(config, 9).values()), n_goals=40).eval()
     env = ActiveVisionEnv(config)
+    views = env.sim.localisation.grid.views
+    goals = offset_count(views) if goal_frame == "camera" else len(views)
+    network = StudentNetwork(9, sum(vector_sizes(config, 9).values()), n_goals=goals).eval()
     metadata = policy_metadata(env.sim.actions, config.camera)
     metadata.update(observation=observation, vector_keys=list(keys), action_history=history)
     if act_by == "goal":
-        grid = env.sim.localisation.grid
         metadata.update(
             act_by="goal",
-            goal_views_deg=np.degrees(grid.views).tolist(),
+            goal_views_deg=np.degrees(views).tolist(),
+            goal_frame=goal_frame,
         )
     paths = export_onnx(network, tmp_path / "policy.onnx", metadata)
     return network, paths, config, keys
 
 
-@pytest.mark.parametrize("act_by", ["action", "goal"])
-def test_onnx_student_plays_like_pytorch(tmp_path, act_by):
-    network, paths, config, keys = exported(tmp_path, act_by=act_by)
+@pytest.mark.parametrize(
+    ("act_by", "goal_frame"), [("action", "body"), ("goal", "body"), ("goal", "camera")]
+)
+def test_onnx_student_plays_like_pytorch(tmp_path, act_by, goal_frame):
+    network, paths, config, keys = exported(tmp_path, act_by=act_by, goal_frame=goal_frame)
     evidence = None
     if act_by == "goal":
         grid = ActiveVisionEnv(config).sim.localisation.grid
         views = grid.views
-        evidence = GoalEvidence(1, views, ActiveVisionEnv(config).sim.actions)
+        table = ActiveVisionEnv(config).sim.actions
+        evidence = GoalEvidence(1, views, table, frame=goal_frame)
     torch_policy = LearnedPolicy(network, vector_keys=keys, goal_evidence=evidence)
     onnx_policy = OnnxPolicy(paths.model_path)
     env_a, env_b = ActiveVisionEnv(config), ActiveVisionEnv(config)
@@ -138,17 +151,19 @@ def test_switch_margin_keeps_the_goal_until_another_view_leads_by_it():
     views = np.radians([[-30.0, 20.0], [30.0, 20.0]])
     table = np.radians([[0, 0], [3, 0], [-3, 0]])
     sticky, plain = GoalEvidence(1, views, table, 1.0), GoalEvidence(1, views, table)
-    slot = np.array([0])
+    slot, head = np.array([0]), np.zeros((1, 2))
     frames = [[0.5, 0.0], [0.0, 0.4], [0.0, 0.4], [0.0, 0.4], [0.0, 0.4]]
     goals = []
     for frame in frames:  # 1 where the goal is view 1 (pan +30)
-        goals.append([int(e.target(np.array([frame]), slot)[0, 0] > 0) for e in (sticky, plain)])
+        goals.append(
+            [int(e.target(np.array([frame]), slot, head)[0, 0] > 0) for e in (sticky, plain)]
+        )
     # summed lead of view 1: -0.5, -0.1, 0.3, 0.7, 1.1
     assert [g for g, _ in goals] == [0, 0, 0, 0, 1]
     assert [g for _, g in goals] == [0, 0, 1, 1, 1]
     sticky.reset()
     assert sticky.current[0] == -1  # a new episode takes the best view at once
-    assert sticky.target(np.array([[0.0, 0.1]]), slot)[0, 0] > 0
+    assert sticky.target(np.array([[0.0, 0.1]]), slot, head)[0, 0] > 0
     with pytest.raises(ValueError, match="switch_margin"):
         GoalEvidence(1, views, table, -1.0)
 
@@ -161,6 +176,17 @@ def test_policy_json_carries_the_switch_margin(tmp_path):
     with pytest.raises(PolicyFileError, match="goal_switch_margin"):
         _, paths = continuous_export(tmp_path / "b", act_by="goal", goal_switch_margin=-1)
         HeadController(paths.model_path)
+
+
+def test_policy_json_names_the_goal_frame_its_output_fits(tmp_path):
+    # a body-frame network (40 goal logits) described as camera-frame (133): one clear error
+    from activevision.runtime import PolicyFileError
+
+    _, paths = continuous_export(tmp_path / "a", act_by="goal", goal_frame="camera")
+    with pytest.raises(PolicyFileError, match=r"goal_frame 'camera'.*133 logits"):
+        HeadController(paths.model_path)
+    with pytest.raises(PolicyFileError, match="'goal_frame' must be one of"):
+        continuous_export(tmp_path / "b", act_by="goal", goal_frame="world")
 
 
 def continuous_export(tmp_path, act_by: str = "action", **metadata_changes):

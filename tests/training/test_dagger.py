@@ -61,8 +61,12 @@ def test_run_layout_and_records(tmp_path):
 
 @pytest.mark.parametrize(
     "extra",
-    [{}, {"env.prior_error_range": (0.0, 2.0), "dagger.redraw_prior": True}],
-    ids=["stored-priors", "redrawn-priors"],
+    [
+        {},
+        {"env.prior_error_range": (0.0, 2.0), "dagger.redraw_prior": True},
+        {"dagger.goal_frame": "camera"},
+    ],
+    ids=["stored-priors", "redrawn-priors", "camera-frame-goal"],
 )
 def test_resume_ends_with_the_same_weights(tmp_path, extra):
     config = tiny(steps=900, **{"run.epoch_steps": 100, "run.checkpoint_interval": 300, **extra})
@@ -269,6 +273,41 @@ def test_redrawn_priors_keep_each_states_error_scale_and_propose_from_the_new_po
     found = out[:, columns["proposal"]][:, 4] == 1
     moves = out[:, columns["proposal"]][:, :2] - data["head"][:n]
     np.testing.assert_allclose(out[found][:, columns["proposal"]][:, 2:4], moves[found], atol=1e-5)
+
+
+def test_camera_frame_goal_labels_are_the_goals_offset_from_the_head(tmp_path):
+    from activevision.runtime.goal_evidence import offset_axes
+
+    trainer = DaggerTrainer(tiny("image", **{"dagger.goal_frame": "camera"}), tmp_path, loggers=[])
+    trainer._rollout()
+    data, views = trainer.dataset.arrays, trainer.sim.localisation.grid.views
+    b = np.arange(trainer.dataset.size)
+    labels = trainer._goal_labels(b)
+    pans, tilts = offset_axes(views)
+    assert trainer.network.n_goals == labels.shape[1] == len(pans) * len(tilts)
+    knots = np.stack(np.meshgrid(pans, tilts, indexing="ij"), axis=-1).reshape(-1, 2)
+    gap = views[data["goal"][b]] - data["head"][b]  # hand-computed: goal minus head
+    inside = (np.abs(gap[:, 1]) <= tilts[-1]) & (np.abs(gap[:, 0]) <= pans[-1])
+    assert inside.mean() > 0.9
+    np.testing.assert_allclose(labels.sum(axis=1), 1.0, atol=1e-6)
+    np.testing.assert_allclose(labels[inside] @ knots, gap[inside], atol=1e-6)
+    assert trainer.metadata()["goal_frame"] == "camera"
+
+
+def test_camera_frame_goal_needs_a_goal_head_on_the_episodes():
+    with pytest.raises(ValueError, match="goal_frame"):
+        tiny(
+            "image",
+            **{
+                "dagger.goal_frame": "camera",
+                "dagger.goal_class_weight": 0.0,
+                "dagger.act_by": "action",
+            },
+        )
+    from activevision.training import presets
+
+    with pytest.raises(ValueError, match="goal_frame"):
+        presets.preset("match_dagger").replace(**{"dagger.goal_frame": "camera"})
 
 
 def test_redraw_prior_needs_a_drawn_prior_in_the_observation():

@@ -226,7 +226,8 @@ class LearnedPolicy:
         if config.algo == "dagger" and config.dagger.act_by == "goal":
             grid = LocalisationConfig().grid  # the candidate views the goal head names
             table = action_table(config.env.step_deg, config.env.action_set)
-            evidence = GoalEvidence(1, grid.views, table, config.dagger.switch_margin)
+            dag = config.dagger
+            evidence = GoalEvidence(1, grid.views, table, dag.switch_margin, dag.goal_frame)
         env = config.env
         max_move = env.max_move if env.action_type == "continuous" else None
         network = load_policy(run_dir, weights=weights)

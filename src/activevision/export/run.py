@@ -80,6 +80,7 @@ def export_run(
         grid = LocalisationConfig().grid  # the views the student's goal head names
         metadata["act_by"] = config.dagger.act_by
         metadata["goal_switch_margin"] = config.dagger.switch_margin
+        metadata["goal_frame"] = config.dagger.goal_frame
         metadata["goal_views_deg"] = np.degrees(grid.views).tolist()
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)
 

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from activevision.runtime.goal_evidence import GoalEvidence, policy_actions
+from activevision.runtime.goal_evidence import GoalEvidence, offset_count, policy_actions
 from activevision.runtime.metadata import (
     CameraModel,
     PolicyFileError,
@@ -155,7 +155,7 @@ class HeadController:
             assert meta.goal_output_name is not None and meta.goal_views is not None
             self._outputs.append(meta.goal_output_name)
             self._evidence = GoalEvidence(
-                1, meta.goal_views, meta.action_table, meta.goal_switch_margin
+                1, meta.goal_views, meta.action_table, meta.goal_switch_margin, meta.goal_frame
             )
         self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
         # policy.json's reader requires max_move_deg with continuous actions
@@ -397,6 +397,16 @@ class HeadController:
                 else f"{meta.n_actions} actions"
             )
             raise mismatch(f"output shape {out_shape} but metadata says {what}")
+        if meta.act_by == "goal" and meta.goal_views is not None:
+            goal = outputs.get(meta.goal_output_name or "")
+            frame = meta.goal_frame
+            need = len(meta.goal_views) if frame == "body" else offset_count(meta.goal_views)
+            if goal is None or list(goal.shape)[-1] != need:
+                raise mismatch(
+                    f"goal_frame {frame!r} over {len(meta.goal_views)} goal_views_deg needs an"
+                    f" output {meta.goal_output_name!r} of {need} logits; model outputs:"
+                    f" {[(o.name, o.shape) for o in outputs.values()]}"
+                )
 
 
 def camera_mismatch_message(

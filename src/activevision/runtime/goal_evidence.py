@@ -13,8 +13,61 @@ action head, 0% with goal evidence). NumPy only: the trainer (batched), the eval
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import numpy as np
+
+#: what a goal head's logits name: ``"body"``, the candidate views themselves (head angles
+#: relative to the body); ``"camera"``, offsets from where the head points now, on a grid
+#: twice as wide as the views' (:func:`offset_axes`), turned into views with the head's
+#: angles (:func:`offset_weights`)
+GoalFrame = Literal["body", "camera"]
+GOAL_FRAMES: tuple[GoalFrame, ...] = ("body", "camera")
+
+
+def offset_axes(views: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pan and tilt offsets (rad) of a camera-frame goal head for evenly spaced
+    candidate ``views`` ((V, 2) pan, tilt): every difference between two of the views'
+    pans (2 n_pan - 1 values, ascending) and between two tilts."""
+    axes = []
+    for column in np.asarray(views, dtype=np.float64).T:
+        values = np.unique(column)
+        span = values[-1] - values[0]
+        axes.append(np.linspace(-span, span, 2 * len(values) - 1))
+    return axes[0], axes[1]
+
+
+def offset_count(views: np.ndarray) -> int:
+    """The logits of a camera-frame goal head for ``views``."""
+    pans, tilts = offset_axes(views)
+    return len(pans) * len(tilts)
+
+
+def _axis_weights(x: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(..., len(values)) linear-interpolation weights of ``x`` (clipped) on ascending
+    ``values``."""
+    weights = np.zeros((*x.shape, len(values)))
+    if len(values) == 1:
+        weights[...] = 1.0
+        return weights
+    x = np.clip(x, values[0], values[-1])
+    low = np.clip(np.searchsorted(values, x, side="right") - 1, 0, len(values) - 2)
+    frac = (x - values[low]) / (values[low + 1] - values[low])
+    np.put_along_axis(weights, low[..., None], (1.0 - frac)[..., None], -1)
+    np.put_along_axis(weights, low[..., None] + 1, frac[..., None], -1)
+    return weights
+
+
+def offset_weights(offsets: np.ndarray, pans: np.ndarray, tilts: np.ndarray) -> np.ndarray:
+    """(..., len(pans) * len(tilts)) bilinear weights (pan-major, each row summing to 1) of
+    ``offsets`` ((..., 2) pan, tilt rad, clipped to the axes) on the offset grid: the soft
+    label of a goal offset, and how a camera-frame goal head's log-probabilities are read
+    at a view's offset."""
+    offsets = np.asarray(offsets, dtype=np.float64)
+    pan = _axis_weights(offsets[..., 0], pans)
+    tilt = _axis_weights(offsets[..., 1], tilts)
+    weights: np.ndarray = (pan[..., :, None] * tilt[..., None, :]).reshape(*offsets.shape[:-1], -1)
+    return weights
 
 
 def greedy_actions(head: np.ndarray, target: np.ndarray, table: np.ndarray) -> np.ndarray:
@@ -54,14 +107,26 @@ class GoalEvidence:
             only when its evidence leads by at least this much. 0: always the best-supported
             view. Frames that keep favouring whichever view the head is not at can then no
             longer swing it between the two (README: continuous head control).
+        frame: what the goal logits name (:data:`GoalFrame`): with ``"camera"`` each view's
+            log-probability is the head's, read at the view's offset from the head, and
+            renormalised over the views.
     """
 
     def __init__(
-        self, n: int, views: np.ndarray, table: np.ndarray, switch_margin: float = 0.0
+        self,
+        n: int,
+        views: np.ndarray,
+        table: np.ndarray,
+        switch_margin: float = 0.0,
+        frame: GoalFrame = "body",
     ) -> None:
         if not (math.isfinite(switch_margin) and switch_margin >= 0):
             raise ValueError(f"switch_margin must be a number >= 0, got {switch_margin!r}")
+        if frame not in GOAL_FRAMES:
+            raise ValueError(f"frame must be one of {GOAL_FRAMES}, got {frame!r}")
+        self.frame = frame
         self.views = np.asarray(views, dtype=np.float64)
+        self.offsets = offset_axes(self.views)
         self.table = np.asarray(table, dtype=np.float64)
         self.switch_margin = float(switch_margin)
         self.evidence = np.zeros((n, len(self.views)))
@@ -72,11 +137,22 @@ class GoalEvidence:
         self.evidence[slots] = 0.0
         self.current[slots] = -1
 
-    def target(self, goal_logits: np.ndarray, slots: np.ndarray) -> np.ndarray:
-        """Add this step's ``goal_logits`` (M, V) to slots ``slots`` (M,) and return the
-        goal view (M, 2) of each: the best-supported one, unless the slot's current goal is
-        within ``switch_margin`` of it."""
-        self.evidence[slots] += log_softmax(np.asarray(goal_logits, dtype=np.float64))
+    def view_log_probs(self, goal_logits: np.ndarray, heads: np.ndarray) -> np.ndarray:
+        """(M, V) the log-probability of each view from a goal head's logits (M, V), or a
+        camera-frame head's (M, offsets) with the heads ((M, 2) pan, tilt rad) they were
+        seen from."""
+        logits = np.asarray(goal_logits, dtype=np.float64)
+        if self.frame == "body":
+            return log_softmax(logits)
+        gap = self.views[None] - np.asarray(heads, dtype=np.float64)[:, None]
+        weights = offset_weights(gap, *self.offsets)
+        return log_softmax(np.einsum("mvr,mr->mv", weights, log_softmax(logits)))
+
+    def target(self, goal_logits: np.ndarray, slots: np.ndarray, heads: np.ndarray) -> np.ndarray:
+        """Add this step's ``goal_logits`` (M, V), seen from ``heads`` (M, 2), to slots
+        ``slots`` (M,) and return the goal view (M, 2) of each: the best-supported one,
+        unless the slot's current goal is within ``switch_margin`` of it."""
+        self.evidence[slots] += self.view_log_probs(goal_logits, heads)
         evidence = self.evidence[slots]
         best = np.argmax(evidence, axis=1)
         current = self.current[slots]
@@ -105,7 +181,7 @@ def policy_actions(
     all act through this function."""
     if evidence is not None and goal_logits is not None:
         rows = np.arange(len(heads)) if slots is None else slots
-        target = evidence.target(goal_logits, rows)
+        target = evidence.target(goal_logits, rows, heads)
         if max_move is None:
             return greedy_actions(heads, target, evidence.table)
         return continuous_moves(heads, target, max_move)

@@ -65,6 +65,8 @@ from typing import Any
 
 import numpy as np
 
+from activevision.runtime.goal_evidence import GOAL_FRAMES, GoalFrame
+
 #: Value of the ``format`` key of every policy.json.
 METADATA_FORMAT = "activevision-policy"
 #: Version of the policy.json layout this code reads and writes.
@@ -354,6 +356,9 @@ class PolicyMetadata:
     goal_views: np.ndarray | None = field(default=None, repr=False)  #: (V, 2) rad
     #: with act_by "goal": the evidence (nats) another view needs over the current goal
     goal_switch_margin: float = 0.0
+    #: what the goal output names (``runtime.goal_evidence.GoalFrame``): "body", the views;
+    #: "camera", offsets from the head
+    goal_frame: GoalFrame = "body"
     #: "discrete": the output scores the action table's rows; "continuous": it is the move
     #: (pan, tilt) in [-1, 1], times ``max_move``
     action_type: str = "discrete"
@@ -416,6 +421,7 @@ class PolicyMetadata:
             goal_output_name=read.optional_str("goal_output_name"),
             goal_views=read.goal_views(),
             goal_switch_margin=read.goal_switch_margin(),
+            goal_frame=read.goal_frame(),
             action_type=read.action_type(),
             max_move=read.max_move(),
             camera=read.camera(),
@@ -463,6 +469,13 @@ class _MetadataReader:
         if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value < 1e6:
             raise self.fail(f"'goal_switch_margin' must be a number >= 0, got {value!r}")
         return float(value)
+
+    def goal_frame(self) -> GoalFrame:
+        value = self.values.get("goal_frame", "body")
+        if value not in GOAL_FRAMES:
+            raise self.fail(f"'goal_frame' must be one of {list(GOAL_FRAMES)}, got {value!r}")
+        frame: GoalFrame = value
+        return frame
 
     def action_type(self) -> str:
         value = self.values.get("action_type", "discrete")

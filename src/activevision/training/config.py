@@ -25,6 +25,7 @@ from typing import Any
 from activevision.envs.config import EnvConfig
 from activevision.envs.match.config import MatchConfig
 from activevision.io import write_text
+from activevision.runtime.goal_evidence import GoalFrame
 from activevision.typecheck import check_dataclass_fields, config_from_dict, config_to_dict
 from activevision.typecheck import in_range as _range
 
@@ -149,6 +150,11 @@ class DaggerConfig:
     #: with act_by "goal": another view becomes the goal only when its summed evidence
     #: leads the current goal's by this many nats (hysteresis; 0: always the best) (T)
     switch_margin: float = field(default=0.0, metadata=_range(0.0, 1000.0))
+    #: what the goal head names (``runtime.goal_evidence.GoalFrame``): "body", the 40 views
+    #: (head angles); "camera", the goal's offset from where the head points now, which an
+    #: image shows without the head angles (7 x 19 offsets, soft bilinear labels), read
+    #: back as views with the head's angles when acting (README: learned head control) (T)
+    goal_frame: GoalFrame = "body"
     #: each minibatch draws its states' prior poses again at their episodes' error scales,
     #: with Algorithm 1's proposal from them (an augmentation: the student cannot recognise
     #: a stored episode by its one prior draw, and so learns what a prior of that error
@@ -169,6 +175,8 @@ class DaggerConfig:
         check_dataclass_fields(self)
         if self.act_by == "goal" and not self.goal_class_weight > 0:
             raise ValueError("DaggerConfig.act_by: 'goal' needs goal_class_weight > 0")
+        if self.goal_frame == "camera" and not self.goal_class_weight > 0:
+            raise ValueError("DaggerConfig.goal_frame: 'camera' needs goal_class_weight > 0")
 
 
 @dataclass(frozen=True)
@@ -289,6 +297,11 @@ class TrainConfig:
             raise ValueError(
                 "TrainConfig.dagger.act_by: a match student acts by its action head ('action');"
                 " its teacher names no goal view"
+            )
+        if self.dagger.goal_frame != "body":
+            raise ValueError(
+                "TrainConfig.dagger.goal_frame: a match student has no goal view to name in"
+                " the camera's frame ('body')"
             )
 
     def _check_sb3(self) -> None:

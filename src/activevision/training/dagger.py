@@ -8,7 +8,8 @@ decayed linearly to 0 over ``teacher_fraction`` of the run), else the student's 
 every visited state is stored with the teacher's action (the greedy 3-degree move to the
 true goal) and the goal view's index. Then ``updates_per_rollout`` minibatches are drawn from
 all states so far: cross-entropy on the teacher's action, plus ``goal_class_weight`` times
-cross-entropy on the goal view (40 classes).
+cross-entropy on the goal view (40 classes; with ``goal_frame="camera"`` on the goal's
+offset from the head, 133 offsets with soft bilinear labels).
 
 With ``env.action_type="continuous"`` the teacher's action is the move straight to the goal,
 clipped to ``env.max_move_deg`` (``envs.actions.oracle_actions``), and the student regresses
@@ -53,7 +54,13 @@ from activevision.envs.observations import (
 )
 from activevision.envs.simulation import EpisodeBatch
 from activevision.rendering.appearance import LOOK_FIELDS
-from activevision.runtime.goal_evidence import GoalEvidence, policy_actions
+from activevision.runtime.goal_evidence import (
+    GoalEvidence,
+    offset_axes,
+    offset_count,
+    offset_weights,
+    policy_actions,
+)
 from activevision.training import checkpoint as ckpt
 from activevision.training.config import TrainConfig
 from activevision.training.cpu import configure_torch_cpu, resolve_device
@@ -286,16 +293,24 @@ class DaggerTrainer(ImitationRun):
             outputs=self.n_actions,
             vector_size=sum(vector_sizes(cfg, self.n_actions).values()),
             image_shape=(cfg.camera.height, cfg.camera.width),
-            n_goals=len(self.sim.localisation.grid) if dag.goal_class_weight > 0 else 0,
+            n_goals=self._goal_outputs(),
             look_size=len(LOOK_FIELDS) if cfg.appearance.enabled else 0,
             robots=cfg.robots.max_count,
         )
 
+    def _goal_outputs(self) -> int:
+        """The goal head's logits: one per view, or per offset (``dagger.goal_frame``)."""
+        dag, views = self.config.dagger, self.sim.localisation.grid.views
+        if not dag.goal_class_weight > 0:
+            return 0
+        return offset_count(views) if dag.goal_frame == "camera" else len(views)
+
     def _goal_evidence(self, n: int) -> GoalEvidence | None:
-        if self.config.dagger.act_by != "goal":
+        dag = self.config.dagger
+        if dag.act_by != "goal":
             return None
-        grid = self.sim.localisation.grid
-        return GoalEvidence(n, grid.views, self.sim.actions, self.config.dagger.switch_margin)
+        views = self.sim.localisation.grid.views
+        return GoalEvidence(n, views, self.sim.actions, dag.switch_margin, dag.goal_frame)
 
     # ------------------------------------------------------------------ the loop
     def _rollout(self) -> None:
@@ -372,13 +387,26 @@ class DaggerTrainer(ImitationRun):
         else:
             loss = F.cross_entropy(logits, teacher)
         if goal_logits is not None:
-            goal = torch.from_numpy(data["goal"][b]).to(self.device)
+            goal = torch.from_numpy(self._goal_labels(b)).to(self.device)
             loss = loss + self.config.dagger.goal_class_weight * F.cross_entropy(goal_logits, goal)
         self.optimizer.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(self.network.parameters(), self.config.learner.max_grad_norm)
         self.optimizer.step()
         return float(loss.item())
+
+    def _goal_labels(self, b: np.ndarray) -> np.ndarray:
+        """The goal head's targets for dataset states ``b``: the goal view's index, or in
+        the camera's frame the bilinear weights of the goal's offset from the head."""
+        data = self.dataset.arrays
+        if self.config.dagger.goal_frame == "body":
+            indices: np.ndarray = data["goal"][b]
+            return indices
+        views = self.sim.localisation.grid.views
+        labels: np.ndarray = offset_weights(
+            views[data["goal"][b]] - data["head"][b], *offset_axes(views)
+        ).astype(np.float32)
+        return labels
 
     def _redraw_priors(self, vectors: np.ndarray, b: np.ndarray) -> np.ndarray:
         """The minibatch's vectors with the prior pose and proposal of every state whose
@@ -423,6 +451,7 @@ class DaggerTrainer(ImitationRun):
             "vector_keys": list(self.keys),
             "act_by": self.config.dagger.act_by,
             "goal_switch_margin": self.config.dagger.switch_margin,
+            "goal_frame": self.config.dagger.goal_frame,
             "max_move_deg": list(cfg.max_move_deg),
             "goal_views_deg": np.degrees(grid.views).tolist(),
             "step": self.step,
