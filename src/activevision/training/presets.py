@@ -9,6 +9,7 @@ from activevision.envs.config import EnvConfig, ObservationKind
 from activevision.envs.match.config import DetectionConfig, MatchConfig
 from activevision.envs.robots import RobotsConfig
 from activevision.rendering.appearance import AppearanceConfig
+from activevision.runtime.goal_evidence import GoalFrame
 from activevision.training.config import (
     Algorithm,
     DaggerConfig,
@@ -54,6 +55,7 @@ def dagger(
     action_type: ActionType = "discrete",
     exact_share: float = 0.5,
     redraw_prior: bool = False,
+    goal_frame: GoalFrame = "body",
 ) -> TrainConfig:
     """DAgger on ``observation``: batch 256 at a learning rate of 1e-3 (tuned here), 64
     episodes a round, 16 updates after each (about 20 states per update), validated four
@@ -64,7 +66,8 @@ def dagger(
     randomisation; ``rendering.appearance``, ``envs.robots``). ``action_type="continuous"``:
     moves of up to 10 degrees per axis regressed on the oracle's (no action history: it
     holds discrete actions). ``exact_share``: the share of episodes whose prior is exact;
-    ``redraw_prior``: each minibatch draws the priors again (``DaggerConfig.redraw_prior``)."""
+    ``redraw_prior``: each minibatch draws the priors again (``DaggerConfig.redraw_prior``);
+    ``goal_frame``: what the goal head names (``DaggerConfig.goal_frame``)."""
     env = EnvConfig(
         observation=observation,
         prior_error_range=prior_error_range,
@@ -83,7 +86,7 @@ def dagger(
         algo="dagger",
         env=env,
         learner=LearnerConfig(batch_size=256, learning_rate=1e-3),
-        dagger=DaggerConfig(redraw_prior=redraw_prior),
+        dagger=DaggerConfig(redraw_prior=redraw_prior, goal_frame=goal_frame),
         run=RunConfig(
             total_timesteps=total_timesteps,
             epoch_steps=5000,
@@ -256,9 +259,15 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         lambda: with_switch_margin(dagger("image+head", 200_000, action_type="continuous"), 3.0),
         "dagger_head with continuous moves of up to 10 degrees a step",
     ),
+    # the image alone names the goal's offset from the view it shows (the camera's frame)
+    # far better than the view itself, which also needs the head's pan: 95.9% / 87.0%
+    # against 82.4% / 45.0% (README: learned head control)
     "dagger_image_continuous": (
-        lambda: dagger("image", 200_000, action_type="continuous"),
-        "dagger_image with continuous moves of up to 10 degrees a step",
+        lambda: with_switch_margin(
+            dagger("image", 200_000, action_type="continuous", goal_frame="camera"), 3.0
+        ),
+        "dagger_image with continuous moves of up to 10 degrees a step, the goal named in"
+        " the camera's frame",
     ),
     "dagger_prior": (
         lambda: dagger("image+head+pose+proposal", 400_000, (0.0, 2.0)),
