@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from activevision.runtime.goal_evidence import GoalEvidence, offset_count, policy_actions
+from activevision.runtime.goal_evidence import GoalEvidence, goal_output_count, policy_actions
 from activevision.runtime.metadata import (
     CameraModel,
     PolicyFileError,
@@ -400,7 +400,7 @@ class HeadController:
         if meta.act_by == "goal" and meta.goal_views is not None:
             goal = outputs.get(meta.goal_output_name or "")
             frame = meta.goal_frame
-            need = len(meta.goal_views) if frame == "body" else offset_count(meta.goal_views)
+            need = goal_output_count(meta.goal_views, frame)
             if goal is None or list(goal.shape)[-1] != need:
                 raise mismatch(
                     f"goal_frame {frame!r} over {len(meta.goal_views)} goal_views_deg needs an"

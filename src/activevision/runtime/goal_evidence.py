@@ -43,6 +43,11 @@ def offset_count(views: np.ndarray) -> int:
     return len(pans) * len(tilts)
 
 
+def goal_output_count(views: np.ndarray, frame: GoalFrame) -> int:
+    """The logits of a goal head over ``views`` in ``frame``: one per view, or per offset."""
+    return offset_count(views) if frame == "camera" else len(views)
+
+
 def _axis_weights(x: np.ndarray, values: np.ndarray) -> np.ndarray:
     """(..., len(values)) linear-interpolation weights of ``x`` (clipped) on ascending
     ``values``."""

@@ -56,8 +56,8 @@ from activevision.envs.simulation import EpisodeBatch
 from activevision.rendering.appearance import LOOK_FIELDS
 from activevision.runtime.goal_evidence import (
     GoalEvidence,
+    goal_output_count,
     offset_axes,
-    offset_count,
     offset_weights,
     policy_actions,
 )
@@ -303,7 +303,7 @@ class DaggerTrainer(ImitationRun):
         dag, views = self.config.dagger, self.sim.localisation.grid.views
         if not dag.goal_class_weight > 0:
             return 0
-        return offset_count(views) if dag.goal_frame == "camera" else len(views)
+        return goal_output_count(views, dag.goal_frame)
 
     def _goal_evidence(self, n: int) -> GoalEvidence | None:
         dag = self.config.dagger
