@@ -315,3 +315,36 @@ def test_redraw_prior_needs_a_drawn_prior_in_the_observation():
         tiny("image+head", **{"dagger.redraw_prior": True})
     with pytest.raises(ValueError, match="prior_error_range"):  # the prior is the belief
         tiny(**{"dagger.redraw_prior": True, "env.localisation_error": 0.5})
+
+
+def test_warm_start_takes_the_source_weights_resumes_without_them_and_refuses_others(tmp_path):
+    import torch
+
+    train(tiny(steps=300), tmp_path / "source")
+    source = load_policy(tmp_path / "source").state_dict()
+    warm = tiny(
+        steps=600,
+        **{"run.checkpoint_interval": 300, "dagger.init_from": str(tmp_path / "source")},
+    )
+    trainer = DaggerTrainer(warm, tmp_path / "split", loggers=[])
+    start = trainer.network.state_dict()
+    assert all(torch.equal(start[k], source[k]) for k in source)
+    cold = DaggerTrainer(tiny(steps=300), tmp_path / "cold", loggers=[]).network.state_dict()
+    assert not all(torch.equal(cold[k], source[k]) for k in source)
+    trainer.train(350)
+    trainer.close()
+    train(warm, tmp_path / "whole")
+    # a resumed run restores its checkpoint: the source may be gone by then
+    (tmp_path / "source").rename(tmp_path / "moved")
+    resume(tmp_path / "split")
+    a = load_policy(tmp_path / "whole").state_dict()
+    b = load_policy(tmp_path / "split").state_dict()
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    moved = str(tmp_path / "moved")
+    for other in ({"env.observation": "image+head"}, {"dagger.goal_frame": "camera"}):
+        with pytest.raises(ValueError, match=r"dagger\.init_from: .* another network or input"):
+            DaggerTrainer(tiny(**{**other, "dagger.init_from": moved}), tmp_path / "x", loggers=[])
+    # how the student acts on its outputs may change
+    DaggerTrainer(
+        tiny(**{"dagger.switch_margin": 3.0, "dagger.init_from": moved}), tmp_path / "y", loggers=[]
+    )

@@ -160,6 +160,11 @@ class DaggerConfig:
     #: a stored episode by its one prior draw, and so learns what a prior of that error
     #: tells; README: learned head control) (T)
     redraw_prior: bool = False
+    #: a run directory (its newest policy) or a policy file whose student weights this run
+    #: starts from instead of a random initialisation: fine-tuning, e.g. a clean-world
+    #: policy in the randomised world. Its network and inputs must be this run's (checked
+    #: against the file's metadata); None: random weights (T)
+    init_from: str | None = None
     #: on the match env: the teacher, the planner ``entropy_track``
     #: (``envs.match.heads.EntropyTrackTeacher``) or ``glance_track`` (``GlanceTrackTeacher``)
     match_teacher: typing.Literal["entropy_track", "glance_track"] = "entropy_track"

@@ -66,6 +66,7 @@ from activevision.training.config import TrainConfig
 from activevision.training.cpu import configure_torch_cpu, resolve_device
 from activevision.training.loggers import Logger
 from activevision.training.metrics import episode_record
+from activevision.training.policy_files import load_policy_and_metadata
 from activevision.training.student_runs import StudentRun
 
 MAX_EPISODE_STEPS = 20  #: the registration's time limit
@@ -137,6 +138,13 @@ def goal_indices(sim: EpisodeBatch) -> np.ndarray:
     return index
 
 
+#: policy metadata that a warm start (``DaggerConfig.init_from``) may change: how the
+#: student acts on its outputs, and the file's own step and validation score
+WARM_START_FREE_KEYS = frozenset(
+    {"step", "act_by", "goal_switch_margin", "validation_success_rate", "validation_episode_reward"}
+)
+
+
 class ImitationRun(StudentRun):
     """What DAgger on the episodes (:class:`DaggerTrainer`) and on the match
     (:class:`~activevision.training.match_dagger.MatchDaggerTrainer`) share: the teacher's
@@ -194,7 +202,23 @@ class ImitationRun(StudentRun):
         )
         configure_torch_cpu(config.run.num_threads)
         self.step = 0
+        if dag.init_from is not None and not resuming:
+            self._warm_start(dag.init_from)
         self._open_run(run_dir, loggers, resuming)
+
+    def _warm_start(self, source: str) -> None:
+        """Load the student weights of ``source`` (``DaggerConfig.init_from``) into the
+        network; ValueError naming the first difference when ``source`` was trained for
+        another network or other inputs."""
+        network, meta = load_policy_and_metadata(source)
+        mine = self.metadata()
+        for key in sorted((set(mine) | set(meta)) - WARM_START_FREE_KEYS):
+            if meta.get(key) != mine.get(key):
+                raise ValueError(
+                    f"dagger.init_from: {source} holds a policy for another network or input"
+                    f" ({key}: {meta.get(key)!r}; this run: {mine.get(key)!r})"
+                )
+        self.network.load_state_dict(network.state_dict())
 
     @property
     def teacher_share(self) -> float:

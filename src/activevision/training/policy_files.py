@@ -111,6 +111,14 @@ def load_policy(
     holds its newest online weights (``weights="final"``), ``best_policy.safetensors`` those
     with the best validation score (``weights="best"``, runs with ``eval_interval``).
     """
+    return load_policy_and_metadata(path, device, weights)[0]
+
+
+def load_policy_and_metadata(
+    path: str | os.PathLike[str], device: str = "cpu", weights: str = "final"
+) -> tuple[QNetwork | StudentNetwork, dict[str, Any]]:
+    """:func:`load_policy`, and the metadata its file carries (what the run's trainer wrote:
+    the network's shape, the step, the observation)."""
     path = _weights_file(Path(path), weights)
     tensors, meta = ckpt.load_tensors(path)
     if any(k.startswith("online.") for k in tensors):
@@ -122,7 +130,7 @@ def load_policy(
         if meta.get("network") == "student":
             network = StudentNetwork.from_metadata(meta)
             network.load_state_dict(tensors)
-            return network.to(device).eval()
+            return network.to(device).eval(), meta
         network = QNetwork(
             meta["n_actions"],
             meta["stack"],
@@ -133,7 +141,7 @@ def load_policy(
         network.load_state_dict(tensors)
     except (KeyError, RuntimeError, TypeError, ValueError) as error:
         raise ckpt.CheckpointError(f"{path} does not hold policy weights: {error}") from error
-    return network.to(device).eval()
+    return network.to(device).eval(), meta
 
 
 def _weights_file(path: Path, weights: str) -> Path:
@@ -159,6 +167,7 @@ __all__ = [
     "POLICY_FILE",
     "BestWeights",
     "load_policy",
+    "load_policy_and_metadata",
     "network_metadata",
     "write_best_policy",
     "write_policy",
