@@ -26,7 +26,7 @@ from activevision.experiments.robustness import (
     worst_drops,
 )
 from activevision.figures.robustness import plot_robustness
-from activevision.rendering.appearance import AppearanceConfig
+from activevision.rendering.appearance import FACTORS, AppearanceConfig
 from activevision.runtime import PolicyFileError, pretrained_policy_path
 from activevision.typecheck import config_to_dict
 
@@ -62,9 +62,10 @@ def test_names_are_unique_and_cover_every_kind():
     ):
         assert expected in names
     appearance = {f.name for f in dataclasses.fields(AppearanceConfig)}
+    assert appearance - set(FACTORS) == {"neutral_share"}  # a share of episodes, not a factor
     # every drawn appearance factor is perturbed (the stripe width only with the stripes)
     played = {p.factor for p in PERTURBATIONS}
-    assert appearance - played == {"stripe_width"}
+    assert set(FACTORS) - played == {"stripe_width"}
 
 
 @pytest.mark.parametrize("clean", [EnvConfig(), RANDOMISED], ids=["clean-trained", "randomised"])

@@ -223,3 +223,25 @@ def test_config_ranges_are_checked():
     with pytest.raises(ValueError, match=r"AppearanceConfig\.defocus"):
         AppearanceConfig(defocus=(0.0, 9.0))
     assert not AppearanceConfig().enabled and AppearanceConfig.randomised().enabled
+    with pytest.raises(ValueError, match=r"AppearanceConfig\.neutral_share"):
+        AppearanceConfig.randomised().replace(neutral_share=1.5)  # type: ignore[arg-type]
+    assert not AppearanceConfig(neutral_share=0.5).enabled  # no factor on: nothing to draw
+
+
+def test_a_neutral_share_of_episodes_draws_the_clean_look_and_the_rest_as_before():
+    robust = AppearanceConfig.randomised()
+    mixed = robust.replace(neutral_share=0.3)  # type: ignore[arg-type]
+    factors = slice(0, LOOK["key"])
+    neutral = 0
+    for seed in range(400):
+        row = draw_looks(mixed, np.random.default_rng(seed))
+        rng = np.random.default_rng(seed)
+        decided = rng.random() < 0.3  # the first number decides; the draws follow as before
+        alone = draw_looks(robust, rng)
+        assert row[LOOK["key"]] == alone[LOOK["key"]]
+        if decided:
+            np.testing.assert_array_equal(row[factors], neutral_looks(1)[0, factors])
+            neutral += 1
+        else:
+            np.testing.assert_array_equal(row, alone)
+    assert 90 <= neutral <= 150  # 30% of 400: 120 +- 3.3 standard deviations

@@ -344,6 +344,8 @@ def test_warm_start_takes_the_source_weights_resumes_without_them_and_refuses_ot
     for other in ({"env.observation": "image+head"}, {"dagger.goal_frame": "camera"}):
         with pytest.raises(ValueError, match=r"dagger\.init_from: .* another network or input"):
             DaggerTrainer(tiny(**{**other, "dagger.init_from": moved}), tmp_path / "x", loggers=[])
+    with pytest.raises(ValueError, match=r"dagger\.init_from: no policy weights"):
+        DaggerTrainer(tiny(**{"dagger.init_from": str(tmp_path / "source")}), tmp_path / "z")
     # how the student acts on its outputs may change
     DaggerTrainer(
         tiny(**{"dagger.switch_margin": 3.0, "dagger.init_from": moved}), tmp_path / "y", loggers=[]

@@ -45,7 +45,7 @@ from typing import Any
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.experiments.evaluate import Interval, evaluate_policy
 from activevision.experiments.policies import HeadPolicy
-from activevision.rendering.appearance import AppearanceConfig
+from activevision.rendering.appearance import FACTORS, AppearanceConfig
 
 #: The robust training ranges (the ``dagger_robust`` preset's appearance and robot count).
 ROBUST_APPEARANCE = AppearanceConfig.randomised()
@@ -165,11 +165,11 @@ def perturbations(clean: EnvConfig, names: Sequence[str] | None = None) -> tuple
 def within(config: EnvConfig, trained: EnvConfig) -> bool:
     """Whether every range ``config`` draws from lies within ``trained``'s: each appearance
     factor (the stripe width only where stripes are on) and the robot count."""
-    for f in dataclasses.fields(AppearanceConfig):
-        if f.name == "stripe_width" and config.appearance.stripes == (0.0, 0.0):
+    for name in FACTORS:
+        if name == "stripe_width" and config.appearance.stripes == (0.0, 0.0):
             continue
-        lo, hi = getattr(config.appearance, f.name)
-        t_lo, t_hi = getattr(trained.appearance, f.name)
+        lo, hi = getattr(config.appearance, name)
+        t_lo, t_hi = getattr(trained.appearance, name)
         if not t_lo <= lo <= hi <= t_hi:
             return False
     (lo, hi), (t_lo, t_hi) = config.robots.count, trained.robots.count

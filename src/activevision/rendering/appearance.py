@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from activevision.typecheck import check_dataclass_fields
+from activevision.typecheck import check_dataclass_fields, in_range
 
 Range = tuple[float, float]
 
@@ -63,6 +63,28 @@ LOOK_FIELDS = (
 LOOK = {name: i for i, name in enumerate(LOOK_FIELDS)}
 #: Looks columns an episode draws (the rest are set per frame).
 _DRAWN = LOOK_FIELDS[: LOOK["key"]]
+
+
+#: The appearance factors: the fields of :class:`AppearanceConfig` that are ranges.
+FACTORS = (
+    "gain",
+    "offset",
+    "gamma",
+    "vignetting",
+    "read_noise",
+    "shot_noise",
+    "defocus",
+    "motion_blur",
+    "stripes",
+    "stripe_width",
+    "grain",
+    "line_width",
+    "line_wear",
+    "clutter",
+    "mount_height",
+    "mount_tilt_deg",
+    "mount_fov",
+)
 
 
 def _bounds(low: float, high: float) -> dict[str, tuple[float, float]]:
@@ -111,10 +133,14 @@ class AppearanceConfig:
     mount_tilt_deg: Range = field(default=(0.0, 0.0), metadata=_bounds(-15.0, 15.0))
     #: relative hfov change [-0.05, 0.05]
     mount_fov: Range = field(default=(0.0, 0.0), metadata=_bounds(-0.3, 0.3))
+    #: share of episodes drawn neutral (every factor off: the paper's clean render), so that
+    #: training keeps seeing the nominal world; not a factor, and 0 in :meth:`randomised`
+    neutral_share: float = field(default=0.0, metadata=in_range(0.0, 1.0))
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
-        for f in dataclasses.fields(self):
+        for name in FACTORS:
+            f = self.__dataclass_fields__[name]
             lo, hi = getattr(self, f.name)
             low, high = f.metadata["bounds"]
             if not low <= lo <= hi <= high:
@@ -149,7 +175,9 @@ class AppearanceConfig:
     def enabled(self) -> bool:
         """Whether any factor differs from the clean render (cached: the envs ask every
         step, and building the comparison config costs most of a millisecond)."""
-        return self != AppearanceConfig(stripe_width=self.stripe_width)
+        return self != AppearanceConfig(
+            stripe_width=self.stripe_width, neutral_share=self.neutral_share
+        )
 
     def replace(self, **changes: Range) -> AppearanceConfig:
         """A copy with ``changes`` (factor name -> range)."""
@@ -159,7 +187,10 @@ class AppearanceConfig:
 def draw_looks(config: AppearanceConfig, rng: np.random.Generator) -> np.ndarray:
     """One episode's look row (len(LOOK_FIELDS),) float64 and nothing else drawn: every
     factor uniform in its range, in :data:`LOOK_FIELDS` order, then the pattern key. The
-    per-frame columns start at 0."""
+    per-frame columns start at 0. With ``neutral_share`` > 0 a first number decides whether
+    the episode is neutral (then its factors are drawn all the same and set neutral, so the
+    draws that follow do not depend on the decision)."""
+    neutral = config.neutral_share > 0.0 and rng.random() < config.neutral_share
     row = np.zeros(len(LOOK_FIELDS))
     for i, name in enumerate(_DRAWN):
         attr = "mount_tilt_deg" if name == "mount_tilt" else name  # stored in radians
@@ -167,6 +198,8 @@ def draw_looks(config: AppearanceConfig, rng: np.random.Generator) -> np.ndarray
         row[i] = lo + (hi - lo) * rng.random()
     row[LOOK["mount_tilt"]] = math.radians(row[LOOK["mount_tilt"]])
     row[LOOK["key"]] = float(rng.integers(0, 2**52))
+    if neutral:
+        row[: LOOK["key"]] = neutral_looks(1)[0, : LOOK["key"]]
     return row
 
 

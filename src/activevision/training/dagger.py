@@ -210,7 +210,10 @@ class ImitationRun(StudentRun):
         """Load the student weights of ``source`` (``DaggerConfig.init_from``) into the
         network; ValueError naming the first difference when ``source`` was trained for
         another network or other inputs."""
-        network, meta = load_policy_and_metadata(source)
+        try:
+            network, meta = load_policy_and_metadata(source)
+        except ckpt.CheckpointError as error:
+            raise ValueError(f"dagger.init_from: {error}") from error
         mine = self.metadata()
         for key in sorted((set(mine) | set(meta)) - WARM_START_FREE_KEYS):
             if meta.get(key) != mine.get(key):
