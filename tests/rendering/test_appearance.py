@@ -224,13 +224,13 @@ def test_config_ranges_are_checked():
         AppearanceConfig(defocus=(0.0, 9.0))
     assert not AppearanceConfig().enabled and AppearanceConfig.randomised().enabled
     with pytest.raises(ValueError, match=r"AppearanceConfig\.neutral_share"):
-        AppearanceConfig.randomised().replace(neutral_share=1.5)  # type: ignore[arg-type]
+        AppearanceConfig.randomised().replace(neutral_share=1.5)
     assert not AppearanceConfig(neutral_share=0.5).enabled  # no factor on: nothing to draw
 
 
 def test_a_neutral_share_of_episodes_draws_the_clean_look_and_the_rest_as_before():
     robust = AppearanceConfig.randomised()
-    mixed = robust.replace(neutral_share=0.3)  # type: ignore[arg-type]
+    mixed = robust.replace(neutral_share=0.3)
     factors = slice(0, LOOK["key"])
     neutral = 0
     for seed in range(400):

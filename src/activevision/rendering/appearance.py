@@ -179,9 +179,9 @@ class AppearanceConfig:
             stripe_width=self.stripe_width, neutral_share=self.neutral_share
         )
 
-    def replace(self, **changes: Range) -> AppearanceConfig:
-        """A copy with ``changes`` (factor name -> range)."""
-        return dataclasses.replace(self, **changes)
+    def replace(self, **changes: Range | float) -> AppearanceConfig:
+        """A copy with ``changes`` (factor name -> range, or ``neutral_share``)."""
+        return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
 
 def draw_looks(config: AppearanceConfig, rng: np.random.Generator) -> np.ndarray:
