@@ -178,6 +178,11 @@ def test_cli_overrides_of_a_nested_config_field():
         apply_overrides(config, ["env.camera.fov=1.2"])
     with pytest.raises(ValueError, match="hfov"):
         apply_overrides(config, ["env.camera.hfov=4"])
+    # a field name that several configs have: the paths to choose from
+    with pytest.raises(ValueError, match=r"'neutral_share' names several fields; give its full"):
+        apply_overrides(config, ["neutral_share=0.5"])
+    with pytest.raises(ValueError, match=r"env\.appearance\.neutral_share, match\.appearance"):
+        apply_overrides(config, ["neutral_share=0.5"])
 
 
 def load_config_round_trip(config: TrainConfig) -> TrainConfig:

@@ -401,6 +401,12 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
     for key, value in changes.items():
         path = paths.get(key.strip()) or _env_alias(key.strip())
         if path is None:
+            twins = sorted(p for p in set(paths.values()) if p.endswith("." + key.strip()))
+            if twins:
+                raise ValueError(
+                    f"TrainConfig key {key!r} names several fields; give its full path:"
+                    f" {', '.join(twins)}"
+                )
             raise ValueError(f"unknown TrainConfig key {key!r}")
         if env_id == MATCH_ENV_ID and path.startswith("env.") and key.strip() != path:
             # a short name means the episodic env's field, which a match run never reads
