@@ -56,6 +56,7 @@ def dagger(
     exact_share: float = 0.5,
     redraw_prior: bool = False,
     goal_frame: GoalFrame = "body",
+    neutral_share: float = 0.0,
 ) -> TrainConfig:
     """DAgger on ``observation``: batch 256 at a learning rate of 1e-3 (tuned here), 64
     episodes a round, 16 updates after each (about 20 states per update), validated four
@@ -63,7 +64,8 @@ def dagger(
     tell when it undoes its own move. With ``prior_error_range`` the prior's error is drawn
     per episode, so the student learns when to trust it. ``robust``: every appearance
     factor randomised at its robust range and 0-4 other robots on the field (domain
-    randomisation; ``rendering.appearance``, ``envs.robots``). ``action_type="continuous"``:
+    randomisation; ``rendering.appearance``, ``envs.robots``), with ``neutral_share`` of the
+    episodes in the clean world (``AppearanceConfig.neutral_share``). ``action_type="continuous"``:
     moves of up to 10 degrees per axis regressed on the oracle's (no action history: it
     holds discrete actions). ``exact_share``: the share of episodes whose prior is exact;
     ``redraw_prior``: each minibatch draws the priors again (``DaggerConfig.redraw_prior``);
@@ -80,7 +82,8 @@ def dagger(
     )
     if robust:
         env = env.replace(
-            appearance=AppearanceConfig.randomised(), robots=RobotsConfig(count=(0, 4))
+            appearance=AppearanceConfig.randomised().replace(neutral_share=neutral_share),
+            robots=RobotsConfig(count=(0, 4)),
         )
     return TrainConfig(
         algo="dagger",
@@ -137,10 +140,13 @@ def with_switch_margin(config: TrainConfig, margin: float) -> TrainConfig:
     return config.replace(**{"dagger.switch_margin": margin})
 
 
-def prior_continuous(total_timesteps: int, robust: bool = False) -> TrainConfig:
+def prior_continuous(
+    total_timesteps: int, robust: bool = False, neutral_share: float = 0.0
+) -> TrainConfig:
     """DAgger on image, head, a prior 0-2 m/rad off (a quarter of the episodes exact) and
     its proposal, with continuous moves of up to 10 degrees, the priors drawn again for
-    every minibatch (``DaggerConfig.redraw_prior``) and a 3-nat goal hysteresis."""
+    every minibatch (``DaggerConfig.redraw_prior``), the goal named in the camera's frame
+    and a 3-nat goal hysteresis. ``robust``, ``neutral_share``: as :func:`dagger`'s."""
     return with_switch_margin(
         dagger(
             "image+head+pose+proposal",
@@ -150,6 +156,8 @@ def prior_continuous(total_timesteps: int, robust: bool = False) -> TrainConfig:
             action_type="continuous",
             exact_share=0.25,
             redraw_prior=True,
+            goal_frame="camera",
+            neutral_share=neutral_share,
         ),
         3.0,
     )
@@ -285,7 +293,8 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     # without it 3% of the episodes at e = 1 end swinging; README: continuous head control)
     "dagger_prior_continuous": (
         lambda: prior_continuous(400_000),
-        "dagger_prior with continuous moves of up to 10 degrees a step, priors redrawn",
+        "dagger_prior with continuous moves of up to 10 degrees a step, priors redrawn, the"
+        " goal named in the camera's frame",
     ),
     # Stable-Baselines3's continuous learners on dagger_head_continuous's task (README:
     # continuous head control); each fits in 30 minutes on a 2-core CPU
@@ -305,8 +314,9 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     # dagger_prior_continuous in dagger_robust's randomised world, 300,000 steps (23 minutes
     # on a 2-core CPU; the shipped policy; README: a randomised world and robustness)
     "dagger_robust_continuous": (
-        lambda: prior_continuous(300_000, robust=True),
-        "dagger_prior_continuous with randomised appearance and 0-4 other robots (the shipped one)",
+        lambda: prior_continuous(400_000, robust=True, neutral_share=0.5),
+        "dagger_prior_continuous with randomised appearance (half the episodes in the clean"
+        " world) and 0-4 other robots (the shipped one)",
     ),
 }
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
