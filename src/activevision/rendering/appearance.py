@@ -140,12 +140,11 @@ class AppearanceConfig:
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
         for name in FACTORS:
-            f = self.__dataclass_fields__[name]
-            lo, hi = getattr(self, f.name)
-            low, high = f.metadata["bounds"]
+            lo, hi = getattr(self, name)
+            low, high = self.__dataclass_fields__[name].metadata["bounds"]
             if not low <= lo <= hi <= high:
                 raise ValueError(
-                    f"AppearanceConfig.{f.name}: must be an ordered (low, high) pair within "
+                    f"AppearanceConfig.{name}: must be an ordered (low, high) pair within "
                     f"[{low}, {high}], got {(lo, hi)!r}"
                 )
 
