@@ -131,6 +131,8 @@ def _field_hostiles(hint: typing.Any) -> list[str]:
         return ['"0.1"', "true", "null", "NaN", "Infinity", "-Infinity", "[0.1]"]
     if hint is str:
         return ["3", "true", "null", "[]"]
+    if set(typing.get_args(hint)) == {str, type(None)}:
+        return ["3", "true", "[]"]  # any text may be right (a path: checked where it is used)
     if "tuple" in name or typing.get_origin(hint) is tuple:
         return ["[1]", "[1, 2, 3]", '["a", "b"]', "[NaN, 1]", "3", '"x"']
     return ["3", '"x"', "true", "[1]"]
