@@ -312,9 +312,9 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         "dagger_prior with randomised appearance and 0-4 other robots",
     ),
     # dagger_prior_continuous in dagger_robust's randomised world with half the episodes
-    # clean, 400,000 steps (44-50 minutes on a 2-core CPU beside other jobs; the shipped policy; README: a
-    # randomised world and robustness: the clean episodes took it from 92.3% / 77.5% to
-    # 94.4% / 83.3% at e = 1 in the paper's world)
+    # clean, 400,000 steps (44-50 minutes on a 2-core CPU beside other jobs; the shipped
+    # policy; README: a randomised world and robustness: the clean episodes took it from
+    # 92.3% / 77.5% to 94.4% / 83.3% at e = 1 in the paper's world)
     "dagger_robust_continuous": (
         lambda: prior_continuous(400_000, robust=True, neutral_share=0.5),
         "dagger_prior_continuous with randomised appearance (half the episodes in the clean"
