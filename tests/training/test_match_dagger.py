@@ -302,3 +302,15 @@ def test_validation_matches_log_rmse_and_ball_and_keep_the_best_weights(tmp_path
     names = {p.name for p in figure.parent.iterdir()}
     assert {"validation_position_rmse.png", "validation_ball_in_view.png"} <= names
     assert "success_rate.png" not in names
+
+
+def test_a_match_student_starts_from_another_runs_weights(tmp_path):
+    train(tiny(), tmp_path / "source")
+    source = load_policy(tmp_path / "source").state_dict()
+    warm = tiny(**{"dagger.init_from": str(tmp_path / "source")})
+    start = MatchDaggerTrainer(warm, tmp_path / "warm", loggers=[]).network.state_dict()
+    assert all(torch.equal(start[k], source[k]) for k in source)
+    # a continuous student has another action head: refused, naming the difference
+    other = tiny(action_type="continuous", **{"dagger.init_from": str(tmp_path / "source")})
+    with pytest.raises(ValueError, match=r"dagger\.init_from: .* another network or input"):
+        MatchDaggerTrainer(other, tmp_path / "other", loggers=[])
