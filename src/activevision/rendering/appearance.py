@@ -65,28 +65,6 @@ LOOK = {name: i for i, name in enumerate(LOOK_FIELDS)}
 _DRAWN = LOOK_FIELDS[: LOOK["key"]]
 
 
-#: The appearance factors: the fields of :class:`AppearanceConfig` that are ranges.
-FACTORS = (
-    "gain",
-    "offset",
-    "gamma",
-    "vignetting",
-    "read_noise",
-    "shot_noise",
-    "defocus",
-    "motion_blur",
-    "stripes",
-    "stripe_width",
-    "grain",
-    "line_width",
-    "line_wear",
-    "clutter",
-    "mount_height",
-    "mount_tilt_deg",
-    "mount_fov",
-)
-
-
 def _bounds(low: float, high: float) -> dict[str, tuple[float, float]]:
     """Field metadata: the ends of a factor's range must lie within ``[low, high]``."""
     return {"bounds": (low, high)}
@@ -181,6 +159,11 @@ class AppearanceConfig:
     def replace(self, **changes: Range | float) -> AppearanceConfig:
         """A copy with ``changes`` (factor name -> range, or ``neutral_share``)."""
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+
+#: The appearance factors: the fields of :class:`AppearanceConfig` that are ranges (those
+#: with bounds; ``neutral_share`` is not one).
+FACTORS = tuple(f.name for f in dataclasses.fields(AppearanceConfig) if "bounds" in f.metadata)
 
 
 def draw_looks(config: AppearanceConfig, rng: np.random.Generator) -> np.ndarray:
