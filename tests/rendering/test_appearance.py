@@ -111,6 +111,43 @@ def test_blur_smooths_and_keeps_the_mean(renderer, states, name):
     assert np.abs(out.mean() - clean.mean()) < 1.0
 
 
+def _box_taps(length: float) -> np.ndarray:
+    """Each pixel tap's overlap with a box ``length`` px wide centred on 0."""
+    r = int(np.ceil(length / 2))
+    k = np.arange(-r, r + 1)
+    return np.clip(np.minimum(k + 0.5, length / 2) - np.maximum(k - 0.5, -length / 2), 0, None)
+
+
+@pytest.mark.parametrize(
+    "name, value, move_deg, taps_x, taps_y",
+    [
+        # defocus sigma 1.2: a Gaussian cut at 3 px (2.5 sigma, at most 3) along both axes
+        ("defocus", 1.2, 0.0, np.exp(-0.5 * (np.arange(-3, 4) / 1.2) ** 2), None),
+        # motion blur: a box as long as 0.5 of the head's 3-degree pan in pixels, along x
+        ("motion_blur", 0.5, 3.0, "box", np.ones(1)),
+    ],
+)
+def test_blur_is_the_separable_filter_of_scipy(
+    renderer, states, name, value, move_deg, taps_x, taps_y
+):
+    """Blur against scipy's correlation of the clean frame (edges repeat the border), taps
+    written out here from the documented filters: equal up to the float32 rounding of the
+    kernels (a grey level either way, on a few pixels)."""
+    ndimage = pytest.importorskip("scipy.ndimage")
+    if isinstance(taps_x, str):
+        taps_x = _box_taps(value * renderer.camera.focal * np.radians(move_deg))
+    taps_y = taps_x if taps_y is None else taps_y
+    rows = only(name, value)
+    rows[:, LOOK["move_pan"]] = np.radians(move_deg)
+    out = renderer.render(*states, looks=rows).astype(int)
+    clean = renderer.render(*states).astype(float)
+    ref = ndimage.correlate1d(clean, taps_x / taps_x.sum(), axis=2, mode="nearest")
+    ref = ndimage.correlate1d(ref, taps_y / taps_y.sum(), axis=1, mode="nearest")
+    ref = np.clip(np.floor(ref + 0.5), 0, 255).astype(int)
+    assert np.abs(out - ref).max() <= 1
+    assert (out != ref).mean() < 0.002
+
+
 def test_motion_blur_needs_a_head_move(renderer, states):
     clean = renderer.render(*states)
     np.testing.assert_array_equal(renderer.render(*states, looks=only("motion_blur", 0.5)), clean)

@@ -29,11 +29,14 @@ class JitFlags(TypedDict, total=False):
     cache: bool
     fastmath: bool
     nogil: bool
+    error_model: Literal["python", "numpy"]
     inline: Literal["never", "always"]
 
 
-#: Flags of every renderer kernel (the entry points add ``parallel``).
-JIT: JitFlags = {"cache": True, "fastmath": True, "nogil": True}
+#: Flags of every renderer kernel (the entry points add ``parallel``). ``error_model="numpy"``:
+#: a float division by zero gives inf or nan instead of a check and a raise in every loop
+#: that divides (an exit from the loop keeps it from vectorising); no kernel divides by zero.
+JIT: JitFlags = {"cache": True, "fastmath": True, "nogil": True, "error_model": "numpy"}
 #: Flags of the parts of one kernel that only it calls: inlined into it by numba (one
 #: compiled function instead of several, each linking and optimising its callees again).
 JIT_PART: JitFlags = {**JIT, "inline": "always"}

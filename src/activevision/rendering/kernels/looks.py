@@ -26,6 +26,7 @@ from numba import njit, prange
 
 from activevision.rendering.appearance import LOOK
 from activevision.rendering.kernels.bundles import JIT, JIT_PART, Params
+from activevision.rendering.kernels.selects import clamp
 
 _GAIN = LOOK["gain"]
 _OFFSET = LOOK["offset"]
@@ -93,7 +94,7 @@ def _hall(
     wy = params.hall_y if dy > 0.0 else -params.hall_y
     tx = (wx - px) / dx if abs(dx) > 1e-12 else 1e30
     ty = (wy - py) / dy if abs(dy) > 1e-12 else 1e30
-    t = min(tx, ty)
+    t = tx if tx < ty else ty
     z = pz + t * dz
     if z < 0.0:
         tf = -pz / dz
@@ -118,7 +119,108 @@ def _stripe(gx: float, width: float) -> float:
     soft edges."""
     t = gx / (2.0 * width)
     f = t - math.floor(t)
-    return min(max(8.0 * (abs(2.0 * f - 1.0) - 0.5), -1.0), 1.0)
+    return float(clamp(8.0 * (abs(2.0 * f - 1.0) - 0.5), -1.0, 1.0))
+
+
+#: Rows of the knots scratch of :func:`texture_row`: the carpet's and the hall's pattern
+#: values, the knots' ground coordinates (x, y; 0 where the ray misses the ground), whether
+#: the ray meets the ground (1 or 0) and the grain's table index.
+KNOT_ROWS = 6
+CARPET, HALL, GROUND_X, GROUND_Y, ON_GROUND, GRAIN_INDEX = range(KNOT_ROWS)
+
+
+@njit(**JIT_PART)
+def _carpet_knots(
+    v: float,
+    h: np.ndarray,
+    stripes: float,
+    grain: float,
+    look: np.ndarray,
+    noise: np.ndarray,
+    knots: np.ndarray,
+) -> None:
+    """Stripes and grain at the knots of row centre ``v`` into ``knots[CARPET]`` (``h``:
+    the pixel -> ground homography). A quantity at a time over the row, each knot computed
+    and then selected (no branch), so that each loop vectorises."""
+    n_knots = knots.shape[1]
+    width = look[_STRIPE_WIDTH]
+    # the homography's entries as scalars: loads from an array the loop might write would
+    # keep it from vectorising
+    h00, h01, h02 = h[0, 0], h[0, 1], h[0, 2]
+    h10, h11, h12 = h[1, 0], h[1, 1], h[1, 2]
+    h20, h21, h22 = h[2, 0], h[2, 1], h[2, 2]
+    for m in range(n_knots):
+        u = float(m * KNOT)
+        gz = h20 * u + h21 * v + h22
+        seen = gz > 0.0  # the knot's ray meets the ground
+        inv_gz = 1.0 / (gz if seen else 1.0)
+        gx = (h00 * u + h01 * v + h02) * inv_gz
+        gy = (h10 * u + h11 * v + h12) * inv_gz
+        knots[GROUND_X, m] = gx if seen else 0.0
+        knots[GROUND_Y, m] = gy if seen else 0.0
+        knots[ON_GROUND, m] = 1.0 if seen else 0.0
+        stripe = stripes * _stripe(gx, width)
+        knots[CARPET, m] = stripe if seen else 0.0
+    if grain == 0.0:
+        return
+    # the cells first (vectorised), then the table reads on their own (a gather the
+    # vectoriser cannot bound-check)
+    key = int(look[_KEY])
+    mask = PATTERN_CELLS - 1
+    for m in range(n_knots):
+        gx = knots[GROUND_X, m] / GRAIN_CELL
+        knots[GRAIN_INDEX, m] = _cell(key, gx, knots[GROUND_Y, m] / GRAIN_CELL, 0, mask)
+    for m in range(n_knots):
+        cell = noise[int(knots[GRAIN_INDEX, m])]
+        knots[CARPET, m] += knots[ON_GROUND, m] * (grain * float(cell))
+
+
+@njit(**JIT_PART)
+def _hall_knots(
+    v: float,
+    ray: np.ndarray,
+    clutter: float,
+    look: np.ndarray,
+    params: Params,
+    noise: np.ndarray,
+    knots: np.ndarray,
+) -> None:
+    """The hall's pattern at the knots of row centre ``v`` into ``knots[HALL]`` (``ray``:
+    the pixel -> world ray matrix)."""
+    key = int(look[_KEY])
+    for m in range(knots.shape[1]):
+        u = float(m * KNOT)
+        dx = ray[0, 0] * u + ray[0, 1] * v + ray[0, 2]
+        dy = ray[1, 0] * u + ray[1, 1] * v + ray[1, 2]
+        dz = ray[2, 0] * u + ray[2, 1] * v + ray[2, 2]
+        knots[HALL, m] = clutter * _hall(dx, dy, dz, ray, params, key, noise)
+
+
+@njit(**JIT_PART)
+def _blend_knots(value: np.ndarray, params: Params, knots: np.ndarray, texture: np.ndarray) -> None:
+    """Add the knots' patterns, interpolated linearly between knots (into ``texture``),
+    to ``value``: the carpet's on its share of each pixel, the hall's on the rest."""
+    width = value.shape[0]
+    step = np.float32(1.0 / KNOT)
+    half = np.float32(0.5)
+    for m in range(knots.shape[1] - 1):
+        c0 = np.float32(knots[CARPET, m])
+        dc = (np.float32(knots[CARPET, m + 1]) - c0) * step
+        h0 = np.float32(knots[HALL, m])
+        dh = (np.float32(knots[HALL, m + 1]) - h0) * step
+        first = m * KNOT
+        for k in range(min(KNOT, width - first)):
+            texture[0, first + k] = c0 + (np.float32(k) + half) * dc
+            texture[1, first + k] = h0 + (np.float32(k) + half) * dh
+    bg = np.float32(params.background)
+    span = params.grass - params.background
+    inv_span = np.float32(1.0 / span if abs(span) >= 1.0 else 0.0)
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    # one flat loop over the row: a segment's 8 pixels are too few to vectorise
+    for i in range(width):
+        share = clamp((value[i] - bg) * inv_span, zero, one)
+        value[i] += share * texture[0, i] + (one - share) * texture[1, i]
 
 
 @njit(**JIT)
@@ -131,25 +233,21 @@ def texture_row(
     params: Params,
     noise: np.ndarray,
     knots: np.ndarray,
+    texture: np.ndarray,
 ) -> None:
     """Carpet stripes and grain on the carpet's share of each pixel of row centre ``v`` of
     ``value`` (W,), the hall on the rest. The share is read off the ground pass's grey
     (background -> 0, grass -> 1), so the carpet's anti-aliased border stays exact.
 
-    Patterns are evaluated every :data:`KNOT` pixels (into ``knots`` (2, W // KNOT + 2):
-    carpet, hall) and interpolated linearly between: a pixel costs a few multiply-adds, not
-    a division and a hash (grain cells farther than a few metres are smaller than a pixel
-    anyway)."""
+    Patterns are evaluated every :data:`KNOT` pixels (into ``knots`` (KNOT_ROWS,
+    W // KNOT + 2) float64) and interpolated linearly between (into ``texture`` (2, W)
+    float32: carpet, hall): a pixel costs a few multiply-adds, not a division and a hash
+    (grain cells farther than a few metres are smaller than a pixel anyway). The kernels
+    index ``knots`` and ``texture`` by row and column: a view of a row would be
+    reference-counted, row after row."""
     stripes = look[_STRIPES]
     grain = look[_GRAIN]
     clutter = look[_CLUTTER]
-    width = look[_STRIPE_WIDTH]
-    key = int(look[_KEY])
-    mask = PATTERN_CELLS - 1
-    h = homography
-    carpet = knots[0]
-    hall = knots[1]
-    n_knots = value.shape[0] // KNOT + 2
     # rows all carpet (or all beyond it) need only one of the patterns
     grass = np.float32(params.grass)
     background = np.float32(params.background)
@@ -165,41 +263,15 @@ def texture_row(
         grain = 0.0
     if stripes == 0.0 and grain == 0.0 and clutter == 0.0:
         return
-    for m in range(n_knots):
-        u = float(m * KNOT)
-        tex = 0.0
-        gz = h[2, 0] * u + h[2, 1] * v + h[2, 2]
-        if gz > 0.0 and (stripes != 0.0 or grain != 0.0):
-            gx = (h[0, 0] * u + h[0, 1] * v + h[0, 2]) / gz
-            gy = (h[1, 0] * u + h[1, 1] * v + h[1, 2]) / gz
-            tex = stripes * _stripe(gx, width)
-            if grain != 0.0:
-                tex += grain * float(noise[_cell(key, gx / GRAIN_CELL, gy / GRAIN_CELL, 0, mask)])
-        carpet[m] = tex
-        wall = 0.0
-        if clutter != 0.0:
-            dx = ray[0, 0] * u + ray[0, 1] * v + ray[0, 2]
-            dy = ray[1, 0] * u + ray[1, 1] * v + ray[1, 2]
-            dz = ray[2, 0] * u + ray[2, 1] * v + ray[2, 2]
-            wall = clutter * _hall(dx, dy, dz, ray, params, key, noise)
-        hall[m] = wall
-    bg = np.float32(params.background)
-    span = params.grass - params.background
-    inv_span = np.float32(1.0 / span if abs(span) >= 1.0 else 0.0)
-    zero = np.float32(0.0)
-    one = np.float32(1.0)
-    step = np.float32(1.0 / KNOT)
-    width_px = value.shape[0]
-    for m in range(n_knots - 1):
-        c0 = carpet[m]
-        dc = (carpet[m + 1] - c0) * step
-        h0 = hall[m]
-        dh = (hall[m + 1] - h0) * step
-        f = np.float32(0.5)  # a float counter: int -> float has no vector instruction
-        for i in range(m * KNOT, min((m + 1) * KNOT, width_px)):
-            share = min(max((value[i] - bg) * inv_span, zero), one)
-            value[i] += share * (c0 + f * dc) + (one - share) * (h0 + f * dh)
-            f += one
+    if stripes != 0.0 or grain != 0.0:
+        _carpet_knots(v, homography, stripes, grain, look, noise, knots)
+    else:
+        knots[CARPET, :] = 0.0
+    if clutter != 0.0:
+        _hall_knots(v, ray, clutter, look, params, noise, knots)
+    else:
+        knots[HALL, :] = 0.0
+    _blend_knots(value, params, knots, texture)
 
 
 @njit(**JIT)
@@ -279,55 +351,70 @@ def _blur_taps(sigma: float, move: float, taps: np.ndarray) -> int:
 
 @njit(**JIT)
 def _filter_rows(src: np.ndarray, dst: np.ndarray, taps: np.ndarray, r: int) -> None:
-    """``dst = src`` filtered along each row (axis 1) by ``taps`` of radius ``r``; the edges
-    repeat their border pixels (each row is copied into a padded one, so that every tap is
-    one plain, vectorised loop)."""
+    """``dst`` (H, W) float32 = ``src`` (H, W) uint8 filtered along each row (axis 1) by
+    ``taps`` of radius ``r``; the edges repeat their border pixels (each row is copied into a
+    padded one, so that every tap is one plain, vectorised loop)."""
     height, width = src.shape
     pad = np.empty(width + 2 * r, dtype=np.float32)
     for j in range(height):
-        s = src[j]
-        d = dst[j]
-        pad[r : r + width] = s
-        pad[:r] = s[0]
-        pad[r + width :] = s[width - 1]
+        for i in range(width):
+            pad[r + i] = src[j, i]
+        for i in range(r):
+            pad[i] = pad[r]
+            pad[r + width + i] = pad[r + width - 1]
         w0 = np.float32(taps[0])
         for i in range(width):
-            d[i] = w0 * pad[i]
+            dst[j, i] = w0 * pad[i]
         for k in range(1, 2 * r + 1):
             w = np.float32(taps[k])
-            shifted = pad[k : k + width]
             for i in range(width):
-                d[i] += w * shifted[i]
+                dst[j, i] += w * pad[k + i]
 
 
-@njit(**JIT)
-def _filter_columns(src: np.ndarray, dst: np.ndarray, taps: np.ndarray, r: int) -> None:
-    """:func:`_filter_rows` along the columns (axis 0)."""
-    height = src.shape[0]
-    dst[:, :] = 0.0
-    for j in range(height):
-        d = dst[j]
-        for k in range(2 * r + 1):
-            w = np.float32(taps[k])
-            s = src[min(max(j + k - r, 0), height - 1)]
-            for i in range(d.shape[0]):
-                d[i] += w * s[i]
+@njit(**JIT_PART)
+def _blur_column(
+    rows_blurred: np.ndarray, j: int, taps: np.ndarray, r: int, row: np.ndarray
+) -> None:
+    """``row`` = row ``j`` of ``rows_blurred`` (H, W) filtered along the columns by ``taps``
+    of radius ``r`` (the edges repeat their border rows)."""
+    height = rows_blurred.shape[0]
+    row[:] = np.float32(0.0)
+    for k in range(2 * r + 1):
+        w = np.float32(taps[k])
+        source = min(max(j + k - r, 0), height - 1)  # once a row: branches are fine
+        for i in range(row.shape[0]):
+            row[i] += w * rows_blurred[source, i]
 
 
-@njit(**JIT)
-def _blurred(img: np.ndarray, sigma: float, bx: float, by: float) -> np.ndarray:
-    """``img`` (H, W) as float32, blurred along its rows and columns (see
-    :func:`finish_frame`)."""
-    height, width = img.shape
-    buf = np.empty((height, width), dtype=np.float32)
-    for j in range(height):
-        for i in range(width):
-            buf[j, i] = img[j, i]
-    taps = np.empty(MAX_TAPS)
-    tmp = np.empty((height, width), dtype=np.float32)
-    _filter_rows(buf, tmp, taps, _blur_taps(sigma, bx, taps))
-    _filter_columns(tmp, buf, taps, _blur_taps(sigma, by, taps))
-    return buf
+@njit(**JIT_PART)
+def _add_noise(row: np.ndarray, read2: float, shot: float, noise: np.ndarray, first: int) -> None:
+    """Sensor noise of std ``sqrt(read2 + shot * value)`` on ``row``, its normal numbers
+    ``noise[first:]`` (indexed, not sliced: a view per row would be reference-counted)."""
+    zero = np.float32(0.0)
+    for i in range(row.shape[0]):
+        signal = row[i] if row[i] > zero else zero
+        row[i] += np.float32(math.sqrt(read2 + shot * signal)) * noise[first + i]
+
+
+@njit(**JIT_PART)
+def _store_row(
+    row: np.ndarray, img: np.ndarray, j: int, tone: np.ndarray, toned: bool, levels: np.ndarray
+) -> None:
+    """Row ``j`` of ``img`` = ``row`` rounded to grey levels, through the ``tone`` curve if
+    ``toned`` (``levels`` (W,) int32 scratch)."""
+    zero = np.float32(0.0)
+    top = np.float32(255.0)
+    half = np.float32(0.5)
+    if not toned:
+        for i in range(row.shape[0]):
+            img[j, i] = np.uint8(clamp(row[i] + half, zero, top))
+        return
+    # the levels in one vectorised loop, the table reads in a plain one (a vector gather is
+    # slower than scalar reads on CPUs with the gather data sampling mitigation)
+    for i in range(row.shape[0]):
+        levels[i] = np.int32(clamp(row[i] + half, zero, top))
+    for i in range(row.shape[0]):
+        img[j, i] = tone[levels[i]]
 
 
 @njit(**JIT)
@@ -341,7 +428,10 @@ def finish_frame(
     long as the head's move on that axis in this step (motion blur; a diagonal move blurs a
     box, not a line). Noise std ``sqrt(read^2 + shot * value)`` grey levels, its normal
     numbers read from ``noise`` at an offset hashed from the episode's key and the frame
-    counter. A frame with none of them is left as it is."""
+    counter. A frame with none of them is left as it is.
+
+    One pass along the rows blurs them into a float image; a second pass makes each output
+    row: its column blur, noise and tone at once (no more passes over the image)."""
     height, width = img.shape
     sigma = look[_DEFOCUS]
     bx = look[_MOTION] * focal * look[_MOVE_PAN]
@@ -356,29 +446,26 @@ def finish_frame(
     mask = noise.shape[0] - 1
     # a contiguous run of the table (the start leaves room for the whole frame)
     start = _cell(int(look[_KEY]), look[_FRAME], 0.0, 6, mask) % (mask + 1 - height * width)
-    zero = np.float32(0.0)
     row = np.empty(width, dtype=np.float32)
-    buf = _blurred(img, sigma, bx, by) if blurred else np.empty((0, 0), dtype=np.float32)
+    taps = np.empty(MAX_TAPS)
+    rows_blurred = np.empty((height if blurred else 0, width), dtype=np.float32)
+    r = 0
+    if blurred:
+        _filter_rows(img, rows_blurred, taps, _blur_taps(sigma, bx, taps))
+        r = _blur_taps(sigma, by, taps)
+    levels = np.empty(width, dtype=np.int32)
     for j in range(height):
         if blurred:
-            row[:] = buf[j]
+            _blur_column(rows_blurred, j, taps, r, row)
         else:
             for i in range(width):
                 row[i] = img[j, i]
         if noisy:
-            table = noise[start + j * width : start + (j + 1) * width]
-            for i in range(width):
-                row[i] += np.float32(math.sqrt(read2 + shot * max(row[i], zero))) * table[i]
-        if toned:
-            for i in range(width):
-                level = np.int32(min(max(row[i] + np.float32(0.5), zero), np.float32(255.0)))
-                img[j, i] = tone[level]
-        else:
-            for i in range(width):
-                img[j, i] = np.uint8(min(max(row[i] + np.float32(0.5), zero), np.float32(255.0)))
+            _add_noise(row, read2, shot, noise, start + j * width)
+        _store_row(row, img, j, tone, toned, levels)
 
 
-@njit(cache=True, fastmath=True, nogil=True, parallel=True)
+@njit(**JIT, parallel=True)
 def finish_kernel(
     images: np.ndarray, rows: np.ndarray, tone: np.ndarray, focal: float, noise: np.ndarray
 ) -> None:

@@ -39,7 +39,14 @@ from activevision.rendering.kernels.coverage import (
     span,
 )
 from activevision.rendering.kernels.garbage import GARBAGE_KINDS, fill_garbage, garbage_floats
-from activevision.rendering.kernels.looks import KNOT, illuminate_row, texture_row, worn_paint
+from activevision.rendering.kernels.looks import (
+    KNOT,
+    KNOT_ROWS,
+    illuminate_row,
+    texture_row,
+    worn_paint,
+)
+from activevision.rendering.kernels.selects import clamp
 
 STRIPES = LOOK["stripes"]
 GRAIN = LOOK["grain"]
@@ -124,11 +131,12 @@ def render_rows(
     value: np.ndarray,
     paint: np.ndarray,
     knots: np.ndarray,
+    texture: np.ndarray,
 ) -> None:
     """Rows ``row0, row0 + row_step, ...`` (``rows = (row0, row_step)``) of image ``n`` into
     ``out`` (N, H, W). ``value`` (W,) float32 scratch; ``paint`` (W,) float32 scratch that is
-    all zero on entry and on exit; ``knots`` (2, W // KNOT + 2) float32 scratch of the
-    looks' patterns (:func:`.looks.texture_row`).
+    all zero on entry and on exit; ``knots`` (KNOT_ROWS, W // KNOT + 2) float64 and
+    ``texture`` (2, W) float32 scratch of the looks' patterns (:func:`.looks.texture_row`).
 
     The per-row helpers take single arrays and :class:`.bundles.Params` (scalars), never the
     work bundle: every call with a bundle of arrays would count references to all of them,
@@ -172,7 +180,7 @@ def render_rows(
         else:
             value[:] = params.background
         if textured:
-            texture_row(v, value, homography, ray, look, params, noise, knots)
+            texture_row(v, value, homography, ray, look, params, noise, knots, texture)
         # --- paint: lines, marks, centre circle (coverages combine with max)
         touched_lo = width
         touched_hi = 0
@@ -215,7 +223,7 @@ def render_rows(
             illuminate_row(v, value, look, params)
         for i in range(width):
             out[n, j, i] = np.uint8(
-                min(max(value[i] + np.float32(0.5), np.float32(0.0)), np.float32(255.0))
+                clamp(value[i] + np.float32(0.5), np.float32(0.0), np.float32(255.0))
             )
 
 
@@ -249,7 +257,7 @@ def _bundles(
     )
 
 
-@njit(cache=True, fastmath=True, nogil=True, parallel=True)
+@njit(**JIT, parallel=True)
 def render_kernel(
     scene: Fields,
     params: Fields,
@@ -283,9 +291,19 @@ def render_kernel(
         if garbage != 0:
             garbage_floats(value, garbage + GARBAGE_KINDS * item)
         paint = np.zeros(width, dtype=np.float32)
-        knots = np.empty((2, width // KNOT + 2), dtype=np.float32)
+        knots = np.empty((KNOT_ROWS, width // KNOT + 2))
+        texture = np.empty((2, width), dtype=np.float32)
         render_rows(
-            n, (item - n * row_blocks, row_blocks), out, params, work, looks, value, paint, knots
+            n,
+            (item - n * row_blocks, row_blocks),
+            out,
+            params,
+            work,
+            looks,
+            value,
+            paint,
+            knots,
+            texture,
         )
 
 
@@ -301,7 +319,8 @@ def render_kernel_serial(
     if garbage != 0:
         fill_garbage(work, scratch, value, garbage)
     paint = np.zeros(width, dtype=np.float32)
-    knots = np.empty((2, width // KNOT + 2), dtype=np.float32)
+    knots = np.empty((KNOT_ROWS, width // KNOT + 2))
+    texture = np.empty((2, width), dtype=np.float32)
     for n in range(cams.pose.shape[0]):
         setup_camera(n, scene, params, cams, looks, work, scratch)
-        render_rows(n, (0, 1), out, params, work, looks, value, paint, knots)
+        render_rows(n, (0, 1), out, params, work, looks, value, paint, knots, texture)
