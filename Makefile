@@ -8,8 +8,13 @@ BIN := $(VENV)/bin
 RUN_DIR ?= runs/quickstart
 INSTALLED := $(VENV)/.installed
 INSTALLED_TEST := $(VENV)/.installed-test
+# numba checks a cached kernel against its own file only, not the files of the kernels it
+# calls: after an edit to one of those, the cache would run the old code. So each state of
+# the sources gets its own cache (the older ones are removed).
+SOURCE_HASH := $(shell cat $$(find src -name '*.py' | LC_ALL=C sort) | sha1sum | cut -c1-16)
+NUMBA_CACHE := $(CURDIR)/.numba_cache/$(SOURCE_HASH)
 
-.PHONY: install install-test run test lint bench clean
+.PHONY: install install-test numba-cache run test lint bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -28,22 +33,26 @@ install: $(INSTALLED)
 
 install-test: $(INSTALLED_TEST)
 
-run: install
-	$(BIN)/activevision quickstart --out $(RUN_DIR)
+numba-cache:
+	find .numba_cache -mindepth 1 -maxdepth 1 ! -name $(SOURCE_HASH) -exec rm -rf {} + 2>/dev/null || true
+	mkdir -p $(NUMBA_CACHE)
+
+run: install numba-cache
+	NUMBA_CACHE_DIR=$(NUMBA_CACHE) $(BIN)/activevision quickstart --out $(RUN_DIR)
 
 lint: install-test
 	$(BIN)/ruff check src tests bench examples
 	$(BIN)/lint-imports
 	$(BIN)/mypy
 
-test: install-test
+test: install-test numba-cache
 	$(BIN)/ruff check src tests bench examples
 	$(BIN)/lint-imports
 	$(BIN)/mypy
-	NUMBA_CACHE_DIR=$(CURDIR)/.numba_cache $(BIN)/python -m pytest -q tests
+	NUMBA_CACHE_DIR=$(NUMBA_CACHE) $(BIN)/python -m pytest -q tests
 
-bench: install-test
-	for b in bench/*.py; do $(BIN)/python $$b || exit 1; done
+bench: install-test numba-cache
+	for b in bench/*.py; do NUMBA_CACHE_DIR=$(NUMBA_CACHE) $(BIN)/python $$b || exit 1; done
 
 clean:
 	rm -rf $(VENV) .numba_cache build *.egg-info src/*.egg-info
