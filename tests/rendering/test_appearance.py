@@ -242,6 +242,8 @@ def test_a_frame_depends_on_its_camera_and_look_only(renderer, states, monkeypat
         monkeypatch.setattr(renderer_module, "_WORK_GARBAGE_SEED", seed)
         dirty = renderer.render(*states, looks=rows, tone=tone, cylinders=cyl)
         np.testing.assert_array_equal(dirty, batch)
+        dirty = Renderer(parallel=False).render(*states, looks=rows, tone=tone, cylinders=cyl)
+        np.testing.assert_array_equal(dirty, batch)
 
 
 def test_bad_looks_are_clear_errors(renderer, states):

@@ -293,6 +293,9 @@ def render_kernel(
         paint = np.zeros(width, dtype=np.float32)
         knots = np.empty((KNOT_ROWS, width // KNOT + 2))
         texture = np.empty((2, width), dtype=np.float32)
+        if garbage != 0:
+            garbage_floats(knots, garbage + GARBAGE_KINDS * (item + n_cams * row_blocks))
+            garbage_floats(texture, garbage + GARBAGE_KINDS * (item + 2 * n_cams * row_blocks))
         render_rows(
             n,
             (item - n * row_blocks, row_blocks),
@@ -321,6 +324,9 @@ def render_kernel_serial(
     paint = np.zeros(width, dtype=np.float32)
     knots = np.empty((KNOT_ROWS, width // KNOT + 2))
     texture = np.empty((2, width), dtype=np.float32)
+    if garbage != 0:
+        garbage_floats(knots, garbage + 20 * GARBAGE_KINDS)
+        garbage_floats(texture, garbage + 21 * GARBAGE_KINDS)
     for n in range(cams.pose.shape[0]):
         setup_camera(n, scene, params, cams, looks, work, scratch)
         render_rows(n, (0, 1), out, params, work, looks, value, paint, knots, texture)
