@@ -15,7 +15,6 @@ a table, then one JSON line.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import platform
@@ -27,7 +26,13 @@ import numpy as np
 from activevision.geometry.camera import CameraConfig
 from activevision.geometry.occlusion import robot_cylinders
 from activevision.rendering import Renderer
-from activevision.rendering.appearance import LOOK, AppearanceConfig, draw_looks, tone_curves
+from activevision.rendering.appearance import (
+    FACTORS,
+    LOOK,
+    AppearanceConfig,
+    draw_looks,
+    tone_curves,
+)
 from activevision.rendering.reference import render_reference
 
 #: The paper's simulator pace: one image per head command of 320 ms.
@@ -99,13 +104,13 @@ def factor_costs(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, float]
         renderer.render(pose[s], pan[s], tilt[s], ball[s], out=out)
 
     calls = {"clean": clean}
-    for f in dataclasses.fields(AppearanceConfig):
-        if f.name == "stripe_width":  # the stripes' width, not a factor of its own
+    for name in FACTORS:
+        if name == "stripe_width":  # the stripes' width, not a factor of its own
             continue
-        config = AppearanceConfig().replace(**{f.name: getattr(full, f.name)})
-        if f.name == "stripes":
+        config = AppearanceConfig().replace(**{name: getattr(full, name)})
+        if name == "stripes":
             config = config.replace(stripe_width=full.stripe_width)
-        calls[f.name] = batch_of(*frame_looks(config, pool, rng))
+        calls[name] = batch_of(*frame_looks(config, pool, rng))
     for fn in calls.values():
         fn()  # compile
     best = dict.fromkeys(calls, np.inf)

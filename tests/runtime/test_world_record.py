@@ -16,6 +16,7 @@ from activevision.runtime import (
     load_metadata,
     pretrained_policy_path,
 )
+from activevision.training.presets import preset
 from activevision.typecheck import config_from_dict, config_to_dict
 
 ROBUST = AppearanceConfig.randomised()
@@ -89,8 +90,9 @@ def test_shipped_policy_records_its_randomised_world():
     # the shipped policy is the dagger_robust_continuous preset's run
     world = load_metadata(pretrained_policy_path().with_suffix(".json")).world
     assert world is not None and world != clean_world()
-    robust = AppearanceConfig.randomised().replace(neutral_share=0.5)  # half the episodes clean
-    assert config_from_dict(AppearanceConfig, world["appearance"]) == robust
+    recipe = preset("dagger_robust_continuous").env.appearance  # wider textures, half clean
+    assert recipe != AppearanceConfig.randomised()
+    assert config_from_dict(AppearanceConfig, world["appearance"]) == recipe
     assert config_from_dict(RobotsConfig, world["robots"]).count == (0, 4)
 
 

@@ -140,6 +140,16 @@ def with_switch_margin(config: TrainConfig, margin: float) -> TrainConfig:
     return config.replace(**{"dagger.switch_margin": margin})
 
 
+#: Carpet and hall textures wider than the robust ranges of ``AppearanceConfig.randomised()``
+#: (grain 10, stripes 12, clutter 60 grey) and still short of the robustness suite's strong
+#: levels (25, 30, 110), which stay unseen: the shipped recipe's (README).
+WIDE_TEXTURE: dict[str, tuple[float, float]] = {
+    "grain": (0.0, 16.0),
+    "stripes": (0.0, 20.0),
+    "clutter": (0.0, 85.0),
+}
+
+
 def prior_continuous(
     total_timesteps: int, robust: bool = False, neutral_share: float = 0.0
 ) -> TrainConfig:
@@ -312,13 +322,16 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         "dagger_prior with randomised appearance and 0-4 other robots",
     ),
     # dagger_prior_continuous in dagger_robust's randomised world with half the episodes
-    # clean, 400,000 steps (44-50 minutes on a 2-core CPU beside other jobs; the shipped
-    # policy; README: a randomised world and robustness: the clean episodes took it from
-    # 92.3% / 77.5% to 94.4% / 83.3% at e = 1 in the paper's world)
+    # clean and wider carpet and hall textures, 400,000 steps (70-80 minutes on a 2-core
+    # CPU beside other jobs; the shipped policy; README: a randomised world and robustness:
+    # the clean episodes took it from 92.3% / 77.5% to 94.4% / 83.3% at e = 1 in the
+    # paper's world, the wider textures its goal reached under grain 25 from 52% to 68%)
     "dagger_robust_continuous": (
-        lambda: prior_continuous(400_000, robust=True, neutral_share=0.5),
+        lambda: prior_continuous(400_000, robust=True, neutral_share=0.5).replace(
+            **{f"env.appearance.{name}": span for name, span in WIDE_TEXTURE.items()}
+        ),
         "dagger_prior_continuous with randomised appearance (half the episodes in the clean"
-        " world) and 0-4 other robots (the shipped one)",
+        " world, wider textures) and 0-4 other robots (the shipped one)",
     ),
 }
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
