@@ -322,8 +322,8 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         "dagger_prior with randomised appearance and 0-4 other robots",
     ),
     # dagger_prior_continuous in dagger_robust's randomised world with half the episodes
-    # clean and wider carpet and hall textures, 400,000 steps (70-80 minutes on a 2-core
-    # CPU beside other jobs; the shipped policy; README: a randomised world and robustness:
+    # clean and wider carpet and hall textures, 400,000 steps (42 minutes on a 2-core CPU,
+    # 70 beside other jobs; the shipped policy; README: a randomised world and robustness:
     # the clean episodes took it from 92.3% / 77.5% to 94.4% / 83.3% at e = 1 in the
     # paper's world, the wider textures its goal reached under grain 25 from 52% to 68%)
     "dagger_robust_continuous": (
