@@ -14,6 +14,7 @@ from activevision.rendering.appearance import (
     LOOK,
     LOOK_FIELDS,
     AppearanceConfig,
+    draw_look_rows,
     draw_looks,
     neutral_looks,
     tone_curves,
@@ -265,6 +266,33 @@ def test_config_ranges_are_checked():
     with pytest.raises(ValueError, match=r"AppearanceConfig\.neutral_share"):
         AppearanceConfig.randomised().replace(neutral_share=1.5)
     assert not AppearanceConfig(neutral_share=0.5).enabled  # no factor on: nothing to draw
+
+
+def test_looks_drawn_at_once_follow_the_documented_order_and_ranges():
+    # draw_look_rows: every row's neutral decision first, then the factors row by row, then
+    # the keys; draw_looks is its one-row case (the envs' bytes stay those of before)
+    config = AppearanceConfig.randomised().replace(neutral_share=0.4, clutter=(10.0, 85.0))
+    n = 500
+    rows = draw_look_rows(config, n, np.random.default_rng(7))
+    rng = np.random.default_rng(7)
+    neutral = rng.random(n) < 0.4
+    u = rng.random((n, LOOK["key"]))
+    keys = rng.integers(0, 2**52, n)
+    np.testing.assert_array_equal(rows[:, LOOK["key"]], keys.astype(float))
+    lo, hi = config.clutter
+    clutter = rows[:, LOOK["clutter"]]
+    np.testing.assert_array_equal(clutter[~neutral], lo + (hi - lo) * u[~neutral, LOOK["clutter"]])
+    np.testing.assert_array_equal(clutter[neutral], 0.0)
+    tilt = rows[~neutral, LOOK["mount_tilt"]]
+    np.testing.assert_allclose(tilt, np.radians(-3.0 + 6.0 * u[~neutral, LOOK["mount_tilt"]]))
+    factors = slice(0, LOOK["key"])
+    clean = neutral_looks(int(neutral.sum()))
+    np.testing.assert_array_equal(rows[neutral][:, factors], clean[:, factors])
+    assert 160 <= neutral.sum() <= 240  # 40% of 500: 200 +- 3.6 standard deviations
+    np.testing.assert_array_equal(rows[:, LOOK["key"] + 1 :], 0.0)  # per-frame columns
+    for seed in range(50):
+        one = draw_look_rows(config, 1, np.random.default_rng(seed))[0]
+        np.testing.assert_array_equal(one, draw_looks(config, np.random.default_rng(seed)))
 
 
 def test_a_neutral_share_of_episodes_draws_the_clean_look_and_the_rest_as_before():

@@ -13,6 +13,7 @@ from activevision.envs.observations import pose_features, proposal_features, vec
 from activevision.experiments.evaluate import evaluate_policy
 from activevision.experiments.policies import LearnedPolicy, OraclePolicy
 from activevision.localisation import best_viewpoints
+from activevision.rendering.appearance import LOOK, AppearanceConfig, draw_look_rows
 from activevision.training import load_policy
 from activevision.training.config import TrainConfig
 from activevision.training.dagger import DaggerTrainer
@@ -315,6 +316,57 @@ def test_redraw_prior_needs_a_drawn_prior_in_the_observation():
         tiny("image+head", **{"dagger.redraw_prior": True})
     with pytest.raises(ValueError, match="prior_error_range"):  # the prior is the belief
         tiny(**{"dagger.redraw_prior": True, "env.localisation_error": 0.5})
+
+
+def test_redrawn_looks_are_new_draws_of_the_appearance_and_keep_each_frames_move(
+    tmp_path, monkeypatch
+):
+    # dagger.redraw_look: each minibatch renders its states under looks drawn again from
+    # env.appearance (the label does not depend on the look); the frame's head move and
+    # counter (motion blur, the noise's key) stay the state's own
+    clutter = (30.0, 80.0)
+    config = tiny(
+        **{
+            "env.appearance": AppearanceConfig.randomised().replace(
+                clutter=clutter, neutral_share=0.5
+            ),
+            "dagger.redraw_look": True,
+            "learner.batch_size": 64,
+        }
+    )
+    trainer = DaggerTrainer(config, tmp_path, loggers=[])
+    trainer._rollout()
+    data, n = trainer.dataset.arrays, trainer.dataset.size
+    stored = data["looks"][:n]
+    assert (stored[:, LOOK["move_pan"]] != 0).any() and (stored[:, LOOK["frame"]] > 0).any()
+    rendered = []
+    render = trainer.sim.render_states
+
+    def spy(pose, head, ball, looks, robots, **kw):
+        rendered.append((pose, looks))
+        return render(pose, head, ball, looks, robots, **kw)
+
+    monkeypatch.setattr(trainer.sim, "render_states", spy)
+    draws = trainer.rng.bit_generator.state
+    trainer._update()
+    pose, looks = rendered[0]
+    rng = np.random.default_rng()
+    rng.bit_generator.state = draws
+    b = rng.integers(0, n, size=64)
+    np.testing.assert_array_equal(pose, data["pose"][b])  # the same minibatch of states
+    episode = slice(0, LOOK["key"] + 1)
+    fresh = draw_look_rows(config.env.appearance, 64, rng)
+    np.testing.assert_array_equal(looks[:, episode], fresh[:, episode])
+    np.testing.assert_array_equal(looks[:, LOOK["key"] + 1 :], stored[b][:, LOOK["key"] + 1 :])
+    assert (looks[:, LOOK["key"]] != stored[b][:, LOOK["key"]]).all()  # new carpets
+    seen = looks[:, LOOK["clutter"]]
+    assert ((seen == 0) | ((seen >= clutter[0]) & (seen <= clutter[1]))).all()
+    assert 0 < (seen == 0).sum() < 64  # some states seen clean, some not
+
+
+def test_redraw_look_needs_a_randomised_appearance():
+    with pytest.raises(ValueError, match="redraw_look"):
+        tiny(**{"dagger.redraw_look": True})
 
 
 def test_warm_start_takes_the_source_weights_resumes_without_them_and_refuses_others(tmp_path):

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -172,17 +171,27 @@ def draw_looks(config: AppearanceConfig, rng: np.random.Generator) -> np.ndarray
     per-frame columns start at 0. With ``neutral_share`` > 0 a first number decides whether
     the episode is neutral (then its factors are drawn all the same and set neutral, so the
     draws that follow do not depend on the decision)."""
-    neutral = config.neutral_share > 0.0 and rng.random() < config.neutral_share
-    row = np.zeros(len(LOOK_FIELDS))
-    for i, name in enumerate(_DRAWN):
-        attr = "mount_tilt_deg" if name == "mount_tilt" else name  # stored in radians
-        lo, hi = getattr(config, attr)
-        row[i] = lo + (hi - lo) * rng.random()
-    row[LOOK["mount_tilt"]] = math.radians(row[LOOK["mount_tilt"]])
-    row[LOOK["key"]] = float(rng.integers(0, 2**52))
-    if neutral:
-        row[: LOOK["key"]] = neutral_looks(1)[0, : LOOK["key"]]
+    row: np.ndarray = draw_look_rows(config, 1, rng)[0]
     return row
+
+
+def draw_look_rows(config: AppearanceConfig, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` look rows (n, len(LOOK_FIELDS)) drawn at once: :func:`draw_looks`' draws for
+    every row, in the order neutral decisions, factors row by row, keys (for ``n=1`` the
+    same numbers as :func:`draw_looks`, which is this)."""
+    neutral = (
+        rng.random(n) < config.neutral_share if config.neutral_share > 0.0 else np.zeros(n, bool)
+    )
+    ranges = np.array(
+        [getattr(config, "mount_tilt_deg" if name == "mount_tilt" else name) for name in _DRAWN]
+    )
+    rows = np.zeros((n, len(LOOK_FIELDS)))
+    drawn = slice(0, LOOK["key"])
+    rows[:, drawn] = ranges[:, 0] + (ranges[:, 1] - ranges[:, 0]) * rng.random((n, len(_DRAWN)))
+    rows[:, LOOK["mount_tilt"]] = np.radians(rows[:, LOOK["mount_tilt"]])  # stored in radians
+    rows[:, LOOK["key"]] = rng.integers(0, 2**52, n).astype(np.float64)
+    rows[neutral, drawn] = neutral_looks(1)[0, drawn]
+    return rows
 
 
 def tone_curves(rows: np.ndarray) -> np.ndarray:

@@ -160,6 +160,12 @@ class DaggerConfig:
     #: a stored episode by its one prior draw, and so learns what a prior of that error
     #: tells; README: learned head control) (T)
     redraw_prior: bool = False
+    #: each minibatch draws its states' looks again from ``env.appearance`` (every factor,
+    #: the pattern key and, with ``neutral_share``, whether the state is seen clean; its head
+    #: move and frame counter stay): the teacher's label does not depend on the look, so
+    #: every state is learned under many appearances instead of the one it was visited in
+    #: (README: robustness) (T)
+    redraw_look: bool = False
     #: a run directory (its newest policy) or a policy file whose student weights this run
     #: starts from instead of a random initialisation: fine-tuning, e.g. a clean-world
     #: policy in the randomised world. Its network and inputs must be this run's (checked
@@ -271,6 +277,14 @@ class TrainConfig:
                 " states again at their drawn error; it needs algo='dagger' on"
                 " ActiveVision-v0 with a prior pose in env.observation ('image+head+pose...')"
                 " and env.prior_error_range"
+            )
+        if self.dagger.redraw_look and not (
+            self.algo == "dagger" and not self.match_student and self.env.appearance.enabled
+        ):
+            raise ValueError(
+                "TrainConfig.dagger.redraw_look: draws the looks of DAgger's episodic states"
+                " again; it needs algo='dagger' on ActiveVision-v0 with a randomised"
+                " env.appearance (e.g. --preset dagger_robust_continuous)"
             )
         if self.algo == "dagger" and self.env.frame_stack != 1:
             raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")

@@ -53,7 +53,7 @@ from activevision.envs.observations import (
     vector_sizes,
 )
 from activevision.envs.simulation import EpisodeBatch
-from activevision.rendering.appearance import LOOK_FIELDS
+from activevision.rendering.appearance import LOOK, LOOK_FIELDS, draw_look_rows
 from activevision.runtime.goal_evidence import (
     GoalEvidence,
     goal_output_count,
@@ -398,6 +398,8 @@ class DaggerTrainer(ImitationRun):
         data = self.dataset.arrays
         b = self.rng.integers(0, self.dataset.size, size=self.config.learner.batch_size)
         looks = data["looks"][b] if "looks" in data else None
+        if looks is not None and self.config.dagger.redraw_look:
+            looks = self._redraw_looks(looks)
         robots = data["robots"][b] if "robots" in data else np.zeros((len(b), 0, 4))
         images = self.sim.render_states(
             data["pose"][b], data["head"][b], data["ball"][b], looks, robots
@@ -434,6 +436,16 @@ class DaggerTrainer(ImitationRun):
             views[data["goal"][b]] - data["head"][b], *offset_axes(views)
         ).astype(np.float32)
         return labels
+
+    def _redraw_looks(self, looks: np.ndarray) -> np.ndarray:
+        """The minibatch's looks drawn again from ``env.appearance`` (``dagger.redraw_look``):
+        every episode column and the pattern key new, the frame's head move and counter
+        kept."""
+        out = looks.copy()
+        episode = slice(0, LOOK["key"] + 1)
+        fresh = draw_look_rows(self.config.env.appearance, len(looks), self.rng)
+        out[:, episode] = fresh[:, episode]
+        return out
 
     def _redraw_priors(self, vectors: np.ndarray, b: np.ndarray) -> np.ndarray:
         """The minibatch's vectors with the prior pose and proposal of every state whose
