@@ -328,10 +328,12 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     # paper's world, the wider textures its goal reached under grain 25 from 52% to 68%)
     "dagger_robust_continuous": (
         lambda: prior_continuous(400_000, robust=True, neutral_share=0.5).replace(
-            **{f"env.appearance.{name}": span for name, span in WIDE_TEXTURE.items()}
+            **{f"env.appearance.{name}": span for name, span in WIDE_TEXTURE.items()},
+            **{"dagger.redraw_look": True},
         ),
         "dagger_prior_continuous with randomised appearance (half the episodes in the clean"
-        " world, wider textures) and 0-4 other robots (the shipped one)",
+        " world, wider textures, the looks drawn again for every minibatch) and 0-4 other"
+        " robots (the shipped one)",
     ),
 }
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
