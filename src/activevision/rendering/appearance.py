@@ -176,9 +176,9 @@ def draw_looks(config: AppearanceConfig, rng: np.random.Generator) -> np.ndarray
 
 
 def draw_look_rows(config: AppearanceConfig, n: int, rng: np.random.Generator) -> np.ndarray:
-    """``n`` look rows (n, len(LOOK_FIELDS)) drawn at once: :func:`draw_looks`' draws for
-    every row, in the order neutral decisions, factors row by row, keys (for ``n=1`` the
-    same numbers as :func:`draw_looks`, which is this)."""
+    """``n`` look rows (n, len(LOOK_FIELDS)) drawn at once, as :func:`draw_looks` draws
+    one, in this order: the neutral decisions, the factors row by row, the keys. With
+    ``n=1`` these are :func:`draw_looks`' numbers (it is this function's one-row case)."""
     neutral = (
         rng.random(n) < config.neutral_share if config.neutral_share > 0.0 else np.zeros(n, bool)
     )
