@@ -90,7 +90,7 @@ def test_shipped_policy_records_its_randomised_world():
     # the shipped policy is the dagger_robust_continuous preset's run
     world = load_metadata(pretrained_policy_path().with_suffix(".json")).world
     assert world is not None and world != clean_world()
-    recipe = preset("dagger_robust_continuous").env.appearance  # wider textures, half clean
+    recipe = preset("dagger_robust_continuous").env.appearance  # wider textures, a quarter clean
     assert recipe != AppearanceConfig.randomised()
     assert config_from_dict(AppearanceConfig, world["appearance"]) == recipe
     assert config_from_dict(RobotsConfig, world["robots"]).count == (0, 4)

@@ -330,9 +330,10 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     # robustness row as high or higher, a quarter clean with them to 96.9% / 90.5% and
     # grain 25 from 73% to 85%)
     "dagger_robust_continuous": (
-        lambda: prior_continuous(400_000, robust=True, neutral_share=0.25).replace(
-            **{f"env.appearance.{name}": span for name, span in WIDE_TEXTURE.items()},
-            **{"dagger.redraw_look": True},
+        lambda: (
+            prior_continuous(400_000, robust=True, neutral_share=0.25)
+            .replace(**{f"env.appearance.{name}": span for name, span in WIDE_TEXTURE.items()})
+            .replace(**{"dagger.redraw_look": True})
         ),
         "dagger_prior_continuous with randomised appearance (a quarter of the episodes in the"
         " clean world, wider textures, the looks drawn again for every minibatch) and 0-4 other"
