@@ -58,6 +58,8 @@ def test_names_are_unique_and_cover_every_kind():
         "mount-tilt+4deg",
         "mount-height+5cm",
         "mount-fov+10%",
+        "all-mild",
+        "all-mild+robots-4",
         PAPER_CLEAN,
     ):
         assert expected in names
@@ -80,6 +82,8 @@ def test_each_row_changes_its_factor_alone(clean):
             assert config == clean
         elif p.name == PAPER_CLEAN:
             assert changed == set()
+        elif p.factor == "all":
+            continue  # test_all_mild_sets_every_mild_level_at_once
         elif p.factor == "robots":
             assert changed == {"robots.count"}
             assert config.robots.count == (int(p.value), int(p.value))
@@ -88,6 +92,39 @@ def test_each_row_changes_its_factor_alone(clean):
         else:
             assert changed == {f"appearance.{p.factor}"}, p.name
             assert getattr(config.appearance, p.factor) == (p.value, p.value)  # exact level
+
+
+@pytest.mark.parametrize("clean", [EnvConfig(), RANDOMISED], ids=["clean-trained", "randomised"])
+def test_all_mild_sets_every_mild_level_at_once(clean):
+    # written out by hand, not from the level table: the first direction of each factor
+    mild = {
+        "gain": 0.75,
+        "offset": -15.0,
+        "gamma": 1.3,
+        "vignetting": 0.3,
+        "read_noise": 4.0,
+        "shot_noise": 0.4,
+        "defocus": 0.8,
+        "motion_blur": 0.3,
+        "stripes": 8.0,
+        "grain": 6.0,
+        "line_width": -0.01,
+        "line_wear": 0.35,
+        "clutter": 40.0,
+    }
+    for name, robots in (("all-mild", 0), ("all-mild+robots-4", 4)):
+        config = BY_NAME[name].config(clean)
+        changed = changed_fields(neutral_config(clean), config)
+        expected = {f"appearance.{f}" for f in mild} | {"appearance.stripe_width"}
+        assert changed == expected | ({"robots.count"} if robots else set()), name
+        for factor, value in mild.items():
+            assert getattr(config.appearance, factor) == (value, value), (name, factor)
+        assert config.appearance.stripe_width == (0.75, 0.75)
+        assert config.robots.count == (robots, robots)
+        # the mount is left as modelled: it has no mild level
+        assert config.appearance.mount_tilt_deg == (0.0, 0.0)
+    assert BY_NAME["all-mild+robots-4"].setting == "all factors mild, robots=4"
+    assert BY_NAME["all-mild"].setting == "all factors mild"
 
 
 def test_mild_levels_lie_inside_the_robust_ranges_and_strong_ones_beyond():

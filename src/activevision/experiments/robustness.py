@@ -16,14 +16,17 @@ The table (:func:`perturbations`):
 * ``mount-tilt+4deg``, ``mount-height+5cm``, ``mount-fov+10%``: the camera mounted
   differently from the model the robot (and the policy's env) assumes; only the image
   changes.
+* ``all-mild`` and ``all-mild+robots-4``: every appearance factor at its mild level at once
+  (gain and offset dark, lines thin: a dim hall), alone and with four other robots. A real
+  camera is off in every way at once; these rows show whether mild changes add up.
 
-**One factor a row.** Every perturbation row is built on the *neutral* env of the policy:
-its training env with every appearance factor neutral and no other robots (the
-``paper-clean`` env; for a policy trained on the clean world that is ``clean`` itself),
-then the row's one factor set. So a row measures that factor alone, never mixed with the
-randomisation the policy trained under; for a randomised policy its drop vs ``clean``
-includes the (usually small) change from the trained mix to the neutral world, which the
-``paper-clean`` row shows on its own.
+**One factor a row** (but the two ``all-mild`` rows). Every perturbation row is built on
+the *neutral* env of the policy: its training env with every appearance factor neutral and
+no other robots (the ``paper-clean`` env; for a policy trained on the clean world that is
+``clean`` itself), then the row's one factor set. So a row measures that factor alone,
+never mixed with the randomisation the policy trained under; for a randomised policy its
+drop vs ``clean`` includes the (usually small) change from the trained mix to the neutral
+world, which the ``paper-clean`` row shows on its own.
 
 **Same seeds.** Every row plays episodes ``episode_seed(seed, 0..n-1)``. The look is drawn
 after the start, so appearance rows play the very starts of ``clean``; other robots are
@@ -79,6 +82,10 @@ MOUNT_LEVELS: tuple[tuple[str, str, float], ...] = (
     ("mount-fov+10%", "mount_fov", 0.10),
 )
 ROBOT_COUNTS = (1, 2, 3, 4)
+#: (name, other robots): the rows with every factor of APPEARANCE_LEVELS at its mild level
+#: (a factor with two directions at its first: dark, thin)
+ALL_MILD_LEVELS: tuple[tuple[str, int], ...] = (("all-mild", 0), ("all-mild+robots-4", 4))
+ALL = "all"
 
 CLEAN = "clean"
 PAPER_CLEAN = "paper-clean"
@@ -87,7 +94,8 @@ PAPER_CLEAN = "paper-clean"
 @dataclass(frozen=True)
 class Perturbation:
     """A named change of the policy's env: ``factor`` (an AppearanceConfig field,
-    ``"robots"``, or ``"none"`` for the two clean rows) set to ``value``."""
+    ``"robots"``, or ``"none"`` for the two clean rows) set to ``value``; or ``factor``
+    ``"all"``: every factor at its mild level and ``value`` other robots."""
 
     name: str
     factor: str
@@ -97,6 +105,8 @@ class Perturbation:
     @property
     def setting(self) -> str:
         """The row's setting as text (``gain=0.45``, ``robots=2``, ``as trained``)."""
+        if self.factor == ALL:
+            return "all factors mild" + (f", robots={self.value:g}" if self.value else "")
         if self.value is None:
             return "as trained" if self.name == CLEAN else "neutral"
         return f"{self.factor}={self.value:g}"
@@ -108,11 +118,18 @@ class Perturbation:
         base = neutral_config(clean)
         if self.value is None:
             return base
-        if self.factor == "robots":
+        if self.factor == "robots" or self.factor == ALL:
             k = int(self.value)
-            return base.replace(robots=dataclasses.replace(clean.robots, count=(k, k)))
-        changes = {self.factor: (self.value, self.value)}
-        if self.factor == "stripes":
+            base = base.replace(robots=dataclasses.replace(clean.robots, count=(k, k)))
+            if self.factor == "robots":
+                return base
+            levels: dict[str, float] = {}
+            for factor, _, mild, _ in APPEARANCE_LEVELS:
+                levels.setdefault(factor, mild)  # the first direction of each factor
+        else:
+            levels = {self.factor: self.value}
+        changes = {factor: (v, v) for factor, v in levels.items()}
+        if "stripes" in levels:
             changes["stripe_width"] = (STRIPE_WIDTH, STRIPE_WIDTH)
         return base.replace(appearance=AppearanceConfig().replace(**changes))
 
@@ -132,6 +149,7 @@ def _all_perturbations() -> tuple[Perturbation, ...]:
         rows.append(Perturbation(f"{stem}-strong", factor, "strong", strong))
     rows += [Perturbation(f"robots-{k}", "robots", str(k), float(k)) for k in ROBOT_COUNTS]
     rows += [Perturbation(name, factor, "strong", v) for name, factor, v in MOUNT_LEVELS]
+    rows += [Perturbation(name, ALL, "mild", float(k)) for name, k in ALL_MILD_LEVELS]
     return tuple(rows)
 
 
@@ -249,17 +267,17 @@ def format_row(row: dict[str, Any]) -> str:
 
     trained = "yes" if row["in_training_range"] else "no"
     return (
-        f"{row['name']:<25}{row['setting']:<22}{trained:>7}  "
+        f"{row['name']:<25}{row['setting']:<28}{trained:>7}  "
         f"{cell('success_rate')}   {cell('goal_reached')}"
     )
 
 
 def table_header() -> str:
     """The two header lines of :func:`format_table` and a rule."""
-    pad = " " * (25 + 22 + 7 + 2)
+    pad = " " * (25 + 28 + 7 + 2)
     groups = pad + f"{' success rate % ':-^27}   {' goal reached % ':-^27}"
     sub = f"{' mean [95% interval]   change':<27}"
-    names = f"{'perturbation':<25}{'setting':<22}{'trained':>7}  {sub}   {sub}"
+    names = f"{'perturbation':<25}{'setting':<28}{'trained':>7}  {sub}   {sub}"
     return "\n".join([groups, names, "-" * len(names)])
 
 
@@ -290,9 +308,9 @@ def list_table(clean: EnvConfig | None = None) -> str:
     ranges (``activevision robustness --list``)."""
     clean = clean or EnvConfig()
     robust = robust_config(clean)
-    lines = [f"{'perturbation':<25}{'factor':<16}{'level':<9}{'setting':<22}robust range"]
+    lines = [f"{'perturbation':<25}{'factor':<16}{'level':<9}{'setting':<28}robust range"]
     lines.append("-" * len(lines[0]))
     for p in PERTURBATIONS:
         inside = "yes" if within(p.config(clean), robust) else "no (beyond)"
-        lines.append(f"{p.name:<25}{p.factor:<16}{p.level:<9}{p.setting:<22}{inside}")
+        lines.append(f"{p.name:<25}{p.factor:<16}{p.level:<9}{p.setting:<28}{inside}")
     return "\n".join(lines)
