@@ -91,6 +91,29 @@ def test_read_noise_has_its_standard_deviation(renderer, states):
     assert abs(diff.std() - 5.0) < 0.3 and abs(diff.mean()) < 0.2
 
 
+@pytest.mark.parametrize("size", [(640, 480), (1024, 768)], ids=["vga", "xga"])
+def test_noise_of_large_images_is_read_from_a_table_that_holds_them(states, size):
+    # an image of more than half as many pixels as the default table has numbers (2**19) gets a
+    # larger table; before, 1024 x 768 read its noise beyond the table's end (a crash)
+    from activevision.geometry.camera import CameraConfig
+
+    width, height = size
+    big = Renderer(camera=CameraConfig(width=width, height=height))
+    table = renderer_module.noise_table(width * height)
+    assert len(table) >= 2 * width * height and len(table) & (len(table) - 1) == 0
+    small = renderer_module.noise_table(160 * 120)
+    np.testing.assert_array_equal(table[: len(small)], small)  # the same numbers first
+    pose, pan, tilt, ball = (x[:2] for x in states)
+    clean = big.render(pose, pan, tilt, ball).astype(float)
+    rows = only("read_noise", 5.0)[:2]
+    rows[:, LOOK["key"]] = [3.0, 2.0**51]  # hashed starts far apart
+    out = big.render(pose, pan, tilt, ball, looks=rows).astype(float)
+    np.testing.assert_array_equal(big.render(pose, pan, tilt, ball, looks=rows), out)
+    inside = (clean > 30) & (clean < 225)
+    diff = (out - clean)[inside]
+    assert abs(diff.std() - 5.0) < 0.1 and abs(diff.mean()) < 0.05
+
+
 def test_noise_differs_between_frames_of_an_episode(renderer, states):
     a = only("read_noise", 5.0)
     b = a.copy()

@@ -29,9 +29,11 @@ drop vs ``clean`` includes the (usually small) change from the trained mix to th
 world, which the ``paper-clean`` row shows on its own.
 
 **Same seeds.** Every row plays episodes ``episode_seed(seed, 0..n-1)``. The look is drawn
-after the start, so appearance rows play the very starts of ``clean``; other robots are
-drawn within the start (a start whose goal a robot hides is drawn again), so robot rows
-share the seeds, not always the starts.
+after the start, so appearance rows play the very starts of the robot-free ``paper-clean``
+world (which are ``clean``'s for a policy trained without other robots); other robots are
+drawn within the start (a start whose goal a robot hides is drawn again), so rows with
+robots (``robots-*``, ``all-mild+robots-4``, and ``clean`` where the policy trained with
+them) share the seeds, not always the starts.
 
 ``in_training_range``: every drawn range of the row lies within the policy's training
 ranges (appearance and robot count); ``in_robust_range``: within the robust ranges

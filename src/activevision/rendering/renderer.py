@@ -3,6 +3,7 @@ method)."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -101,6 +102,7 @@ class Renderer:
         # C, namedtuples in Python).
         self._kernel_scene, self._kernel_params = scene_bundles(self.scene, camera, config)
         self._kernel_fields = (tuple(self._kernel_scene), tuple(self._kernel_params))
+        self._noise = noise_table(camera.width * camera.height)
 
     @property
     def image_shape(self) -> tuple[int, int]:
@@ -166,7 +168,7 @@ class Renderer:
             finish = looks_kernels.finish_kernel_serial
             if threads > 1:
                 finish = looks_kernels.finish_kernel
-            finish(out, looks_fields[0], looks_fields[1], self.camera.focal, _NOISE_TABLE)
+            finish(out, looks_fields[0], looks_fields[1], self.camera.focal, self._noise)
         if rng is not None and self.config.has_noise:  # with noise, rng is checked above
             apply_noise(out, self.config, rng)
         return out
@@ -183,7 +185,7 @@ class Renderer:
             raise ValueError("tone needs looks")
         cyl = _NO_CYLINDERS if cylinders is None else _cylinders(cylinders, n)
         if looks is None:
-            return _NEUTRAL_ROWS, _NEUTRAL_TONE, cyl, _NOISE_TABLE, False
+            return _NEUTRAL_ROWS, _NEUTRAL_TONE, cyl, self._noise, False
         rows = _float_array("looks", looks, (n, len(LOOK_FIELDS)))
         if tone is None:
             tone_arr = np.broadcast_to(identity_tone(), (n, 256))
@@ -191,7 +193,7 @@ class Renderer:
             tone_arr = np.asarray(tone)
             if tone_arr.shape != (n, 256) or tone_arr.dtype != np.uint8:
                 raise ValueError(f"tone must be a uint8 array of shape ({n}, 256)")
-        return rows, np.ascontiguousarray(tone_arr), cyl, _NOISE_TABLE, True
+        return rows, np.ascontiguousarray(tone_arr), cyl, self._noise, True
 
 
 def _cylinders(value: ArrayLike, n: int) -> np.ndarray:
@@ -208,9 +210,23 @@ def _cylinders(value: ArrayLike, n: int) -> np.ndarray:
     return arr
 
 
-#: The fixed table of standard normal numbers the looks read patterns and noise from (a
-#: constant of the package: its seed never changes, so frames keep their bytes).
-_NOISE_TABLE = np.random.default_rng(20170320).standard_normal(1 << 19).astype(np.float32)
+#: Entries of the noise table of images up to NOISE_TABLE_MIN / 2 pixels (the default
+#: camera's 19,200 and a 640 x 400 one).
+NOISE_TABLE_MIN = 1 << 19
+
+
+@functools.lru_cache(maxsize=4)
+def noise_table(pixels: int) -> np.ndarray:
+    """The fixed table of standard normal numbers the looks of ``pixels``-pixel images read
+    patterns and noise from: NOISE_TABLE_MIN entries, or the first power of two of at least
+    twice ``pixels`` (a frame's sensor noise is a contiguous run of the table from a hashed
+    start, so the table must hold a frame and room to place it). A constant of the package:
+    its seed never changes, so frames keep their bytes; a larger table begins with the same
+    numbers."""
+    size = max(NOISE_TABLE_MIN, 1 << (2 * pixels - 1).bit_length())
+    return np.random.default_rng(20170320).standard_normal(size).astype(np.float32)
+
+
 _NEUTRAL_ROWS = neutral_looks(1)
 _NEUTRAL_TONE = identity_tone()[None]
 _NO_CYLINDERS = np.zeros((1, 0, 6))
