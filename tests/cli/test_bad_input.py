@@ -27,6 +27,12 @@ BAD_ARGUMENTS = [
     (["evaluate", "--error", "-1"], "'-1'"),
     (["evaluate", "--error", "nan"], "'nan'"),
     (["evaluate", "--error", "inf"], "'inf'"),
+    (["evaluate", "--error", "11"], "'11'"),  # beyond the field and a full turn
+    (["evaluate", "--methods", "random", "--weights", "best"], "--run"),
+    (["evaluate", "--methods", "random", "--out", "{run}/config.json"], "not a directory"),
+    (["robustness", "--method", "random", "--weights", "best"], "--run"),
+    (["robustness", "--method", "random", "--out", "{run}/metrics.csv"], "not a directory"),
+    (["match", "--robot-speed", "0.2"], "--robots"),
     (["evaluate", "--seed", "-1"], "'-1'"),
     (["evaluate", "--methods", "nope"], "'nope'"),
     (["evaluate", "--methods", "learned"], "--run"),
@@ -43,6 +49,9 @@ BAD_ARGUMENTS = [
     (["episode", "--policies", "nope", "--out", "{tmp}/e.png"], "'nope'"),
     (["episode", "--policies", "learned", "--out", "{tmp}/e.png"], "--run"),
     (["demo", "--seed", "x"], "'x'"),
+    (["demo", "--out", "{tmp}/d.gif"], "GIF"),  # the figure and its GIF would be one file
+    (["episode", "--out", "{tmp}/e.gif"], "GIF"),
+    (["export", "{run}", "-o", "{tmp}/policy.json"], ".onnx"),
     (["render", "--field", "moon", "--out", "{tmp}/v.png"], "'moon'"),
     (["render", "--seed", "2147483648", "--out", "{tmp}/v.png"], "2147483648"),
     (["render"], "--out"),
@@ -70,6 +79,16 @@ BAD_ARGUMENTS = [
     (["train", "--set", "env_id=Nope-v0", "--steps", "30", "--out", "{tmp}/x"], "Nope-v0"),
     (["train", "--set", "device=cuda:7", "--out", "{tmp}/x"], "cuda"),
     (["train", "--set", "device=tpu", "--out", "{tmp}/x"], "device"),
+    (["train", "--set", "env.appearance.neutral_share=0.5", "--out", "{tmp}/x"], "switch one on"),
+    (
+        [
+            "train",
+            *("--preset", "dagger_robust_continuous"),
+            *("--set", "env.appearance.neutral_share=1", "--out", "{tmp}/x"),
+        ],
+        "redraw_look",
+    ),
+    (["train", "--set", "ticks=1", "--out", "{tmp}/x"], "give its full path, match.ticks"),
     (["train", "--config", "{tmp}/none.json", "--out", "{tmp}/x"], "none.json"),
     (["train", "--resume", "{tmp}/missing"], "missing"),
     (["train", "--resume", "{run}", "--set", "learning_rate=1e-3"], "--set"),
@@ -123,6 +142,48 @@ def test_named_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     assert picture.read_bytes() == b"a photo of my robot"
     assert main(["render", "--out", str(picture), "--overwrite"]) == 0
     assert picture.read_bytes().startswith(b"\x89PNG")
+
+
+def test_a_folder_of_other_files_is_no_place_for_a_run(tmp_path, tiny_train, one_clear_line):
+    # an evaluation's episodes.csv, or a user's config.json, is not a run to start over
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / "episodes.csv").write_text("my,table\n1,2\n")
+    assert main([*tiny_train, "--out", str(folder)]) == 2
+    one_clear_line("episodes.csv", "--overwrite")
+    assert (folder / "episodes.csv").read_text() == "my,table\n1,2\n"
+    assert sorted(p.name for p in folder.iterdir()) == ["episodes.csv"]
+
+
+def test_evaluating_again_needs_overwrite(tmp_path, capsys, one_clear_line):
+    argv = ["evaluate", "--methods", "random", "--episodes", "2", "--out", str(tmp_path / "e")]
+    assert main(argv) == 0
+    written = (tmp_path / "e" / "evaluation.csv").read_bytes()
+    capsys.readouterr()
+    assert main([*argv, "--seed", "1"]) == 2
+    one_clear_line("evaluation.csv", "--overwrite")
+    assert (tmp_path / "e" / "evaluation.csv").read_bytes() == written
+    assert main([*argv, "--seed", "1", "--overwrite"]) == 0
+    assert (tmp_path / "e" / "evaluation.csv").read_bytes() != written
+
+
+def test_files_that_are_not_text_are_named(run, tmp_path, capsys, one_clear_line):
+    garbage = bytes(range(128, 256))
+    (tmp_path / "binary.json").write_bytes(garbage)
+    assert (
+        main(["train", "--config", str(tmp_path / "binary.json"), "--out", str(tmp_path / "x")])
+        == 2
+    )
+    one_clear_line("binary.json")
+    (run / "metrics.csv").write_bytes(garbage)
+    assert main(["plot", str(run)]) == 2
+    one_clear_line("metrics.csv")
+
+
+def test_a_run_without_weights_says_which_file_it_lacks(run, capsys, one_clear_line):
+    (run / "policy.safetensors").unlink()
+    assert main(["export", str(run)]) == 2
+    one_clear_line("no policy weights in", "policy.safetensors", "--resume")
 
 
 def test_finished_run_resumes_to_nothing_and_says_so(run, capsys):

@@ -182,6 +182,11 @@ class Mirror(BallTrack):
 
 def not_a_strategy(config):
     return object()
+
+
+class NoConfig:  # takes no config: not NAME(config)
+    def reset(self, n, rng):
+        pass
 """
 
 
@@ -212,6 +217,7 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
         ("mine.py", "FILE.py:NAME"),
         ("missing.py:Mirror", "no such file"),
         ("mine.py:Nothing", "defines no class or function Nothing"),
+        ("mine.py:NoConfig", "NoConfig(config) failed"),
         ("mine.py:not_a_strategy", "no reset or act method"),
         ("no_such_module_xyz:Thing", "cannot import it"),
         ("broken.py:Mirror", "broken.py:2: "),
@@ -228,6 +234,31 @@ def test_a_bad_strategy_is_one_clear_line(tmp_path, monkeypatch, spec, needle, o
         return
     assert main(argv) == 2
     one_clear_line(needle)
+
+
+WIDE = """
+import numpy as np
+
+
+class Wide:
+    name = "wide"
+
+    def __init__(self, config):
+        pass
+
+    def reset(self, n, rng):
+        self.n = n
+
+    def act(self, obs, info):
+        return np.zeros((self.n, 7))  # seven numbers a match: not an action
+"""
+
+
+def test_a_strategy_acting_wrongly_is_named_on_one_line(tmp_path, one_clear_line):
+    (tmp_path / "wide.py").write_text(WIDE)
+    argv = [*TINY, "--out", str(tmp_path / "m"), "--strategy", f"{tmp_path / 'wide.py'}:Wide"]
+    assert main(argv) == 2
+    one_clear_line("strategy wide, tick 0: invalid action", "shape (2,)")
 
 
 def test_two_strategies_of_one_name_are_refused(tmp_path, one_clear_line):

@@ -110,6 +110,23 @@ def test_mean_interval_on_known_data():
     assert iv.low == pytest.approx(2.5 - half) and iv.high == pytest.approx(2.5 + half)
 
 
+def test_a_share_keeps_its_interval_within_0_and_1_and_one_value_has_none():
+    # the paper's success rate of two episodes, 1.0 and 0.2: mean 0.6, +-0.784 unbounded
+    iv = mean_interval([1.0, 0.2], bounds=(0.0, 1.0))
+    assert iv.mean == pytest.approx(0.6) and (iv.low, iv.high) == (0.0, 1.0)
+    assert summarise_success_rates([1.0, 0.2]) == (iv.low, iv.high)
+    one = mean_interval([0.7])
+    assert one.mean == 0.7 and math.isnan(one.low) and math.isnan(one.high)
+
+
+def summarise_success_rates(rates):
+    from activevision.experiments.evaluate import METRICS, summarise
+
+    episodes = [dict.fromkeys(METRICS, 0.0) | {"success_rate": r} for r in rates]
+    iv = summarise(episodes)["success_rate"]
+    return iv.low, iv.high
+
+
 def test_compare_is_incremental(tmp_path):
     methods = {"oracle": lambda e: OraclePolicy(), "entropy_jump": lambda e: EntropyPolicy(e)}
     rows = compare(tmp_path, methods, errors=[0.0, 1.0], episodes=5, progress=False)

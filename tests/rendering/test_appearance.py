@@ -288,7 +288,11 @@ def test_config_ranges_are_checked():
     assert not AppearanceConfig().enabled and AppearanceConfig.randomised().enabled
     with pytest.raises(ValueError, match=r"AppearanceConfig\.neutral_share"):
         AppearanceConfig.randomised().replace(neutral_share=1.5)
-    assert not AppearanceConfig(neutral_share=0.5).enabled  # no factor on: nothing to draw
+    # a share of neutral episodes among none randomised: refused, not silently a no-op
+    with pytest.raises(ValueError, match=r"AppearanceConfig\.neutral_share: .* switch one on"):
+        AppearanceConfig(neutral_share=0.5)
+    assert not AppearanceConfig(stripe_width=(0.2, 0.4)).enabled  # the width alone is no factor
+    assert AppearanceConfig(mount_fov=(0.0, 0.01)).enabled
 
 
 def test_looks_drawn_at_once_follow_the_documented_order_and_ranges():

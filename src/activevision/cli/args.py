@@ -61,11 +61,18 @@ def _finite(text: str) -> float:
     return value
 
 
-def non_negative_float(text: str) -> float:
-    """A finite number >= 0 (localisation errors in metres / radians)."""
+#: The largest localisation error the commands take (m and rad): beyond the field's size in
+#: metres, and past a full turn in radians, a larger error means nothing more.
+MAX_ERROR = 10.0
+
+
+def localisation_error(text: str) -> float:
+    """A localisation error: a finite number in ``[0, MAX_ERROR]`` (metres and radians)."""
     value = _finite(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text!r}")
+    if not 0 <= value <= MAX_ERROR:
+        raise argparse.ArgumentTypeError(
+            f"must lie in [0, {MAX_ERROR:g}] (m and rad), got {text!r}"
+        )
     return value
 
 
@@ -111,13 +118,13 @@ def error_levels(text: str) -> list[float]:
             parts = text.split(":")
             if len(parts) != 3:
                 raise argparse.ArgumentTypeError("expects start:stop:step")
-            start, stop, step = (non_negative_float(v) for v in parts)
+            start, stop, step = (localisation_error(v) for v in parts)
             if step <= 0:
                 raise argparse.ArgumentTypeError("step must be positive")
             if stop < start:
                 raise argparse.ArgumentTypeError("stop is below start")
             return [round(float(v), 6) for v in np.arange(start, stop + step / 2, step)]
-        levels = [non_negative_float(v) for v in text.split(",")]
+        levels = [localisation_error(v) for v in text.split(",")]
         if len(set(levels)) != len(levels):
             raise argparse.ArgumentTypeError("repeats a level")
         return levels
@@ -175,6 +182,13 @@ def add_weights(parser: argparse.ArgumentParser) -> None:
         default="final",
         help="the run's final weights or its best validated ones (eval_interval)",
     )
+
+
+def check_weights(args: argparse.Namespace) -> None:
+    """``--weights best`` names the best validated weights of a training run: refused where
+    no run is given (``--run``, or ``--runs`` where the command has it)."""
+    if args.weights != "final" and args.run is None and not getattr(args, "runs", None):
+        raise ValueError(f"--weights {args.weights} picks a training run's weights: give --run")
 
 
 def add_overwrite(parser: argparse.ArgumentParser) -> None:

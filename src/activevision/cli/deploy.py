@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from activevision.cli.args import add_overwrite, add_weights, seed
-from activevision.cli.outputs import check_outputs
+from activevision.cli.outputs import check_outputs, figure_and_gif
 
 
 def _opset(text: str) -> int:
@@ -25,10 +25,12 @@ def cmd_export(args: argparse.Namespace) -> None:
     from activevision.export.onnx_export import model_path_of
     from activevision.runtime.metadata import metadata_path_for
 
+    if args.out is not None and args.out.suffix not in ("", ".onnx"):
+        raise ValueError(f"--out {args.out}: name a .onnx file or a directory")
     model = model_path_of(args.out or args.run)
     outputs = [model, metadata_path_for(model)]
     if args.out is None:
-        check_outputs(own=outputs)
+        check_outputs(own=outputs, overwrite=args.overwrite)
     else:
         check_outputs(named=outputs, overwrite=args.overwrite)
     exported = export_run(args.run, model, weights=args.weights, opset=args.opset)
@@ -42,7 +44,7 @@ def cmd_demo(args: argparse.Namespace) -> None:
     from activevision.figures.episode import animate_episode, plot_episodes
     from activevision.runtime import pretrained_policy_path
 
-    gif = args.out.with_suffix(".gif")
+    gif = figure_and_gif(args.out)
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
     policy = OnnxPolicy(args.policy or pretrained_policy_path())
     config = policy.env_config()  # the observation the policy takes; an exact prior pose

@@ -10,14 +10,15 @@ from typing import TYPE_CHECKING, Any
 from activevision.cli.args import (
     add_overwrite,
     add_weights,
+    check_weights,
     choice_list,
     env_config_of_run,
     error_levels,
-    non_negative_float,
+    localisation_error,
     positive_int,
     seed,
 )
-from activevision.cli.outputs import check_outputs
+from activevision.cli.outputs import check_outputs, figure_and_gif
 
 if TYPE_CHECKING:
     from activevision.experiments.policies import HeadPolicy
@@ -84,9 +85,10 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     )
     from activevision.io import write_csv, write_json
 
+    check_weights(args)
     out = args.out or (args.run / "evaluation" if args.run else Path("evaluation"))
     files = [out / n for n in ("evaluation.csv", "episodes.csv", "evaluation.json")]
-    check_outputs(own=files)
+    check_outputs(own=files, overwrite=args.overwrite)
     from activevision.experiments.compare import config_at_error
     from activevision.experiments.methods import runnable_methods
     from activevision.experiments.policies import OnnxPolicy
@@ -148,8 +150,10 @@ def cmd_compare(args: argparse.Namespace) -> None:
     from activevision.experiments.methods import check_runs
     from activevision.figures.compare import plot_compare
 
+    check_weights(args)
     out = args.out or (args.run / "compare" if args.run else Path("compare"))
-    check_outputs(own=[out / "compare.csv", out / "compare.png"])
+    # compare.csv is resumed, not replaced (outputs.py, rule 3): only rules 1 and 4 apply
+    check_outputs(own=[out / "compare.csv", out / "compare.png"], overwrite=True)
     check_runs(args.methods or [], args.run)
     if args.overwrite:
         (out / "compare.csv").unlink(missing_ok=True)
@@ -192,7 +196,8 @@ def cmd_episode(args: argparse.Namespace) -> None:
     from activevision.experiments.episode_figure import trace_episode
     from activevision.figures.episode import animate_episode, plot_episodes
 
-    gif = args.out.with_suffix(".gif")
+    check_weights(args)
+    gif = figure_and_gif(args.out)
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
     from activevision.experiments.compare import config_at_error
 
@@ -208,7 +213,7 @@ def cmd_episode(args: argparse.Namespace) -> None:
 def cmd_report(args: argparse.Namespace) -> None:
     from activevision.experiments.report import write_report
 
-    check_outputs(own=[args.run / "report.md"])
+    check_outputs(own=[args.run / "report.md"], overwrite=args.overwrite)
     print(f"wrote {write_report(args.run)}")
 
 
@@ -244,12 +249,13 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--episodes", type=positive_int, default=100)
     p.add_argument(
         "--error",
-        type=non_negative_float,
+        type=localisation_error,
         default=0.0,
         help="localisation error of the entropy methods' belief and of a learned policy's"
         " prior pose (m and rad)",
     )
     p.add_argument("--out", type=Path)
+    add_overwrite(p)
 
     p = sub.add_parser("compare", help="success vs localisation error, every method")
     p.set_defaults(func=cmd_compare)
@@ -286,3 +292,4 @@ def add_parsers(sub: Any) -> None:
     p = sub.add_parser("report", help="one Markdown page with a run's figures and tables")
     p.set_defaults(func=cmd_report)
     p.add_argument("run", type=Path)
+    add_overwrite(p)

@@ -54,6 +54,8 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
     )
     from activevision.envs.robots import RobotsConfig
 
+    if args.robot_speed and not args.robots:
+        raise ValueError("--robot-speed moves the other robots: give --robots N (1-8) too")
     return MatchConfig(
         ticks=args.ticks,
         step_deg=args.step_deg,

@@ -8,9 +8,11 @@ Rules (what a user of a research tool expects, and what keeps a run loadable):
    RUN/config.onnx`` (whose metadata would be ``RUN/config.json``) are refused.
 2. A file the user named (``--out FILE.png``, ``export -o FILE.onnx``) that exists already
    is replaced only with ``--overwrite``.
-3. The fixed-name files a command writes inside its output directory (``evaluation.csv``,
-   ``compare.csv``, ``report.md``, ``plots/*.png``) are that command's own: running it again
-   refreshes them.
+3. So are the fixed-name files a command writes inside its output directory
+   (``evaluation.csv``, ``report.md``, ``RUN/policy.onnx``): running it again asks for
+   ``--overwrite``. (``compare`` resumes its ``compare.csv`` when it was played on the same
+   episodes and seed: continuing a table is not replacing it.)
+4. An output directory that exists as a file is refused before any work.
 """
 
 from __future__ import annotations
@@ -37,16 +39,50 @@ def check_outputs(
 ) -> None:
     """Refuse (OutputError naming the file) any output that breaks the module's rules.
 
-    ``own``: fixed-name files of the command (rule 3); ``named``: files the user named
-    (rule 2). Both are held against rule 1.
+    ``own``: fixed-name files of the command (rule 3), refused where they exist unless
+    ``overwrite``; ``named``: files the user named (rule 2), the same. Both are held against
+    rules 1 and 4.
     """
-    own, named = [Path(p) for p in own], [Path(p) for p in named]
-    for path in own + named:
+    paths = [Path(p) for p in own] + [Path(p) for p in named]
+    for path in paths:
+        for folder in (path.parent, *path.parent.parents):
+            if folder.exists() and not folder.is_dir():
+                raise OutputError(f"{folder} is a file, not a directory: choose another --out")
         if path.name in RUN_FILES and is_training_run(path.parent):
             raise OutputError(
                 f"refusing to write {path}: it is a file of the training run {path.parent};"
                 " choose another output path"
             )
-    for path in named:
+        if path.is_dir():
+            raise OutputError(f"{path} is a directory: choose another output path")
+    for path in paths:
         if path.exists() and not overwrite:
             raise OutputError(f"{path} exists; pass --overwrite to replace it")
+
+
+def check_run_directory(directory: Path, *, overwrite: bool = False) -> None:
+    """Refuse a new training run in ``directory`` where it would replace files another
+    command (or the user) put there: any of a run's file names (rule 1 the other way round),
+    unless ``overwrite``; and a ``directory`` that is a file (rule 4)."""
+    if directory.exists() and not directory.is_dir():
+        raise OutputError(f"{directory} is a file, not a directory: choose another --out")
+    if overwrite or not directory.is_dir():
+        return
+    clash = sorted(p.name for p in directory.iterdir() if p.name in RUN_FILES)
+    if clash:
+        raise OutputError(
+            f"{directory} already holds {', '.join(clash)}; choose another --out, or pass"
+            " --overwrite to replace them"
+        )
+
+
+def figure_and_gif(figure: Path) -> Path:
+    """The GIF written beside the figure ``figure`` (``episode``, ``demo``): refused when
+    the two would be one file."""
+    gif = Path(figure).with_suffix(".gif")
+    if gif == Path(figure):
+        raise OutputError(
+            f"--out {figure}: name the figure (e.g. {gif.with_suffix('.png')}); the GIF is"
+            " written beside it"
+        )
+    return gif

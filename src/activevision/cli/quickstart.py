@@ -24,7 +24,7 @@ def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
         steps = [["train", "--preset", "quickstart", "--seed", run_seed, "--out", out, *extra]]
     return [
         *steps,
-        ["evaluate", "--run", out, "--episodes", episodes, "--seed", run_seed],
+        ["evaluate", "--run", out, "--episodes", episodes, "--seed", run_seed, "--overwrite"],
         ["compare", "--run", out, "--errors", "0:2:0.5", "--episodes", episodes]
         + ["--seed", run_seed, "--overwrite"],
         ["episode", "--run", out, "--seed", run_seed, "--overwrite"]
@@ -33,7 +33,7 @@ def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
         ["match", "--matches", str(args.matches), "--ticks", str(args.match_ticks)]
         + ["--seed", run_seed]
         + ["--out", str(args.out / "match"), "--overwrite"],
-        ["report", out],
+        ["report", out, "--overwrite"],
     ]
 
 

@@ -10,9 +10,10 @@ from typing import TYPE_CHECKING, Any
 from activevision.cli.args import (
     add_overwrite,
     add_weights,
+    check_weights,
     choice_list,
     env_config_of_run,
-    non_negative_float,
+    localisation_error,
     positive_int,
     seed,
 )
@@ -55,6 +56,7 @@ def _policy(name: str, args: argparse.Namespace) -> tuple[HeadPolicy, EnvConfig]
     from activevision.experiments.methods import make_policy
     from activevision.experiments.policies import OnnxPolicy
 
+    check_weights(args)
     clean = config_at_error(env_config_of_run(args.run), args.error)
     policy = make_policy(name, args.error, clean, args.run, args.weights)
     if isinstance(policy, OnnxPolicy) and args.run is None:
@@ -147,7 +149,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--seed", type=seed, default=0)
     p.add_argument(
         "--error",
-        type=non_negative_float,
+        type=localisation_error,
         default=0.0,
         help="localisation error of a policy's prior pose (and of the entropy methods'"
         " belief), m and rad, in every row",

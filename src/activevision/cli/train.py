@@ -15,7 +15,7 @@ from activevision.cli.args import (
     seed,
     seed_list,
 )
-from activevision.cli.outputs import OutputError, is_training_run
+from activevision.cli.outputs import OutputError, check_run_directory, is_training_run
 
 
 def _preset_names() -> tuple[str, ...]:
@@ -87,6 +87,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             f"{args.out} already holds a run that has no checkpoint yet; pass --overwrite to"
             " start it over"
         )
+    check_run_directory(args.out, overwrite=args.overwrite)
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     overrides = list(args.set or [])
     if args.steps is not None:

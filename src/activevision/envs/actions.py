@@ -37,6 +37,13 @@ def action_table(step_deg: float, action_set: str = "8way") -> np.ndarray:
     return np.asarray(moves[:count], dtype=np.float64)
 
 
+def _shown(actions: object, limit: int = 60) -> str:
+    """``actions`` on one line for an error message (an array's repr spans several, and a
+    batch's is long): its repr with the line breaks folded, cut at ``limit`` characters."""
+    text = " ".join(repr(actions).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def check_actions(actions: object, n_actions: int, shape: tuple[int, ...]) -> np.ndarray:
     """``actions`` as an integer array of ``shape`` with values in ``0..n_actions - 1``.
 
@@ -50,14 +57,15 @@ def check_actions(actions: object, n_actions: int, shape: tuple[int, ...]) -> np
         array = np.asarray(None)
     span = f"0..{n_actions - 1}"
     expects = f"an integer in {span}" if shape == () else f"integers in {span}, shape {shape}"
+    shown = _shown(actions)
     if array.dtype == np.bool_ or not np.issubdtype(array.dtype, np.integer):
-        raise ValueError(f"invalid action {actions!r}: expects {expects}, got dtype {array.dtype}")
+        raise ValueError(f"invalid action {shown}: expects {expects}, got dtype {array.dtype}")
     if array.shape != shape:
-        raise ValueError(f"invalid action {actions!r}: expects {expects}, got shape {array.shape}")
+        raise ValueError(f"invalid action {shown}: expects {expects}, got shape {array.shape}")
     bad = (array < 0) | (array >= n_actions)
     if bad.any():
         where = "" if shape == () else f" {int(array[bad].flat[0])} in"
-        raise ValueError(f"invalid action{where} {actions!r}: expects {expects}")
+        raise ValueError(f"invalid action{where} {_shown(actions)}: expects {expects}")
     return array
 
 
@@ -71,15 +79,15 @@ def check_continuous_actions(actions: object, shape: tuple[int, ...]) -> np.ndar
         array = np.asarray(actions, dtype=np.float64)
     except (TypeError, ValueError):
         raise ValueError(
-            f"invalid action {actions!r}: expects numbers in [-1, 1], shape {shape}"
+            f"invalid action {_shown(actions)}: expects numbers in [-1, 1], shape {shape}"
         ) from None
     if array.shape != shape:
         raise ValueError(
-            f"invalid action {actions!r}: expects numbers in [-1, 1], shape {shape},"
+            f"invalid action {_shown(actions)}: expects numbers in [-1, 1], shape {shape},"
             f" got shape {array.shape}"
         )
     if not (np.isfinite(array).all() and (np.abs(array) <= 1.0).all()):
-        raise ValueError(f"invalid action {actions!r}: expects finite numbers in [-1, 1]")
+        raise ValueError(f"invalid action {_shown(actions)}: expects finite numbers in [-1, 1]")
     return array
 
 

@@ -31,6 +31,8 @@ METRICS = {
     "oscillating": "proportion",  #: ended, unsolved, swinging between two views
     "head_travel": "mean",  #: degrees the head moved over the episode (pan-tilt Euclidean)
 }
+#: The "mean" metrics that are shares of something, whose intervals stay within these bounds.
+SHARE_BOUNDS = {"success_rate": (0.0, 1.0)}
 #: nats: a final view this close to the goal view's entropy counts as good as the goal
 REGRET_TOLERANCE = 0.25
 
@@ -53,15 +55,22 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> Interval:
     return Interval(p, max(0.0, centre - half), min(1.0, centre + half))
 
 
-def mean_interval(values: Sequence[float], z: float = Z95) -> Interval:
-    """Mean +- z standard errors (sample standard deviation, ddof=1)."""
+def mean_interval(
+    values: Sequence[float], z: float = Z95, bounds: tuple[float, float] | None = None
+) -> Interval:
+    """Mean +- z standard errors (sample standard deviation, ddof=1), cut to ``bounds``
+    where the values cannot leave them (a share: (0, 1)). One value has no interval (NaN
+    ends: one sample says nothing of the spread)."""
     x = np.asarray(values, float)
     if len(x) == 0:
         return Interval(math.nan, math.nan, math.nan)
     if len(x) == 1:
-        return Interval(float(x[0]), float(x[0]), float(x[0]))
+        return Interval(float(x[0]), math.nan, math.nan)
     half = z * x.std(ddof=1) / math.sqrt(len(x))
-    return Interval(float(x.mean()), float(x.mean() - half), float(x.mean() + half))
+    low, high = float(x.mean() - half), float(x.mean() + half)
+    if bounds is not None:
+        low, high = max(low, bounds[0]), min(high, bounds[1])
+    return Interval(float(x.mean()), low, high)
 
 
 def summarise(episodes: Sequence[dict]) -> dict[str, Interval]:
@@ -72,7 +81,7 @@ def summarise(episodes: Sequence[dict]) -> dict[str, Interval]:
         if kind == "proportion":
             out[name] = wilson_interval(int(sum(values)), len(values))
         else:
-            out[name] = mean_interval(values)
+            out[name] = mean_interval(values, bounds=SHARE_BOUNDS.get(name))
     return out
 
 

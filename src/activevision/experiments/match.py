@@ -82,10 +82,8 @@ class MethodResult:
         """Mean and 95% interval over matches of every metric (shares clipped to [0, 1])."""
         out = {}
         for name, values in self.per_match.items():
-            iv = mean_interval(values.tolist())
-            if name in SHARES:
-                iv = Interval(iv.mean, max(iv.low, 0.0), min(iv.high, 1.0))
-            out[name] = iv
+            bounds = (0.0, 1.0) if name in SHARES else None
+            out[name] = mean_interval(values.tolist(), bounds=bounds)
         return out
 
 
@@ -109,8 +107,14 @@ def play_matches(
     scores = MatchScores(config.ticks, matches, config.tick_seconds)
     clip = MatchClip()
     clip.add(info, clip_match)
-    for _ in range(config.ticks):
-        obs, reward, _, _, info = env.step(policy.act(obs, info))
+    for tick in range(config.ticks):
+        actions = policy.act(obs, info)
+        try:
+            obs, reward, _, _, info = env.step(actions)
+        except ValueError as error:
+            if not str(error).startswith("invalid action"):
+                raise
+            raise ValueError(f"strategy {label or method}, tick {tick}: {error}") from None
         scores.add(info, reward)
         clip.add(info, clip_match)
     env.close()

@@ -593,10 +593,13 @@ def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> Matc
     """``factory(config)``, checked to be a :class:`MatchPolicy`."""
     if factory is None:
         raise ValueError("a user's strategy needs its factory (--strategy FILE.py:NAME)")
-    policy = factory(config)
+    label = getattr(factory, "__name__", repr(factory))
+    try:
+        policy = factory(config)
+    except TypeError as error:  # its signature: NAME(config) is the contract
+        raise ValueError(f"--strategy {label}: {label}(config) failed: {error}") from None
     missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
     if missing:
-        label = getattr(factory, "__name__", repr(factory))
         raise ValueError(
             f"--strategy {label}: what it returns has no {' or '.join(missing)} method"
             " (a strategy has reset(n, rng) and act(obs, info): see MatchPolicy)"

@@ -124,6 +124,12 @@ class AppearanceConfig:
                     f"AppearanceConfig.{name}: must be an ordered (low, high) pair within "
                     f"[{low}, {high}], got {(lo, hi)!r}"
                 )
+        if self.neutral_share > 0.0 and not self.enabled:
+            raise ValueError(
+                "AppearanceConfig.neutral_share: the share of episodes drawn neutral among"
+                " randomised ones; every factor is neutral here, so switch one on (e.g."
+                " AppearanceConfig.randomised())"
+            )
 
     @classmethod
     def randomised(cls) -> AppearanceConfig:
@@ -149,10 +155,12 @@ class AppearanceConfig:
 
     @functools.cached_property
     def enabled(self) -> bool:
-        """Whether any factor differs from the clean render (cached: the envs ask every
-        step, and building the comparison config costs most of a millisecond)."""
-        return self != AppearanceConfig(
-            stripe_width=self.stripe_width, neutral_share=self.neutral_share
+        """Whether any factor differs from the clean render (the stripes' width alone is
+        none; cached: the envs ask every step)."""
+        return any(
+            getattr(self, f.name) != f.default
+            for f in dataclasses.fields(self)
+            if f.name in FACTORS and f.name != "stripe_width"
         )
 
     def replace(self, **changes: Range | float) -> AppearanceConfig:

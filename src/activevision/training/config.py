@@ -19,12 +19,11 @@ import os
 import typing
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from activevision.envs.config import EnvConfig
 from activevision.envs.match.config import MatchConfig
-from activevision.io import write_text
+from activevision.io import read_json, write_text
 from activevision.runtime.goal_evidence import GoalFrame
 from activevision.typecheck import check_dataclass_fields, config_from_dict, config_to_dict
 from activevision.typecheck import in_range as _range
@@ -278,13 +277,18 @@ class TrainConfig:
                 " ActiveVision-v0 with a prior pose in env.observation ('image+head+pose...')"
                 " and env.prior_error_range"
             )
+        appearance = self.env.appearance
         if self.dagger.redraw_look and not (
-            self.algo == "dagger" and not self.match_student and self.env.appearance.enabled
+            self.algo == "dagger"
+            and not self.match_student
+            and appearance.enabled
+            and appearance.neutral_share < 1.0
         ):
             raise ValueError(
                 "TrainConfig.dagger.redraw_look: draws the looks of DAgger's episodic states"
                 " again; it needs algo='dagger' on ActiveVision-v0 with a randomised"
-                " env.appearance (e.g. --preset dagger_robust_continuous)"
+                " env.appearance, not every episode neutral (e.g. --preset"
+                " dagger_robust_continuous)"
             )
         if self.algo == "dagger" and self.env.frame_stack != 1:
             raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")
@@ -416,6 +420,8 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
         path = paths.get(key.strip()) or _env_alias(key.strip())
         if path is None:
             twins = sorted(p for p in set(paths.values()) if p.endswith("." + key.strip()))
+            if len(twins) == 1:
+                raise ValueError(f"TrainConfig key {key!r}: give its full path, {twins[0]}")
             if twins:
                 raise ValueError(
                     f"TrainConfig key {key!r} names several fields; give its full path:"
@@ -509,10 +515,7 @@ def save_config(config: TrainConfig, path: str | os.PathLike[str]) -> None:
 
 def load_config(path: str | os.PathLike[str]) -> TrainConfig:
     """Read a config written by :func:`save_config` (ValueError on unknown or invalid keys)."""
-    try:
-        values = json.loads(Path(path).read_text())
-    except json.JSONDecodeError as error:
-        raise ValueError(f"{path} is not valid JSON: {error}") from error
+    values = read_json(path)
     if not isinstance(values, dict):
         raise ValueError(f"{path} must hold a JSON object")
     try:

@@ -156,8 +156,11 @@ class CsvLog:
 
 def read_csv_columns(path: str | os.PathLike[str]) -> dict[str, list[float]]:
     """A CSV written by :class:`CsvLog` as float columns (empty cells become NaN)."""
-    with open(path, newline="") as file:
-        rows = list(csv.DictReader(file))
+    try:
+        with open(path, newline="", encoding="utf-8") as file:
+            rows = list(csv.DictReader(file))
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise ValueError(f"{path} is not a CSV table: {error}") from None
     if not rows:
         return {}
     try:

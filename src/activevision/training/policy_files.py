@@ -156,7 +156,14 @@ def _weights_file(path: Path, weights: str) -> Path:
                 " its first validation, every eval_interval steps when that is > 0)"
             )
     elif path.is_dir():
-        path = path / POLICY_FILE if (path / POLICY_FILE).exists() else path / "model.safetensors"
+        for name in (POLICY_FILE, "model.safetensors"):  # a run's, a checkpoint's
+            if (path / name).exists():
+                return path / name
+        raise ckpt.CheckpointError(
+            f"no policy weights in {path}: neither {POLICY_FILE} (a run writes it when it"
+            " finishes; continue an interrupted one with train --resume) nor a checkpoint's"
+            " model.safetensors"
+        )
     if not path.exists():
         raise ckpt.CheckpointError(f"no policy weights at {path}")
     return path
