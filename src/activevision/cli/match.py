@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 from activevision.cli.args import (
     add_overwrite,
     add_weights,
+    check_weights,
     choice_list,
     float_in,
     int_in,
@@ -97,8 +98,7 @@ def _strategies(
         raise ValueError("--model is played by onnx_policy: add it to --methods")
     if args.run is not None and "learned" not in methods:
         raise ValueError("--run is played by learned: add it to --methods")
-    if args.weights != "final" and args.run is None:
-        raise ValueError("--weights picks the weights of --run's learned policy: give --run")
+    check_weights(args)
     strategies = [load_strategy(spec) for spec in dict.fromkeys(args.strategy or ())]
     entries = expand_methods(methods, models, margins, args.run, args.weights, strategies)
     for _, method, options in entries:  # loads each run and model once: errors come first
