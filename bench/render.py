@@ -6,8 +6,9 @@ appearance factor on at its robust range, 4 other robots), and prints the random
 world's speed as a ratio of the clean one's measured in the same run. Every figure is the
 best of several timed chunks over several rounds (the machine's capability; medians are
 printed too, and differ when other processes compete for the cores). ``--factors`` also
-times each appearance factor alone (the time it adds as a share of a clean frame's). Prints
-a table, then one JSON line.
+times each appearance factor alone (the time it adds as a share of a clean frame's), and the
+factors of each of the two passes together (the row pass's: lighting, textures, lines, hall,
+mount; the finish pass's: blur, noise, tone curve). Prints a table, then one JSON line.
 
     python bench/render.py [--seconds 1] [--rounds 3] [--reference-frames 50] [--factors]
 """
@@ -37,6 +38,11 @@ from activevision.rendering.reference import render_reference
 
 #: The paper's simulator pace: one image per head command of 320 ms.
 PAPER_SECONDS_PER_IMAGE = 0.320
+#: The factors the finish pass applies to whole frames (kernels.looks.finish_frame); the
+#: rest act in the row pass.
+FINISH = ("read_noise", "shot_noise", "defocus", "motion_blur", "gamma")
+ROW_PASS = "row-pass factors together"
+FINISH_PASS = "finish-pass factors together"
 
 
 def random_states(n: int, rng: np.random.Generator, camera: CameraConfig):
@@ -111,6 +117,12 @@ def factor_costs(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, float]
         if name == "stripes":
             config = config.replace(stripe_width=full.stripe_width)
         calls[name] = batch_of(*frame_looks(config, pool, rng))
+    # the two passes' factors together (what a pass costs once it runs at all)
+    neutral = AppearanceConfig()
+    finish_only = full.replace(**{n: getattr(neutral, n) for n in FACTORS if n not in FINISH})
+    row_only = full.replace(**{n: getattr(neutral, n) for n in FINISH})
+    calls[ROW_PASS] = batch_of(*frame_looks(row_only, pool, rng))
+    calls[FINISH_PASS] = batch_of(*frame_looks(finish_only, pool, rng))
     for fn in calls.values():
         fn()  # compile
     best = dict.fromkeys(calls, np.inf)
@@ -120,6 +132,17 @@ def factor_costs(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, float]
     return {
         name: (t - best["clean"]) / best["clean"] for name, t in best.items() if name != "clean"
     }
+
+
+def print_factor_costs(shares: dict[str, float]) -> None:
+    """:func:`factor_costs`' shares, the largest first, then the two passes'."""
+    print("time each appearance factor adds alone, as a share of a clean frame (N=64):")
+    passes = (ROW_PASS, FINISH_PASS)
+    for name, share in sorted(shares.items(), key=lambda kv: -kv[1]):
+        if name not in passes:
+            print(f"  {name:15s} {share:+6.2f}")
+    for name in passes:
+        print(f"  {name}: {shares[name]:+.2f}")
 
 
 def randomised_world(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, float]:
@@ -295,9 +318,7 @@ def main() -> None:
     results.update(looked)
     if args.factors:
         shares = factor_costs(renderer, pose, pan, tilt, ball, rng, args)
-        print("time each appearance factor adds alone, as a share of a clean frame (N=64):")
-        for name, share in sorted(shares.items(), key=lambda kv: -kv[1]):
-            print(f"  {name:15s} {share:+6.2f}")
+        print_factor_costs(shares)
         results["factor_extra_share"] = shares
 
     m = args.reference_frames
