@@ -51,6 +51,7 @@ BAD_ARGUMENTS = [
     (["demo", "--seed", "x"], "'x'"),
     (["demo", "--out", "{tmp}/d.gif"], "GIF"),  # the figure and its GIF would be one file
     (["episode", "--out", "{tmp}/e.gif"], "GIF"),
+    (["episode", "--out", "{tmp}/e.GIF"], "GIF"),
     (["export", "{run}", "-o", "{tmp}/policy.json"], ".onnx"),
     (["render", "--field", "moon", "--out", "{tmp}/v.png"], "'moon'"),
     (["render", "--seed", "2147483648", "--out", "{tmp}/v.png"], "2147483648"),
@@ -183,7 +184,7 @@ def test_files_that_are_not_text_are_named(run, tmp_path, capsys, one_clear_line
 def test_a_run_without_weights_says_which_file_it_lacks(run, capsys, one_clear_line):
     (run / "policy.safetensors").unlink()
     assert main(["export", str(run)]) == 2
-    one_clear_line("no policy weights in", "policy.safetensors", "--resume")
+    one_clear_line("no policy weights in", "policy.safetensors", "each checkpoint")
 
 
 def test_finished_run_resumes_to_nothing_and_says_so(run, capsys):

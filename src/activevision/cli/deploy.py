@@ -25,7 +25,11 @@ def cmd_export(args: argparse.Namespace) -> None:
     from activevision.export.onnx_export import model_path_of
     from activevision.runtime.metadata import metadata_path_for
 
-    if args.out is not None and args.out.suffix not in ("", ".onnx"):
+    if (
+        args.out is not None
+        and not args.out.is_dir()
+        and args.out.suffix.lower() not in ("", ".onnx")
+    ):
         raise ValueError(f"--out {args.out}: name a .onnx file or a directory")
     model = model_path_of(args.out or args.run)
     outputs = [model, metadata_path_for(model)]

@@ -80,7 +80,7 @@ def figure_and_gif(figure: Path) -> Path:
     """The GIF written beside the figure ``figure`` (``episode``, ``demo``): refused when
     the two would be one file."""
     gif = Path(figure).with_suffix(".gif")
-    if gif == Path(figure):
+    if Path(figure).suffix.lower() == ".gif":  # also .GIF: one file on case-blind disks
         raise OutputError(
             f"--out {figure}: name the figure (e.g. {gif.with_suffix('.png')}); the GIF is"
             " written beside it"

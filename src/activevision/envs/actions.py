@@ -57,11 +57,15 @@ def check_actions(actions: object, n_actions: int, shape: tuple[int, ...]) -> np
         array = np.asarray(None)
     span = f"0..{n_actions - 1}"
     expects = f"an integer in {span}" if shape == () else f"integers in {span}, shape {shape}"
-    shown = _shown(actions)
+    # _shown only when raising: check_actions runs on every env step.
     if array.dtype == np.bool_ or not np.issubdtype(array.dtype, np.integer):
-        raise ValueError(f"invalid action {shown}: expects {expects}, got dtype {array.dtype}")
+        raise ValueError(
+            f"invalid action {_shown(actions)}: expects {expects}, got dtype {array.dtype}"
+        )
     if array.shape != shape:
-        raise ValueError(f"invalid action {shown}: expects {expects}, got shape {array.shape}")
+        raise ValueError(
+            f"invalid action {_shown(actions)}: expects {expects}, got shape {array.shape}"
+        )
     bad = (array < 0) | (array >= n_actions)
     if bad.any():
         where = "" if shape == () else f" {int(array[bad].flat[0])} in"

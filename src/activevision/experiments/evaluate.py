@@ -32,7 +32,7 @@ METRICS = {
     "head_travel": "mean",  #: degrees the head moved over the episode (pan-tilt Euclidean)
 }
 #: The "mean" metrics that are shares of something, whose intervals stay within these bounds.
-SHARE_BOUNDS = {"success_rate": (0.0, 1.0)}
+SHARE_BOUNDS = {"success_rate": (0.0, 1.0), "score": (0.0, 1.0)}
 #: nats: a final view this close to the goal view's entropy counts as good as the goal
 REGRET_TOLERANCE = 0.25
 

@@ -210,20 +210,20 @@ def _cylinders(value: ArrayLike, n: int) -> np.ndarray:
     return arr
 
 
-#: Entries of the noise table of images up to NOISE_TABLE_MIN / 2 pixels (the default
-#: camera's 19,200 and a 640 x 400 one).
+#: Entries of the noise table of images of fewer pixels (every camera up to 640 x 480 and more;
+#: the default has 19,200).
 NOISE_TABLE_MIN = 1 << 19
 
 
 @functools.lru_cache(maxsize=4)
 def noise_table(pixels: int) -> np.ndarray:
     """The fixed table of standard normal numbers the looks of ``pixels``-pixel images read
-    patterns and noise from: NOISE_TABLE_MIN entries, or the first power of two of at least
-    twice ``pixels`` (a frame's sensor noise is a contiguous run of the table from a hashed
-    start, so the table must hold a frame and room to place it). A constant of the package:
-    its seed never changes, so frames keep their bytes; a larger table begins with the same
-    numbers."""
-    size = max(NOISE_TABLE_MIN, 1 << (2 * pixels - 1).bit_length())
+    patterns and noise from. A frame's sensor noise is a contiguous run of the table from a
+    hashed start, so the table must hold the frame: NOISE_TABLE_MIN entries for images of
+    fewer pixels (the table every image had before larger ones were supported, so their
+    frames keep their bytes), else the first power of two of at least twice ``pixels`` (room
+    to place the run). Its seed never changes; a larger table begins with the same numbers."""
+    size = NOISE_TABLE_MIN if pixels < NOISE_TABLE_MIN else 1 << (2 * pixels - 1).bit_length()
     return np.random.default_rng(20170320).standard_normal(size).astype(np.float32)
 
 

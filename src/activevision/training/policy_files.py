@@ -160,8 +160,8 @@ def _weights_file(path: Path, weights: str) -> Path:
             if (path / name).exists():
                 return path / name
         raise ckpt.CheckpointError(
-            f"no policy weights in {path}: neither {POLICY_FILE} (a run writes it when it"
-            " finishes; continue an interrupted one with train --resume) nor a checkpoint's"
+            f"no policy weights in {path}: neither {POLICY_FILE} (a run writes it with each"
+            " checkpoint; this run has none yet, or it was deleted) nor a checkpoint's"
             " model.safetensors"
         )
     if not path.exists():
