@@ -15,6 +15,7 @@ from activevision.experiments.match import (
     MATCH_METRICS,
     MatchClip,
     MethodResult,
+    compare_matches,
     csv_rows,
     expand_methods,
     format_difference,
@@ -359,3 +360,33 @@ def test_unknown_method_is_one_clear_error():
         make_match_policy("nope", SMALL)
     with pytest.raises(ValueError, match="needs a training run"):
         make_match_policy("learned", SMALL)
+
+
+class _ActsWrongAtTick:
+    """A user's strategy that plays well until tick ``bad`` of a match, then sends a float."""
+
+    def __init__(self, config, bad):
+        self.bad, self.tick = bad, 0
+
+    def reset(self, n, rng):
+        self.n, self.tick = n, 0
+
+    def act(self, obs, info):
+        self.tick += 1
+        return np.full(self.n, 0.5 if self.tick > self.bad else 0)
+
+
+def test_a_user_strategy_that_fails_at_once_fails_before_the_others_play():
+    played = []
+    strategies = [("bad", lambda c: _ActsWrongAtTick(c, bad=0))]
+    entries = expand_methods(["ball_track"], strategies=strategies)
+    assert [label for label, _, _ in entries] == ["ball_track", "bad"]
+    with pytest.raises(ValueError, match="strategy bad, tick 0: invalid action"):
+        compare_matches(entries, SMALL, 2, seed=3, progress=played.append)
+    assert played == []  # ball_track did not play its matches first
+    # one that fails later than the trial is still caught, at its tick, after the others
+    strategies = [("late", lambda c: _ActsWrongAtTick(c, bad=7))]
+    entries = expand_methods(["ball_track"], strategies=strategies)
+    with pytest.raises(ValueError, match="strategy late, tick 7: invalid action"):
+        compare_matches(entries, SMALL, 2, seed=3, progress=played.append)
+    assert [r.method for r in played] == ["ball_track"]

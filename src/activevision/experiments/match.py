@@ -172,6 +172,10 @@ def expand_methods(
     return entries
 
 
+#: Ticks a user's strategy plays as a trial before any strategy's matches (compare_matches).
+TRIAL_TICKS = 3
+
+
 def compare_matches(
     entries: Sequence[tuple[str, str, StrategyOptions]],
     config: MatchConfig,
@@ -180,7 +184,13 @@ def compare_matches(
     progress: Callable[[MethodResult], None] | None = None,
 ) -> list[MethodResult]:
     """:func:`play_matches` for each ``(label, method, options)`` of
-    :func:`expand_methods`, on the same seeds."""
+    :func:`expand_methods`, on the same seeds. The user's strategies first play
+    :data:`TRIAL_TICKS` ticks of the same matches: one that fails fails before the others
+    have played (which can take minutes), not after."""
+    trial = config.replace(ticks=min(config.ticks, TRIAL_TICKS))
+    for label, name, options in entries:
+        if name == USER_STRATEGY:
+            play_matches(name, trial, matches, seed, options, label=label)
     results = []
     for label, name, options in entries:
         result = play_matches(name, config, matches, seed, options, label=label)
