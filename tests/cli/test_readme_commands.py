@@ -1,0 +1,65 @@
+"""Every ``activevision ...`` command in the README's shell blocks parses: a flag renamed or
+removed in the code fails here, not in a new user's terminal."""
+
+from __future__ import annotations
+
+import re
+import shlex
+from pathlib import Path
+
+import pytest
+
+from activevision.cli import build_parser
+
+README = Path(__file__).resolve().parents[2] / "README.md"
+
+
+def shell_blocks(text: str) -> list[str]:
+    """The bodies of the fenced blocks marked bash or sh (or unmarked)."""
+    blocks: list[str] = []
+    body: list[str] = []
+    language: str | None = None  # None: outside a block
+    for line in text.splitlines():
+        if not line.startswith("```"):
+            body.append(line)
+        elif language is None:
+            language, body = line[3:].strip(), []
+        else:
+            if language in ("", "bash", "sh"):
+                blocks.append("\n".join(body))
+            language = None
+    return blocks
+
+
+def readme_commands(text: str) -> list[list[str]]:
+    """The argument lists of the ``activevision`` commands of ``text``'s shell blocks, with
+    their continued lines joined and comments dropped."""
+    commands = []
+    for block in shell_blocks(text):
+        for line in re.sub(r"\\\n\s*", " ", block).splitlines():
+            if line.strip().startswith("activevision "):
+                commands.append(shlex.split(line, comments=True)[1:])
+    return commands
+
+
+COMMANDS = readme_commands(README.read_text(encoding="utf-8"))
+
+
+def test_the_readme_has_its_commands():
+    # the parser above finds them: train, evaluate, match, robustness... (45 when written)
+    assert len(COMMANDS) >= 40
+    assert {argv[0] for argv in COMMANDS} >= {"train", "evaluate", "match", "robustness", "export"}
+
+
+@pytest.mark.parametrize("argv", COMMANDS, ids=[" ".join(a)[:60] for a in COMMANDS])
+def test_readme_command_parses(argv):
+    build_parser().parse_args(argv)
+
+
+def test_a_stale_flag_would_fail():
+    text = "```bash\nactivevision evaluate --run runs/x --episods 5  # typo\n```\n"
+    (argv,) = readme_commands(text)
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(argv)
+    python = "```python\nactivevision train --nope\n```\n"
+    assert readme_commands(python) == []
