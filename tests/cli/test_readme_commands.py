@@ -63,3 +63,33 @@ def test_a_stale_flag_would_fail():
         build_parser().parse_args(argv)
     python = "```python\nactivevision train --nope\n```\n"
     assert readme_commands(python) == []
+
+
+def python_blocks(text: str) -> list[str]:
+    """The bodies of the fenced blocks marked python."""
+    blocks = re.findall(r"^```python\n(.*?)^```", text, re.S | re.M)
+    return [block for block in blocks if block.strip()]
+
+
+#: The README's Python examples that run on their own (the rest need a robot: a camera,
+#: a neck, its localisation).
+ENV_EXAMPLES = [b for b in python_blocks(README.read_text(encoding="utf-8")) if "gym.make" in b]
+
+
+@pytest.mark.parametrize("example", ENV_EXAMPLES, ids=lambda b: b.split("gym.make")[1][:30])
+def test_readme_env_example_runs(example):
+    import gymnasium
+
+    namespace: dict[str, object] = {"gym": gymnasium}  # one example continues another's imports
+    exec(compile(example, str(README), "exec"), namespace)
+    env = namespace["env"]
+    obs, _ = env.reset(seed=0)  # type: ignore[attr-defined]
+    assert env.observation_space.contains(obs)  # type: ignore[attr-defined]
+    for name in ("env", "envs"):
+        if name in namespace:
+            namespace[name].close()  # type: ignore[attr-defined]
+
+
+def test_the_readme_has_its_env_examples():
+    # the quick start, the randomised world, the match
+    assert len(ENV_EXAMPLES) == 3
