@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from activevision.cli import main
+from activevision.cli import build_parser, main
 
 TINY = ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "random"]
 
@@ -267,3 +267,14 @@ def test_two_strategies_of_one_name_are_refused(tmp_path, one_clear_line):
     specs = [f"{tmp_path / 'a.py'}:Mirror", f"{tmp_path / 'b.py'}:Mirror"]
     assert main([*TINY, "--out", str(tmp_path / "m"), "--strategy", *specs]) == 2
     one_clear_line("two strategies are named mirror")
+
+
+def test_the_ball_can_bounce_off_our_robot(tmp_path, capsys):
+    from activevision.cli.match import _match_config
+
+    argv = [*TINY, "--methods", "ball_track", "--ball-bounces-off-us", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    assert "the ball bouncing off our robot" in capsys.readouterr().out
+    args = build_parser().parse_args(argv)
+    assert _match_config(args).ball.bounces_off_own_robot
+    assert not _match_config(build_parser().parse_args(TINY)).ball.bounces_off_own_robot

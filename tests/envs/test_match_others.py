@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from activevision.envs.match.config import BallConfig, MatchConfig, OthersConfig
+from activevision.envs.match.config import BallConfig, MatchConfig, OthersConfig, WalkConfig
 from activevision.envs.match.others import bounce_ball, walk_others
 from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.robots import RobotsConfig
@@ -155,3 +155,34 @@ def test_standing_robots_stay_put_and_a_match_depends_on_its_seed_only(walking):
     alone_robots, alone_balls = _play(cfg, [4], 300)  # match 4 alone, not in a batch of 3
     np.testing.assert_array_equal(alone_robots[:, 0], robots[:, 1])
     np.testing.assert_array_equal(alone_balls[:, 0], balls[:, 1])
+
+
+def _play_own(bounces: bool, seeds: list[int], ticks: int):
+    """Our robot's positions and the balls over ``ticks`` ticks of matches with no other
+    robots, our robot walking onto the ball (so that it meets it), soft and rare kicks
+    (so that it catches up)."""
+    cfg = MatchConfig(
+        ticks=ticks,
+        walk=WalkConfig(target="ball", ball_standoff=0.0),
+        ball=BallConfig(kick_rate=0.01, kick_speed=(0.3, 1.0), bounces_off_own_robot=bounces),
+    )
+    batch = MatchBatch(cfg, len(seeds))
+    batch.reset(np.arange(len(seeds)), [np.random.default_rng(s) for s in seeds])
+    own, balls, speeds = [], [], []
+    for t in range(ticks):
+        batch.step(np.full(len(seeds), t % 9))
+        own.append(batch.pose[:, :2].copy())
+        balls.append(batch.ball.copy())
+        speeds.append(np.hypot(*batch.ball_velocity.T))
+    d = np.stack(balls) - np.stack(own)
+    return cfg, np.hypot(d[..., 0], d[..., 1]), np.stack(speeds)
+
+
+def test_the_ball_bounces_off_our_robot_only_when_asked():
+    cfg, through, _ = _play_own(False, [3, 4], 400)
+    contact = cfg.robots.radius + cfg.field.ball_radius
+    assert (through < contact - 0.1).any()  # by default it rolls through us (README)
+    cfg, bounced, speeds = _play_own(True, [3, 4], 400)
+    assert bounced.min() >= contact - 1e-9
+    assert (bounced < contact + 1e-6).mean() > 0.03  # our robot walks into it and pushes it
+    assert speeds.max() <= cfg.ball.kick_speed[1] + 1e-9  # a bounce adds no speed

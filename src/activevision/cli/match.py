@@ -42,12 +42,15 @@ def _world_text(args: argparse.Namespace) -> str:
         text += f", {args.robots} other robot{'s' if args.robots > 1 else ''} {moving}"
     if args.detection:
         text += ", detector {:g}/{:g}/{:g}".format(*args.detection)
+    if args.ball_bounces_off_us:
+        text += ", the ball bouncing off our robot"
     return text
 
 
 def _match_config(args: argparse.Namespace) -> MatchConfig:
     """The matches the command line asks for."""
     from activevision.envs.match.config import (
+        BallConfig,
         DetectionConfig,
         MatchConfig,
         OthersConfig,
@@ -65,6 +68,7 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
         walk=WalkConfig(target=args.walk),
         robots=RobotsConfig(count=(args.robots, args.robots)),
         others=OthersConfig(speed=args.robot_speed),
+        ball=BallConfig(bounces_off_own_robot=args.ball_bounces_off_us),
         detection=DetectionConfig(*args.detection) if args.detection else DetectionConfig(),
     )
 
@@ -264,6 +268,12 @@ def add_parsers(sub: Any) -> None:
         default=0.0,
         help="m/s the other robots walk at between random waypoints (0: they stand; KidSize"
         " robots walk 0.1-0.3)",
+    )
+    p.add_argument(
+        "--ball-bounces-off-us",
+        action="store_true",
+        help="the ball bounces off our robot's body, as off the others' (default: it rolls"
+        " through our robot, as in the README's figures)",
     )
     p.add_argument(
         "--detection",

@@ -62,6 +62,10 @@ class BallConfig:
     deceleration: float = field(default=0.4, metadata=in_range(0.0, 5.0))
     kick_rate: float = field(default=0.02, metadata=in_range(0.0, 1.0))  #: kicks per tick
     kick_speed: tuple[float, float] = (0.5, 2.5)  #: initial speed of a kick (m/s), uniform
+    #: the ball bounces off our own robot's body too, as off the others' (keeping
+    #: ``others.ball_restitution``; a robot walking into it pushes it). Off by default: the
+    #: README's match figures were measured with the ball rolling through our robot.
+    bounces_off_own_robot: bool = False
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)

@@ -46,7 +46,9 @@ class ActiveVisionMatchEnv(gym.Env):
        odometry model (std proportional to distance walked and angle turned, plus a small
        slip per tick); the commanded step is its odometry;
     3. the ball (:class:`BallConfig`) rolls with constant deceleration, bounces off the
-       field lines, and is kicked at random times in random directions;
+       field lines, and is kicked at random times in random directions. It rolls through
+       our own robot unless ``ball.bounces_off_own_robot`` (then it bounces off our body as
+       off the others', and our robot walking into it pushes it);
     4. the detector (:class:`DetectionConfig`) sees the landmarks in view (the episodic
        env's visibility model; behind another robot they are hidden), each with a
        probability falling with range, with the UKF's own sensor noise, plus occasional

@@ -267,6 +267,8 @@ class MatchBatch:
             normals,
         )
         ball_hidden = np.zeros(len(idx), dtype=bool)
+        if self.cfg.ball.bounces_off_own_robot:
+            self._bounce_off_own_robot(idx)
         if self.cfg.robots.max_count:
             self._move_others(idx, uniforms)
             self._update_hidden(idx)
@@ -316,6 +318,23 @@ class MatchBatch:
             ball,
             velocity,
             robots,
+            cfg.robots.radius,
+            cfg.field.ball_radius,
+            cfg.others.ball_restitution,
+        )
+        self.ball[idx], self.ball_velocity[idx] = ball, velocity
+
+    def _bounce_off_own_robot(self, idx: np.ndarray) -> None:
+        """The balls of matches ``idx`` that meet our robot's body bounce off it."""
+        cfg = self.cfg
+        ball, velocity = self.ball[idx], self.ball_velocity[idx]
+        own = np.zeros((len(idx), 1, 4))
+        own[:, 0, :2] = self.pose[idx, :2]
+        own[:, 0, 2] = 1.0  # a used slot (bounce_ball reads no more of it)
+        bounce_ball(
+            ball,
+            velocity,
+            own,
             cfg.robots.radius,
             cfg.field.ball_radius,
             cfg.others.ball_restitution,
