@@ -210,8 +210,8 @@ def _cylinders(value: ArrayLike, n: int) -> np.ndarray:
     return arr
 
 
-#: Entries of the noise table of images of fewer pixels (every camera up to 640 x 480 and more;
-#: the default has 19,200).
+#: Entries of the noise table of every image of fewer pixels than this (640 x 480 has 307,200;
+#: the default camera's image 19,200).
 NOISE_TABLE_MIN = 1 << 19
 
 
