@@ -8,6 +8,7 @@ import json
 import math
 import shutil
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -163,6 +164,14 @@ def test_robot_camera_must_be_a_camera(camera_policy):
         CameraModel.from_degrees(160, 120, 190.0, 0.5, (-90, 90), (5, 65))
     with pytest.raises(ValueError, match="ordered"):
         CameraModel.from_degrees(160, 120, 60.0, 0.5, (-90, 90), (65, 5))
+    with pytest.raises(ValueError, match="hfov_deg must be a finite number of degrees"):
+        CameraModel.from_degrees(160, 120, "70", 0.5, (-90, 90), (5, 65))
+    with pytest.raises(ValueError, match=r"hfov_deg must be degrees, at least 5; got 1\.22"):
+        CameraModel.from_degrees(160, 120, 1.22, 0.5, (-90, 90), (5, 65))  # radians
+    with pytest.raises(ValueError, match="tilt_deg must be a finite"):
+        CameraModel.from_degrees(160, 120, 60.0, 0.5, (-90, 90), (5, None))
+    with pytest.raises(ValueError, match="a \\(min, max\\) pair"):
+        CameraModel.from_degrees(160, 120, 60.0, 0.5, 90, (5, 65))
 
 
 # ---------------------------------------------------------------- the warning
@@ -226,8 +235,13 @@ def test_warning_names_each_difference(camera_policy, changes, lines):
         assert f"  - {line}" in message
     assert message.count("\n  - ") == len(lines)  # nothing else is reported
     assert "may not transfer" in message and "activevision export" in message
-    for name in changes:  # the settings that train for the robot's camera
-        assert f"--set env.camera.{name}={getattr(robot, name):.6g}" in message
+    # the settings that train for the robot's whole camera, at the policy's input width
+    settings = message.split("activevision train ... ")[1]
+    size = (160, round(160 * robot.height / robot.width))
+    for name, value in (("width", size[0]), ("height", size[1])):
+        assert f"--set env.camera.{name}={value} " in settings
+    for name in ("hfov", "camera_height", "pan_min", "pan_max", "tilt_min", "tilt_max"):
+        assert f"--set env.camera.{name}={getattr(robot, name):.9g} " in settings
 
 
 def test_one_warning_for_many_differences(camera_policy):
@@ -238,12 +252,40 @@ def test_one_warning_for_many_differences(camera_policy):
     assert message.count("\n  - ") == 5  # aspect, hfov, camera_height, tilt_min, tilt_max
     for name in ("aspect ratio", "hfov", "camera_height", "tilt_min", "tilt_max"):
         assert f"  - {name}" in message
-    assert "pan_" not in message
+    assert "  - pan_" not in message
     settings = message.split("activevision train ... ")[1]
+    # the policy's input width at the robot's 16:9, not the robot's 640 x 360 (training
+    # renders at the network's input size), and every field: a retrain starts from the
+    # preset's camera, not the loaded policy's
     assert settings.startswith(
-        "--set env.camera.width=640 --set env.camera.height=360 --set env.camera.hfov=1.5708"
-        " --set env.camera.camera_height=0.4 --set env.camera.tilt_min=0"
+        "--set env.camera.width=160 --set env.camera.height=90 --set env.camera.hfov=1.57079633"
+        " --set env.camera.camera_height=0.4 --set env.camera.pan_min=-1.57079633"
+        " --set env.camera.pan_max=1.57079633 --set env.camera.tilt_min=0"
+        " --set env.camera.tilt_max=0.785398163 (and --set env.start_tilt_range_deg=[LOW,HIGH]"
+        " within the tilt limits, 0 to 45 degrees"
     )
+
+
+def test_the_retrain_hint_trains(tmp_path):
+    """The warning's settings, given to the training config as `activevision train` gives
+    them, build the robot's camera (at the policy's input width) and a valid env."""
+    pytest.importorskip("torch")
+    from activevision.runtime.controller import camera_mismatch_message
+    from activevision.training import TrainConfig, apply_overrides
+
+    robot = CameraModel.from_degrees(1280, 720, 70.0, 0.62, (-80, 80), (30, 60))
+    message = camera_mismatch_message(Path("p.onnx"), robot, {"hfov": "..."}, 160)
+    words = message.split("activevision train ... ")[1].split(" (and")[0].split()
+    overrides = [w for w in words if w != "--set"]
+    with pytest.raises(ValueError, match="within the camera's tilt limits, 30 to 60 degrees"):
+        apply_overrides(TrainConfig(), overrides)  # the preset's 5-25 deg starts lie outside
+    config = apply_overrides(TrainConfig(), [*overrides, "env.start_tilt_range_deg=[30,45]"])
+    camera = config.env.camera
+    assert (camera.width, camera.height) == (160, 90)
+    want = dataclasses.replace(robot, width=160, height=90)
+    for f in dataclasses.fields(CameraModel):  # to the hint's 9 digits
+        got = getattr(CameraModel.of(camera), f.name)
+        assert got == pytest.approx(getattr(want, f.name), abs=1e-8)
 
 
 def test_warning_can_be_made_an_error(camera_policy):
@@ -257,5 +299,34 @@ def test_the_controller_still_acts_after_warning(camera_policy):
     robot = dataclasses.replace(TRAINED, width=640, height=360)
     with pytest.warns(CameraMismatchWarning):
         controller = HeadController(camera_policy, camera=robot)
-    command = controller.act(np.zeros((360, 640, 3), np.uint8), 0.0, 0.3)
+    with pytest.warns(CameraMismatchWarning, match="stretched"):  # the frames' 16:9, once
+        command = controller.act(np.zeros((360, 640, 3), np.uint8), 0.0, 0.3)
     assert 0 <= command.action < controller.n_actions
+
+
+def test_frames_of_another_aspect_ratio_warn_once_without_a_camera(camera_policy):
+    controller = HeadController(camera_policy)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        controller.act(np.zeros((480, 640), np.uint8), 0.0, 0.3)  # 4:3, as trained
+        controller.reset()
+    assert caught == []
+    controller = HeadController(camera_policy)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(3):
+            controller.act(np.zeros((720, 1280), np.uint8), 0.0, 0.3)
+    assert [w.category for w in caught] == [CameraMismatchWarning]
+    assert caught[0].filename == __file__  # points at the caller's act(...)
+    assert "1280x720 px (aspect 1.778) are stretched to the policy's 160x120" in str(
+        caught[0].message
+    )
+
+
+def test_camera_config_of_the_trained_camera(camera_policy):
+    """Views for a policy trained on another camera are planned with that camera."""
+    trained = HeadController(camera_policy).trained_camera
+    assert CameraConfig.of(trained) == TRAINED
+    assert CameraConfig.of(TRAINED) is TRAINED
+    with pytest.raises(TypeError, match="lacks"):
+        CameraConfig.of(object())

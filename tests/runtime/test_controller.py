@@ -136,6 +136,10 @@ def test_bad_arguments(policy):
         controller.act(frame, float("nan"), 0.3)
     with pytest.raises(ValueError, match="tilt"):
         controller.act(frame, 0.0, "up")
+    with pytest.raises(ValueError, match=r"pan must be radians within \+-pi, got 45 \(degrees\?\)"):
+        controller.act(frame, 45.0, 0.3)
+    with pytest.raises(ValueError, match="tilt must be radians"):
+        controller.act(frame, 0.0, -30.0)
     with pytest.raises(ValueError, match="num_threads"):
         HeadController(policy.model_path, num_threads=0)
     with pytest.raises(ValueError, match="color_order"):
@@ -153,6 +157,12 @@ def policy_copy(policy, tmp_path):
 def test_missing_files(policy_copy):
     with pytest.raises(PolicyFileError, match="not found"):
         HeadController(policy_copy.with_name("nope.onnx"))
+    # a folder stands for its policy.onnx
+    assert HeadController(policy_copy.parent).model_path == policy_copy
+    empty_run = policy_copy.parent / "empty_run"
+    empty_run.mkdir()
+    with pytest.raises(PolicyFileError, match=r"not found .*activevision export RUN_DIR"):
+        HeadController(empty_run)
     policy_copy.with_suffix(".json").unlink()
     with pytest.raises(PolicyFileError, match=r"policy\.json not found"):
         HeadController(policy_copy)

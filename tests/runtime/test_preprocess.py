@@ -99,7 +99,10 @@ def test_writes_into_out():
     [
         (np.zeros((120, 160), dtype=np.float32), "dtype uint8"),
         (np.zeros((120, 160, 3), dtype=np.float64), "dtype uint8"),
-        (np.zeros((120, 160, 4), dtype=np.uint8), "4"),
+        (np.zeros((120, 160, 4), dtype=np.uint8), "got 4 .* drop the alpha channel"),
+        (np.zeros((3, 120, 160), dtype=np.uint8), r"channel-first: give frame\.transpose"),
+        (np.zeros((120, 160), dtype=np.uint16), "16-bit image"),
+        (np.zeros((120, 160), dtype=bool), "the camera's 8-bit image"),
         (np.zeros((120, 160, 2), dtype=np.uint8), "channels"),
         (np.zeros(19200, dtype=np.uint8), "1-D"),
         (np.zeros((1, 120, 160, 3), dtype=np.uint8), "4-D"),

@@ -102,10 +102,17 @@ class EnvConfig:
             if not lo <= hi:
                 raise bad(name, "must be an ordered (low, high) pair")
         lo, hi = self.start_tilt_range_deg
-        if math.radians(lo) < self.camera.tilt_min - 1e-9 or math.radians(hi) > (
-            self.camera.tilt_max + 1e-9
+        # within a micro-radian: limits given to 9 digits (the runtime's retrain hint) would
+        # otherwise refuse a range ending on them (draw_starts clips to the limits)
+        if math.radians(lo) < self.camera.tilt_min - 1e-6 or math.radians(hi) > (
+            self.camera.tilt_max + 1e-6
         ):
-            raise bad("start_tilt_range_deg", "must lie within the camera's tilt limits")
+            low, high = (math.degrees(t) for t in (self.camera.tilt_min, self.camera.tilt_max))
+            raise bad(
+                "start_tilt_range_deg",
+                f"must lie within the camera's tilt limits, {low:.4g} to {high:.4g} degrees"
+                " (set env.start_tilt_range_deg=[LOW,HIGH] with the camera)",
+            )
         if not self.ball_distance_range[0] > 0:
             raise bad("ball_distance_range", "must be positive")
         if self.max_start_draws < 1:

@@ -130,6 +130,7 @@ def draw_starts(rngs: Sequence[np.random.Generator], cfg: EnvConfig) -> dict[str
     believed pose (:func:`corrupt_pose`)."""
     cam, spec = cfg.camera, cfg.field
     tilt_lo, tilt_hi = np.radians(cfg.start_tilt_range_deg)
+    tilt_lo, tilt_hi = max(tilt_lo, cam.tilt_min), min(tilt_hi, cam.tilt_max)
     low = np.array([cfg.robot_x_range[0], cfg.robot_y_range[0], -np.pi, cam.pan_min, tilt_lo])
     high = np.array([cfg.robot_x_range[1], cfg.robot_y_range[1], np.pi, cam.pan_max, tilt_hi])
     r = spec.ball_radius

@@ -18,7 +18,7 @@ broadcasts; nothing loops over cameras or points in Python.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 import numpy.typing as npt
@@ -61,6 +61,19 @@ class CameraConfig:
                 f"CameraConfig tilt limits must satisfy -pi/2 < tilt_min < tilt_max < pi/2, "
                 f"got ({self.tilt_min!r}, {self.tilt_max!r})"
             )
+
+    @classmethod
+    def of(cls, camera: object) -> CameraConfig:
+        """The CameraConfig of any camera record with these fields as attributes, such as
+        the runtime's ``CameraModel`` (``HeadController.trained_camera``): the camera to plan
+        views with (``localisation.best_viewpoint``) for a policy trained on another camera."""
+        if isinstance(camera, cls):
+            return camera
+        names = [f.name for f in fields(cls)]
+        missing = [name for name in names if not hasattr(camera, name)]
+        if missing:
+            raise TypeError(f"a camera needs the fields {names}; {camera!r} lacks {missing}")
+        return cls(**{name: getattr(camera, name) for name in names})
 
     @property
     def focal(self) -> float:

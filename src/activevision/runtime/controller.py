@@ -9,15 +9,18 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import sys
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
+from types import FrameType
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from activevision.runtime.goal_evidence import GoalEvidence, goal_output_count, policy_actions
 from activevision.runtime.metadata import (
+    CAMERA_TOLERANCES,
     CameraModel,
     PolicyFileError,
     PolicyMetadata,
@@ -84,8 +87,8 @@ class HeadController:
     each axis.
 
     Args:
-        model_path: the exported ``policy.onnx``; its metadata is read from the ``.json``
-            file of the same name beside it.
+        model_path: the exported ``policy.onnx`` (or the folder holding it); its metadata
+            is read from the ``.json`` file of the same name beside it.
         num_threads: onnxruntime intra-op threads (1 suits a small robot CPU; see
             :func:`robot_session_options` for all session settings).
         color_order: channel order of 3-channel frames, ``"rgb"`` or ``"bgr"`` (OpenCV).
@@ -98,6 +101,8 @@ class HeadController:
             CAMERA_TOLERANCES`, one :class:`CameraMismatchWarning` names each difference
             and how to retrain. Resolution alone does not matter: frames are resized. No
             check when the policy.json predates the camera record (``trained_camera`` None).
+            Without ``camera``, the first frame's aspect ratio is still checked against the
+            policy input's (one CameraMismatchWarning: frames would be stretched).
 
     Raises:
         PolicyFileError: (a ValueError) the model or metadata is missing, unreadable,
@@ -121,9 +126,18 @@ class HeadController:
             raise ValueError(f"num_threads must be a positive integer, got {num_threads!r}")
         self.color_order: ColorOrder = color_order
         self.model_path = Path(model_path)
+        if self.model_path.is_dir():  # a run or export folder: its policy.onnx
+            self.model_path = self.model_path / "policy.onnx"
         self.metadata_path = metadata_path_for(self.model_path)
         if not self.model_path.is_file():
-            raise PolicyFileError(f"policy model {self.model_path} not found")
+            raise PolicyFileError(
+                f"policy model {self.model_path} not found"
+                + (
+                    " (export the run first: activevision export RUN_DIR)"
+                    if Path(model_path).is_dir()
+                    else ""
+                )
+            )
         self.metadata: PolicyMetadata = load_metadata(self.metadata_path)
         model_bytes = _read_model(self.model_path)
         if verify_checksum:
@@ -163,6 +177,7 @@ class HeadController:
         self._max_move = np.asarray(meta.max_move) if continuous else None
         self.last_q_values: np.ndarray | None = None
         self.last_goal_logits: np.ndarray | None = None
+        self._frame_aspect_checked = False  # the first frame's, once (observe)
 
     @property
     def trained_camera(self) -> CameraModel | None:
@@ -212,6 +227,9 @@ class HeadController:
             newest = self._preprocess(frame, order)  # validate before shifting the stack
             frames[:-1] = frames[1:]
             frames[-1] = newest
+        if not self._frame_aspect_checked:
+            self._frame_aspect_checked = True
+            self._check_frame_aspect(frame.shape[1], frame.shape[0])
         return frames
 
     def q_values(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
@@ -348,9 +366,26 @@ class HeadController:
         differences = trained.differences(robot)
         if differences:
             warnings.warn(
-                camera_mismatch_message(self.model_path, robot, differences),
+                camera_mismatch_message(
+                    self.model_path, robot, differences, self.metadata.image_width
+                ),
                 CameraMismatchWarning,
                 stacklevel=3,  # the caller of HeadController(...)
+            )
+
+    def _check_frame_aspect(self, width: int, height: int) -> None:
+        """One CameraMismatchWarning when the frames' aspect ratio is not the policy
+        input's: resizing stretches them."""
+        meta = self.metadata
+        trained = meta.image_width / meta.image_height
+        if abs((width / height) / trained - 1) > CAMERA_TOLERANCES["aspect"]:
+            warnings.warn(
+                f"frames of {width}x{height} px (aspect {width / height:.3f}) are stretched to"
+                f" the policy's {meta.image_width}x{meta.image_height} input (aspect"
+                f" {trained:.3f}): the policy may not transfer. Crop the frames to that aspect"
+                " ratio, or train for the robot's camera (README: On a robot)",
+                CameraMismatchWarning,
+                stacklevel=_caller_level(),  # the caller of act, q_values or observe
             )
 
     def _check_signature(self) -> None:
@@ -410,21 +445,44 @@ class HeadController:
 
 
 def camera_mismatch_message(
-    model_path: Path, robot: CameraModel, differences: Mapping[str, str]
+    model_path: Path,
+    robot: CameraModel,
+    differences: Mapping[str, str],
+    input_width: int = 160,
 ) -> str:
     """The warning for a robot whose camera differs (``CameraModel.differences``): each
-    difference, and the ``activevision train`` settings of the robot's camera."""
-    fields = [
-        f for key in differences for f in (("width", "height") if key == "aspect" else (key,))
-    ]
-    settings = " ".join(f"--set env.camera.{name}={getattr(robot, name):.6g}" for name in fields)
+    difference, and the ``activevision train`` settings of the robot's whole camera (a
+    retrain starts from its preset's camera, so every field is given, not only those that
+    differ): its angles and height, and an image ``input_width`` wide (the policy's) at the
+    robot's aspect ratio (training renders at the network's input size, not the camera's)."""
+    height = max(1, round(input_width / robot.aspect))
+    values = {"width": input_width, "height": height}
+    values |= {name: getattr(robot, name) for name in ("hfov", "camera_height", *_HEAD_LIMITS)}
+    settings = " ".join(f"--set env.camera.{name}={value:.9g}" for name, value in values.items())
     lines = "\n".join(f"  - {line}" for line in differences.values())
+    low, high = (math.degrees(getattr(robot, f"tilt_{end}")) for end in ("min", "max"))
     return (
         f"the robot's camera differs from the one {model_path} was trained for:\n{lines}\n"
         "The policy may not transfer to this camera. Retrain it for the robot's camera (angles"
-        f" in radians, height in metres): activevision train ... {settings}; then"
-        " `activevision export RUN_DIR` and load that policy.onnx."
+        f" in radians, height in metres): activevision train ... {settings} (and"
+        f" --set env.start_tilt_range_deg=[LOW,HIGH] within the tilt limits, {low:.4g} to"
+        f" {high:.4g} degrees, if the preset's lie outside them); then `activevision export"
+        " RUN_DIR` and load that policy.onnx."
     )
+
+
+#: CameraModel's head limit fields
+_HEAD_LIMITS = ("pan_min", "pan_max", "tilt_min", "tilt_max")
+
+
+def _caller_level() -> int:
+    """The ``stacklevel`` of the first frame outside this module, seen from a function of
+    it that calls ``warnings.warn``."""
+    frame: FrameType | None = sys._getframe(2)  # the warning function's caller
+    level = 2
+    while frame is not None and frame.f_code.co_filename == __file__:
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 def _finite_vector(name: str, value: Any, size: int) -> np.ndarray:
@@ -457,6 +515,8 @@ def _finite_angle(name: str, value: float) -> float:
         raise ValueError(f"{name} must be a number of radians, got {value!r}") from error
     if not math.isfinite(angle):
         raise ValueError(f"{name} must be finite, got {angle}")
+    if abs(angle) > math.pi:  # no neck turns that far: degrees given for radians
+        raise ValueError(f"{name} must be radians within +-pi, got {angle:g} (degrees?)")
     return angle
 
 

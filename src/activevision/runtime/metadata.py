@@ -126,6 +126,9 @@ _CAMERA_KEYS = {
     "tilt_max_deg": "tilt_max",
 }
 #: How far a robot's camera may differ from the trained one before HeadController warns.
+#: The narrowest field of view CameraModel.from_degrees takes (degrees): a humanoid's head
+#: camera sees tens of degrees; a value below this is radians given for degrees.
+MIN_HFOV_DEG = 5.0
 CAMERA_TOLERANCES = {
     "hfov": math.radians(1.0),  #: rad
     "camera_height": 0.02,  #: m
@@ -261,17 +264,32 @@ class CameraModel:
     ) -> CameraModel:
         """A camera with its angles in degrees: ``pan_deg`` and ``tilt_deg`` are the
         ``(min, max)`` head limits (pan positive left, tilt positive down)."""
-        pan_min, pan_max = pan_deg
-        tilt_min, tilt_max = tilt_deg
+
+        def degrees(name: str, value: Any) -> float:
+            real = _real(value)
+            if real is None or not math.isfinite(real):
+                raise ValueError(f"{name} must be a finite number of degrees, got {value!r}")
+            return real
+
+        try:
+            (pan_min, pan_max), (tilt_min, tilt_max) = pan_deg, tilt_deg
+        except (TypeError, ValueError) as error:
+            raise ValueError(
+                f"pan_deg and tilt_deg must each be a (min, max) pair, got {pan_deg!r} and"
+                f" {tilt_deg!r}"
+            ) from error
+        hfov = degrees("hfov_deg", hfov_deg)
+        if hfov < MIN_HFOV_DEG:  # no head camera is that narrow: radians given for degrees
+            raise ValueError(f"hfov_deg must be degrees, at least {MIN_HFOV_DEG:g}; got {hfov:g}")
         return cls(
             width=width,
             height=height,
-            hfov=math.radians(hfov_deg),
+            hfov=math.radians(hfov),
             camera_height=camera_height,
-            pan_min=math.radians(pan_min),
-            pan_max=math.radians(pan_max),
-            tilt_min=math.radians(tilt_min),
-            tilt_max=math.radians(tilt_max),
+            pan_min=math.radians(degrees("pan_deg", pan_min)),
+            pan_max=math.radians(degrees("pan_deg", pan_max)),
+            tilt_min=math.radians(degrees("tilt_deg", tilt_min)),
+            tilt_max=math.radians(degrees("tilt_deg", tilt_max)),
         )
 
     @property

@@ -62,9 +62,15 @@ def check_frame(frame: object) -> np.ndarray:
     if not isinstance(frame, np.ndarray):
         raise ValueError(f"frame must be a numpy uint8 array, got {type(frame).__name__}")
     if frame.dtype != np.uint8:
-        raise ValueError(
-            f"frame must have dtype uint8 (0..255 camera pixels), got {frame.dtype}; "
+        how = (
             "convert float images with (img * 255).round().astype(np.uint8)"
+            if np.issubdtype(frame.dtype, np.floating)
+            else "scale it to 8 bits first (a 16-bit image: (img >> 8).astype(np.uint8))"
+            if np.issubdtype(frame.dtype, np.integer)
+            else "give the camera's 8-bit image"
+        )
+        raise ValueError(
+            f"frame must have dtype uint8 (0..255 camera pixels), got {frame.dtype}; {how}"
         )
     if frame.ndim == 2:
         frame = frame[:, :, None]
@@ -74,9 +80,14 @@ def check_frame(frame: object) -> np.ndarray:
             f"shape {frame.shape}"
         )
     if frame.shape[2] not in (1, 3):
+        how = (
+            "it looks channel-first: give frame.transpose(1, 2, 0)"
+            if frame.shape[0] in (1, 3, 4) and frame.shape[2] > 4
+            else "drop the alpha channel of RGBA/BGRA frames first"
+        )
         raise ValueError(
-            f"frame must have 1 (grey) or 3 (RGB/BGR) channels, got {frame.shape[2]} (shape "
-            f"{frame.shape}); drop the alpha channel of RGBA/BGRA frames first"
+            f"frame must have 1 (grey) or 3 (RGB/BGR) channels last, got {frame.shape[2]}"
+            f" (shape {frame.shape}); {how}"
         )
     if frame.shape[0] < 1 or frame.shape[1] < 1:
         raise ValueError(f"frame is empty, shape {frame.shape}")
