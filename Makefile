@@ -51,8 +51,14 @@ test: install-test numba-cache
 	$(BIN)/mypy
 	NUMBA_CACHE_DIR=$(NUMBA_CACHE) $(BIN)/python -m pytest -q tests
 
+# The benchmarks that need nothing but the package; continuous.py (scores trained runs:
+# --runs) and reference_ppo.py (trains PPO for 11 minutes into runs/) are run by hand.
+BENCH_SCRIPTS := render viewpoint env match vectorizers render_determinism train inference \
+	inference_inputs match_student sweep reproducibility fuzz_inputs
+
 bench: install-test numba-cache
-	for b in bench/*.py; do NUMBA_CACHE_DIR=$(NUMBA_CACHE) $(BIN)/python $$b || exit 1; done
+	for b in $(BENCH_SCRIPTS); do echo "== bench/$$b.py"; \
+		NUMBA_CACHE_DIR=$(NUMBA_CACHE) $(BIN)/python bench/$$b.py || exit 1; done
 
 clean:
 	rm -rf $(VENV) .numba_cache build *.egg-info src/*.egg-info

@@ -25,6 +25,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import torch
 
+from activevision.cli.args import positive_int, seed
 from activevision.envs import ActiveVisionEnv
 from activevision.experiments.evaluate import evaluate_policy, paired_steps
 from activevision.experiments.policies import LearnedPolicy, OraclePolicy
@@ -34,10 +35,13 @@ from activevision.training import load_config
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=Path, nargs="+", required=True)
-    parser.add_argument("--episodes", type=int, default=1000)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--episodes", type=positive_int, default=1000)
+    parser.add_argument("--seed", type=seed, default=0)
     parser.add_argument("--figure", type=Path, help="write the steps histogram here (PNG)")
     args = parser.parse_args()
+    for run in args.runs:
+        if not (run / "config.json").is_file():
+            parser.error(f"--runs {run}: not a training run (no config.json)")
     torch.set_num_threads(1)
 
     env_config = load_config(args.runs[0] / "config.json").env.replace(action_type="discrete")

@@ -25,6 +25,8 @@ import time
 import typing
 from pathlib import Path
 
+from activevision.cli.args import positive_int, seed
+
 HOSTILE_NUMBERS = ["nan", "inf", "-inf", "1e309", "-1", "abc", "", "3.5", "0x10", "1_0_"]
 HOSTILE_JSON = ['"3"', "true", "null", "[1]", '{"a": 1}', "NaN", "Infinity", "-1e400", '"x"']
 
@@ -238,8 +240,8 @@ def make_tiny_run(directory: Path) -> Path:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--cases", type=int, default=400, help="CLI cases at most")
+    parser.add_argument("--seed", type=seed, default=0)
+    parser.add_argument("--cases", type=positive_int, default=400, help="CLI cases at most")
     args = parser.parse_args()
     rng = random.Random(args.seed)
     tally = Tally()

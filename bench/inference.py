@@ -33,6 +33,7 @@ import torch
 
 import activevision
 from activevision.agents.q_network import QNetwork
+from activevision.cli.args import int_in, positive_int
 from activevision.export import export_onnx, export_run, policy_metadata
 from activevision.geometry import CameraConfig
 from activevision.runtime import FramePreprocessor, HeadController, robot_session_options
@@ -181,9 +182,13 @@ def conditions() -> dict[str, object]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--run", type=Path, help="training run to export (default: random init)")
-    parser.add_argument("--iterations", type=int, default=2000, help="timed decisions per case")
-    parser.add_argument("--warmup", type=int, default=200)
-    parser.add_argument("--rounds", type=int, default=4, help="alternating blocks per case")
+    parser.add_argument(
+        "--iterations", type=int_in(2, 10**7), default=2000, help="timed decisions per case"
+    )
+    parser.add_argument("--warmup", type=int_in(0, 10**6), default=200)
+    parser.add_argument(
+        "--rounds", type=positive_int, default=4, help="alternating blocks per case"
+    )
     parser.add_argument(
         "--variants",
         action="store_true",
@@ -208,6 +213,12 @@ def main() -> None:
             metadata = policy_metadata(eight_way_table(), CameraConfig())
             model_path = export_onnx(network, tmp_dir / "policy.onnx", metadata).model_path
         controller = HeadController(model_path, num_threads=1)
+        if controller.metadata.vector_size:
+            parser.error(
+                f"--run {args.run}: its policy takes {', '.join(controller.metadata.vector_keys)}"
+                " beside the image; this benchmark times image-only policies (for the others:"
+                " bench/inference_inputs.py --policy)"
+            )
         torch_controller = TorchController(
             network, controller.metadata.action_table, CameraConfig()
         )
@@ -249,6 +260,10 @@ def main() -> None:
         f"faster), PyTorch eager {torch_eager['p50']:.3f} ms"
     )
     print(
+        f"onnxruntime / PyTorch eager in the same run: {onnx['p50'] / torch_eager['p50']:.2f}x"
+        f" (p50), {onnx['p99'] / torch_eager['p99']:.2f}x (p99)"
+    )
+    print(
         f"conditions: {before['cpu']}, {before['cores']} cores, load average "
         f"{before['loadavg_1min']:.2f} -> {after['loadavg_1min']:.2f}; "
         f"{args.iterations} decisions per case after {args.warmup} warm-up"
@@ -267,6 +282,8 @@ def main() -> None:
         "paper_ms": PAPER_MS,
         "onnx_p50_over_paper": onnx["p50"] / PAPER_MS,
         "torch_p50_over_paper": torch_eager["p50"] / PAPER_MS,
+        "onnx_over_torch_p50": onnx["p50"] / torch_eager["p50"],
+        "onnx_over_torch_p99": onnx["p99"] / torch_eager["p99"],
         "target_met": onnx["p50"] < 0.5 and onnx["p99"] < 1.0,
         "iterations": args.iterations,
         "loadavg_1min": [before["loadavg_1min"], after["loadavg_1min"]],

@@ -24,6 +24,7 @@ import numpy as np
 import torch
 
 from activevision.agents.q_network import QNetwork
+from activevision.cli.args import int_in
 from activevision.export import export_onnx, policy_metadata
 from activevision.geometry import CameraConfig
 from activevision.runtime import HeadController, pretrained_policy_path
@@ -48,7 +49,9 @@ def timed(call, n: int) -> list[float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--policy", type=Path, help="policy.onnx (default: the shipped one)")
-    parser.add_argument("--decisions", type=int, default=3000)
+    parser.add_argument(
+        "--decisions", type=int_in(10, 10**7), default=3000, help="timed, in 10 rounds"
+    )
     args = parser.parse_args()
     torch.set_num_threads(1)
     rng = np.random.default_rng(0)

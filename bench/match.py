@@ -3,10 +3,14 @@ ball, rendering, detection and a UKF update every tick) against the episodic
 ``ActiveVision-v0`` vector env at the same N, measured alternately in the same run; the
 ratio is the figure (issue: >= 0.40). Also the single match env, and the vector env with
 four other robots walking (occlusion tested for every landmark every tick, the ball
-bouncing off them). Last line: JSON."""
+bouncing off them). Last line: JSON.
+
+    python bench/match.py [--rounds 3] [--batches 200]
+"""
 
 from __future__ import annotations
 
+import argparse
 import json
 import time
 
@@ -14,6 +18,7 @@ import gymnasium as gym
 import numpy as np
 
 import activevision.envs  # noqa: F401  (registers both envs)
+from activevision.cli.args import positive_int
 from activevision.envs.match.config import MatchConfig, OthersConfig
 from activevision.envs.robots import RobotsConfig
 
@@ -48,17 +53,21 @@ def single_match_ticks_per_s(ticks: int = 2000) -> float:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rounds", type=positive_int, default=3, help="alternating rounds")
+    parser.add_argument("--batches", type=positive_int, default=200, help="N-env steps a round")
+    args = parser.parse_args()
     for env_id in ("ActiveVision-v0", "ActiveVisionMatch-v0"):  # compile / load the caches
         vector_steps_per_s(env_id, N, 5)
     episodic, match = [], []
-    for _ in range(3):  # alternate, so a slow minute hits both
-        episodic.append(vector_steps_per_s("ActiveVision-v0", N, 200))
-        match.append(vector_steps_per_s("ActiveVisionMatch-v0", N, 200))
+    for _ in range(args.rounds):  # alternate, so a slow minute hits both
+        episodic.append(vector_steps_per_s("ActiveVision-v0", N, args.batches))
+        match.append(vector_steps_per_s("ActiveVisionMatch-v0", N, args.batches))
     best_episodic, best_match = max(episodic), max(match)
     ratio = best_match / best_episodic
-    single = max(single_match_ticks_per_s() for _ in range(2))
+    single = max(single_match_ticks_per_s(10 * args.batches) for _ in range(2))
     robots = max(
-        vector_steps_per_s("ActiveVisionMatch-v0", N, 200, config=ROBOTS) for _ in range(2)
+        vector_steps_per_s("ActiveVisionMatch-v0", N, args.batches, config=ROBOTS) for _ in range(2)
     )
     print(f"episodic vector env N={N}: {best_episodic:,.0f} steps/s")
     print(

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from activevision.cli.args import int_in
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import EntropyTrackTeacher
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
@@ -42,7 +43,9 @@ def untrained_student(run_dir: Path) -> Path:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--policy", type=Path, help="a match student's policy.onnx")
-    parser.add_argument("--states", type=int, default=200, help="match states timed, per round")
+    parser.add_argument(
+        "--states", type=int_in(20, 10**6), default=200, help="match states timed, per round"
+    )
     args = parser.parse_args()
     config = MatchConfig()
     env = ActiveVisionMatchVectorEnv(1, config)

@@ -21,6 +21,7 @@ import gymnasium as gym
 import torch
 
 import activevision  # noqa: F401  (registers ActiveVision-v0)
+from activevision.cli.args import positive_float, positive_int
 from activevision.envs import EnvConfig
 from activevision.experiments.compare import compare
 from activevision.experiments.policies import LearnedPolicy
@@ -66,11 +67,15 @@ def main() -> None:
     from stable_baselines3.common.env_util import make_vec_env
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--minutes", type=float, default=11.0)
-    parser.add_argument("--episodes", type=int, default=200)
+    parser.add_argument("--minutes", type=positive_float, default=11.0)
+    parser.add_argument("--episodes", type=positive_int, default=200)
     parser.add_argument("--out", type=Path, default=Path("runs/ppo_prior"))
     parser.add_argument("--dagger", type=Path, help="a DAgger run to score beside PPO")
     args = parser.parse_args()
+    if args.dagger is not None and not (args.dagger / "config.json").is_file():
+        parser.error(f"--dagger {args.dagger}: not a training run (no config.json)")
+    if (args.out / "ppo.zip").exists():
+        parser.error(f"--out {args.out} holds a ppo.zip already: name another folder")
 
     torch.set_num_threads(2)
     env_config: EnvConfig = preset("dagger_prior").env

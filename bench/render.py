@@ -24,6 +24,7 @@ import time
 import numba
 import numpy as np
 
+from activevision.cli.args import positive_float, positive_int, seed
 from activevision.geometry.camera import CameraConfig
 from activevision.geometry.occlusion import robot_cylinders
 from activevision.rendering import Renderer
@@ -222,10 +223,10 @@ def randomised_world(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, fl
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=1.0, help="time per measurement")
-    parser.add_argument("--rounds", type=int, default=3, help="rounds of all measurements")
-    parser.add_argument("--reference-frames", type=int, default=50)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seconds", type=positive_float, default=1.0, help="time per measurement")
+    parser.add_argument("--rounds", type=positive_int, default=3, help="rounds of all measurements")
+    parser.add_argument("--reference-frames", type=positive_int, default=50)
+    parser.add_argument("--seed", type=seed, default=0)
     parser.add_argument(
         "--factors", action="store_true", help="also time each appearance factor alone"
     )

@@ -22,6 +22,8 @@ import numba
 import numpy as np
 
 import activevision.rendering.renderer as renderer_module
+from activevision.cli.args import int_in
+from activevision.cli.args import seed as seed_arg
 from activevision.geometry import CameraConfig, FieldSpec
 from activevision.rendering import Renderer
 from activevision.rendering.kernels.garbage import GARBAGE_KINDS
@@ -96,8 +98,8 @@ def with_garbage(seed: int, path):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cameras", type=int, default=12000)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--cameras", type=int_in(2, 10**7), default=12000)
+    parser.add_argument("--seed", type=seed_arg, default=0)
     args = parser.parse_args()
 
     camera, field = CameraConfig(), FieldSpec()

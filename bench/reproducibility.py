@@ -1,6 +1,6 @@
 """Benchmark: are training runs of the same seed bitwise identical across processes?
 
-Trains the same short run (``quickstart`` preset, 900 steps, 600 updates, seed 0) in
+Trains the same short DDQN run (``quickstart_ddqn`` preset, 900 steps, 600 updates, seed 0) in
 ``--repeats`` fresh processes, with 2 threads, 1 thread, and 1 thread with oneDNN (mkldnn)
 off, and reports how many distinct final weights each produced and the time per run. Within
 one process runs are identical (tests/training); across processes they are not always.
@@ -17,12 +17,14 @@ import subprocess
 import sys
 import time
 
+from activevision.cli.args import positive_int
+
 RUN = """
 import hashlib, sys, tempfile
 import torch
 from activevision.training import Trainer, preset
 torch.backends.mkldnn.enabled = sys.argv[2] != "1"
-config = preset("quickstart").replace(
+config = preset("quickstart_ddqn").replace(
     total_timesteps=900, learning_starts=300, num_threads=int(sys.argv[1]),
     progress_bar=False, tensorboard=False, checkpoint_interval=0, seed=0)
 trainer = Trainer(config, tempfile.mkdtemp())
@@ -50,7 +52,7 @@ def runs(threads: int, onednn_off: bool, repeats: int) -> tuple[int, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=4)
+    parser.add_argument("--repeats", type=positive_int, default=4, help="processes per setting")
     args = parser.parse_args()
     results = {}
     for name, threads, onednn_off in (

@@ -26,6 +26,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from activevision.cli.args import positive_int
+
 
 def run_sweep(steps: int, num_cpus: int, out_dir: Path) -> dict[str, Any]:
     from activevision.scaleout import sweep
@@ -77,7 +79,9 @@ def run_sweep(steps: int, num_cpus: int, out_dir: Path) -> dict[str, Any]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--steps", type=int, default=900, help="environment steps per trial")
+    parser.add_argument(
+        "--steps", type=positive_int, default=900, help="environment steps per trial"
+    )
     args = parser.parse_args()
     import ray
 

@@ -35,6 +35,7 @@ from torch.nn import functional as F
 from activevision.agents.ddqn import DDQNLearner
 from activevision.agents.q_network import QNetwork
 from activevision.agents.replay.prioritized import PrioritizedReplayBuffer
+from activevision.cli.args import int_in, positive_int
 from activevision.training.config import TrainConfig
 from activevision.training.cpu import configure_torch_cpu, resolve_num_threads
 from activevision.training.trainer import Trainer
@@ -191,9 +192,11 @@ def training_steps_per_s(make: Callable[[], gym.Env], threads: int, epoch: int =
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--updates", type=int, default=40, help="timed updates per round")
-    parser.add_argument("--rounds", type=int, default=3, help="alternating rounds")
-    parser.add_argument("--threads", type=int, default=0, help="torch threads (0: all cores)")
+    parser.add_argument("--updates", type=positive_int, default=40, help="timed updates per round")
+    parser.add_argument("--rounds", type=positive_int, default=3, help="alternating rounds")
+    parser.add_argument(
+        "--threads", type=int_in(0, 1024), default=0, help="torch threads (0: all cores)"
+    )
     args = parser.parse_args()
     threads = resolve_num_threads(args.threads)
     torch.set_num_threads(threads)

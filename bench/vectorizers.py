@@ -5,6 +5,7 @@ frames and info entries that are not byte-identical (dtypes included). Last line
 
 from __future__ import annotations
 
+import argparse
 import json
 import time
 from typing import Any
@@ -13,8 +14,9 @@ import gymnasium as gym
 import numpy as np
 
 import activevision.envs  # noqa: F401
+from activevision.cli.args import positive_int
 
-N, SEED, STEPS = 4, 0, 1000
+N, SEED = 4, 0
 MODES = ("sync", "async", "vector_entry_point")
 
 #: (observations, rewards, terminated, truncated, infos) of one reset or step of N envs
@@ -88,20 +90,27 @@ def compare(got: list[Batch], want: list[Batch]) -> dict[str, Any]:
 
 
 def main() -> None:
-    actions = np.random.default_rng(1).integers(0, 9, (STEPS, N))
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--steps", type=positive_int, default=1000, help="steps of every rollout")
+    steps = parser.parse_args().steps
+    actions = np.random.default_rng(1).integers(0, 9, (steps, N))
     t0 = time.perf_counter()
     reference = singles_rollout(actions)
-    print(f"{N} single envs, {STEPS} steps: {time.perf_counter() - t0:.1f} s")
+    singles_s = time.perf_counter() - t0
+    print(f"{N} single envs, {steps} steps: {singles_s:.1f} s")
     episodes = int(sum((b[2] | b[3]).sum() for b in reference))
     print(f"  {episodes} episodes ended (terminated or truncated)")
     results: dict[str, Any] = {}
     for mode in MODES:
         t0 = time.perf_counter()
         results[mode] = compare(vector_rollout(mode, actions), reference)
+        seconds = time.perf_counter() - t0
         r = results[mode]
+        r["time_vs_singles"] = round(seconds / singles_s, 3)
         print(
-            f"make_vec {mode:>18}: {time.perf_counter() - t0:5.1f} s; frames differing "
-            f"{r['frames_differing']}/{N * (STEPS + 1)}, steps with rewards/dones differing "
+            f"make_vec {mode:>18}: {seconds:5.1f} s ({seconds / singles_s:.2f}x the singles');"
+            f" frames differing "
+            f"{r['frames_differing']}/{N * (steps + 1)}, steps with rewards/dones differing "
             f"{r['steps_rewards_dones_differing']}, info keys differing "
             f"{r['info_keys_differing'] or 'none'}"
         )
@@ -115,7 +124,7 @@ def main() -> None:
         json.dumps(
             {
                 "num_envs": N,
-                "steps": STEPS,
+                "steps": steps,
                 "episodes_ended": episodes,
                 "byte_identical": identical,
                 **results,

@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from activevision.cli.args import int_in, positive_int, seed
 from activevision.geometry import CameraConfig, FieldSpec, field_landmarks, visible_landmarks
 from activevision.localisation import (
     DEFAULT_UKF,
@@ -60,12 +61,16 @@ def _best_time(fn, repeats: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--starts", type=int, default=512)
-    parser.add_argument("--loop-starts", type=int, default=40)
-    parser.add_argument("--batch", type=int, default=64)
-    parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--starts", type=positive_int, default=512)
+    parser.add_argument("--loop-starts", type=positive_int, default=40)
+    parser.add_argument("--batch", type=positive_int, default=64, help="at most --starts")
+    parser.add_argument(
+        "--repeats", type=int_in(2, 10**4), default=5, help="the first of them compiles"
+    )
+    parser.add_argument("--seed", type=seed, default=0)
     args = parser.parse_args()
+    if args.batch > args.starts:
+        parser.error(f"--batch {args.batch} is more than --starts {args.starts}")
 
     field, cam, grid, ukf = FieldSpec(), CameraConfig(), ViewpointGrid(), DEFAULT_UKF
     landmarks = field_landmarks(field)

@@ -1,0 +1,52 @@
+"""Every benchmark script has a command line: ``--help`` lists its options, and a bad value
+is one line and exit code 2 before any work (``make bench`` and the README run them)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).parents[2] / "bench"
+SCRIPTS = sorted(p.name for p in BENCH.glob("*.py"))
+
+#: one bad value per script (a count of 0, a negative budget, a batch above its starts)
+BAD = {
+    "continuous.py": ["--runs", "/no/such/run"],
+    "env.py": ["--rounds", "0"],
+    "fuzz_inputs.py": ["--cases", "-1"],
+    "inference.py": ["--iterations", "0"],
+    "inference_inputs.py": ["--decisions", "5"],
+    "match.py": ["--batches", "0"],
+    "match_student.py": ["--states", "3"],
+    "reference_ppo.py": ["--minutes", "-1"],
+    "render.py": ["--rounds", "0"],
+    "render_determinism.py": ["--cameras", "0"],
+    "reproducibility.py": ["--repeats", "0"],
+    "sweep.py": ["--steps", "0"],
+    "train.py": ["--threads", "-3"],
+    "vectorizers.py": ["--steps", "0"],
+    "viewpoint.py": ["--batch", "32", "--starts", "16"],
+}
+
+
+def run(script: str, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, str(BENCH / script), *args], capture_output=True, text=True, timeout=120
+    )
+
+
+def test_every_script_has_a_bad_value_here():
+    assert sorted(BAD) == SCRIPTS
+
+
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_help_and_a_bad_value(script):
+    done = run(script, "--help")
+    assert done.returncode == 0 and "usage:" in done.stdout, done.stderr
+    done = run(script, *BAD[script])
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr and lines[-1].startswith(f"{script}: error: ")
