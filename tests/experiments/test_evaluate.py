@@ -137,6 +137,12 @@ def test_compare_is_incremental(tmp_path):
     assert len(rows2) == 4 and (tmp_path / "compare.csv").read_text() == csv_text
     plot_compare(tmp_path / "compare.csv", tmp_path / "compare.png")
     assert (tmp_path / "compare.png").stat().st_size > 10_000
+    # more levels after those, in their places: only the new one is played, on its own seed
+    rows3 = compare(tmp_path, methods, errors=[0.0, 1.0, 2.0], episodes=5, progress=False)
+    assert [str(r["level_seed"]) for r in rows3] == ["0", "0", "1", "1", "2", "2"]
+    # a level put before them would leave 1.0 on the episodes of 0.5's place: refused
+    with pytest.raises(ValueError, match="error 1 played on the episodes of seed 1; in"):
+        compare(tmp_path, methods, errors=[0.0, 0.5, 1.0], episodes=5, progress=False)
 
 
 def test_paired_steps_compare_only_episodes_every_method_solves():

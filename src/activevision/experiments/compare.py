@@ -63,14 +63,32 @@ def done_levels(csv_path: Path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
-def check_resumable(csv_path: Path, rows: list[dict], episodes: int, seed: int) -> None:
-    """Levels already in the CSV are kept only if they were played on the same episodes."""
+def check_resumable(
+    csv_path: Path, rows: list[dict], episodes: int, seed: int, errors: Sequence[float]
+) -> None:
+    """Levels already in the CSV are kept only if they were played on the same episodes: the
+    same count and seed, and for each error level the episodes its place in ``errors``
+    gives (level ``i`` plays seed ``seed + i``'s: a level moved in the list would keep
+    another level's episodes)."""
+    places = {float(e): i for i, e in enumerate(errors)}
     for row in rows:
         if (row.get("episodes"), row.get("seed")) != (str(episodes), str(seed)):
             raise ValueError(
                 f"{csv_path} holds levels of {row.get('episodes')} episodes from seed"
                 f" {row.get('seed')}, not {episodes} from seed {seed}: resume with those, or"
                 " pass --overwrite to start over"
+            )
+        error = float(row["error"])
+        if error not in places:
+            continue
+        want = str(seed + places[error])
+        if row.get("level_seed") != want:
+            played = row.get("level_seed") or "unknown (a CSV from before level_seed)"
+            raise ValueError(
+                f"{csv_path} holds error {error:g} played on the episodes of seed {played};"
+                f" in --errors {','.join(f'{e:g}' for e in errors)} it is played on seed"
+                f" {want}'s: resume with the same --errors in the same order, or pass"
+                " --overwrite to start over"
             )
 
 
@@ -86,12 +104,14 @@ def compare(
     """Run the experiment into ``out_dir/compare.csv``, one error level at a time.
 
     The CSV is rewritten (atomically) after every level, and levels already in it are
-    skipped: an interrupted run loses at most the level in progress.
+    skipped: an interrupted run loses at most the level in progress. Level ``i`` of
+    ``errors`` plays the episodes of seed ``seed + i`` (its ``level_seed`` column); a
+    resume with the levels in other places is refused (:func:`check_resumable`).
     """
     out_dir = Path(out_dir)
     csv_path = out_dir / "compare.csv"
     rows = done_levels(csv_path)
-    check_resumable(csv_path, rows, episodes, seed)
+    check_resumable(csv_path, rows, episodes, seed, errors)
     done = {(float(r["error"]), r["method"]) for r in rows}
     config = config or EnvConfig()
     env = ActiveVisionEnv(config)
@@ -110,7 +130,13 @@ def compare(
             if (float(e), name) in done:
                 continue
             _, summary, _ = evaluate_policy(factory(float(e)), episodes, seed=seed + level, env=env)
-            rows += summary_rows({name: summary}, error=float(e), episodes=episodes, seed=seed)
+            rows += summary_rows(
+                {name: summary},
+                error=float(e),
+                episodes=episodes,
+                seed=seed,
+                level_seed=seed + level,
+            )
             if bar is not None:
                 bar.update()
                 bar.set_postfix(error=e, method=name, success=f"{summary['success'].mean:.2f}")
