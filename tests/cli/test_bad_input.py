@@ -97,6 +97,9 @@ BAD_ARGUMENTS = [
     (["train", "--resume", "{run}", "--preset", "paper"], "--preset"),
     (["train", "--resume", "{run}", "--steps", "30"], "finished"),
     (["train", "--out", "{run}"], "--resume"),
+    (["train", "--out", "{run}/plots/x"], "inside the training run"),
+    (["train", "--out", "{run}/plots/x", "--overwrite"], "inside the training run"),
+    (["evaluate", "--run", "{tmp}", "--methods", "random"], "not a training run (no config.json)"),
     (["sweep", "--seeds", "3..1", "--out", "{tmp}/s"], "'3..1'"),
     (["sweep", "--grid", "learning_rate", "--out", "{tmp}/s"], "KEY=V1"),
     (["plot", "{tmp}"], "not a training run"),
@@ -179,6 +182,12 @@ def test_files_that_are_not_text_are_named(run, tmp_path, capsys, one_clear_line
     (run / "metrics.csv").write_bytes(garbage)
     assert main(["plot", str(run)]) == 2
     one_clear_line("metrics.csv")
+
+
+def test_a_run_without_its_log_has_nothing_to_plot(run, capsys, one_clear_line):
+    (run / "metrics.csv").unlink()  # checkpoints/ still mark it a run
+    assert main(["plot", str(run)]) == 2
+    one_clear_line("has no metrics.csv (its training log): nothing to plot")
 
 
 def test_a_run_without_weights_says_which_file_it_lacks(run, capsys, one_clear_line):

@@ -44,6 +44,11 @@ def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     assert "match/match_pareto.png" in report and "| entropy_greedy |" in report
     # Running it again finds the finished run and only redoes evaluation and figures.
     assert main(argv) == 0
+    # ... but another quickstart's (other steps or seed) is not resumed into this run
+    capsys.readouterr()
+    for other in (["--steps", "900"], ["--seed", "1"]):
+        assert main([*argv, *other]) == 2
+        assert "holds another training run than this quickstart's" in capsys.readouterr().err
     # The trained run exports to ONNX for the robot runtime.
     assert main(["export", str(out), "-o", str(tmp_path / "policy.onnx")]) == 0
     assert (tmp_path / "policy.json").exists()

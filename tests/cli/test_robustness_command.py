@@ -95,6 +95,8 @@ def test_list_prints_the_table(capsys):
         (["--method", "nope"], "'nope'"),
         (["--method", "learned"], "--run"),
         (["--shipped", "--method", "scan"], "--shipped"),
+        (["--shipped", "--run", "runs/x"], "--shipped and --run runs/x name two policies"),
+        (["--method", "shipped", "--run", "runs/x"], "--shipped and --run"),
         ([], "--run"),
     ],
     ids=" ".join,

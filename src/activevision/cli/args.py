@@ -209,4 +209,6 @@ def env_config_of_run(run_dir: Path | None) -> EnvConfig:
         return EnvConfig()
     from activevision.training.config import load_config
 
+    if not (run_dir / "config.json").is_file():
+        raise ValueError(f"--run {run_dir}: not a training run (no config.json)")
     return load_config(run_dir / "config.json").env.replace(action_type="discrete")

@@ -125,10 +125,13 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
             f"(paper: 2.3 ms on a GTX 1060)"
         )
     solved = paired_steps(episodes, list(summaries))
-    print(
-        f"steps to success on the {solved['episodes']} episodes every method solves (median):"
-        + ", ".join(f" {name} {solved[name]['median']:g}" for name in summaries)
-    )
+    if solved["episodes"]:
+        print(
+            f"steps to success on the {solved['episodes']} episodes every method solves"
+            " (median):" + ", ".join(f" {name} {solved[name]['median']:g}" for name in summaries)
+        )
+    else:
+        print("steps to success: no episode is solved by every method, so none to pair")
     rows = summary_rows(summaries, episodes=args.episodes, seed=args.seed, error=args.error)
     write_csv(files[0], rows)
     write_csv(files[1], episodes)

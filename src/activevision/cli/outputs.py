@@ -63,9 +63,15 @@ def check_outputs(
 def check_run_directory(directory: Path, *, overwrite: bool = False) -> None:
     """Refuse a new training run in ``directory`` where it would replace files another
     command (or the user) put there: any of a run's file names (rule 1 the other way round),
-    unless ``overwrite``; and a ``directory`` that is a file (rule 4)."""
+    unless ``overwrite``; a ``directory`` inside another run (whose folders its own commands
+    write); and a ``directory`` that is a file (rule 4)."""
     if directory.exists() and not directory.is_dir():
         raise OutputError(f"{directory} is a file, not a directory: choose another --out")
+    for folder in Path(directory).absolute().parents:
+        if is_training_run(folder):  # not even with --overwrite: rule 1's folder
+            raise OutputError(
+                f"{directory} lies inside the training run {folder}: choose an --out outside it"
+            )
     if overwrite or not directory.is_dir():
         return
     clash = sorted(p.name for p in directory.iterdir() if p.name in RUN_FILES)

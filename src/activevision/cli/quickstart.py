@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +19,7 @@ def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
 
     out, run_seed, episodes = str(args.out), str(args.seed), str(args.episodes)
     if list_checkpoints(args.out):
+        check_quickstart_run(args)
         steps = [["train", "--resume", out]]
     else:
         extra = ["--steps", str(args.steps)] if args.steps is not None else []
@@ -35,6 +37,23 @@ def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
         + ["--out", str(args.out / "match"), "--overwrite"],
         ["report", out, "--overwrite"],
     ]
+
+
+def check_quickstart_run(args: argparse.Namespace) -> None:
+    """ValueError unless the run in ``args.out`` is this quickstart's (the preset, seed and
+    steps asked for): resuming another would run and overwrite that run's evaluations."""
+    from activevision.training import load_config, preset
+
+    want = preset("quickstart").replace(seed=args.seed)
+    if args.steps is not None:
+        want = want.replace(total_timesteps=args.steps)
+    have = load_config(args.out / "config.json")
+    if replace(have, run=replace(have.run, progress_bar=want.run.progress_bar)) != want:
+        steps = f", {args.steps} steps" if args.steps is not None else ""
+        raise ValueError(
+            f"{args.out} holds another training run than this quickstart's (preset quickstart,"
+            f" seed {args.seed}{steps}): choose another --out, or run the commands by hand"
+        )
 
 
 def run_quickstart(args: argparse.Namespace, main: Callable[[list[str]], int]) -> int:

@@ -40,6 +40,11 @@ def _method(args: argparse.Namespace) -> str:
     """The policy to score: ``--method``, ``--shipped``, or the learned one of ``--run``."""
     if args.shipped and args.method not in (None, "shipped"):
         raise ValueError(f"--shipped and --method {args.method} name two policies; pick one")
+    if (args.shipped or args.method == "shipped") and args.run is not None:
+        raise ValueError(
+            f"--shipped and --run {args.run} name two policies (the shipped one plays in its own"
+            " training world); pick one"
+        )
     name: str | None = "shipped" if args.shipped else args.method
     if name is None:
         if args.run is None:

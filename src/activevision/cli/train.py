@@ -106,6 +106,8 @@ def cmd_plot(args: argparse.Namespace) -> None:
 
     if not is_training_run(args.run):
         raise ValueError(f"{args.run} is not a training run (no config.json and metrics.csv)")
+    if not (args.run / "metrics.csv").is_file():
+        raise ValueError(f"{args.run} has no metrics.csv (its training log): nothing to plot")
     print(f"wrote {plot_run(args.run)}")
 
 

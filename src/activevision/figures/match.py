@@ -88,7 +88,8 @@ def plot_error_over_time(
     with a 95% band."""
     fig = new_figure(figsize=(7.5, 4.0), layout="constrained")
     ax = fig.add_subplot()
-    for name, errors in curves.items():
+    # the default cycle's ten colours would repeat beyond ten methods
+    for (name, errors), colour in zip(curves.items(), _colours(len(curves)), strict=True):
         t = np.arange(1, len(errors) + 1) * tick_seconds
         mean = errors.mean(axis=1)
         half = (
@@ -96,8 +97,8 @@ def plot_error_over_time(
             if errors.shape[1] > 1
             else 0
         )
-        ax.plot(t, mean, lw=1.2, label=name)
-        ax.fill_between(t, mean - half, mean + half, alpha=0.2)
+        ax.plot(t, mean, lw=1.2, label=name, color=colour)
+        ax.fill_between(t, mean - half, mean + half, alpha=0.2, color=colour)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("position error (m), mean over matches")
     ax.set_title(title, fontsize=9)

@@ -82,7 +82,7 @@ def compare_ray(
     config = config or EnvConfig()
     csv_path = Path(out_dir) / "compare.csv"
     rows = done_levels(csv_path)
-    check_resumable(csv_path, rows, episodes, seed)
+    check_resumable(csv_path, rows, episodes, seed, errors)
     done = {(float(r["error"]), r["method"]) for r in rows}
     run = str(run_dir) if run_dir is not None else None
     starts = list(range(0, episodes, chunk))
@@ -90,7 +90,7 @@ def compare_ray(
     with ray_session(address, num_cpus) as ray:
         task = ray.remote(num_cpus=1)(evaluate_chunk)
         config_ref = ray.put(config)
-        pending: list[tuple[float, dict[str, list[Any]]]] = []
+        pending: list[tuple[int, float, dict[str, list[Any]]]] = []
         for level, e in enumerate(errors):
             refs = {
                 name: [
@@ -109,12 +109,16 @@ def compare_ray(
                 if (float(e), name) not in done
             }
             if refs:
-                pending.append((float(e), refs))
-        for e, refs in pending:  # in level order, so the CSV matches the local run's
+                pending.append((level, float(e), refs))
+        for level, e, refs in pending:  # in level order, so the CSV matches the local run's
             for name, chunk_refs in refs.items():
                 records = [r for part in ray.get(chunk_refs) for r in part]
                 rows += summary_rows(
-                    {name: summarise(records)}, error=e, episodes=episodes, seed=seed
+                    {name: summarise(records)},
+                    error=e,
+                    episodes=episodes,
+                    seed=seed,
+                    level_seed=seed + level,
                 )
             write_csv(csv_path, rows)
     return rows
