@@ -93,3 +93,34 @@ def test_method_names_and_policies():
         make_policy("nope", 0.0, None)
     with pytest.raises(ValueError, match="run directory"):
         make_policy("learned", 0.0, None)
+
+
+def test_a_sweep_is_refused_before_ray_starts(tmp_path):
+    """What a rerun or a grid would get wrong is refused before any trial: a trial folder of
+    another configuration (a rerun only resumes its trials: a bigger budget was never
+    reached, a changed setting silently ignored), the seed in the grid, two grid points of
+    one configuration, an --out that is a file."""
+    from activevision.scaleout.sweep import _trial_specs
+    from activevision.training import save_config
+
+    base = TrainConfig()
+    out = tmp_path / "sweep"
+
+    def specs(grid, seeds=(0,), out_dir=out):
+        return _trial_specs(base, seeds, grid, out_dir, 1.0, None)
+
+    trials = specs({"learning_rate": ["1e-3"]})
+    run_dir = Path(trials[0]["run_dir"])
+    run_dir.mkdir(parents=True)
+    save_config(TrainConfig.from_dict(trials[0]["config"]), run_dir / "config.json")
+    assert specs({"learning_rate": ["1e-3"]}) == trials  # the same trial: resumed
+    changed = base.replace(total_timesteps=base.run.total_timesteps * 2)
+    with pytest.raises(ValueError, match=r"total_timesteps .* a rerun only resumes its trials"):
+        _trial_specs(changed, (0,), {"learning_rate": ["1e-3"]}, out, 1.0, None)
+    with pytest.raises(ValueError, match="with --seeds"):
+        specs({"seed": ["1", "2"]})
+    with pytest.raises(ValueError, match="are the same configuration"):
+        specs({"learning_rate": ["1e-3", "0.001"]}, out_dir=tmp_path / "other")
+    (tmp_path / "file").write_text("")
+    with pytest.raises(ValueError, match="is a file"):
+        specs({}, out_dir=tmp_path / "file")

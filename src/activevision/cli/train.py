@@ -10,6 +10,7 @@ from activevision.cli.args import (
     add_overwrite,
     choice_list,
     grid_item,
+    int_in,
     positive_float,
     positive_int,
     seed,
@@ -193,5 +194,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--num-cpus", type=positive_int, help="CPUs of the local Ray instance")
     p.add_argument("--cpus-per-trial", type=positive_float, default=1.0)
     p.add_argument(
-        "--max-failures", type=int, default=2, help="restarts of a failed trial (default 2)"
+        "--max-failures",
+        type=int_in(0, 100),
+        default=2,
+        help="restarts of a failed trial (default 2)",
     )

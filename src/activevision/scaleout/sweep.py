@@ -31,7 +31,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from activevision.training.config import TrainConfig, apply_overrides
+from activevision.training.config import TrainConfig, apply_overrides, load_config
 
 if TYPE_CHECKING:
     from ray.tune.experiment import Trial
@@ -221,13 +221,21 @@ def _trial_specs(
         raise ValueError("a sweep needs at least one seed")
     if len(set(seeds)) != len(seeds):
         raise ValueError(f"duplicate seeds: {seeds}")
-    trials = []
+    if {"seed", "run.seed"} & set(grid or {}):
+        raise ValueError("the grid may not hold the seed: give the seeds with --seeds")
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ValueError(f"{out_dir} is a file, not a directory: choose another --out")
+    trials: list[dict[str, Any]] = []
     for point in grid_points(grid or {}):
         for seed in seeds:
             config = trial_config(base_config, seed, point)
             if config.run.num_threads == 0:
                 config = config.replace(**{"run.num_threads": max(1, math.floor(cpus_per_trial))})
             name = trial_name(seed, point)
+            same = [t["name"] for t in trials if t["config"] == config.to_dict()]
+            if same:
+                raise ValueError(f"grid points {same[0]} and {name} are the same configuration")
+            check_trial_dir(out_dir / "trials" / name, config)
             trials.append(
                 {
                     "name": name,
@@ -239,6 +247,35 @@ def _trial_specs(
                 }
             )
     return trials
+
+
+def check_trial_dir(run_dir: Path, config: TrainConfig) -> None:
+    """ValueError when ``run_dir`` holds a trial of another configuration: a sweep rerun
+    into its folder resumes its trials as they were configured (a changed setting or budget
+    would be ignored, or never reached)."""
+    if not (run_dir / "config.json").is_file():
+        return
+    saved = _leaves(load_config(run_dir / "config.json").to_dict())
+    wanted = _leaves(config.to_dict())
+    differ = sorted(k for k in saved.keys() | wanted.keys() if saved.get(k) != wanted.get(k))
+    if differ:
+        shown = ", ".join(f"{k} {saved.get(k)!r} -> {wanted.get(k)!r}" for k in differ[:3])
+        raise ValueError(
+            f"{run_dir} holds this trial trained with another configuration ({shown}"
+            f"{', ...' if len(differ) > 3 else ''}): a rerun only resumes its trials; choose"
+            " another --out"
+        )
+
+
+def _leaves(tree: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """A nested config dict as ``{"learner.gamma": 0.99, ...}``."""
+    out: dict[str, Any] = {}
+    for key, value in tree.items():
+        if isinstance(value, Mapping):
+            out |= _leaves(value, f"{prefix}{key}.")
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
 
 
 def _fit(
