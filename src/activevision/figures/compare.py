@@ -10,6 +10,13 @@ from pathlib import Path
 
 from activevision.figures.canvas import new_figure, save_figure
 
+#: y-axis labels (the CSV's column names say less to a reader)
+Y_LABELS = {
+    "success_rate": "success rate (mean over episodes)",
+    "success": "share of episodes (goal reached)",
+    "score": "release score (mean over episodes)",
+    "regret_within": "share of episodes (regret <= 0.25 nats)",
+}
 TITLES = {
     "success_rate": "success rate (|observed ∩ desired| / |desired|)",
     "success": "episodes reaching the goal",
@@ -45,10 +52,14 @@ def plot_compare(
                 alpha=0.2,
             )
         ax.set_xlabel("localisation error e (m and rad)")
-        ax.set_ylabel(metric)
+        ax.set_ylabel(Y_LABELS.get(metric, metric))
         ax.set_title(TITLES.get(metric, metric), fontsize=10)
         ax.set_ylim(-0.02, 1.02)
         ax.grid(alpha=0.3)
-    axes[0][-1].legend(fontsize=8, loc="lower left")
-    fig.tight_layout()
+    # one legend for every panel, below them: inside one it covered curves
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    columns = max(1, min(len(labels), 3 * len(metrics)))  # ~3 names a panel's width
+    rows = -(-len(labels) // columns)
+    fig.legend(handles, labels, loc="lower center", ncol=columns, fontsize=9, frameon=False)
+    fig.tight_layout(rect=(0, 0.02 + 0.055 * rows, 1, 1))
     save_figure(fig, out_png, dpi=120)
