@@ -59,7 +59,7 @@ def plot_compare(
     # one legend for every panel, below them: inside one it covered curves
     handles, labels = axes[0][0].get_legend_handles_labels()
     columns = max(1, min(len(labels), 3 * len(metrics)))  # ~3 names a panel's width
-    rows = -(-len(labels) // columns)
+    legend_rows = -(-len(labels) // columns)
     fig.legend(handles, labels, loc="lower center", ncol=columns, fontsize=9, frameon=False)
-    fig.tight_layout(rect=(0, 0.02 + 0.055 * rows, 1, 1))
+    fig.tight_layout(rect=(0, 0.02 + 0.055 * legend_rows, 1, 1))
     save_figure(fig, out_png, dpi=120)

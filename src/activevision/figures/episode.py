@@ -14,7 +14,7 @@ import numpy as np
 
 from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
 from activevision.figures.scene import view_figure
-from activevision.figures.topview import draw_topview
+from activevision.figures.topview import draw_topview, landmark_key
 from activevision.geometry import CameraConfig, FieldSpec, LandmarkSet
 
 
@@ -97,8 +97,8 @@ def plot_episodes(
             )
         axes[2 * r, 0].set_ylabel(_outcome(trace), fontsize=8)
     fig.suptitle(
-        "red: robot and goal view, blue: current view; landmarks in view coloured by "
-        "type (L red, T blue, lines yellow, boundary purple)",
+        "red: robot and goal view, blue: current view; landmarks in view coloured by"
+        f" type ({landmark_key()})",
         fontsize=9,
     )
     fig.tight_layout()

@@ -34,6 +34,24 @@ LANDMARK_COLOURS = {
 }
 
 
+#: What each landmark type is called in a figure's colour key.
+LANDMARK_NAMES = {
+    LandmarkType.L_CORNER: "L",
+    LandmarkType.T_JUNCTION: "T",
+    LandmarkType.X_CROSSING: "X",
+    LandmarkType.PENALTY_MARK: "penalty mark",
+    LandmarkType.GOAL_POST: "goal post",
+    LandmarkType.CENTRE_CIRCLE: "centre",
+    LandmarkType.LINE: "lines",
+    LandmarkType.FIELD_BOUNDARY: "boundary",
+}
+
+
+def landmark_key() -> str:
+    """The landmark colours as a caption: ``"L red, T blue, ..."``."""
+    return ", ".join(f"{LANDMARK_NAMES[t]} {c}" for t, c in LANDMARK_COLOURS.items())
+
+
 def draw_field(ax: Axes, spec: FieldSpec) -> None:
     """Carpet, painted lines, centre circle, penalty marks and goals."""
     bx, by = spec.carpet_half_extent
