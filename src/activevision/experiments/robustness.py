@@ -38,6 +38,10 @@ them) share the seeds, not always the starts.
 ``in_training_range``: every drawn range of the row lies within the policy's training
 ranges (appearance and robot count); ``in_robust_range``: within the robust ranges
 (:data:`ROBUST_APPEARANCE`, :data:`ROBUST_ROBOTS`, those of the ``dagger_robust`` preset).
+A row's world is built on the policy's own clean world (for the shipped policy, its
+randomised training world), while ``--list`` (:func:`list_table`) builds every row on the
+paper's default world: for a policy trained wider than the robust ranges, ``clean`` is in
+them in the list but not in the CSV.
 """
 
 from __future__ import annotations
