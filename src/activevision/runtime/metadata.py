@@ -125,10 +125,10 @@ _CAMERA_KEYS = {
     "tilt_min_deg": "tilt_min",
     "tilt_max_deg": "tilt_max",
 }
-#: How far a robot's camera may differ from the trained one before HeadController warns.
 #: The narrowest field of view CameraModel.from_degrees takes (degrees): a humanoid's head
 #: camera sees tens of degrees; a value below this is radians given for degrees.
 MIN_HFOV_DEG = 5.0
+#: How far a robot's camera may differ from the trained one before HeadController warns.
 CAMERA_TOLERANCES = {
     "hfov": math.radians(1.0),  #: rad
     "camera_height": 0.02,  #: m
