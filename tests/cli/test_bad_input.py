@@ -91,7 +91,7 @@ BAD_ARGUMENTS = [
     ),
     (["train", "--set", "ticks=1", "--out", "{tmp}/x"], "give its full path, match.ticks"),
     (["train", "--config", "{tmp}/none.json", "--out", "{tmp}/x"], "none.json"),
-    (["train", "--resume", "{tmp}/missing"], "missing"),
+    (["train", "--resume", "{tmp}/missing"], "missing: not a training run (no config.json)"),
     (["train", "--resume", "{run}", "--set", "learning_rate=1e-3"], "--set"),
     (["train", "--resume", "{run}", "--seed", "3"], "--seed"),
     (["train", "--resume", "{run}", "--preset", "paper"], "--preset"),

@@ -161,3 +161,12 @@ def test_paired_steps_compare_only_episodes_every_method_solves():
     assert out["a"] == {"median": 5.0, "mean": 5.0, "head_travel": 6.0}
     assert out["b"]["median"] == 7.0 and out["b"]["mean"] == 7.0
     assert paired_steps(episodes, ["a"])["a"]["median"] == 4.0  # seeds 1-3: 4, 2, 6
+
+
+def test_the_table_stays_aligned_with_long_method_names():
+    from activevision.experiments.evaluate import METRICS, Interval, format_table
+
+    summary = {m: Interval(0.5, 0.25, 0.75) for m in METRICS}
+    lines = format_table({"oracle": summary, "onnx_policy[a_long_run_name]": summary}).splitlines()
+    starts = {line.index("0.500") for line in lines[2:]}
+    assert len(starts) == 1 and lines[0].index("method") == 0  # every row's cells line up

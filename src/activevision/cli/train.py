@@ -50,6 +50,8 @@ def _resume(args: argparse.Namespace) -> Path | None:
             f"--resume continues a run with its own config.json; {', '.join(given)} cannot be"
             " combined with it (start a new run with --out instead)"
         )
+    if not (args.resume / "config.json").is_file():
+        raise ValueError(f"--resume {args.resume}: not a training run (no config.json)")
     trainer = reopen_run(args.resume)
     try:
         total = trainer.config.run.total_timesteps

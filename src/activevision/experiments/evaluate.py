@@ -199,14 +199,15 @@ def latency_summary(latencies_s: Sequence[float]) -> dict[str, float]:
 
 def format_table(rows: dict[str, dict[str, Interval]]) -> str:
     """A plain-text table: one row per method, ``mean [low, high]`` per metric."""
-    header = f"{'method':<14}" + "".join(f"{m:>26}" for m in METRICS)
+    width = max([14, *(len(method) + 2 for method in rows)])  # long names keep columns aligned
+    header = f"{'method':<{width}}" + "".join(f"{m:>26}" for m in METRICS)
     lines = [header, "-" * len(header)]
     for method, summary in rows.items():
         cells = "".join(
             f"{summary[m].mean:>10.3f} [{summary[m].low:6.3f},{summary[m].high:6.3f}]"
             for m in METRICS
         )
-        lines.append(f"{method:<14}{cells}")
+        lines.append(f"{method:<{width}}{cells}")
     return "\n".join(lines)
 
 

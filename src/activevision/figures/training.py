@@ -102,7 +102,7 @@ def _draw_validation(ax: Axes, x: np.ndarray, table: Columns, validation: Column
 
 def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> None:
     """``curve`` from ``table`` (its source's columns; empty: "no data yet"; all NaN: "not
-    measured in this task"), with the greedy ``validation`` over the success rate when
+    measured (yet, or in this task)"), with the greedy ``validation`` over the success rate when
     given."""
     if not table:
         text = "no validation yet" if curve.source == "validation" else None
@@ -110,7 +110,12 @@ def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> N
     elif curve.y not in table or not np.isfinite(np.asarray(table[curve.y], dtype=float)).any():
         # e.g. a match run: a match has no success and no goal view
         ax.text(
-            0.5, 0.5, "not measured in this task", ha="center", va="center", transform=ax.transAxes
+            0.5,
+            0.5,
+            "not measured (yet, or in this task)",
+            ha="center",
+            va="center",
+            transform=ax.transAxes,
         )
     else:
         x, y = np.asarray(table[curve.x]), np.asarray(table[curve.y])
