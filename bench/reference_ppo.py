@@ -100,12 +100,16 @@ def main() -> None:
         print(
             f"{key:<12} success rate {row['success_rate']:.3f}  goal reached {row['success']:.3f}"
         )
-    ratios = {}
+    ratios: dict[str, float | None] = {}
     if args.dagger:
         for e in ERRORS:
             ppo, dagger = table[f"ppo@{e}"]["goal"], table[f"dagger@{e}"]["goal"]
-            ratios[str(e)] = dagger / ppo if ppo > 0 else float("inf")
-            print(f"goal reached, DAgger / PPO at e = {e}: {ratios[str(e)]:.2f}x")
+            # None (JSON null), not inf: strict JSON has no Infinity
+            ratios[str(e)] = dagger / ppo if ppo > 0 else None
+            shown = f"{dagger / ppo:.2f}x" if ppo > 0 else "undefined (PPO reached none)"
+            print(f"goal reached, DAgger / PPO at e = {e}: {shown}")
+    else:
+        print("no reference: pass --dagger RUN to score a DAgger run of the same budget beside")
     print(
         json.dumps(
             {
