@@ -24,8 +24,12 @@ def plot_sweep_curves(
         step = np.array([r["step"] for r in sel], float)
         mean = np.array([r["success_rate_mean"] for r in sel], float)
         std = np.array([r["success_rate_std"] for r in sel], float)
-        ax.plot(step, mean, "o-", ms=3, label=f"{label} (n={max(r['seeds'] for r in sel)})")
-        ax.fill_between(step, mean - std, mean + std, alpha=0.2)
+        (line,) = ax.plot(
+            step, mean, "o-", ms=3, label=f"{label} (n={max(r['seeds'] for r in sel)})"
+        )
+        ax.fill_between(step, mean - std, mean + std, alpha=0.2, color=line.get_color())
+        if len(step) == 1:  # a band over one step has no width: a bar instead
+            ax.errorbar(step, mean, yerr=std, fmt="none", capsize=4, color=line.get_color())
     ax.set_xlabel("environment step")
     ax.set_ylabel("success rate (mean ± std over seeds)")
     ax.set_ylim(-0.02, 1.02)
