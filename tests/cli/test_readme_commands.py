@@ -14,8 +14,9 @@ from activevision.cli import build_parser
 README = Path(__file__).resolve().parents[2] / "README.md"
 
 
-def shell_blocks(text: str) -> list[str]:
-    """The bodies of the fenced blocks marked bash or sh (or unmarked)."""
+def fenced_blocks(text: str, languages: tuple[str, ...]) -> list[str]:
+    """The bodies of ``text``'s fenced blocks marked with one of ``languages`` ("" for
+    unmarked)."""
     blocks: list[str] = []
     body: list[str] = []
     language: str | None = None  # None: outside a block
@@ -25,7 +26,7 @@ def shell_blocks(text: str) -> list[str]:
         elif language is None:
             language, body = line[3:].strip(), []
         else:
-            if language in ("", "bash", "sh"):
+            if language in languages:
                 blocks.append("\n".join(body))
             language = None
     return blocks
@@ -35,7 +36,7 @@ def readme_commands(text: str) -> list[list[str]]:
     """The argument lists of the ``activevision`` commands of ``text``'s shell blocks, with
     their continued lines joined and comments dropped."""
     commands = []
-    for block in shell_blocks(text):
+    for block in fenced_blocks(text, ("", "bash", "sh")):
         for line in re.sub(r"\\\n\s*", " ", block).splitlines():
             if line.strip().startswith("activevision "):
                 commands.append(shlex.split(line, comments=True)[1:])
@@ -65,15 +66,11 @@ def test_a_stale_flag_would_fail():
     assert readme_commands(python) == []
 
 
-def python_blocks(text: str) -> list[str]:
-    """The bodies of the fenced blocks marked python."""
-    blocks = re.findall(r"^```python\n(.*?)^```", text, re.S | re.M)
-    return [block for block in blocks if block.strip()]
-
-
 #: The README's Python examples that run on their own (the rest need a robot: a camera,
 #: a neck, its localisation).
-ENV_EXAMPLES = [b for b in python_blocks(README.read_text(encoding="utf-8")) if "gym.make" in b]
+ENV_EXAMPLES = [
+    b for b in fenced_blocks(README.read_text(encoding="utf-8"), ("python",)) if "gym.make" in b
+]
 
 
 @pytest.mark.parametrize("example", ENV_EXAMPLES, ids=lambda b: b.split("gym.make")[1][:30])
