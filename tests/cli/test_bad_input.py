@@ -190,9 +190,20 @@ def test_a_run_without_its_log_has_nothing_to_plot(run, capsys, one_clear_line):
     one_clear_line("has no metrics.csv (its training log): nothing to plot")
 
 
-def test_a_run_without_weights_says_which_file_it_lacks(run, capsys, one_clear_line):
+def test_a_run_without_weights_reads_its_newest_checkpoint_or_says_which_file_it_lacks(
+    run, capsys, one_clear_line, tmp_path
+):
+    assert main(["export", str(run), "-o", str(tmp_path / "before.onnx")]) == 0
     (run / "policy.safetensors").unlink()
-    assert main(["export", str(run)]) == 2
+    # policy.safetensors is rewritten with every checkpoint: the newest holds the same weights
+    with pytest.warns(UserWarning, match="no policy.safetensors .*newest checkpoint") as caught:
+        assert main(["export", str(run), "-o", str(tmp_path / "after.onnx")]) == 0
+    newest = sorted((run / "checkpoints").iterdir())[-1] / "model.safetensors"
+    assert str(newest) in str(caught[0].message)
+    assert (tmp_path / "after.onnx").read_bytes() == (tmp_path / "before.onnx").read_bytes()
+    capsys.readouterr()
+    shutil.rmtree(run / "checkpoints")
+    assert main(["export", str(run), "-o", str(tmp_path / "none.onnx")]) == 2
     one_clear_line("no policy weights in", "policy.safetensors", "each checkpoint")
 
 

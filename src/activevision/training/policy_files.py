@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -159,6 +160,17 @@ def _weights_file(path: Path, weights: str) -> Path:
         for name in (POLICY_FILE, "model.safetensors"):  # a run's, a checkpoint's
             if (path / name).exists():
                 return path / name
+        checkpoints = ckpt.list_checkpoints(path)
+        if checkpoints:
+            # policy.safetensors is rewritten with every checkpoint, so the newest
+            # checkpoint holds the same weights
+            newest = checkpoints[-1] / "model.safetensors"
+            warnings.warn(
+                f"{path} has no {POLICY_FILE} (deleted?): reading its newest checkpoint's"
+                f" weights, {newest}",
+                stacklevel=3,
+            )
+            return newest
         raise ckpt.CheckpointError(
             f"no policy weights in {path}: neither {POLICY_FILE} (a run writes it with each"
             " checkpoint; this run has none yet, or it was deleted) nor a checkpoint's"
