@@ -85,19 +85,19 @@ def vector_rollout(envs, seed, actions):
     return out
 
 
-@pytest.mark.parametrize("robots", [False, True], ids=["empty", "walking-robots"])
+@pytest.mark.parametrize("world", ["empty", "walking-robots", "ball-bounces-off-us"])
 @pytest.mark.parametrize("mode", ["sync", "async"])
-def test_every_vectorizer_agrees_with_the_native_one(mode, robots):
+def test_every_vectorizer_agrees_with_the_native_one(mode, world):
     """Gymnasium's Sync and Async vectorizers over single envs and the native vector env
     give the same batches, byte for byte, across an autoreset (also with other robots
-    walking: their draws, the occlusion and the bounces)."""
+    walking: their draws, the occlusion and the bounces; and with our robot walking onto a
+    ball that bounces off it)."""
     from activevision.envs.match.config import MatchConfig, OthersConfig
     from activevision.envs.robots import RobotsConfig
 
     n, ticks = 3, 12
-    actions = np.random.default_rng(2).integers(0, 9, (ticks + 3, n))
     kwargs: dict = {"observation": "image+head+belief", "ticks": ticks}
-    if robots:
+    if world == "walking-robots":
         kwargs = {
             "config": MatchConfig(
                 observation="image+head+belief",
@@ -106,14 +106,30 @@ def test_every_vectorizer_agrees_with_the_native_one(mode, robots):
                 others=OthersConfig(speed=0.3),
             )
         }
+    if world == "ball-bounces-off-us":
+        ticks = 200  # our robot reaches the ball within it (checked below)
+        kwargs = {
+            "config": MatchConfig(
+                observation="image+head+belief",
+                ticks=ticks,
+                walk=WalkConfig(target="ball", ball_standoff=0.0),
+                ball=BallConfig(kick_rate=0.01, kick_speed=(0.3, 1.0), bounces_off_own_robot=True),
+            )
+        }
+    actions = np.random.default_rng(2).integers(0, 9, (ticks + 3, n))
     native = gym.make_vec(
         "ActiveVisionMatch-v0", num_envs=n, vectorization_mode="vector_entry_point", **kwargs
     )
     other = gym.make_vec("ActiveVisionMatch-v0", num_envs=n, vectorization_mode=mode, **kwargs)
     try:
-        for x, y in zip(
-            vector_rollout(native, 4, actions), vector_rollout(other, 4, actions), strict=True
-        ):
+        expected = vector_rollout(native, 4, actions)
+        if world == "ball-bounces-off-us":
+            config = kwargs["config"]
+            contact = config.robots.radius + config.field.ball_radius
+            gap = np.stack([np.hypot(*(i["ball"] - i["pose"][:, :2]).T) for *_, i in expected])
+            assert (np.abs(gap - contact) < 1e-6).any()  # the ball rests against us
+            assert gap.min() > contact - 1e-6  # and never inside us
+        for x, y in zip(expected, vector_rollout(other, 4, actions), strict=True):
             for part_x, part_y in zip(x, y, strict=True):
                 if isinstance(part_x, dict) and "pose" in part_x:  # infos: the env's keys
                     for key in part_x:
