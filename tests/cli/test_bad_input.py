@@ -56,6 +56,11 @@ BAD_ARGUMENTS = [
     (["render", "--field", "moon", "--out", "{tmp}/v.png"], "'moon'"),
     (["render", "--seed", "2147483648", "--out", "{tmp}/v.png"], "2147483648"),
     (["render"], "--out"),
+    # a figure is written in the format its suffix names: a suffix no format has is refused
+    (["render", "--out", "{tmp}/v.txt"], "not .txt"),
+    (["viewpoints", "--out", "{tmp}/v.xyz"], "not .xyz"),
+    (["demo", "--out", "{tmp}/d.txt"], "not .txt"),
+    (["episode", "--out", "{tmp}/e.csv"], "not .csv"),
     (["export", "{run}", "--opset", "1"], "opset"),
     (["export", "{run}", "--opset", "999"], "opset"),
     (["export", "{tmp}/missing"], "missing"),

@@ -10,6 +10,14 @@ def test_render_and_viewpoints_write_pictures(tmp_path):
     assert main(["viewpoints", "--seed", "3", "--out", str(tmp_path / "vp.png")]) == 0
     assert (tmp_path / "view.png").stat().st_size > 20_000
     assert (tmp_path / "vp.png").stat().st_size > 20_000
+    # in the format the suffix names (a .pdf used to hold a PNG)
+    assert main(["render", "--seed", "3", "--out", str(tmp_path / "view.pdf")]) == 0
+    assert main(["viewpoints", "--seed", "3", "--out", str(tmp_path / "vp.SVG")]) == 0
+    assert main(["demo", "--out", str(tmp_path / "demo.jpg")]) == 0
+    assert (tmp_path / "view.pdf").read_bytes().startswith(b"%PDF")
+    assert b"<svg" in (tmp_path / "vp.SVG").read_bytes()[:1000]
+    assert (tmp_path / "demo.jpg").read_bytes().startswith(b"\xff\xd8\xff")  # JPEG
+    assert (tmp_path / "view.png").read_bytes().startswith(b"\x89PNG")
 
 
 def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from activevision.cli.args import add_overwrite, add_weights, seed
-from activevision.cli.outputs import check_outputs, figure_and_gif
+from activevision.cli.outputs import check_figure_path, check_outputs, figure_and_gif
 
 
 def _opset(text: str) -> int:
@@ -50,6 +50,7 @@ def cmd_demo(args: argparse.Namespace) -> None:
 
     gif = figure_and_gif(args.out)
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
+    check_figure_path(args.out)
     policy = OnnxPolicy(args.policy or pretrained_policy_path())
     config = policy.env_config()  # the observation the policy takes; an exact prior pose
     traces = [trace_episode(p, args.seed, config) for p in (policy, RandomPolicy(config))]

@@ -18,7 +18,7 @@ from activevision.cli.args import (
     positive_int,
     seed,
 )
-from activevision.cli.outputs import check_outputs, figure_and_gif
+from activevision.cli.outputs import check_figure_path, check_outputs, figure_and_gif
 
 if TYPE_CHECKING:
     from activevision.experiments.policies import HeadPolicy
@@ -202,6 +202,7 @@ def cmd_episode(args: argparse.Namespace) -> None:
     check_weights(args)
     gif = figure_and_gif(args.out)
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
+    check_figure_path(args.out)
     from activevision.experiments.compare import config_at_error
 
     env_config = config_at_error(env_config_of_run(args.run), 0.0)

@@ -92,3 +92,14 @@ def figure_and_gif(figure: Path) -> Path:
             " written beside it"
         )
     return gif
+
+
+def check_figure_path(figure: Path) -> None:
+    """OutputError unless a figure can be written at ``figure`` in the format its suffix
+    names (checked before any work)."""
+    from activevision.figures.canvas import figure_format
+
+    try:
+        figure_format(figure)
+    except ValueError as error:
+        raise OutputError(f"--out {error}") from None

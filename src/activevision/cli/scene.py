@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from activevision.cli.args import add_overwrite, choice_list, seed
-from activevision.cli.outputs import check_outputs
+from activevision.cli.outputs import check_figure_path, check_outputs
 
 
 def _field_names() -> tuple[str, ...]:
@@ -35,6 +35,7 @@ def cmd_render(args: argparse.Namespace) -> None:
     from activevision.figures.canvas import save_rgb
 
     check_outputs(named=[args.out], overwrite=args.overwrite)
+    check_figure_path(args.out)
     sim = _random_episode(args.seed, args.field)
     save_rgb(episode_panel(sim, 0, sim.render()[0]), args.out)
     print(f"wrote {args.out}")
@@ -46,6 +47,7 @@ def cmd_viewpoints(args: argparse.Namespace) -> None:
     from activevision.figures.scene import plot_viewpoint_search
 
     check_outputs(named=[args.out], overwrite=args.overwrite)
+    check_figure_path(args.out)
     sim = _random_episode(args.seed, args.field)
     plot_viewpoint_search(viewpoint_search(sim, 0), args.out)
     print(f"wrote {args.out}")

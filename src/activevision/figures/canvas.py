@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -28,18 +29,40 @@ def figure_to_rgb(fig: Figure) -> np.ndarray:
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
 
+#: The formats a figure is written in, named by its file's suffix (matplotlib's, but GIF:
+#: an animation's; the package writes those with :func:`save_gif`).
+FIGURE_FORMATS = frozenset(FigureCanvasAgg(Figure()).get_supported_filetypes()) - {"gif"}
+
+
+def figure_format(path: str | os.PathLike[str]) -> str:
+    """The format a figure at ``path`` is written in: its suffix (``.png``, ``.pdf``,
+    ``.svg``, ...; PNG when it has none). ValueError naming the path when no figure format
+    has that suffix (a ``.pdf`` must not hold a PNG)."""
+    suffix = Path(path).suffix.lower().removeprefix(".")
+    if not suffix:
+        return "png"
+    if suffix not in FIGURE_FORMATS:
+        raise ValueError(
+            f"{path}: a figure is written as .png, .pdf, .svg or another format matplotlib"
+            f" writes, not .{suffix}"
+        )
+    return suffix
+
+
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: float) -> None:
-    """Write the figure as PNG atomically."""
+    """Write the figure atomically, in the format its suffix names (:func:`figure_format`)."""
+    file_format = figure_format(path)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format="png")
+        fig.savefig(tmp, dpi=dpi, format=file_format)
 
 
 def save_rgb(rgb: np.ndarray, path: str | os.PathLike[str]) -> None:
-    """Write an RGB array as PNG atomically."""
+    """Write an RGB array atomically, in the format its suffix names (:func:`figure_format`)."""
     from matplotlib.image import imsave
 
+    file_format = figure_format(path)
     with atomic_path(path) as tmp:
-        imsave(tmp, rgb, format="png")
+        imsave(tmp, rgb, format=file_format)
 
 
 def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: float) -> None:
