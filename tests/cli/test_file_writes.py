@@ -1,0 +1,39 @@
+"""Files are written atomically (``activevision.io``): whole or not at all, and a write that
+cannot happen names the file asked for, not the temporary one beside it."""
+
+import os
+
+import pytest
+
+from activevision.io import write_text
+
+
+def test_a_write_replaces_the_file_whole_and_leaves_no_temporary(tmp_path):
+    target = tmp_path / "a" / "b.txt"
+    write_text(target, "one")
+    write_text(target, "two")
+    assert target.read_text() == "two"
+    assert os.listdir(target.parent) == ["b.txt"]
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch):
+    target = tmp_path / "b.txt"
+    write_text(target, "old")
+
+    def fail(path):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("activevision.io.fsync_path", fail)
+    with pytest.raises(OSError, match="No space"):
+        write_text(target, "new")
+    assert target.read_text() == "old"
+    assert os.listdir(tmp_path) == ["b.txt"]
+
+
+def test_a_write_that_cannot_start_names_the_file_asked_for(tmp_path):
+    (tmp_path / "plain").write_text("a file, not a folder")
+    target = tmp_path / "plain" / "x.png"
+    with pytest.raises(OSError) as caught:
+        write_text(target, "x")
+    assert f"cannot write {target}" in str(caught.value)
+    assert ".tmp" not in str(caught.value)
