@@ -201,3 +201,30 @@ def test_dict_observations_agree_in_every_mode() -> None:
                 assert_same_bytes(x, y, f"{mode} step {t}: {name}")
             for key in a[4]:
                 assert_same_bytes(a[4][key], b[4][key], f"{mode} step {t}: info[{key!r}]")
+
+
+MAKERS = {
+    "make": lambda env_id: gym.make(env_id),
+    "unwrapped": lambda env_id: gym.make(env_id).unwrapped,
+    "native vector": lambda env_id: gym.make_vec(
+        env_id, num_envs=2, vectorization_mode="vector_entry_point"
+    ),
+    "sync": lambda env_id: gym.make_vec(env_id, num_envs=2, vectorization_mode="sync"),
+}
+
+
+@pytest.mark.parametrize("maker", list(MAKERS))
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_a_step_before_reset_is_refused_on_every_path(env_id: str, maker: str) -> None:
+    """Gymnasium's ResetNeeded from the env, its unwrapped self, and every vectorizer (the
+    native vector envs and ``.unwrapped`` used to play from the zeros the state starts as;
+    the match's filter failed on them with a numerical error)."""
+    from gymnasium.error import ResetNeeded
+
+    env = MAKERS[maker](env_id)
+    action: Any = 0 if env.action_space.shape == () else np.zeros(2, dtype=np.int64)
+    with pytest.raises(ResetNeeded, match="reset"):
+        env.step(action)
+    env.reset(seed=1)
+    env.step(action)  # and a reset is all it takes
+    env.close()

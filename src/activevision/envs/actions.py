@@ -10,6 +10,7 @@ from typing import Literal
 
 import numpy as np
 from gymnasium import spaces
+from gymnasium.error import ResetNeeded
 
 from activevision.runtime.goal_evidence import continuous_moves, greedy_actions
 
@@ -35,6 +36,18 @@ def action_table(step_deg: float, action_set: str = "8way") -> np.ndarray:
     if count is None:
         raise ValueError(f"action_set must be '8way' or '4way', got {action_set!r}")
     return np.asarray(moves[:count], dtype=np.float64)
+
+
+def require_reset(started: np.ndarray, idx: np.ndarray) -> None:
+    """Gymnasium's ResetNeeded unless every slot of ``idx`` was reset: a step before the
+    first reset would play from the zeros the state starts as (an env made by
+    ``gymnasium.make`` refuses it too; the vector envs and ``.unwrapped`` did not)."""
+    if not started[idx].all():
+        never = np.flatnonzero(~started)
+        raise ResetNeeded(
+            f"step before reset: call reset() first (sub-environments never reset: "
+            f"{_shown(never.tolist())})"
+        )
 
 
 def _shown(actions: object, limit: int = 60) -> str:

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from activevision.envs.actions import action_table, head_moves
+from activevision.envs.actions import action_table, head_moves, require_reset
 from activevision.envs.config import EnvConfig
 from activevision.envs.reward import approach_reward, viewpoint_distance_deg
 from activevision.envs.robots import draw_robots
@@ -85,6 +85,7 @@ class EpisodeBatch:
         self.looks = neutral_looks(num_envs)
         self.tone = np.repeat(identity_tone()[None], num_envs, axis=0)
         self.last_move = np.zeros((num_envs, 2))
+        self.started = np.zeros(num_envs, dtype=bool)  #: reset at least once
 
     # ------------------------------------------------------------------ starts
     def reset(self, indices: np.ndarray, rngs: list[np.random.Generator]) -> None:
@@ -102,6 +103,7 @@ class EpisodeBatch:
                         self.looks[slot] = draw_looks(self.cfg.appearance, rngs[j])
                     self.tone[todo] = tone_curves(self.looks[todo])
                 self.last_move[todo] = 0.0
+                self.started[todo] = True
                 return
             slots = todo[pending]
             starts = draw_starts([rngs[j] for j in pending], self.cfg)
@@ -259,6 +261,7 @@ class EpisodeBatch:
         Returns:
             ``(reward, terminated, success, ball_lost)``, each (N,).
         """
+        require_reset(self.started, idx)
         reward = np.zeros(self.n)
         success = np.zeros(self.n, dtype=bool)
         lost = np.zeros(self.n, dtype=bool)

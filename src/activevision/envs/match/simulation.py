@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activevision.envs.actions import action_table, head_moves
+from activevision.envs.actions import action_table, head_moves, require_reset
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.dynamics import to_robot_frame
 from activevision.envs.match.kernels import MatchParams, MatchState, move_kernel, sense_kernel
@@ -68,6 +68,7 @@ class MatchBatch:
         self.cov = np.zeros((num_envs, 3, 3))
         self.gated_share = np.zeros(num_envs)
         self.head = np.zeros((num_envs, 2))
+        self.started = np.zeros(num_envs, dtype=bool)  #: reset at least once
         self.last_move = np.zeros((num_envs, 2))
         self.ball = np.zeros((num_envs, 2))
         self.ball_velocity = np.zeros((num_envs, 2))
@@ -235,6 +236,7 @@ class MatchBatch:
             )
         self.ball_age[idx] = 0
         self.reward[idx] = 0.0
+        self.started[idx] = True
 
     # ------------------------------------------------------------------ dynamics
     def step(self, actions: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
@@ -249,6 +251,7 @@ class MatchBatch:
     def move_head(self, idx: np.ndarray, pan: np.ndarray, tilt: np.ndarray) -> np.ndarray:
         """One tick of matches ``idx`` with their heads moved to ``(pan, tilt)`` (clipped to
         the limits). Returns the rewards (N,), 0 outside ``idx``."""
+        require_reset(self.started, idx)
         reward = np.zeros(self.n)
         if not len(idx):
             return reward
