@@ -261,6 +261,69 @@ def test_a_strategy_acting_wrongly_is_named_on_one_line(tmp_path, one_clear_line
     one_clear_line("strategy wide, tick 0: invalid action", "shape (2,)")
 
 
+RAISING = """
+import numpy as np
+
+
+class Late:
+    def __init__(self, config):
+        self.ticks = 0
+
+    def reset(self, n, rng):
+        self.n = n
+
+    def act(self, obs, info):
+        self.ticks += 1
+        if self.ticks > 4:  # after the trial ticks
+            return np.zeros(self.n, dtype=np.int64)[self.n]
+        return np.zeros(self.n, dtype=np.int64)
+
+
+class BadReset(Late):
+    def reset(self, n, rng):
+        raise RuntimeError("no reset today")
+
+
+def broken_factory(config):
+    return config.nothing
+"""
+
+
+def _line(source: str, text: str) -> str:
+    """``"line N"``: where ``text`` stands in ``source``."""
+    return f"line {source[: source.index(text)].count(chr(10)) + 1}"
+
+
+@pytest.mark.parametrize(
+    ("source", "name", "needles"),
+    [
+        (
+            RAISING,
+            "Late",
+            ["strategy Late, tick 4: act raised IndexError", _line(RAISING, "[self.n]") + ", in"],
+        ),
+        (RAISING, "BadReset", ["strategy BadReset: reset raised RuntimeError: no reset today"]),
+        (
+            RAISING,
+            "broken_factory",
+            ["broken_factory(config) raised AttributeError", _line(RAISING, "config.nothing")],
+        ),
+        ("1 / 0\n", "Any", ["importing", "raised ZeroDivisionError", "line 1, in <module>"]),
+    ],
+)
+def test_a_strategy_that_raises_is_named_on_one_line_with_its_line(
+    tmp_path, source, name, needles, one_clear_line
+):
+    """An exception from the user's own code (at import, in NAME(config), reset or act,
+    also after the trial ticks) ends in one line: what raised, at which tick, and the line
+    of their file, not a traceback through the package."""
+    (tmp_path / "raising.py").write_text(source)
+    argv = [*TINY, "--ticks", "8", "--out", str(tmp_path / "m")]
+    argv += ["--strategy", f"{tmp_path / 'raising.py'}:{name}"]
+    assert main(argv) == 2
+    one_clear_line(*needles, "raising.py")
+
+
 def test_two_strategies_of_one_name_are_refused(tmp_path, one_clear_line):
     (tmp_path / "a.py").write_text(MIRROR)
     (tmp_path / "b.py").write_text(MIRROR)

@@ -81,7 +81,7 @@ def _strategies(
     be made for ``config`` (a run's moves fit the match)."""
     import numpy as np
 
-    from activevision.experiments.match import expand_methods
+    from activevision.experiments.match import expand_methods, users_code
     from activevision.experiments.match_methods import (
         default_match_methods,
         load_strategy,
@@ -105,8 +105,10 @@ def _strategies(
     check_weights(args)
     strategies = [load_strategy(spec) for spec in dict.fromkeys(args.strategy or ())]
     entries = expand_methods(methods, models, margins, args.run, args.weights, strategies)
-    for _, method, options in entries:  # loads each run and model once: errors come first
-        make_match_policy(method, config, options).reset(1, np.random.default_rng(0))
+    for label, method, options in entries:  # loads each run and model once: errors first
+        policy = make_match_policy(method, config, options)
+        with users_code(method, f"strategy {label}: reset"):
+            policy.reset(1, np.random.default_rng(0))
     return entries
 
 

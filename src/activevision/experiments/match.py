@@ -15,8 +15,9 @@ than the methods do.
 
 from __future__ import annotations
 
+import contextlib
 import time
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from activevision.experiments.match_methods import (
     StrategyFactory,
     StrategyOptions,
     make_match_policy,
+    user_code_error,
 )
 
 #: per-match metrics, in table order: name -> (column header, format)
@@ -103,24 +105,40 @@ def play_matches(
     policy = make_match_policy(method, config, options)
     env = ActiveVisionMatchVectorEnv(matches, config)
     obs, info = env.reset(seed=seed)
-    policy.reset(matches, np.random.default_rng(seed))
+    name = label or method
+    with users_code(method, f"strategy {name}: reset"):
+        policy.reset(matches, np.random.default_rng(seed))
     scores = MatchScores(config.ticks, matches, config.tick_seconds)
     clip = MatchClip()
     clip.add(info, clip_match)
     for tick in range(config.ticks):
-        actions = policy.act(obs, info)
+        with users_code(method, f"strategy {name}, tick {tick}: act"):
+            actions = policy.act(obs, info)
         try:
             obs, reward, _, _, info = env.step(actions)
         except ValueError as error:
             if not str(error).startswith("invalid action"):
                 raise
-            raise ValueError(f"strategy {label or method}, tick {tick}: {error}") from None
+            raise ValueError(f"strategy {name}, tick {tick}: {error}") from None
         scores.add(info, reward)
         clip.add(info, clip_match)
     env.close()
-    name = label or method
     seconds = time.perf_counter() - start
     return MethodResult(name, scores.per_match(), scores.position, clip, seconds)
+
+
+@contextlib.contextmanager
+def users_code(method: str, what: str) -> Iterator[None]:
+    """Exceptions a user's strategy raises inside the block, as one line naming ``what``
+    and the line of their code (:func:`user_code_error`); the package's own strategies'
+    propagate as they are (a bug there deserves its traceback)."""
+    if method != USER_STRATEGY:
+        yield
+        return
+    try:
+        yield
+    except Exception as error:
+        raise user_code_error(what, error) from None
 
 
 def model_labels(models: Sequence[Path]) -> list[str]:

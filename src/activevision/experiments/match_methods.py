@@ -551,6 +551,29 @@ def default_match_methods(run: Path | None) -> tuple[str, ...]:
     return tuple(n for n, m in MATCH_METHODS.items() if run is not None or not m.needs_run)
 
 
+def user_code_error(what: str, error: Exception) -> ValueError:
+    """A one-line error for an exception ``error`` that a user's strategy raised: its type,
+    message and the line of the user's code it came from (the innermost frame outside this
+    package and the installed libraries), e.g. ``strategy mine, tick 0: act raised
+    ZeroDivisionError: division by zero (mine.py, line 4, in act)``."""
+    import traceback
+
+    package = str(Path(__file__).resolve().parents[1])
+    frames = traceback.extract_tb(error.__traceback__)
+    theirs = [
+        f
+        for f in frames
+        if not str(Path(f.filename).resolve()).startswith(package)
+        and "site-packages" not in f.filename
+        and not f.filename.startswith("<")
+    ]
+    place = ""
+    if theirs or frames:
+        frame = (theirs or frames)[-1]
+        place = f" ({Path(frame.filename).name}, line {frame.lineno}, in {frame.name})"
+    return ValueError(f"{what} raised {type(error).__name__}: {error}{place}")
+
+
 def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     """A user's strategy from ``"path/to/file.py:NAME"`` or ``"package.module:NAME"``:
     ``NAME`` is a class (or function) that takes the :class:`MatchConfig` and returns a
@@ -582,6 +605,10 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     except SyntaxError as error:
         where_bad = f"{error.filename}:{error.lineno}"
         raise ValueError(f"--strategy {spec}: {where_bad}: {error.msg}") from None
+    except ValueError:
+        raise
+    except Exception as error:  # the module's own code failed as it ran
+        raise user_code_error(f"--strategy {spec}: importing {where}", error) from None
     factory = getattr(module, attr, None)
     if not callable(factory):
         raise ValueError(f"--strategy {spec}: {where} defines no class or function {attr}")
@@ -598,6 +625,8 @@ def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> Matc
         policy = factory(config)
     except TypeError as error:  # its signature: NAME(config) is the contract
         raise ValueError(f"--strategy {label}: {label}(config) failed: {error}") from None
+    except Exception as error:
+        raise user_code_error(f"--strategy {label}: {label}(config)", error) from None
     missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
     if missing:
         raise ValueError(
