@@ -90,3 +90,26 @@ def test_readme_env_example_runs(example):
 def test_the_readme_has_its_env_examples():
     # the quick start, the randomised world, the match
     assert len(ENV_EXAMPLES) == 3
+
+
+def heading_anchor(heading: str) -> str:
+    """GitHub's anchor of a Markdown heading: lower case, punctuation but ``-`` and ``_``
+    dropped, spaces to ``-``."""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower())
+    return text.replace(" ", "-")
+
+
+def test_heading_anchor_is_githubs():
+    assert heading_anchor("The task (`ActiveVision-v0`)") == "the-task-activevision-v0"
+    assert heading_anchor("Evaluation and the paper's experiments") == (
+        "evaluation-and-the-papers-experiments"
+    )
+
+
+def test_every_link_within_the_readme_finds_its_heading():
+    text = README.read_text()
+    outside = "\n".join(re.split(r"^```.*?^```", text, flags=re.S | re.M))  # no code
+    anchors = {heading_anchor(h) for h in re.findall(r"^#{1,6} (.+)$", outside, flags=re.M)}
+    links = set(re.findall(r"\]\(#([^)]+)\)", text))
+    assert len(links) >= 15  # the contents line and the cross-references
+    assert sorted(links - anchors) == []
