@@ -212,6 +212,18 @@ def test_a_run_without_weights_reads_its_newest_checkpoint_or_says_which_file_it
     one_clear_line("no policy weights in", "policy.safetensors", "each checkpoint")
 
 
+def test_a_run_another_process_trains_is_refused_on_one_line(tmp_path, tiny_train, one_clear_line):
+    from activevision.training.run_lock import RunLock
+
+    held = RunLock(tmp_path / "busy")  # as another process's trainer holds it
+    try:
+        assert main([*tiny_train, "--out", str(tmp_path / "busy")]) == 2
+        one_clear_line(f"{tmp_path / 'busy'} is being trained by another process (pid")
+    finally:
+        held.release()
+    assert main([*tiny_train, "--out", str(tmp_path / "busy")]) == 0
+
+
 def test_finished_run_resumes_to_nothing_and_says_so(run, capsys):
     assert main(["train", "--resume", str(run)]) == 0
     assert "finished" in capsys.readouterr().out

@@ -23,6 +23,7 @@ from activevision.training.config import TrainConfig, load_config, save_config
 from activevision.training.loggers import Logger, LoggerGroup, LogPosition, default_loggers
 from activevision.training.metrics import EpochAccumulator, episode_record
 from activevision.training.policy_files import BestWeights, write_policy
+from activevision.training.run_lock import RunLock
 from activevision.training.validation import (
     evaluation_fields,
     summarise_validation,
@@ -47,7 +48,7 @@ class StudentRun:
         self.run_dir = Path(run_dir)
         if not resuming and ckpt.list_checkpoints(self.run_dir):
             raise ValueError(f"{self.run_dir} already holds a run; resume it")
-        self.run_dir.mkdir(parents=True, exist_ok=True)
+        self._lock = RunLock(self.run_dir)  # one trainer a run, from before its first write
         ckpt.remove_stale_writes(self.run_dir)
         self.episode = 0
         self.epoch_log = EpochAccumulator()
@@ -189,6 +190,7 @@ class StudentRun:
 
     def close(self) -> None:
         self.logger.close()
+        self._lock.release()
 
 
 def _prefixed(tensors: dict[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:

@@ -43,6 +43,7 @@ from activevision.training.loggers import Logger, LoggerGroup, default_loggers
 from activevision.training.metrics import EpochAccumulator, episode_record
 from activevision.training.policy_files import BestWeights, network_metadata, write_policy
 from activevision.training.progress import postfix, progress_bar
+from activevision.training.run_lock import RunLock
 from activevision.training.validation import greedy_episodes, summarise_validation
 
 
@@ -85,7 +86,7 @@ class Trainer:
         self.n_actions = discrete_actions(self.env)
         self.obs_shape = chw_shape(self.env.observation_space)
         aux_size = aux_dim(self.aux_target, self.env, config.seed)
-        self.run_dir.mkdir(parents=True, exist_ok=True)
+        self._lock = RunLock(self.run_dir)  # one trainer a run, from before its first write
         ckpt.remove_stale_writes(self.run_dir)  # left by a checkpoint write that was killed
         configure_torch_cpu(config.run.num_threads)
         self.rng, self.learner, self.buffer = build_learning(
@@ -265,6 +266,7 @@ class Trainer:
         if self._eval_env is not None:
             self._eval_env.close()
         torch.set_flush_denormal(False)
+        self._lock.release()
 
     # ------------------------------------------------------------------ checkpoints
     def state(self) -> run_state.TrainerState:
