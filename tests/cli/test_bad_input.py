@@ -213,15 +213,13 @@ def test_a_run_without_weights_reads_its_newest_checkpoint_or_says_which_file_it
 
 
 def test_a_run_another_process_trains_is_refused_on_one_line(tmp_path, tiny_train, one_clear_line):
-    from activevision.training.run_lock import RunLock
+    from ..training.test_run_lock import held_by_another_process
 
-    held = RunLock(tmp_path / "busy")  # as another process's trainer holds it
-    try:
-        assert main([*tiny_train, "--out", str(tmp_path / "busy")]) == 2
-        one_clear_line(f"{tmp_path / 'busy'} is being trained by another process (pid")
-    finally:
-        held.release()
-    assert main([*tiny_train, "--out", str(tmp_path / "busy")]) == 0
+    busy = tmp_path / "busy"
+    with held_by_another_process(busy) as pid:
+        assert main([*tiny_train, "--out", str(busy)]) == 2
+        one_clear_line(f"{busy} is being trained by another process (pid {pid})")
+    assert main([*tiny_train, "--out", str(busy)]) == 0
 
 
 def test_finished_run_resumes_to_nothing_and_says_so(run, capsys):

@@ -6,8 +6,9 @@ start would delete the first's checkpoint half-written at that moment. A trainer
 holds an exclusive advisory lock (``flock``) on ``RUN/.lock`` from before its first write
 until :meth:`RunLock.release` (the trainer's ``close``). The operating system drops the lock
 when the process ends, however it ends, so a killed run leaves no stale lock to clear; the
-file itself stays, naming the last holder. Where ``fcntl`` does not exist (Windows), runs
-are not locked.
+file itself stays, naming the last holder. A resume takes the lock before it reads the
+checkpoint (another trainer may be replacing it) and hands it to the trainer it builds. Where
+``fcntl`` does not exist (Windows), runs are not locked.
 """
 
 from __future__ import annotations
@@ -24,8 +25,9 @@ except ImportError:  # pragma: no cover - not POSIX
 LOCK_FILE = ".lock"  #: in the run directory; holds "pid N" of the trainer holding it
 
 
-class RunInUseError(RuntimeError):
-    """Another process is training into the run directory."""
+class RunInUseError(Exception):
+    """Another trainer holds the run directory. (Not a RuntimeError: the resume paths turn
+    those into "checkpoint does not fit" errors.)"""
 
 
 class RunLock:
@@ -38,20 +40,27 @@ class RunLock:
         if fcntl is None:
             return
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        file = self.path.open("a+", encoding="utf-8")
+        # read-write without truncating (the holder's pid must stay readable) or appending
+        file = os.fdopen(os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644), "r+", encoding="utf-8")
         try:
             fcntl.flock(file.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
             file.seek(0)
             holder = file.read().strip() or "unknown pid"
             file.close()
+            if holder == _holder():
+                raise RunInUseError(
+                    f"{self.path.parent} is being trained by this process ({holder}): close()"
+                    " the trainer that holds it first"
+                ) from None
             raise RunInUseError(
                 f"{self.path.parent} is being trained by another process ({holder}): let it"
                 " finish (or stop it) before resuming, or train into another --out"
             ) from None
+        # written over the old holder, then cut: a reader never finds the file empty
         file.seek(0)
+        file.write(_holder() + "\n")
         file.truncate()
-        file.write(f"pid {os.getpid()}\n")
         file.flush()
         self._file = file
 
@@ -60,6 +69,10 @@ class RunLock:
         if self._file is not None:
             self._file.close()  # closing the descriptor drops the flock
             self._file = None
+
+
+def _holder() -> str:
+    return f"pid {os.getpid()}"
 
 
 __all__ = ["LOCK_FILE", "RunInUseError", "RunLock"]

@@ -48,19 +48,25 @@ class StudentRun:
         self.run_dir = Path(run_dir)
         if not resuming and ckpt.list_checkpoints(self.run_dir):
             raise ValueError(f"{self.run_dir} already holds a run; resume it")
-        self._lock = RunLock(self.run_dir)  # one trainer a run, from before its first write
-        ckpt.remove_stale_writes(self.run_dir)
-        self.episode = 0
-        self.epoch_log = EpochAccumulator()
-        self.best = BestWeights()
-        self._epochs_logged = 0
-        self._validations_logged = 0
-        save_config(self.config, self.run_dir / run_state.CONFIG_FILE)
-        self.logger = LoggerGroup(
-            default_loggers(self.config, run_dir) if loggers is None else loggers
-        )
-        if not resuming:
-            self.logger.start(None)
+        # one trainer a run, from before its first write (a resume holds it already)
+        self._lock: RunLock | None = None
+        try:
+            self._lock = None if resuming else RunLock(self.run_dir)
+            ckpt.remove_stale_writes(self.run_dir)
+            self.episode = 0
+            self.epoch_log = EpochAccumulator()
+            self.best = BestWeights()
+            self._epochs_logged = 0
+            self._validations_logged = 0
+            save_config(self.config, self.run_dir / run_state.CONFIG_FILE)
+            self.logger = LoggerGroup(
+                default_loggers(self.config, run_dir) if loggers is None else loggers
+            )
+            if not resuming:
+                self.logger.start(None)
+        except BaseException:
+            self.close()  # the lock, and what the subclass built before
+            raise
 
     # ------------------------------------------------------------------ records
     def record_episode(self, reward: float, length: int, info: dict[str, Any]) -> None:
@@ -149,18 +155,24 @@ class StudentRun:
         cls, run_dir: str | os.PathLike[str], *, loggers: Sequence[Logger] | None = None
     ) -> Self:
         """Rebuild the trainer from the run's newest checkpoint (verified first; a
-        config.json edited after it is refused)."""
+        config.json edited after it is refused), holding the run's lock from before it
+        reads (another trainer may be replacing the checkpoint)."""
         run_dir = Path(run_dir)
-        path = ckpt.latest_checkpoint(run_dir)
-        ckpt.verify_checkpoint(path)
-        config = load_config(run_dir / run_state.CONFIG_FILE)
+        lock = RunLock(run_dir)
+        trainer: Self | None = None
+        path: Path | None = None  # set once the checkpoint and config are read and checked
         try:
+            newest = ckpt.latest_checkpoint(run_dir)
+            ckpt.verify_checkpoint(newest)
+            config = load_config(run_dir / run_state.CONFIG_FILE)
+            path = newest
             state = json.loads((path / run_state.STATE_FILE).read_text())
             if state.get("config_sha256") != run_state.config_digest(run_dir):
                 raise ckpt.CheckpointError(
                     f"{run_dir / run_state.CONFIG_FILE} was changed after checkpoint {path.name}"
                 )
             trainer = cls(config, run_dir, loggers=loggers, _resuming=True)  # type: ignore[call-arg]
+            trainer._lock = lock  # handed over: close() releases it
             tensors, _ = ckpt.load_tensors(path / "model.safetensors")
             trainer._restore(path, state, _prefixed(tensors, "online."))
             trainer.episode = int(state["episode"])
@@ -170,8 +182,13 @@ class StudentRun:
             if state["best_eval"] is not None:
                 best = _prefixed(tensors, "best.")
                 trainer.best.keep_weights(best, int(state["best_step"]), float(state["best_eval"]))
-        except (KeyError, TypeError, ValueError, RuntimeError) as error:
-            if isinstance(error, ckpt.CheckpointError):
+        except BaseException as error:
+            if trainer is not None:
+                trainer.close()
+            else:
+                lock.release()
+            fits = isinstance(error, KeyError | TypeError | ValueError | RuntimeError)
+            if path is None or isinstance(error, ckpt.CheckpointError) or not fits:
                 raise
             raise ckpt.CheckpointError(
                 f"checkpoint {path} does not fit this run ({type(error).__name__}: {error})"
@@ -189,8 +206,13 @@ class StudentRun:
         raise NotImplementedError
 
     def close(self) -> None:
-        self.logger.close()
-        self._lock.release()
+        """Close the logs and let another trainer take the run (also of a trainer whose
+        construction failed part-way)."""
+        logger = getattr(self, "logger", None)  # none yet if construction failed before it
+        if logger is not None:
+            logger.close()
+        if self._lock is not None:
+            self._lock.release()
 
 
 def _prefixed(tensors: dict[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:

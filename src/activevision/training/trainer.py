@@ -86,7 +86,24 @@ class Trainer:
         self.n_actions = discrete_actions(self.env)
         self.obs_shape = chw_shape(self.env.observation_space)
         aux_size = aux_dim(self.aux_target, self.env, config.seed)
-        self._lock = RunLock(self.run_dir)  # one trainer a run, from before its first write
+        # one trainer a run, from before its first write (a resume holds it already)
+        self._lock: RunLock | None = None
+        try:
+            self._lock = None if _resuming else RunLock(self.run_dir)
+            self._set_up(config, loggers, aux_size, _resuming)
+        except BaseException:
+            self.close()  # the lock and the environment
+            raise
+
+    def _set_up(
+        self,
+        config: TrainConfig,
+        loggers: Sequence[Logger] | None,
+        aux_size: int,
+        resuming: bool,
+    ) -> None:
+        """The constructor's writes, with the run's lock held: the learner, the replay, the
+        progress counters, config.json and the logs."""
         ckpt.remove_stale_writes(self.run_dir)  # left by a checkpoint write that was killed
         configure_torch_cpu(config.run.num_threads)
         self.rng, self.learner, self.buffer = build_learning(
@@ -107,8 +124,10 @@ class Trainer:
         self._validations_logged = 0
 
         save_config(config, self.run_dir / run_state.CONFIG_FILE)
-        self.logger = LoggerGroup(default_loggers(config, run_dir) if loggers is None else loggers)
-        if not _resuming:  # a fresh run starts fresh logs (a resumed one: at its checkpoint)
+        self.logger = LoggerGroup(
+            default_loggers(config, self.run_dir) if loggers is None else loggers
+        )
+        if not resuming:  # a fresh run starts fresh logs (a resumed one: at its checkpoint)
             self.logger.start(None)
 
     @property
@@ -261,12 +280,15 @@ class Trainer:
     def close(self) -> None:
         """Close the environments and the loggers, and turn flushing of denormals (set for
         training speed, process-wide) back off."""
-        self.logger.close()
+        logger = getattr(self, "logger", None)  # none yet if construction failed before it
+        if logger is not None:
+            logger.close()
         self.env.close()
         if self._eval_env is not None:
             self._eval_env.close()
         torch.set_flush_denormal(False)
-        self._lock.release()
+        if self._lock is not None:
+            self._lock.release()
 
     # ------------------------------------------------------------------ checkpoints
     def state(self) -> run_state.TrainerState:
@@ -311,24 +333,36 @@ class Trainer:
     ) -> Trainer:
         """Rebuild a trainer from its run directory's newest (or a given) checkpoint
         (``aux_target``, ``loggers``: as for a new one). CheckpointError if the checkpoint is
-        missing or corrupt; nothing is written to the run directory before it has loaded."""
+        missing or corrupt; nothing is written to the run directory before it has loaded
+        (but the lock, ``run_lock``, taken before it reads: another trainer may be replacing
+        the checkpoint)."""
         run_dir = Path(run_dir)
-        loaded = run_state.load_checkpoint(
-            run_dir, None if checkpoint is None else Path(checkpoint)
-        )
-        config = load_config(run_dir / run_state.CONFIG_FILE)
-        trainer = cls(
-            config, run_dir, env_factory, aux_target=aux_target, loggers=loggers, _resuming=True
-        )
+        lock = RunLock(run_dir)
+        trainer: Trainer | None = None
         try:
-            trainer._restore(loaded)
-        except (KeyError, TypeError, ValueError, IndexError, RuntimeError) as error:
-            trainer.close()
-            if isinstance(error, ckpt.CheckpointError):
-                raise
-            raise ckpt.CheckpointError(
-                f"checkpoint {loaded.path} does not fit this run ({type(error).__name__}: {error})"
-            ) from error
+            loaded = run_state.load_checkpoint(
+                run_dir, None if checkpoint is None else Path(checkpoint)
+            )
+            config = load_config(run_dir / run_state.CONFIG_FILE)
+            trainer = cls(
+                config, run_dir, env_factory, aux_target=aux_target, loggers=loggers, _resuming=True
+            )
+            trainer._lock = lock  # handed over: close() releases it
+            try:
+                trainer._restore(loaded)
+            except (KeyError, TypeError, ValueError, IndexError, RuntimeError) as error:
+                if isinstance(error, ckpt.CheckpointError):
+                    raise
+                raise ckpt.CheckpointError(
+                    f"checkpoint {loaded.path} does not fit this run"
+                    f" ({type(error).__name__}: {error})"
+                ) from error
+        except BaseException:
+            if trainer is not None:
+                trainer.close()
+            else:
+                lock.release()
+            raise
         return trainer
 
     def _restore(self, loaded: run_state.LoadedCheckpoint) -> None:
