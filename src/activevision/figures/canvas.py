@@ -29,24 +29,34 @@ def figure_to_rgb(fig: Figure) -> np.ndarray:
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
 
-#: The formats a figure is written in, named by its file's suffix (matplotlib's, but GIF:
-#: an animation's; the package writes those with :func:`save_gif`).
-FIGURE_FORMATS = frozenset(FigureCanvasAgg(Figure()).get_supported_filetypes()) - {"gif"}
+#: The format a figure is written in, by its file's suffix: those both writers below handle
+#: with matplotlib's own dependencies (not .pgf, which needs LaTeX, nor raw pixel dumps; GIF
+#: is an animation's, :func:`save_gif`).
+FIGURE_FORMATS = {
+    "png": "png",
+    "pdf": "pdf",
+    "svg": "svg",
+    "eps": "eps",
+    "ps": "ps",
+    "jpg": "jpeg",
+    "jpeg": "jpeg",
+    "tif": "tiff",
+    "tiff": "tiff",
+    "webp": "webp",
+}
 
 
 def figure_format(path: str | os.PathLike[str]) -> str:
-    """The format a figure at ``path`` is written in: its suffix (``.png``, ``.pdf``,
-    ``.svg``, ...; PNG when it has none). ValueError naming the path when no figure format
-    has that suffix (a ``.pdf`` must not hold a PNG)."""
+    """The format a figure at ``path`` is written in, named by its suffix (PNG when it has
+    none). ValueError naming the path when no format has that suffix (a ``.pdf`` must not
+    hold a PNG)."""
     suffix = Path(path).suffix.lower().removeprefix(".")
     if not suffix:
         return "png"
     if suffix not in FIGURE_FORMATS:
-        raise ValueError(
-            f"{path}: a figure is written as .png, .pdf, .svg or another format matplotlib"
-            f" writes, not .{suffix}"
-        )
-    return suffix
+        names = ", ".join(f".{name}" for name in FIGURE_FORMATS)
+        raise ValueError(f"{path}: a figure is written as one of {names}; not .{suffix}")
+    return FIGURE_FORMATS[suffix]
 
 
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: float) -> None:

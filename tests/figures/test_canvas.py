@@ -1,0 +1,58 @@
+"""Figures are written in the format their file's suffix names, by both writers (a figure
+and an RGB array), atomically: no temporary file is left beside them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from activevision.figures.canvas import (
+    FIGURE_FORMATS,
+    figure_format,
+    new_figure,
+    save_figure,
+    save_rgb,
+)
+
+#: How each format's file begins.
+MAGIC = {
+    "png": [b"\x89PNG"],
+    "pdf": [b"%PDF"],
+    "svg": [b"<?xml"],
+    "eps": [b"%!PS-Adobe"],
+    "ps": [b"%!PS-Adobe"],
+    "jpeg": [b"\xff\xd8\xff"],
+    "tiff": [b"II*\x00", b"MM\x00*"],
+    "webp": [b"RIFF"],
+}
+
+
+def test_every_suffix_has_a_known_file_format():
+    assert set(FIGURE_FORMATS.values()) == set(MAGIC)
+
+
+@pytest.mark.parametrize("suffix", sorted(FIGURE_FORMATS))
+def test_both_writers_write_every_format_the_suffix_names(tmp_path, suffix):
+    fig = new_figure(figsize=(2, 1.5))
+    ax = fig.add_subplot()
+    ax.imshow(np.arange(12).reshape(3, 4))
+    ax.plot([0, 3], [0, 2])
+    rgb = (np.arange(40 * 60 * 3) % 251).astype(np.uint8).reshape(40, 60, 3)
+    for name, write in [
+        ("figure", lambda p: save_figure(fig, p, dpi=50)),
+        ("rgb", lambda p: save_rgb(rgb, p)),
+    ]:
+        path = tmp_path / f"{name}.{suffix}"
+        write(path)
+        head = path.read_bytes()[:16]
+        assert any(head.startswith(m) for m in MAGIC[FIGURE_FORMATS[suffix]]), (name, head)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"figure.{suffix}", f"rgb.{suffix}"]
+
+
+def test_a_path_without_suffix_is_png_and_others_are_refused(tmp_path):
+    assert figure_format(tmp_path / "plain") == "png"
+    assert figure_format(tmp_path / "x.PDF") == "pdf"
+    assert figure_format(tmp_path / "x.tif") == "tiff"
+    for suffix in ("txt", "pgf", "raw", "gif"):
+        with pytest.raises(ValueError, match=rf"not \.{suffix}"):
+            figure_format(tmp_path / f"x.{suffix}")
