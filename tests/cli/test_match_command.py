@@ -286,6 +286,16 @@ class BadReset(Late):
 
 def broken_factory(config):
     return config.nothing
+
+
+class BadInit(Late):
+    def __init__(self, config):
+        len(5)  # a TypeError of the user's own, not a wrong signature
+
+
+class TwoLines(Late):
+    def reset(self, n, rng):
+        raise RuntimeError("first line\\nsecond line")
 """
 
 
@@ -309,6 +319,9 @@ def _line(source: str, text: str) -> str:
             ["broken_factory(config) raised AttributeError", _line(RAISING, "config.nothing")],
         ),
         ("1 / 0\n", "Any", ["importing", "raised ZeroDivisionError", "line 1, in <module>"]),
+        ("int('x')\n", "Any", ["importing", "raised ValueError: invalid literal", "line 1"]),
+        (RAISING, "BadInit", ["BadInit(config) raised TypeError", _line(RAISING, "len(5)")]),
+        (RAISING, "TwoLines", ["reset raised RuntimeError: first line second line"]),
     ],
 )
 def test_a_strategy_that_raises_is_named_on_one_line_with_its_line(

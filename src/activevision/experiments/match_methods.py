@@ -52,10 +52,12 @@ can run them -- and bound what a learned strategy could reach from the same head
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import Protocol
 
 import numpy as np
@@ -571,7 +573,8 @@ def user_code_error(what: str, error: Exception) -> ValueError:
     if theirs or frames:
         frame = (theirs or frames)[-1]
         place = f" ({Path(frame.filename).name}, line {frame.lineno}, in {frame.name})"
-    return ValueError(f"{what} raised {type(error).__name__}: {error}{place}")
+    message = " ".join(str(error).split())  # one line, whatever the user's message holds
+    return ValueError(f"{what} raised {type(error).__name__}: {message}{place}")
 
 
 def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
@@ -586,27 +589,36 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     where, sep, attr = spec.rpartition(":")
     if not sep or not where or not attr.isidentifier():
         raise ValueError(f"--strategy {spec}: write FILE.py:NAME or MODULE:NAME")
-    try:
-        if where.endswith(".py"):
-            path = Path(where)
-            if not path.is_file():
-                raise ValueError(f"--strategy {spec}: no such file {path}")
-            module_name = f"activevision_strategy_{path.stem}"
-            module_spec = importlib.util.spec_from_file_location(module_name, path)
-            if module_spec is None or module_spec.loader is None:
-                raise ValueError(f"--strategy {spec}: {path} is not a Python module")
-            module = importlib.util.module_from_spec(module_spec)
+    # the package's own checks first: what the import itself raises is the user's code's
+    load: Callable[[], ModuleType]
+    if where.endswith(".py"):
+        path = Path(where)
+        if not path.is_file():
+            raise ValueError(f"--strategy {spec}: no such file {path}")
+        module_name = f"activevision_strategy_{path.stem}"
+        module_spec = importlib.util.spec_from_file_location(module_name, path)
+        if module_spec is None or module_spec.loader is None:
+            raise ValueError(f"--strategy {spec}: {path} is not a Python module")
+        found, loader = module_spec, module_spec.loader
+
+        def load() -> ModuleType:
+            module = importlib.util.module_from_spec(found)
             sys.modules[module_name] = module  # dataclasses and pickling look modules up
-            module_spec.loader.exec_module(module)
-        else:
-            module = importlib.import_module(where)
+            loader.exec_module(module)
+            return module
+
+    else:
+
+        def load() -> ModuleType:
+            return importlib.import_module(where)
+
+    try:
+        module = load()
     except ImportError as error:
         raise ValueError(f"--strategy {spec}: cannot import it ({error})") from None
     except SyntaxError as error:
         where_bad = f"{error.filename}:{error.lineno}"
         raise ValueError(f"--strategy {spec}: {where_bad}: {error.msg}") from None
-    except ValueError:
-        raise
     except Exception as error:  # the module's own code failed as it ran
         raise user_code_error(f"--strategy {spec}: importing {where}", error) from None
     factory = getattr(module, attr, None)
@@ -622,10 +634,17 @@ def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> Matc
         raise ValueError("a user's strategy needs its factory (--strategy FILE.py:NAME)")
     label = getattr(factory, "__name__", repr(factory))
     try:
+        signature = inspect.signature(factory)
+    except (TypeError, ValueError):  # no signature to read (a builtin): just call it
+        signature = None
+    if signature is not None:
+        try:
+            signature.bind(config)
+        except TypeError as error:  # NAME(config) is the contract
+            raise ValueError(f"--strategy {label}: {label}(config) failed: {error}") from None
+    try:
         policy = factory(config)
-    except TypeError as error:  # its signature: NAME(config) is the contract
-        raise ValueError(f"--strategy {label}: {label}(config) failed: {error}") from None
-    except Exception as error:
+    except Exception as error:  # the user's code failed as it ran
         raise user_code_error(f"--strategy {label}: {label}(config)", error) from None
     missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
     if missing:
