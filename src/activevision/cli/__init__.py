@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
+from collections.abc import Callable
 
 from activevision.cli import deploy, evaluate, match, quickstart, robustness, scene, train
 from activevision.cli.args import ArgumentParser
@@ -39,6 +41,9 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as exit_:  # --help (0) or a bad argument (2, one line already printed)
         return exit_.code if isinstance(exit_.code, int) else 2
+    # warnings on one line each, like errors (not Python's "file:line: Category" and source)
+    formatwarning = warnings.formatwarning
+    warnings.formatwarning = _one_line_warning(args.command)
     try:
         if args.command == "quickstart":
             return quickstart.run_quickstart(args, main)
@@ -51,4 +56,14 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"activevision {args.command}: error: {err}", file=sys.stderr)
         return 2
+    finally:
+        warnings.formatwarning = formatwarning
     return 0
+
+
+def _one_line_warning(command: str) -> Callable[..., str]:
+    def format_warning(message: Warning | str, category: type[Warning], *_: object) -> str:
+        text = " ".join(str(message).split())
+        return f"activevision {command}: warning: {text}\n"
+
+    return format_warning

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -145,6 +146,17 @@ def load_policy_and_metadata(
     return network.to(device).eval(), meta
 
 
+def _caller_level() -> int:
+    """The ``stacklevel`` of the first caller outside this module, for a warning issued by
+    the function that calls this one (whichever public function the caller used)."""
+    frame = sys._getframe(1)
+    level = 1
+    while frame.f_back is not None and frame.f_code.co_filename == __file__:
+        frame = frame.f_back
+        level += 1
+    return level
+
+
 def _weights_file(path: Path, weights: str) -> Path:
     """The weights file that ``load_policy(path, weights=weights)`` reads."""
     if weights not in ("final", "best"):
@@ -168,7 +180,7 @@ def _weights_file(path: Path, weights: str) -> Path:
             warnings.warn(
                 f"{path} has no {POLICY_FILE} (deleted?): reading its newest checkpoint's"
                 f" weights, {newest}",
-                stacklevel=3,
+                stacklevel=_caller_level(),
             )
             return newest
         raise ckpt.CheckpointError(
