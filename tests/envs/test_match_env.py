@@ -10,7 +10,13 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import activevision.envs  # noqa: F401  (registers the envs)
-from activevision.envs.match.config import BallConfig, DetectionConfig, MatchConfig, WalkConfig
+from activevision.envs.match.config import (
+    BallConfig,
+    DetectionConfig,
+    MatchConfig,
+    OthersConfig,
+    WalkConfig,
+)
 from activevision.envs.match.detections import detect_one
 from activevision.envs.match.dynamics import carry, move_pose, roll_ball, to_robot_frame, walk_step
 from activevision.envs.match.env import ActiveVisionMatchEnv
@@ -57,9 +63,6 @@ def test_gymnasium_env_checker(observation):
 
 def test_gymnasium_env_checker_with_a_whole_config_and_walking_robots():
     """A ``config=`` argument is deep-copied by the checker: every part of it must copy."""
-    from activevision.envs.match.config import MatchConfig, OthersConfig
-    from activevision.envs.robots import RobotsConfig
-
     config = MatchConfig(ticks=30, robots=RobotsConfig(count=(2, 3)), others=OthersConfig(0.3))
     env = gym.make("ActiveVisionMatch-v0", config=config)
     check_env(env.unwrapped, skip_render_check=True)
@@ -92,9 +95,6 @@ def test_every_vectorizer_agrees_with_the_native_one(mode, world):
     give the same batches, byte for byte, across an autoreset (also with other robots
     walking: their draws, the occlusion and the bounces; and with our robot walking onto a
     ball that bounces off it)."""
-    from activevision.envs.match.config import MatchConfig, OthersConfig
-    from activevision.envs.robots import RobotsConfig
-
     n, ticks = 3, 12
     kwargs: dict = {"observation": "image+head+belief", "ticks": ticks}
     if world == "walking-robots":
