@@ -137,7 +137,9 @@ def test_run_layout_resume_and_export(tmp_path):
 
 
 def test_a_changed_config_refuses_to_resume(tmp_path):
-    Sb3Trainer(tiny("ppo", steps=64, **{"run.checkpoint_interval": 0}), tmp_path).train()
+    trainer = Sb3Trainer(tiny("ppo", steps=64, **{"run.checkpoint_interval": 0}), tmp_path)
+    trainer.train()
+    trainer.close()  # it holds the run until then (training.run_lock)
     config = json.loads((tmp_path / "config.json").read_text())
     config["sb3"]["n_epochs"] = 2
     (tmp_path / "config.json").write_text(json.dumps(config))
