@@ -354,3 +354,11 @@ def test_the_ball_can_bounce_off_our_robot(tmp_path, capsys):
     args = build_parser().parse_args(argv)
     assert _match_config(args).ball.bounces_off_own_robot
     assert not _match_config(build_parser().parse_args(TINY)).ball.bounces_off_own_robot
+
+
+def test_help_says_95_percent_once(capsys):
+    # argparse %-formats a description only where it holds "%(prog)": "95%%" printed as is
+    assert main(["match", "--help"]) == 0
+    printed = " ".join(capsys.readouterr().out.split())
+    assert "with 95% intervals; writes match.csv" in printed
+    assert "%%" not in printed

@@ -223,7 +223,7 @@ def add_parsers(sub: Any) -> None:
         description="Play each strategy through the same seeded matches of"
         " ActiveVisionMatch-v0 (the robot walking, the ball kicked about, the UKF tracking"
         " every tick) and report position and heading RMSE, time lost, ball in view, entropy"
-        " and head travel with 95%% intervals; writes match.csv, match_pareto.png,"
+        " and head travel with 95% intervals; writes match.csv, match_pareto.png,"
         " match_error.png and match_clip.gif.",
     )
     p.set_defaults(func=cmd_match)
