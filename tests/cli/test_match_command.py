@@ -362,3 +362,24 @@ def test_help_says_95_percent_once(capsys):
     printed = " ".join(capsys.readouterr().out.split())
     assert "with 95% intervals; writes match.csv" in printed
     assert "%%" not in printed
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc")
+def test_an_out_that_cannot_be_made_is_refused_before_any_match(monkeypatch, one_clear_line):
+    import activevision.experiments.match as experiment
+
+    played = []
+    monkeypatch.setattr(experiment, "compare_matches", lambda *a, **k: played.append(a))
+    # /proc exists and is a folder, but no folder can be made in it (not even by root)
+    assert main([*TINY, "--out", "/proc/activevision-no-such/m"]) == 2
+    one_clear_line("--out /proc/activevision-no-such/m", "cannot create")
+    assert played == []
+
+
+def test_a_strategy_failing_in_its_trial_leaves_no_folder(tmp_path, one_clear_line):
+    (tmp_path / "wide.py").write_text(WIDE)
+    out = tmp_path / "new" / "m"  # the output folder is made before the matches are played
+    argv = [*TINY, "--out", str(out), "--strategy", f"{tmp_path / 'wide.py'}:Wide"]
+    assert main(argv) == 2
+    one_clear_line("strategy wide, tick 0: invalid action")
+    assert not (tmp_path / "new").exists()

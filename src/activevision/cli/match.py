@@ -112,6 +112,17 @@ def _strategies(
     return entries
 
 
+def _make_folder(out: Path) -> list[Path]:
+    """Make the output folder ``out``, or refuse it in one line; the folders made, deepest
+    first."""
+    made = [folder for folder in (out, *out.parents) if not folder.exists()]
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputError(f"--out {out}: cannot create it ({err.strerror or err})") from None
+    return made
+
+
 def cmd_match(args: argparse.Namespace) -> None:
     """Play every chosen strategy through the same matches; print, write and plot."""
     out: Path = args.out
@@ -131,6 +142,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         raise ValueError(f"--baseline {args.baseline} is not among: {', '.join(labels)}")
     if args.baseline is not None and len(labels) < 2:
         raise ValueError("--baseline needs at least one other method to compare with")
+    made = _make_folder(out)  # before the matches are played: one that cannot be made fails now
     import numpy as np
 
     from activevision.experiments.match import (
@@ -158,13 +170,23 @@ def cmd_match(args: argparse.Namespace) -> None:
     )
     width = max(NAME_WIDTH, max(len(label) for label in labels) + 2)
     print(table_header(width), flush=True)
-    results = compare_matches(
-        entries,
-        config,
-        args.matches,
-        args.seed,
-        progress=lambda r: print(f"{format_result(r, width)}   ({r.seconds:.0f} s)", flush=True),
-    )
+    try:
+        results = compare_matches(
+            entries,
+            config,
+            args.matches,
+            args.seed,
+            progress=lambda r: print(
+                f"{format_result(r, width)}   ({r.seconds:.0f} s)", flush=True
+            ),
+        )
+    except BaseException:  # a strategy failed, or Ctrl-C: leave no empty folder behind
+        for folder in made:  # deepest first, each while empty
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+        raise
     references = privileged_methods() & set(methods)
     front = pareto_front(results, references)
     print(f"Pareto front (position RMSE vs ball in view): {', '.join(front)}")
@@ -173,7 +195,6 @@ def cmd_match(args: argparse.Namespace) -> None:
             f"privileged references (read the simulator's truth): {', '.join(sorted(references))}"
         )
     csv_path, pareto_path, error_path, clip_path = files
-    out.mkdir(parents=True, exist_ok=True)
     write_csv(csv_path, csv_rows(results, args.matches, args.seed))
     if args.baseline is None and args.overwrite and paired_path.exists():
         paired_path.unlink()  # --overwrite (match.csv was there): not this run's pairs
