@@ -383,3 +383,11 @@ def test_a_strategy_failing_in_its_trial_leaves_no_folder(tmp_path, one_clear_li
     assert main(argv) == 2
     one_clear_line("strategy wide, tick 0: invalid action")
     assert not (tmp_path / "new").exists()
+
+
+def test_ticks_beyond_memory_are_one_clear_line(tmp_path, one_clear_line):
+    # 10**15 ticks of per-tick scores: more than any address space, refused at once
+    argv = [*TINY, "--methods", "random", "--ticks", str(10**15), "--out", str(tmp_path / "m")]
+    assert main(argv) == 2
+    one_clear_line(f"--ticks {10**15} x --matches 2: out of memory")
+    assert not (tmp_path / "m").exists()

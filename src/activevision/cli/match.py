@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -123,6 +125,27 @@ def _make_folder(out: Path) -> list[Path]:
     return made
 
 
+@contextmanager
+def _unmade_when_failing(made: list[Path], args: argparse.Namespace) -> Iterator[None]:
+    """Remove the folders ``made`` (deepest first, each while empty) when the block fails:
+    a strategy's error or Ctrl-C leaves no empty folder behind; running out of memory for
+    the per-tick scores of every match is one line naming ``--ticks`` and ``--matches``."""
+    try:
+        yield
+    except BaseException as err:
+        for folder in made:
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+        if isinstance(err, MemoryError):
+            raise ValueError(
+                f"--ticks {args.ticks} x --matches {args.matches}: out of memory ({err});"
+                " ask for fewer"
+            ) from None
+        raise
+
+
 def cmd_match(args: argparse.Namespace) -> None:
     """Play every chosen strategy through the same matches; print, write and plot."""
     out: Path = args.out
@@ -170,7 +193,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     )
     width = max(NAME_WIDTH, max(len(label) for label in labels) + 2)
     print(table_header(width), flush=True)
-    try:
+    with _unmade_when_failing(made, args):
         results = compare_matches(
             entries,
             config,
@@ -180,13 +203,6 @@ def cmd_match(args: argparse.Namespace) -> None:
                 f"{format_result(r, width)}   ({r.seconds:.0f} s)", flush=True
             ),
         )
-    except BaseException:  # a strategy failed, or Ctrl-C: leave no empty folder behind
-        for folder in made:  # deepest first, each while empty
-            try:
-                folder.rmdir()
-            except OSError:
-                break
-        raise
     references = privileged_methods() & set(methods)
     front = pareto_front(results, references)
     print(f"Pareto front (position RMSE vs ball in view): {', '.join(front)}")
