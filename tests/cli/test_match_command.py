@@ -391,3 +391,64 @@ def test_ticks_beyond_memory_are_one_clear_line(tmp_path, one_clear_line):
     assert main(argv) == 2
     one_clear_line(f"--ticks {10**15} x --matches 2: out of memory")
     assert not (tmp_path / "m").exists()
+
+
+EXITING = """
+import sys
+
+import numpy as np
+
+if "exit_at_import" in sys.modules:
+    sys.exit("leaving at import")
+
+
+class AtInit:
+    def __init__(self, config):
+        sys.exit()
+
+
+class AtReset:
+    def __init__(self, config):
+        pass
+
+    def reset(self, n, rng):
+        sys.exit(3)
+
+    def act(self, obs, info):
+        return np.zeros(1, dtype=int)
+
+
+class AtAct(AtReset):
+    def reset(self, n, rng):
+        self.n = n
+
+    def act(self, obs, info):
+        sys.exit(0)
+"""
+
+
+@pytest.mark.parametrize(
+    ("name", "needle"),
+    [
+        ("AtInit", "AtInit(config) raised SystemExit (exiting.py"),
+        ("AtReset", "reset raised SystemExit: 3"),
+        ("AtAct", "strategy AtAct, tick 0: act raised SystemExit: 0"),
+        ("import", "importing"),
+    ],
+)
+def test_a_strategy_calling_sys_exit_is_one_line_not_a_silent_exit_0(
+    tmp_path, monkeypatch, name, needle, one_clear_line
+):
+    """sys.exit() in a user's strategy ended the command with its code (0: success) and
+    no outputs, or no message at all."""
+    import sys
+    import types
+
+    (tmp_path / "exiting.py").write_text(EXITING)
+    if name == "import":  # a module the file looks for makes it exit as it is imported
+        monkeypatch.setitem(sys.modules, "exit_at_import", types.ModuleType("exit_at_import"))
+    argv = [*TINY, "--out", str(tmp_path / "m")]
+    argv += ["--strategy", f"{tmp_path / 'exiting.py'}:{'AtAct' if name == 'import' else name}"]
+    assert main(argv) == 2
+    one_clear_line(needle, "SystemExit", "exiting.py")
+    assert not (tmp_path / "m").exists()

@@ -28,6 +28,7 @@ from activevision.envs.match.scores import MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.experiments.evaluate import Interval, mean_interval
 from activevision.experiments.match_methods import (
+    USER_ERRORS,
     USER_STRATEGY,
     StrategyFactory,
     StrategyOptions,
@@ -137,7 +138,7 @@ def users_code(method: str, what: str) -> Iterator[None]:
         return
     try:
         yield
-    except Exception as error:
+    except USER_ERRORS as error:
         raise user_code_error(what, error) from None
 
 

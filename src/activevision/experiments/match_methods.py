@@ -553,7 +553,12 @@ def default_match_methods(run: Path | None) -> tuple[str, ...]:
     return tuple(n for n, m in MATCH_METHODS.items() if run is not None or not m.needs_run)
 
 
-def user_code_error(what: str, error: Exception) -> ValueError:
+#: what a user's strategy may raise and have reported as one line: sys.exit() in their code
+#: must not end ``activevision match`` with exit code 0 and no outputs (Ctrl-C still stops it)
+USER_ERRORS = (Exception, SystemExit)
+
+
+def user_code_error(what: str, error: BaseException) -> ValueError:
     """A one-line error for an exception ``error`` that a user's strategy raised: its type,
     message and the line of the user's code it came from (the innermost frame outside this
     package and the installed libraries), e.g. ``strategy mine, tick 0: act raised
@@ -573,8 +578,9 @@ def user_code_error(what: str, error: Exception) -> ValueError:
     if theirs or frames:
         frame = (theirs or frames)[-1]
         place = f" ({Path(frame.filename).name}, line {frame.lineno}, in {frame.name})"
-    message = " ".join(str(error).split())  # one line, whatever the user's message holds
-    return ValueError(f"{what} raised {type(error).__name__}: {message}{place}")
+    text = " ".join(str(error).split())  # one line, whatever the user's message holds
+    message = f": {text}" if text else ""  # sys.exit(): no message
+    return ValueError(f"{what} raised {type(error).__name__}{message}{place}")
 
 
 def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
@@ -619,7 +625,7 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     except SyntaxError as error:
         where_bad = f"{error.filename}:{error.lineno}"
         raise ValueError(f"--strategy {spec}: {where_bad}: {error.msg}") from None
-    except Exception as error:  # the module's own code failed as it ran
+    except USER_ERRORS as error:  # the module's own code failed as it ran
         raise user_code_error(f"--strategy {spec}: importing {where}", error) from None
     factory = getattr(module, attr, None)
     if not callable(factory):
@@ -644,7 +650,7 @@ def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> Matc
             raise ValueError(f"--strategy {label}: {label}(config) failed: {error}") from None
     try:
         policy = factory(config)
-    except Exception as error:  # the user's code failed as it ran
+    except USER_ERRORS as error:  # the user's code failed as it ran
         raise user_code_error(f"--strategy {label}: {label}(config)", error) from None
     missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
     if missing:
