@@ -103,6 +103,17 @@ def test_wilson_interval_on_known_data():
     assert wilson_interval(0, 10).low == 0.0
 
 
+@pytest.mark.parametrize("n", [3, 6, 7, 10, 12, 13, 200, 1000])
+def test_wilson_interval_holds_the_proportion_at_none_and_all(n):
+    # Rounding put 0/3's low at 5.6e-17 and 10/10's high at 1 - 1.1e-16: the robustness
+    # figure's whiskers (mean - low, high - mean) came out negative and matplotlib refused
+    # them, after the CSV was written. Every n: each end on the right side of the proportion.
+    for successes in range(n + 1):
+        iv = wilson_interval(successes, n)
+        assert 0.0 <= iv.low <= iv.mean <= iv.high <= 1.0
+    assert wilson_interval(0, n).low == 0.0 and wilson_interval(n, n).high == 1.0
+
+
 def test_mean_interval_on_known_data():
     iv = mean_interval([1.0, 2.0, 3.0, 4.0])
     half = 1.959963984540054 * math.sqrt(5 / 3) / 2
