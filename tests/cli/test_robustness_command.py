@@ -108,6 +108,20 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys, argv, needle, one_clear_l
     assert not out.exists()
 
 
+@pytest.mark.parametrize("what", ["file", "missing", "empty folder"])
+def test_a_run_that_is_no_run_is_named_as_the_run(tmp_path, capsys, what, one_clear_line):
+    # The default output lies inside the run (RUN/robustness): a --run that is a file was
+    # refused as "RUN is a file, not a directory: choose another --out", an --out nobody typed.
+    run = tmp_path / "run"
+    if what == "file":
+        run.write_text("not a run\n")
+    elif what == "empty folder":
+        run.mkdir()
+    assert main(["robustness", "--run", str(run), "--episodes", "2"]) == 2
+    line = one_clear_line(f"--run {run}: not a training run")
+    assert "--out" not in line
+
+
 def test_a_run_is_scored_beside_its_files_never_over_them(
     trained, tmp_path, capsys, digests, one_clear_line
 ):

@@ -199,6 +199,14 @@ def add_overwrite(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def check_run(run_dir: Path | None) -> None:
+    """ValueError naming ``--run`` unless ``run_dir`` (where given) holds a run's
+    config.json: checked before the outputs a command puts inside the run, so a ``--run``
+    that is a file is named as the ``--run`` it is, not as an ``--out`` nobody typed."""
+    if run_dir is not None and not (run_dir / "config.json").is_file():
+        raise ValueError(f"--run {run_dir}: not a training run (no config.json)")
+
+
 def env_config_of_run(run_dir: Path | None) -> EnvConfig:
     """The EnvConfig a run trained on (its config.json), else the paper's default. Its
     actions are the paper's discrete ones: a continuous policy moves by head targets
@@ -209,6 +217,5 @@ def env_config_of_run(run_dir: Path | None) -> EnvConfig:
         return EnvConfig()
     from activevision.training.config import load_config
 
-    if not (run_dir / "config.json").is_file():
-        raise ValueError(f"--run {run_dir}: not a training run (no config.json)")
+    check_run(run_dir)
     return load_config(run_dir / "config.json").env.replace(action_type="discrete")

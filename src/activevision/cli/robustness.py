@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 from activevision.cli.args import (
     add_overwrite,
     add_weights,
+    check_run,
     check_weights,
     choice_list,
     env_config_of_run,
@@ -88,6 +89,7 @@ def cmd_robustness(args: argparse.Namespace) -> None:
         print(list_table())
         return
     method = _method(args)
+    check_run(args.run)  # before RUN/robustness/..., which names a bad --run as an --out
     csv_path, png_path = _outputs(args, method)
     from activevision.experiments.robustness import (
         format_row,
