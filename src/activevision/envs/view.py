@@ -29,6 +29,8 @@ def episode_panel(sim: EpisodeBatch, i: int, image: np.ndarray) -> np.ndarray:
         visible_ids=np.flatnonzero(sim.observed[i]),
         title=f"step {sim.step_count[i]}: {int((sim.observed[i] & sim.desired[i]).sum())}/"
         f"{int(sim.desired[i].sum())} goal landmarks in view",
+        robots=sim.robots[i],
+        robot_radius=cfg.robots.radius,
     )
 
 

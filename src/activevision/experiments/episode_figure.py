@@ -54,4 +54,6 @@ def trace_episode(policy: HeadPolicy, seed: int, config: EnvConfig | None = None
         field=env.config.field,
         camera=env.config.camera,
         landmarks=env.sim.landmarks,
+        robots=env.sim.robots[0].copy(),
+        robot_radius=env.config.robots.radius,
     )

@@ -45,6 +45,14 @@ class EpisodeTrace:
     field: FieldSpec
     camera: CameraConfig
     landmarks: LandmarkSet
+    #: the other robots (R, 4) ``(x, y, height, grey)`` (height 0: an empty slot), drawn as
+    #: grey discs of ``robot_radius`` in the top views
+    robots: np.ndarray | None = None
+    robot_radius: float = 0.12
+
+
+def _has_robots(trace: EpisodeTrace) -> bool:
+    return trace.robots is not None and bool((trace.robots[:, 2] > 0).any())
 
 
 def _pick(snapshots: list[Snapshot], columns: int) -> list[Snapshot]:
@@ -94,11 +102,14 @@ def plot_episodes(
                 trace.ball,
                 trace.goal,
                 s.observed,
+                robots=trace.robots,
+                robot_radius=trace.robot_radius,
             )
         axes[2 * r, 0].set_ylabel(_outcome(trace), fontsize=8)
     fig.suptitle(
         "red: robot and goal view, blue: current view; landmarks in view coloured by"
-        f" type ({landmark_key()})",
+        f" type ({landmark_key()})"
+        + ("; grey discs: other robots" if any(_has_robots(t) for t in traces) else ""),
         fontsize=9,
     )
     fig.tight_layout()
@@ -121,6 +132,8 @@ def animate_episode(trace: EpisodeTrace, out_gif: str | os.PathLike[str], fps: i
             trace.goal,
             s.observed,
             title=f"{trace.policy}, step {s.step}",
+            robots=trace.robots,
+            robot_radius=trace.robot_radius,
         )
         frames.append(figure_to_rgb(fig))
     frames += [frames[-1]] * 2  # linger on the outcome

@@ -33,8 +33,11 @@ def view_figure(
     goal: tuple[float, float] | None = None,
     visible_ids: Sequence[int] | np.ndarray = (),
     title: str | None = None,
+    robots: np.ndarray | None = None,
+    robot_radius: float = 0.12,
 ) -> Figure:
-    """Camera image (grayscale, (H, W) uint8) beside the top view, as a figure."""
+    """Camera image (grayscale, (H, W) uint8) beside the top view (other ``robots`` as
+    grey discs: :func:`~activevision.figures.topview.draw_topview`), as a figure."""
     fig = new_figure(figsize=(9, 3.4))
     ax_img, ax_top = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.45]})
     ax_img.imshow(image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
@@ -43,7 +46,21 @@ def view_figure(
     )
     ax_img.set_xticks([])
     ax_img.set_yticks([])
-    draw_topview(ax_top, spec, landmarks, cam, pose, pan, tilt, ball, goal, visible_ids, title)
+    draw_topview(
+        ax_top,
+        spec,
+        landmarks,
+        cam,
+        pose,
+        pan,
+        tilt,
+        ball,
+        goal,
+        visible_ids,
+        title,
+        robots,
+        robot_radius,
+    )
     fig.tight_layout()
     return fig
 
@@ -60,9 +77,25 @@ def view_rgb(
     goal: tuple[float, float] | None = None,
     visible_ids: Sequence[int] | np.ndarray = (),
     title: str | None = None,
+    robots: np.ndarray | None = None,
+    robot_radius: float = 0.12,
 ) -> np.ndarray:
     """:func:`view_figure` as an (H, W, 3) uint8 RGB array (``env.render()``'s frame)."""
-    fig = view_figure(spec, landmarks, cam, image, pose, pan, tilt, ball, goal, visible_ids, title)
+    fig = view_figure(
+        spec,
+        landmarks,
+        cam,
+        image,
+        pose,
+        pan,
+        tilt,
+        ball,
+        goal,
+        visible_ids,
+        title,
+        robots,
+        robot_radius,
+    )
     return figure_to_rgb(fig)
 
 

@@ -140,13 +140,20 @@ def draw_topview(
     goal: tuple[float, float] | None = None,
     visible_ids: Sequence[int] | np.ndarray = (),
     title: str | None = None,
+    robots: np.ndarray | None = None,
+    robot_radius: float = 0.12,
 ) -> None:
-    """The paper's top view: field, robot, ball, current view (blue), goal view (red)."""
+    """The paper's top view: field, robot, ball, current view (blue), goal view (red), and
+    the other robots (``robots`` (R, 4) ``(x, y, height, grey)``, height 0 an empty slot) as
+    grey discs of ``robot_radius``."""
     draw_field(ax, spec)
     if goal is not None:
         draw_footprint(ax, pose, goal[0], goal[1], cam, "red")
     draw_footprint(ax, pose, pan, tilt, cam, "blue")
     draw_landmarks(ax, landmarks, visible_ids)
+    for x, y, height, _ in [] if robots is None else robots:
+        if height > 0:
+            ax.add_patch(Circle((x, y), robot_radius, color="0.35", zorder=4))
     draw_robot(ax, pose, ball, spec.ball_radius)
     if title:
         ax.set_title(title, fontsize=9)
