@@ -126,6 +126,15 @@ def test_bad_arguments(trained, tmp_path, capsys, argv, needle, digests, one_cle
     assert not (tmp_path / "x").exists()  # a refused training run leaves no directory
 
 
+@pytest.mark.parametrize("command", ["render", "viewpoints", "episode", "demo"])
+def test_a_figure_named_as_a_folder_is_refused(tmp_path, capsys, command, one_clear_line):
+    # pathlib drops the trailing slash: --out figs/ wrote a PNG file called figs
+    folder = tmp_path / "figs"
+    assert main([command, "--out", f"{folder}/"]) == 2
+    one_clear_line("--out", "not a folder", f"{folder}/")
+    assert not folder.exists()
+
+
 # ------------------------------------------------------------ outputs never overwritten
 @pytest.mark.parametrize(
     ("argv", "needle"),

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import os
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn, TypeVar
@@ -33,6 +34,17 @@ def _integer(text: str) -> int:
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+
+
+def figure_file(text: str) -> Path:
+    """A figure's file (``--out view.png``): a path that ends in a separator names a folder,
+    which ``Path`` would silently make a file of that name (``--out figs/`` wrote a PNG
+    called ``figs``)."""
+    if text.endswith(("/", os.sep)) or not text:
+        raise argparse.ArgumentTypeError(
+            f"name the figure's file, not a folder: got {text!r} (e.g. {text or './'}view.png)"
+        )
+    return Path(text)
 
 
 def positive_int(text: str) -> int:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from activevision.cli.args import add_overwrite, add_weights, seed
+from activevision.cli.args import add_overwrite, add_weights, figure_file, seed
 from activevision.cli.outputs import check_figure_path, check_outputs, figure_and_gif
 
 
@@ -74,5 +74,5 @@ def add_parsers(sub: Any) -> None:
     p.set_defaults(func=cmd_demo)
     p.add_argument("--policy", type=Path, help="an exported policy.onnx (default: the shipped one)")
     p.add_argument("--seed", type=seed, default=0)
-    p.add_argument("--out", type=Path, default=Path("demo/episode.png"))
+    p.add_argument("--out", type=figure_file, default=Path("demo/episode.png"))
     add_overwrite(p)

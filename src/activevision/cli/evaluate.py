@@ -14,6 +14,7 @@ from activevision.cli.args import (
     choice_list,
     env_config_of_run,
     error_levels,
+    figure_file,
     localisation_error,
     positive_int,
     seed,
@@ -290,7 +291,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument(
         "--policies", nargs="+", type=method, help="default: learned random (oracle random)"
     )
-    p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--out", type=figure_file, required=True)
     add_overwrite(p)
 
     p = sub.add_parser("report", help="one Markdown page with a run's figures and tables")

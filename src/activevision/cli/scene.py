@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from activevision.cli.args import add_overwrite, choice_list, seed
+from activevision.cli.args import add_overwrite, choice_list, figure_file, seed
 from activevision.cli.outputs import check_figure_path, check_outputs
 
 
@@ -67,5 +66,5 @@ def add_parsers(sub: Any) -> None:
             default="kidsize",
             help="field preset: kidsize | paper2019",
         )
-        p.add_argument("--out", type=Path, required=True)
+        p.add_argument("--out", type=figure_file, required=True)
         add_overwrite(p)
