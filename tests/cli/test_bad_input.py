@@ -126,6 +126,27 @@ def test_bad_arguments(trained, tmp_path, capsys, argv, needle, digests, one_cle
     assert not (tmp_path / "x").exists()  # a refused training run leaves no directory
 
 
+@pytest.mark.parametrize("folder", ["checkpoints", "tensorboard"])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["robustness", "--method", "oracle", "--episodes", "1", "--perturbations", "robots-1"],
+        ["evaluate", "--methods", "random", "--episodes", "1"],
+        ["render"],
+    ],
+    ids=lambda argv: argv[0],
+)
+def test_the_folders_of_a_run_are_trains_alone(run, capsys, folder, argv, digests, one_clear_line):
+    # rule 1 of cli/outputs.py: checkpoints/ and tensorboard/ are the run's, written by train
+    # alone; --out RUN/checkpoints put robustness.csv or episodes.csv beside the checkpoints
+    (run / folder).mkdir(exist_ok=True)
+    before = digests(run)
+    out = run / folder / ("view.png" if argv[0] == "render" else "")
+    assert main([*argv, "--out", str(out)]) == 2
+    one_clear_line("refusing to write", "belongs to the training run")
+    assert digests(run) == before
+
+
 @pytest.mark.parametrize("command", ["render", "viewpoints", "episode", "demo"])
 def test_a_figure_named_as_a_folder_is_refused(tmp_path, capsys, command, one_clear_line):
     # pathlib drops the trailing slash: --out figs/ wrote a PNG file called figs

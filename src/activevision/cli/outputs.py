@@ -53,6 +53,12 @@ def check_outputs(
                 f"refusing to write {path}: it is a file of the training run {path.parent};"
                 " choose another output path"
             )
+        for folder in path.parents:  # RUN/checkpoints/..., RUN/tensorboard/...: train's too
+            if folder.name in RUN_FILES and is_training_run(folder.parent):
+                raise OutputError(
+                    f"refusing to write {path}: {folder} belongs to the training run"
+                    f" {folder.parent}; choose another output path"
+                )
         if path.is_dir():
             raise OutputError(f"{path} is a directory: choose another output path")
     for path in paths:
