@@ -115,6 +115,25 @@ BAD_ARGUMENTS = [
     (["nope"], "invalid choice"),
 ]
 
+#: a run that is a file: named as the run, not as an --out nobody typed
+RUN_IS_A_FILE = [
+    ["evaluate", "--run", "{file}", "--methods", "random"],
+    ["compare", "--run", "{file}"],
+    ["episode", "--run", "{file}", "--out", "{tmp}/e.png"],
+    ["robustness", "--run", "{file}"],
+    ["report", "{file}"],
+    ["export", "{file}"],
+]
+
+
+@pytest.mark.parametrize("argv", RUN_IS_A_FILE, ids=" ".join)
+def test_a_run_that_is_a_file_is_named_as_the_run(tmp_path, argv, one_clear_line):
+    (tmp_path / "afile").write_text("not a run")
+    filled = [a.format(file=tmp_path / "afile", tmp=tmp_path) for a in argv]
+    assert main(filled) == 2
+    line = one_clear_line(f"{tmp_path / 'afile'}: not a training run (no config.json)")
+    assert "--out" not in line
+
 
 @pytest.mark.parametrize(("argv", "needle"), BAD_ARGUMENTS, ids=" ".join)
 def test_bad_arguments(trained, tmp_path, capsys, argv, needle, digests, one_clear_line):

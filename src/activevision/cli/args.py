@@ -211,12 +211,14 @@ def add_overwrite(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def check_run(run_dir: Path | None) -> None:
-    """ValueError naming ``--run`` unless ``run_dir`` (where given) holds a run's
-    config.json: checked before the outputs a command puts inside the run, so a ``--run``
-    that is a file is named as the ``--run`` it is, not as an ``--out`` nobody typed."""
+def check_run(run_dir: Path | None, option: str = "--run") -> None:
+    """ValueError naming ``option`` (``""`` for a positional RUN) unless ``run_dir`` (where
+    given) holds a run's config.json: checked before the outputs a command puts inside the
+    run, so a run that is a file is named as the run it is, not as an ``--out`` nobody
+    typed."""
     if run_dir is not None and not (run_dir / "config.json").is_file():
-        raise ValueError(f"--run {run_dir}: not a training run (no config.json)")
+        named = f"{option} {run_dir}" if option else str(run_dir)
+        raise ValueError(f"{named}: not a training run (no config.json)")
 
 
 def env_config_of_run(run_dir: Path | None) -> EnvConfig:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from activevision.cli.args import add_overwrite, add_weights, figure_file, seed
+from activevision.cli.args import add_overwrite, add_weights, check_run, figure_file, seed
 from activevision.cli.outputs import check_figure_path, check_outputs, figure_and_gif
 
 
@@ -31,6 +31,7 @@ def cmd_export(args: argparse.Namespace) -> None:
         and args.out.suffix.lower() not in ("", ".onnx")
     ):
         raise ValueError(f"--out {args.out}: name a .onnx file or a directory")
+    check_run(args.run, option="")  # before the outputs inside it
     model = model_path_of(args.out or args.run)
     outputs = [model, metadata_path_for(model)]
     if args.out is None:

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 from activevision.cli.args import (
     add_overwrite,
     add_weights,
+    check_run,
     check_weights,
     choice_list,
     env_config_of_run,
@@ -87,6 +88,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     from activevision.io import write_csv, write_json
 
     check_weights(args)
+    check_run(args.run)  # before the outputs inside it
     out = args.out or (args.run / "evaluation" if args.run else Path("evaluation"))
     files = [out / n for n in ("evaluation.csv", "episodes.csv", "evaluation.json")]
     check_outputs(own=files, overwrite=args.overwrite)
@@ -155,6 +157,7 @@ def cmd_compare(args: argparse.Namespace) -> None:
     from activevision.figures.compare import plot_compare
 
     check_weights(args)
+    check_run(args.run)  # before the outputs inside it
     out = args.out or (args.run / "compare" if args.run else Path("compare"))
     # compare.csv is resumed, not replaced (outputs.py, rule 3): only rules 1 and 4 apply
     check_outputs(own=[out / "compare.csv", out / "compare.png"], overwrite=True)
@@ -201,6 +204,7 @@ def cmd_episode(args: argparse.Namespace) -> None:
     from activevision.figures.episode import animate_episode, plot_episodes
 
     check_weights(args)
+    check_run(args.run)  # before the outputs inside it
     gif = figure_and_gif(args.out)
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
     check_figure_path(args.out)
@@ -218,6 +222,7 @@ def cmd_episode(args: argparse.Namespace) -> None:
 def cmd_report(args: argparse.Namespace) -> None:
     from activevision.experiments.report import write_report
 
+    check_run(args.run, option="")
     check_outputs(own=[args.run / "report.md"], overwrite=args.overwrite)
     print(f"wrote {write_report(args.run)}")
 
