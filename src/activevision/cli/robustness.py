@@ -122,8 +122,8 @@ def cmd_robustness(args: argparse.Namespace) -> None:
     plot_robustness(
         scored,
         png_path,
-        title=f"{what}: {args.episodes} episodes a row, seed {args.seed},"
-        f" localisation error {args.error:g}",
+        title=f"{what}: {args.episodes} episode{'s' * (args.episodes != 1)} a row,"
+        f" seed {args.seed}, localisation error {args.error:g}",
     )
     print(f"wrote {csv_path} and {png_path}")
 

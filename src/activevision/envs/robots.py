@@ -22,7 +22,8 @@ from activevision.typecheck import check_dataclass_fields, in_range
 class RobotsConfig:
     """Other robots (none by default: the paper's empty field)."""
 
-    #: how many, drawn per episode from ``count[0]..count[1]`` (at most 8; a KidSize match of 4 a side has 7 others)
+    #: how many, drawn per episode from ``count[0]..count[1]`` (at most 8; a KidSize match
+    #: of 4 a side has 7 others)
     count: tuple[int, int] = (0, 0)
     #: height (m), uniform (KidSize rules: 40-100 cm)
     height: tuple[float, float] = (0.4, 1.0)
