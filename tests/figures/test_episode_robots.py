@@ -24,13 +24,9 @@ def _grey_discs(ax) -> list[tuple[float, float, float]]:
     ]
 
 
-def test_the_trace_keeps_its_robots_and_the_top_view_draws_them(tmp_path):
-    config = EnvConfig(robots=RobotsConfig(count=(3, 3), radius=0.15))
-    trace = trace_episode(RandomPolicy(config), 0, config)
-    placed = trace.robots[trace.robots[:, 2] > 0]
-    assert len(placed) == 3 and trace.robot_radius == 0.15
-    fig = new_figure()
-    ax = fig.subplots()
+def _top_view(trace, **robots):
+    """The axes of ``trace``'s top view drawn at its start pose."""
+    ax = new_figure().subplots()
     draw_topview(
         ax,
         trace.field,
@@ -41,8 +37,17 @@ def test_the_trace_keeps_its_robots_and_the_top_view_draws_them(tmp_path):
         0.3,
         trace.ball,
         robots=trace.robots,
-        robot_radius=trace.robot_radius,
+        **robots,
     )
+    return ax
+
+
+def test_the_trace_keeps_its_robots_and_the_top_view_draws_them(tmp_path):
+    config = EnvConfig(robots=RobotsConfig(count=(3, 3), radius=0.15))
+    trace = trace_episode(RandomPolicy(config), 0, config)
+    placed = trace.robots[trace.robots[:, 2] > 0]
+    assert len(placed) == 3 and trace.robot_radius == 0.15
+    ax = _top_view(trace, robot_radius=trace.robot_radius)
     assert sorted(_grey_discs(ax)) == sorted((x, y, 0.15) for x, y, _, _ in placed)
     plot_episodes([trace], tmp_path / "episode.png")  # the figure takes the trace
     assert (tmp_path / "episode.png").read_bytes().startswith(b"\x89PNG")
@@ -50,17 +55,4 @@ def test_the_trace_keeps_its_robots_and_the_top_view_draws_them(tmp_path):
 
 def test_an_empty_field_draws_no_robot():
     trace = trace_episode(RandomPolicy(EnvConfig()), 0)
-    fig = new_figure()
-    ax = fig.subplots()
-    draw_topview(
-        ax,
-        trace.field,
-        trace.landmarks,
-        trace.camera,
-        trace.pose,
-        0.0,
-        0.3,
-        trace.ball,
-        robots=trace.robots,
-    )
-    assert _grey_discs(ax) == []
+    assert _grey_discs(_top_view(trace)) == []
