@@ -523,3 +523,40 @@ def test_tampered_files_are_refused(
     tamper(run)
     assert main([a.format(run=run) for a in argv]) == 2
     one_clear_line(needle)
+
+
+#: the slow commands, and the function that plays their episodes
+SLOW_COMMANDS = [
+    (["evaluate", "--methods", "random", "--episodes", "2"], "evaluate", "evaluate_policy"),
+    (["compare", "--methods", "random", "--errors", "0"], "compare", "compare"),
+    (["robustness", "--method", "random", "--perturbations", "clean"], "robustness", None),
+]
+
+
+@pytest.mark.parametrize(("argv", "module", "player"), SLOW_COMMANDS, ids=lambda v: str(v))
+def test_an_out_that_cannot_be_written_is_refused_before_any_episode(
+    monkeypatch, one_clear_line, argv, module, player
+):
+    import importlib
+
+    played = []
+    target = importlib.import_module(f"activevision.experiments.{module}")
+    name = player or "score_perturbations"
+    monkeypatch.setattr(target, name, lambda *a, **k: played.append(a))
+    # /proc is a folder, but no folder can be made in it (not even by root)
+    assert main([*argv, "--out", "/proc/activevision-no-such/x"]) == 2
+    one_clear_line("--out /proc/activevision-no-such/x: cannot create it or write in it")
+    assert played == []
+
+
+def test_a_failed_evaluation_leaves_no_folder_behind(tmp_path, monkeypatch, one_clear_line):
+    import activevision.experiments.evaluate as evaluation
+
+    def fail(*args, **kwargs):
+        raise ValueError("an episode failed")
+
+    monkeypatch.setattr(evaluation, "evaluate_policy", fail)
+    out = tmp_path / "new" / "e"
+    assert main(["evaluate", "--methods", "random", "--episodes", "2", "--out", str(out)]) == 2
+    one_clear_line("an episode failed")
+    assert not (tmp_path / "new").exists()

@@ -20,7 +20,13 @@ from activevision.cli.args import (
     positive_int,
     seed,
 )
-from activevision.cli.outputs import check_figure_path, check_outputs, figure_and_gif
+from activevision.cli.outputs import (
+    check_figure_path,
+    check_outputs,
+    figure_and_gif,
+    make_output_folder,
+    removed_on_failure,
+)
 
 if TYPE_CHECKING:
     from activevision.experiments.policies import HeadPolicy
@@ -106,20 +112,22 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         # every method plays the shipped policy's observation (the others read only info)
         env_config = config_at_error(shipped.env_config(env_config), args.error)
     env = ActiveVisionEnv(env_config)
+    made = make_output_folder(out, None if args.out else str(out))
     summaries, episodes = {}, []
     latency: dict[str, float] = {}
-    for name, policy in policies.items():
-        records, summary, lat = evaluate_policy(
-            policy,
-            args.episodes,
-            args.seed,
-            env=env,
-            measure_latency=name.startswith("learned") and not latency,  # the first one
-        )
-        summaries[name] = summary
-        episodes += [{"method": name, **r} for r in records]
-        if lat:
-            latency = latency_summary(lat)
+    with removed_on_failure(made):
+        for name, policy in policies.items():
+            records, summary, lat = evaluate_policy(
+                policy,
+                args.episodes,
+                args.seed,
+                env=env,
+                measure_latency=name.startswith("learned") and not latency,  # the first one
+            )
+            summaries[name] = summary
+            episodes += [{"method": name, **r} for r in records]
+            if lat:
+                latency = latency_summary(lat)
     print(format_table(summaries))
     if latency:
         print(
@@ -164,6 +172,7 @@ def cmd_compare(args: argparse.Namespace) -> None:
     check_runs(args.methods or [], args.run)
     if args.overwrite:
         (out / "compare.csv").unlink(missing_ok=True)
+    make_output_folder(out, None if args.out else str(out))  # its rows are written as played
     env_config = env_config_of_run(args.run)
     if args.ray and args.runs:
         raise ValueError("--runs plays in this process: leave out --ray")

@@ -19,7 +19,13 @@ from activevision.cli.args import (
     positive_int,
     seed,
 )
-from activevision.cli.outputs import OutputError, check_outputs, is_training_run
+from activevision.cli.outputs import (
+    OutputError,
+    check_outputs,
+    is_training_run,
+    make_output_folder,
+    removed_on_failure,
+)
 
 if TYPE_CHECKING:
     from activevision.envs.match.config import MatchConfig
@@ -114,36 +120,17 @@ def _strategies(
     return entries
 
 
-def _make_folder(out: Path) -> list[Path]:
-    """Make the output folder ``out``, or refuse it in one line; the folders made, deepest
-    first."""
-    made = [folder for folder in (out, *out.parents) if not folder.exists()]
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise OutputError(f"--out {out}: cannot create it ({err.strerror or err})") from None
-    return made
-
-
 @contextmanager
 def _unmade_when_failing(made: list[Path], args: argparse.Namespace) -> Iterator[None]:
-    """Remove the folders ``made`` (deepest first, each while empty) when the block fails:
-    a strategy's error or Ctrl-C leaves no empty folder behind; running out of memory for
-    the per-tick scores of every match is one line naming ``--ticks`` and ``--matches``."""
+    """:func:`~activevision.cli.outputs.removed_on_failure`, and running out of memory for
+    the per-tick scores of every match as one line naming ``--ticks`` and ``--matches``."""
     try:
-        yield
-    except BaseException as err:
-        for folder in made:
-            try:
-                folder.rmdir()
-            except OSError:
-                break
-        if isinstance(err, MemoryError):
-            raise ValueError(
-                f"--ticks {args.ticks} x --matches {args.matches}: out of memory ({err});"
-                " ask for fewer"
-            ) from None
-        raise
+        with removed_on_failure(made):
+            yield
+    except MemoryError as err:
+        raise ValueError(
+            f"--ticks {args.ticks} x --matches {args.matches}: out of memory ({err}); ask for fewer"
+        ) from None
 
 
 def cmd_match(args: argparse.Namespace) -> None:
@@ -165,7 +152,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         raise ValueError(f"--baseline {args.baseline} is not among: {', '.join(labels)}")
     if args.baseline is not None and len(labels) < 2:
         raise ValueError("--baseline needs at least one other method to compare with")
-    made = _make_folder(out)  # before the matches are played: one that cannot be made fails now
+    made = make_output_folder(out)  # before the matches: one that cannot be made fails now
     import numpy as np
 
     from activevision.experiments.match import (

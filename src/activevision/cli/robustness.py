@@ -18,7 +18,13 @@ from activevision.cli.args import (
     positive_int,
     seed,
 )
-from activevision.cli.outputs import OutputError, check_outputs, is_training_run
+from activevision.cli.outputs import (
+    OutputError,
+    check_outputs,
+    is_training_run,
+    make_output_folder,
+    removed_on_failure,
+)
 
 if TYPE_CHECKING:
     from activevision.envs import EnvConfig
@@ -103,20 +109,22 @@ def cmd_robustness(args: argparse.Namespace) -> None:
 
     policy, clean = _policy(method, args)
     rows = perturbations(clean, args.perturbations)
+    made = make_output_folder(csv_path.parent, None if args.out else str(csv_path.parent))
     what = f"{method} ({args.run})" if args.run else method
     print(
         f"robustness of {what}: {len(rows)} rows x {args.episodes} episodes"
         f" from seed {args.seed}, localisation error {args.error:g}"
     )
     print(table_header(), flush=True)
-    scored = score_perturbations(
-        policy,
-        clean,
-        rows,
-        args.episodes,
-        args.seed,
-        progress=lambda row: print(format_row(row), flush=True),
-    )
+    with removed_on_failure(made):
+        scored = score_perturbations(
+            policy,
+            clean,
+            rows,
+            args.episodes,
+            args.seed,
+            progress=lambda row: print(format_row(row), flush=True),
+        )
     print(worst_drops(scored))
     write_csv(csv_path, [{"method": method, "error": args.error, **r} for r in scored])
     plot_robustness(
