@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from activevision.envs.simulation import EpisodeBatch
-from activevision.figures.scene import ViewpointSearch, view_rgb
+from activevision.figures.canvas import figure_to_rgb
+from activevision.figures.scene import ViewpointSearch, view_figure
 from activevision.localisation import ViewpointStatus, best_viewpoint, candidate_footprints
 
 
@@ -16,7 +17,7 @@ def episode_panel(sim: EpisodeBatch, i: int, image: np.ndarray) -> np.ndarray:
     """RGB array of slot ``i``: the camera image beside the top view with the goal (red) and
     current (blue) views."""
     cfg = sim.cfg
-    return view_rgb(
+    fig = view_figure(
         cfg.field,
         sim.landmarks,
         cfg.camera,
@@ -32,6 +33,7 @@ def episode_panel(sim: EpisodeBatch, i: int, image: np.ndarray) -> np.ndarray:
         robots=sim.robots[i],
         robot_radius=cfg.robots.radius,
     )
+    return figure_to_rgb(fig)
 
 
 def viewpoint_search(sim: EpisodeBatch, i: int, max_distance: float = 4.0) -> ViewpointSearch:

@@ -15,7 +15,7 @@
 **Layer.** ``figures`` is a low layer: it imports only :mod:`activevision.geometry` and
 :mod:`activevision.io` (beside numpy, matplotlib and Pillow), so every layer above geometry
 may draw with it — ``env.render()`` included (``envs.view`` gathers a slot's data and hands
-it to :func:`~activevision.figures.scene.view_rgb`), and ``env.render()`` stays the same
+it to :func:`~activevision.figures.scene.view_figure`), and ``env.render()`` stays the same
 picture as ``activevision render``. What a figure shows is computed in its own layer
 (tracing an episode in ``experiments``, reading a run's CSVs in ``training``, the viewpoint
 search in ``envs.view``); only the drawing is here.

@@ -16,7 +16,7 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
-from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure
+from activevision.figures.canvas import new_figure, save_figure
 from activevision.figures.topview import draw_field, draw_landmarks, draw_robot, draw_topview
 from activevision.geometry import CameraConfig, FieldSpec, LandmarkSet
 
@@ -63,40 +63,6 @@ def view_figure(
     )
     fig.tight_layout()
     return fig
-
-
-def view_rgb(
-    spec: FieldSpec,
-    landmarks: LandmarkSet,
-    cam: CameraConfig,
-    image: np.ndarray,
-    pose: Sequence[float] | np.ndarray,
-    pan: float,
-    tilt: float,
-    ball: Sequence[float] | np.ndarray | None,
-    goal: tuple[float, float] | None = None,
-    visible_ids: Sequence[int] | np.ndarray = (),
-    title: str | None = None,
-    robots: np.ndarray | None = None,
-    robot_radius: float = 0.12,
-) -> np.ndarray:
-    """:func:`view_figure` as an (H, W, 3) uint8 RGB array (``env.render()``'s frame)."""
-    fig = view_figure(
-        spec,
-        landmarks,
-        cam,
-        image,
-        pose,
-        pan,
-        tilt,
-        ball,
-        goal,
-        visible_ids,
-        title,
-        robots,
-        robot_radius,
-    )
-    return figure_to_rgb(fig)
 
 
 @dataclass(frozen=True)
