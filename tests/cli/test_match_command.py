@@ -27,6 +27,17 @@ def test_tiny_match_writes_table_csv_and_figures(tmp_path, capsys):
     assert gif.n_frames == 10  # the start and 9 ticks
 
 
+def test_the_same_seed_writes_the_same_bytes(tmp_path, capsys):
+    """Two runs of one command: every output file is byte-identical (no wall-clock column)."""
+    argv = [*TINY, "--ticks", "3", "--baseline", "random"]
+    for name in ("a", "b"):
+        assert main([*argv, "--out", str(tmp_path / name)]) == 0
+    written = sorted(p.name for p in (tmp_path / "a").iterdir())
+    assert {"match.csv", "match_paired.csv", "match_clip.gif"} <= set(written)
+    for name in written:
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
+
+
 def test_a_continuous_match(tmp_path, capsys):
     out = tmp_path / "m"
     assert main([*TINY, "--action-type", "continuous", "--out", str(out)]) == 0
