@@ -81,3 +81,11 @@ def test_train_help_names_every_preset(capsys):
     assert main(["train", "--help"]) == 0
     help_text = " ".join(capsys.readouterr().out.split())
     assert all(name in help_text for name in PRESET_NAMES)
+
+
+def test_one_episode_says_its_means_have_no_intervals(tmp_path, capsys):
+    argv = ["evaluate", "--episodes", "1", "--methods", "scan", "--out", str(tmp_path / "e")]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "one episode: the means' 95% intervals need 2 or more" in printed
+    assert "nan" in printed

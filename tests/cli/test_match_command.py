@@ -38,6 +38,13 @@ def test_the_same_seed_writes_the_same_bytes(tmp_path, capsys):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
 
 
+def test_one_match_says_it_has_no_intervals(tmp_path, capsys):
+    assert main([*TINY, "--matches", "1", "--ticks", "3", "--out", str(tmp_path / "m")]) == 0
+    printed = capsys.readouterr().out
+    assert "one match gives no 95% intervals" in printed and "[nan,nan]" in printed
+    assert (tmp_path / "m" / "match_pareto.png").stat().st_size > 0
+
+
 def test_a_continuous_match(tmp_path, capsys):
     out = tmp_path / "m"
     assert main([*TINY, "--action-type", "continuous", "--out", str(out)]) == 0

@@ -129,6 +129,8 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
             if lat:
                 latency = latency_summary(lat)
     print(format_table(summaries))
+    if args.episodes == 1:
+        print("one episode: the means' 95% intervals need 2 or more (nan above); rates keep theirs")
     if latency:
         print(
             f"learned policy per-decision latency (batch 1, CPU): "

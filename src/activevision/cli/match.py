@@ -178,6 +178,8 @@ def cmd_match(args: argparse.Namespace) -> None:
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
         f" walking to {args.walk}{_world_text(args)}"
     )
+    if args.matches == 1:
+        print("one match gives no 95% intervals (they need 2 or more matches): nan below")
     width = max(NAME_WIDTH, max(len(label) for label in labels) + 2)
     print(table_header(width), flush=True)
     with _unmade_when_failing(made, args):
