@@ -93,7 +93,7 @@ def plot_robustness(
             ax.axhline(b, color="#bbbbbb", lw=0.5)
         for yi, m in zip(y, mean, strict=True):
             ax.text(102.5, yi, f"{m:.0f}", va="center", ha="left", fontsize=7)
-        ax.set_xlim(0, 111)
+        ax.set_xlim(-2, 111)  # the axis off 0: a clean line at 0% would hide in it
         ax.set_xticks(range(0, 101, 20))
         ax.set_xlabel(label)
         ax.grid(axis="x", alpha=0.3)
