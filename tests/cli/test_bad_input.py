@@ -284,6 +284,21 @@ def test_a_run_another_process_trains_is_refused_on_one_line(tmp_path, tiny_trai
     assert main([*tiny_train, "--out", str(busy)]) == 0
 
 
+def test_a_compare_folder_another_compare_writes_is_refused(tmp_path, one_clear_line, capsys):
+    """Two compares into one folder would append their rows to one compare.csv."""
+    from ..training.test_run_lock import held_by_another_process
+
+    out = tmp_path / "cmp"
+    argv = ["compare", "--methods", "random", "--errors", "0.1", "--episodes", "1"]
+    with held_by_another_process(out) as pid:
+        assert main([*argv, "--out", str(out)]) == 2
+        one_clear_line(f"{out} is being written by another process (pid {pid})", "--out")
+    assert not (out / "compare.csv").exists()
+    assert main([*argv, "--out", str(out)]) == 0  # free again, and released after the run
+    assert main([*argv, "--out", str(out), "--overwrite"]) == 0
+    assert "wrote" in capsys.readouterr().out
+
+
 def test_finished_run_resumes_to_nothing_and_says_so(run, capsys):
     assert main(["train", "--resume", str(run)]) == 0
     assert "finished" in capsys.readouterr().out

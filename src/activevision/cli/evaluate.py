@@ -164,7 +164,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
 def cmd_compare(args: argparse.Namespace) -> None:
     """The localisation-error experiment and its figure (on Ray with ``--ray``)."""
     from activevision.experiments.methods import check_runs
-    from activevision.figures.compare import plot_compare
+    from activevision.training.run_lock import RunLock
 
     check_weights(args)
     check_run(args.run)  # before the outputs inside it
@@ -172,9 +172,21 @@ def cmd_compare(args: argparse.Namespace) -> None:
     # compare.csv is resumed, not replaced (outputs.py, rule 3): only rules 1 and 4 apply
     check_outputs(own=[out / "compare.csv", out / "compare.png"], overwrite=True)
     check_runs(args.methods or [], args.run)
+    make_output_folder(out, None if args.out else str(out))  # its rows are written as played
+    # one compare per folder: two would append their rows to one compare.csv
+    lock = RunLock(out, ("written", "let it finish (or stop it), or give this one another --out"))
+    try:
+        _compare_into(out, args)
+    finally:
+        lock.release()
+
+
+def _compare_into(out: Path, args: argparse.Namespace) -> None:
+    """``cmd_compare``'s work, in ``out`` (made, and locked against another compare)."""
+    from activevision.figures.compare import plot_compare
+
     if args.overwrite:
         (out / "compare.csv").unlink(missing_ok=True)
-    make_output_folder(out, None if args.out else str(out))  # its rows are written as played
     env_config = env_config_of_run(args.run)
     if args.ray and args.runs:
         raise ValueError("--runs plays in this process: leave out --ray")

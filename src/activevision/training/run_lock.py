@@ -1,4 +1,4 @@
-"""One trainer at a time per run directory.
+"""One trainer at a time per run directory (and one ``compare`` per output folder).
 
 Two processes training into one run directory (a second ``train --resume`` in another
 terminal, a duplicated job) would interleave their logs and checkpoints, and the second's
@@ -30,11 +30,17 @@ class RunInUseError(Exception):
     those into "checkpoint does not fit" errors.)"""
 
 
+#: what the lock's holder does to the folder, and what to do instead (the refusal's words)
+TRAINING = ("trained", "let it finish (or stop it) before resuming, or train into another --out")
+
+
 class RunLock:
     """The exclusive lock on ``run_dir`` (created if need be); RunInUseError naming the
-    holder's pid when another process holds it."""
+    holder's pid when another process holds it. ``work`` is ``(what the holder does,
+    what to do instead)``: a trainer's by default; ``compare`` locks its folder too."""
 
-    def __init__(self, run_dir: str | os.PathLike[str]) -> None:
+    def __init__(self, run_dir: str | os.PathLike[str], work: tuple[str, str] = TRAINING) -> None:
+        done, advice = work
         self.path = Path(run_dir) / LOCK_FILE
         self._file: IO[str] | None = None
         if fcntl is None:
@@ -50,12 +56,11 @@ class RunLock:
             file.close()
             if holder == _holder():
                 raise RunInUseError(
-                    f"{self.path.parent} is being trained by this process ({holder}): close()"
-                    " the trainer that holds it first"
+                    f"{self.path.parent} is being {done} by this process ({holder}): release"
+                    " the lock that holds it first (a trainer's close())"
                 ) from None
             raise RunInUseError(
-                f"{self.path.parent} is being trained by another process ({holder}): let it"
-                " finish (or stop it) before resuming, or train into another --out"
+                f"{self.path.parent} is being {done} by another process ({holder}): {advice}"
             ) from None
         # written over the old holder, then cut: a reader never finds the file empty
         file.seek(0)
@@ -75,4 +80,4 @@ def _holder() -> str:
     return f"pid {os.getpid()}"
 
 
-__all__ = ["LOCK_FILE", "RunInUseError", "RunLock"]
+__all__ = ["LOCK_FILE", "TRAINING", "RunInUseError", "RunLock"]
