@@ -65,6 +65,7 @@ class WallClock:
 def main() -> None:
     from stable_baselines3 import PPO
     from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.logger import Logger
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--minutes", type=positive_float, default=11.0)
@@ -81,6 +82,7 @@ def main() -> None:
     env_config: EnvConfig = preset("dagger_prior").env
     vec = make_vec_env(lambda: gym.make("ActiveVision-v0", config=env_config), n_envs=8, seed=0)
     model = PPO("MultiInputPolicy", vec, n_steps=256, batch_size=256, seed=0, verbose=0)
+    model.set_logger(Logger(folder=None, output_formats=[]))  # no SB3-<time> folder in /tmp
     t0 = time.perf_counter()
     model.learn(total_timesteps=10**8, callback=WallClock(args.minutes * 60))
     trained_s, steps = time.perf_counter() - t0, model.num_timesteps

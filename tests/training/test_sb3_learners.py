@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+import tempfile
 
 import numpy as np
 import pytest
@@ -84,8 +85,12 @@ def test_actor_network_is_sb3s_deterministic_policy(algo, observation, action_ty
     vec.close()
 
 
-def test_run_layout_resume_and_export(tmp_path):
+def test_run_layout_resume_and_export(tmp_path, monkeypatch):
     run = tmp_path / "sac"
+    scratch = tmp_path / "tmp"  # the temporary directory, watched: SB3 made a folder per learn
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)
     trainer = Sb3Trainer(tiny("sac"), run)
     first = trainer.train(200)
     buffer_pos = trainer.model.replay_buffer.pos
@@ -116,6 +121,7 @@ def test_run_layout_resume_and_export(tmp_path):
     with (run / "evaluations.csv").open() as f:
         assert [int(r["step"]) for r in csv.DictReader(f)] == [200, 400]
     assert list_checkpoints(run)[-1].name == checkpoint_name(400)
+    assert list(scratch.glob("SB3-*")) == []  # the losses above came from memory
 
     # the policy: torch (evaluate) and ONNX (HeadController) play the same episodes
     from activevision.export import export_run

@@ -36,6 +36,7 @@ from stable_baselines3 import PPO, SAC, TD3
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.buffers import DictReplayBuffer, ReplayBuffer
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.logger import Logger as Sb3Logger
 from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv
@@ -56,7 +57,15 @@ _LOSS_KEY = {"sac": "train/critic_loss", "td3": "train/critic_loss", "ppo": "tra
 
 
 def build_model(config: TrainConfig, env: DummyVecEnv, device: torch.device) -> BaseAlgorithm:
-    """The SB3 model of ``config.algo`` on ``env``, seeded from ``config.seed``."""
+    """The SB3 model of ``config.algo`` on ``env``, seeded from ``config.seed``, logging to
+    memory only: the run's own loggers write its logs, and SB3's default logger would make an
+    empty ``SB3-<time>`` folder in the temporary directory at every ``learn``."""
+    model = _algorithm(config, env, device)
+    model.set_logger(Sb3Logger(folder=None, output_formats=[]))  # values kept, none written
+    return model
+
+
+def _algorithm(config: TrainConfig, env: DummyVecEnv, device: torch.device) -> BaseAlgorithm:
     learner, sb3, env_cfg = config.learner, config.sb3, config.env
     features = {
         "features_extractor_class": StudentFeatures,
