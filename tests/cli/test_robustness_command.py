@@ -83,6 +83,9 @@ def test_list_prints_the_table(capsys):
     names = [line.split()[0] for line in out.splitlines()[2:]]
     assert names == list(perturbation_names())
     assert "no (beyond)" in out
+    assert main(["robustness", "--list", "--perturbations", "robots-4", "gamma-mild"]) == 0
+    chosen = capsys.readouterr().out.splitlines()[2:]
+    assert [line.split()[0] for line in chosen] == ["clean", "gamma-mild", "robots-4"]
 
 
 @pytest.mark.parametrize(
@@ -172,3 +175,20 @@ def test_an_exported_policy_is_marked_against_its_training_world(tmp_path, capsy
     assert trained == {"clean": "True", "gain-dark-strong": "False", "robots-3": "True"}
     printed = capsys.readouterr().out
     assert any(line.startswith("robots-3") and " yes " in line for line in printed.splitlines())
+    # --list for this policy says what its CSV says, row by row, without playing
+    assert (
+        main(
+            ["robustness", "--shipped", "--list", "--perturbations"]
+            + ["robots-3", "gain-dark-strong"]
+        )
+        == 0
+    )
+    listed = capsys.readouterr().out.replace("no (beyond)", "no").splitlines()[2:]
+    assert [line.split()[0] for line in listed] == list(rows)
+    for line in listed:
+        *_, robust, trained_range = line.split()
+        row = rows[line.split()[0]]
+        assert (robust == "yes", trained_range == "yes") == (
+            row["in_robust_range"] == "True",
+            row["in_training_range"] == "True",
+        ), line

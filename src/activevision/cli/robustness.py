@@ -92,7 +92,12 @@ def cmd_robustness(args: argparse.Namespace) -> None:
     from activevision.experiments.robustness import list_table
 
     if args.list:
-        print(list_table())
+        # with a policy named: the rows it would play, on its world, with its training range
+        named = args.run is not None or args.shipped or args.method is not None
+        if named:
+            check_run(args.run)
+        clean = _policy(_method(args), args)[1] if named else None
+        print(list_table(clean, args.perturbations))
         return
     method = _method(args)
     check_run(args.run)  # before RUN/robustness/..., which names a bad --run as an --out
@@ -175,4 +180,9 @@ def add_parsers(sub: Any) -> None:
         help="output directory (default: RUN/robustness, or ./robustness-METHOD)",
     )
     add_overwrite(p)
-    p.add_argument("--list", action="store_true", help="print the perturbation table and exit")
+    p.add_argument(
+        "--list",
+        action="store_true",
+        help="print the perturbation table and exit (with a policy named: the rows it would"
+        " play, on its training world, with whether each lies within its training ranges)",
+    )

@@ -39,9 +39,9 @@ them) share the seeds, not always the starts.
 ranges (appearance and robot count); ``in_robust_range``: within the robust ranges
 (:data:`ROBUST_APPEARANCE`, :data:`ROBUST_ROBOTS`, those of the ``dagger_robust`` preset).
 A row's world is built on the policy's own clean world (for the shipped policy, its
-randomised training world), while ``--list`` (:func:`list_table`) builds every row on the
-paper's default world: for a policy trained wider than the robust ranges, ``clean`` is in
-them in the list but not in the CSV.
+randomised training world). ``--list`` (:func:`list_table`) alone builds every row on the
+paper's default world; with a policy named (``--run``, ``--shipped``, ``--method``) it builds
+them on that policy's world, as the CSV does, and adds its training range.
 """
 
 from __future__ import annotations
@@ -309,14 +309,29 @@ def worst_drops(rows: Sequence[dict[str, Any]]) -> str:
     return "worst change vs clean: " + ", ".join(parts)
 
 
-def list_table(clean: EnvConfig | None = None) -> str:
-    """Every perturbation with its setting and whether it lies within the robust training
-    ranges (``activevision robustness --list``)."""
-    clean = clean or EnvConfig()
-    robust = robust_config(clean)
-    lines = [f"{'perturbation':<25}{'factor':<16}{'level':<9}{'setting':<28}robust range"]
+def list_table(clean: EnvConfig | None = None, names: Sequence[str] | None = None) -> str:
+    """The perturbations with their settings and whether each lies within the robust
+    training ranges (``activevision robustness --list``): every one on the paper's default
+    world, or, given a policy's ``clean`` world, the rows that ``names`` would play for it,
+    built on that world, with whether each lies within its training ranges too (the CSV's
+    ``in_training_range`` and ``in_robust_range``)."""
+    rows = PERTURBATIONS if clean is None else perturbations(clean, names)
+    world = clean or EnvConfig()
+    robust = robust_config(world)
+    if clean is None and names:
+        rows = tuple(p for p in rows if p.name in set(names) | {CLEAN})
+    header = f"{'perturbation':<25}{'factor':<16}{'level':<9}{'setting':<28}{'robust range':<14}"
+    lines = [(header + ("training range" if clean is not None else "")).rstrip()]
     lines.append("-" * len(lines[0]))
-    for p in PERTURBATIONS:
-        inside = "yes" if within(p.config(clean), robust) else "no (beyond)"
-        lines.append(f"{p.name:<25}{p.factor:<16}{p.level:<9}{p.setting:<28}{inside}")
+    for p in rows:
+        config = p.config(world)
+        line = f"{p.name:<25}{p.factor:<16}{p.level:<9}{p.setting:<28}"
+        line += f"{_yes_no(within(config, robust)):<14}"
+        if clean is not None:
+            line += _yes_no(within(config, clean))
+        lines.append(line.rstrip())
     return "\n".join(lines)
+
+
+def _yes_no(inside: bool) -> str:
+    return "yes" if inside else "no (beyond)"
