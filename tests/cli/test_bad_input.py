@@ -575,3 +575,40 @@ def test_a_failed_evaluation_leaves_no_folder_behind(tmp_path, monkeypatch, one_
     assert main(["evaluate", "--methods", "random", "--episodes", "2", "--out", str(out)]) == 2
     one_clear_line("an episode failed")
     assert not (tmp_path / "new").exists()
+
+
+def test_ctrl_c_is_one_line_and_an_interrupted_run_says_how_to_resume(
+    tmp_path, tiny_train, monkeypatch, one_clear_line
+):
+    """Ctrl-C (KeyboardInterrupt) ends any command with one line and exit 130; ``train``
+    names the way on: resume from its last checkpoint, or start over before the first."""
+    from activevision.training.trainer import Trainer
+
+    save = Trainer.save_checkpoint
+
+    def save_then_interrupt(self):
+        save(self)
+        raise KeyboardInterrupt
+
+    run = tmp_path / "run"
+    monkeypatch.setattr(Trainer, "save_checkpoint", save_then_interrupt)
+    assert main([*tiny_train, "--out", str(run)]) == 130
+    one_clear_line(f"interrupted; `activevision train --resume {run}` continues", "step_")
+    monkeypatch.setattr(Trainer, "save_checkpoint", save)
+    assert main(["train", "--resume", str(run)]) == 0  # the advice works
+
+    def interrupt(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    fresh = tmp_path / "fresh"
+    monkeypatch.setattr(Trainer, "train", interrupt)
+    assert main([*tiny_train, "--out", str(fresh)]) == 130
+    one_clear_line(f"before its first checkpoint; start it again with --out {fresh} --overwrite")
+
+    monkeypatch.setattr("activevision.experiments.evaluate.run_episode", interrupt)
+    out = tmp_path / "evaluation"
+    assert main(["evaluate", "--methods", "scan", "--episodes", "2", "--out", str(out)]) == 130
+    assert (
+        one_clear_line("activevision evaluate: interrupted") == "activevision evaluate: interrupted"
+    )
+    assert not out.exists()  # the folder it made is removed again

@@ -34,7 +34,8 @@ def build_parser() -> ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run one command; returns the exit code (0 done, 2 bad input or a refused file)."""
+    """Run one command; returns the exit code (0 done, 2 bad input or a refused file, 130
+    interrupted)."""
     # Headless by default; an environment variable, so --help needs no matplotlib import.
     os.environ.setdefault("MPLBACKEND", "Agg")
     try:
@@ -48,6 +49,12 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "quickstart":
             return quickstart.run_quickstart(args, main)
         args.func(args)
+    except KeyboardInterrupt:
+        # Ctrl-C: one line, with what to do next where the command knows, and the shell's
+        # exit status for SIGINT (128 + 2)
+        note = args.interrupted(args) if getattr(args, "interrupted", None) else ""
+        print(f"activevision {args.command}: interrupted{note}", file=sys.stderr)
+        return 130
     except Exception as err:
         # Our own errors and bad input get one clear line; anything else is a bug: traceback.
         if not isinstance(err, ValueError | OSError | ImportError) and not type(

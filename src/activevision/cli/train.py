@@ -71,6 +71,23 @@ def _resume(args: argparse.Namespace) -> Path | None:
     return run_dir
 
 
+def _interrupted(args: argparse.Namespace) -> str:
+    """What an interrupted ``train`` can do next: resume from its last checkpoint, or start
+    over when it had written none."""
+    from activevision.training.checkpoint import list_checkpoints
+
+    run = args.resume or args.out
+    if run is None or not is_training_run(run):
+        return ""
+    checkpoints = list_checkpoints(run)
+    if checkpoints:
+        return (
+            f"; `activevision train --resume {run}` continues from its last checkpoint"
+            f" ({checkpoints[-1].name})"
+        )
+    return f" before its first checkpoint; start it again with --out {run} --overwrite"
+
+
 def _given(args: argparse.Namespace, name: str) -> bool:
     return getattr(args, name) not in (None, [])
 
@@ -154,7 +171,7 @@ def _add_config_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_parsers(sub: Any) -> None:
     p = sub.add_parser("train", help="train a head controller (DDQN + PER, DAgger, SAC/TD3/PPO)")
-    p.set_defaults(func=cmd_train)
+    p.set_defaults(func=cmd_train, interrupted=_interrupted)
     _add_config_arguments(p)
     p.add_argument(
         "--algo",
