@@ -68,6 +68,31 @@ def test_gymnasium_env_checker_with_a_whole_config_and_walking_robots():
     check_env(env.unwrapped, skip_render_check=True)
 
 
+def test_render_shows_the_camera_beside_the_match_from_above():
+    """``render()`` is the clip's top view (belief ellipse in blue, the other robots as grey
+    discs) beside the camera image; the same seed draws the same picture."""
+    config = MatchConfig(ticks=30, robots=RobotsConfig(count=(3, 3)))
+    check_env(gym.make("ActiveVisionMatch-v0", config=config, render_mode="rgb_array").unwrapped)
+    pictures = []
+    for _ in range(2):
+        env = ActiveVisionMatchEnv(config, render_mode="rgb_array")
+        env.reset(seed=5)
+        for _ in range(4):
+            env.step(0)
+        pictures.append(env.render())
+    picture = pictures[0]
+    assert picture.shape == (340, 900, 3) and picture.dtype == np.uint8
+    np.testing.assert_array_equal(pictures[0], pictures[1])
+    r, g, b = (picture[..., c].astype(int) for c in range(3))
+    assert ((b > 150) & (r < 80) & (g < 80)).sum() > 30  # the belief: mean and ellipse
+    assert ((abs(r - 89) < 3) & (abs(g - 89) < 3) & (abs(b - 89) < 3)).sum() > 3 * 40  # robots
+    # the camera panel on the left holds the observation's grey levels
+    left = picture[:, : picture.shape[1] // 2]
+    assert (left[..., 0] == left[..., 1]).mean() > 0.9
+    assert len(np.intersect1d(np.unique(left), np.unique(env._frames[0, 0]))) > 5
+    assert ActiveVisionMatchEnv(ticks=5).render() is None  # no render_mode: nothing
+
+
 def test_same_seed_same_bytes_and_truncation():
     actions = np.random.default_rng(0).integers(0, 9, TICKS)
     a = rollout(ActiveVisionMatchEnv(ticks=TICKS), 7, actions)

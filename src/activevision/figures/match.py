@@ -10,13 +10,22 @@ from collections.abc import Collection, Mapping, Sequence
 
 import numpy as np
 from matplotlib import colormaps
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Ellipse, Polygon
 
 from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
 from activevision.figures.topview import draw_field
 from activevision.geometry import CameraConfig, FieldSpec
 
-__all__ = ["clip_frames", "plot_error_over_time", "plot_pareto", "save_gif"]
+__all__ = [
+    "clip_frames",
+    "draw_match_tick",
+    "match_view",
+    "plot_error_over_time",
+    "plot_pareto",
+    "save_gif",
+]
 
 #: a method's point and whiskers: (mean, low, high) of each axis
 Point = Mapping[str, tuple[float, float, float]]
@@ -108,6 +117,55 @@ def plot_error_over_time(
     save_figure(fig, path, dpi=110)
 
 
+def draw_match_tick(
+    ax: Axes,
+    field: FieldSpec,
+    camera: CameraConfig,
+    pose: np.ndarray,
+    mean: np.ndarray,
+    cov: np.ndarray,
+    pan: float,
+    ball: np.ndarray,
+    ball_in_view: bool,
+    robots: np.ndarray | None = None,
+    robot_radius: float = 0.12,
+    trail: np.ndarray | None = None,
+) -> None:
+    """One tick of a match from above on ``ax``: the true robot (red; its path so far,
+    ``trail`` (T, 2+), when given) with its camera's view wedge, the belief's mean and
+    2-sigma ellipse (blue), the ball (orange, hollow when out of view), the other robots
+    (grey discs of ``robot_radius``; ``robots`` (R, 4) rows ``x, y, height, grey``, height 0
+    an empty slot)."""
+    draw_field(ax, field)
+    x, y, th = pose
+    yaw = th + pan
+    reach = 8.0  # the view wedge, drawn long enough to reach a far ball
+    half = camera.hfov / 2
+    wedge = [
+        (x, y),
+        (x + reach * math.cos(yaw + half), y + reach * math.sin(yaw + half)),
+        (x + reach * math.cos(yaw - half), y + reach * math.sin(yaw - half)),
+    ]
+    ax.add_patch(Polygon(wedge, closed=True, color="yellow", alpha=0.25, zorder=2))
+    for rx, ry, height, _ in [] if robots is None else robots:
+        if height > 0:
+            ax.add_patch(Circle((rx, ry), robot_radius, color="0.35", zorder=4))
+    if trail is not None:
+        ax.plot(trail[:, 0], trail[:, 1], color="red", lw=0.8, alpha=0.6, zorder=3)
+    ax.plot(x, y, "o", color="red", ms=7, zorder=4)
+    ax.plot([x, x + 0.3 * math.cos(th)], [y, y + 0.3 * math.sin(th)], color="red", lw=2, zorder=4)
+    values, vectors = np.linalg.eigh(cov[:2, :2])
+    angle = math.degrees(math.atan2(vectors[1, 1], vectors[0, 1]))
+    width, height = 4 * np.sqrt(np.maximum(values[::-1], 0))  # 2 sigma each side
+    ax.add_patch(
+        Ellipse(
+            tuple(mean[:2]), width, height, angle=angle, fill=False, ec="blue", lw=1.5, zorder=5
+        )
+    )
+    ax.plot(*mean[:2], "x", color="blue", ms=7, zorder=5)
+    ax.plot(*ball, "o", ms=6, zorder=6, mfc="orange" if ball_in_view else "none", mec="darkorange")
+
+
 def clip_frames(
     pose: np.ndarray,
     mean: np.ndarray,
@@ -123,53 +181,67 @@ def clip_frames(
     robots: np.ndarray | None = None,
     robot_radius: float = 0.12,
 ) -> list[np.ndarray]:
-    """RGB frames of one match from above: the true robot (red) with its camera's view
-    wedge, the belief's mean and 2-sigma ellipse (blue), the ball (orange, hollow when out
-    of view), the other robots (grey discs of ``robot_radius``; ``robots`` (T, R, 4),
-    height 0 an empty slot). Every ``every``-th tick of ``pose`` (T, 3) etc."""
+    """RGB frames of one match from above (:func:`draw_match_tick`, with the robot's path so
+    far), every ``every``-th tick of ``pose`` (T, 3), ``mean`` (T, 3), ``cov`` (T, 3, 3),
+    ``head`` (T, 2), ``ball`` (T, 2), ``ball_in_view`` (T,) and ``robots`` (T, R, 4)."""
     frames = []
     fig = new_figure(figsize=(6.4, 4.6), layout="constrained")
     for t in range(0, len(pose), every):
         fig.clear()
         ax = fig.add_subplot()
-        draw_field(ax, field)
-        x, y, th = pose[t]
-        yaw = th + head[t, 0]
-        reach = 8.0  # the view wedge, drawn long enough to reach a far ball
-        half = camera.hfov / 2
-        wedge = [
-            (x, y),
-            (x + reach * math.cos(yaw + half), y + reach * math.sin(yaw + half)),
-            (x + reach * math.cos(yaw - half), y + reach * math.sin(yaw - half)),
-        ]
-        ax.add_patch(Polygon(wedge, closed=True, color="yellow", alpha=0.25, zorder=2))
-        for rx, ry, height, _ in [] if robots is None else robots[t]:
-            if height > 0:
-                ax.add_patch(Circle((rx, ry), robot_radius, color="0.35", zorder=4))
-        ax.plot(pose[: t + 1, 0], pose[: t + 1, 1], color="red", lw=0.8, alpha=0.6, zorder=3)
-        ax.plot(x, y, "o", color="red", ms=7, zorder=4)
-        ax.plot(
-            [x, x + 0.3 * math.cos(th)], [y, y + 0.3 * math.sin(th)], color="red", lw=2, zorder=4
+        draw_match_tick(
+            ax,
+            field,
+            camera,
+            pose[t],
+            mean[t],
+            cov[t],
+            head[t, 0],
+            ball[t],
+            bool(ball_in_view[t]),
+            None if robots is None else robots[t],
+            robot_radius,
+            trail=pose[: t + 1],
         )
-        values, vectors = np.linalg.eigh(cov[t, :2, :2])
-        angle = math.degrees(math.atan2(vectors[1, 1], vectors[0, 1]))
-        width, height = 4 * np.sqrt(np.maximum(values[::-1], 0))  # 2 sigma each side
-        ax.add_patch(
-            Ellipse(
-                tuple(mean[t, :2]),
-                width,
-                height,
-                angle=angle,
-                fill=False,
-                ec="blue",
-                lw=1.5,
-                zorder=5,
-            )
-        )
-        ax.plot(*mean[t, :2], "x", color="blue", ms=7, zorder=5)
-        seen = bool(ball_in_view[t])
-        ax.plot(*ball[t], "o", ms=6, zorder=6, mfc="orange" if seen else "none", mec="darkorange")
         error = math.hypot(*(mean[t, :2] - pose[t, :2]))
         ax.set_title(f"{title}   t = {t * tick_seconds:5.1f} s   error {error:.2f} m", fontsize=9)
         frames.append(figure_to_rgb(fig))
     return frames
+
+
+def match_view(
+    image: np.ndarray,
+    field: FieldSpec,
+    camera: CameraConfig,
+    info: Mapping[str, np.ndarray],
+    title: str,
+    robot_radius: float = 0.12,
+) -> Figure:
+    """The camera image (grayscale (H, W) uint8) beside the top view of one match tick
+    (:func:`draw_match_tick`), from one robot's match info (``pose``, ``belief_mean``,
+    ``belief_cov``, ``head``, ``ball``, ``ball_in_view``, ``robots``): ``env.render()``."""
+    fig = new_figure(figsize=(9, 3.4))
+    ax_img, ax_top = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.45]})
+    pan, tilt = info["head"]
+    ax_img.imshow(image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+    ax_img.set_title(
+        f"camera: pan {math.degrees(pan):+.0f}°, tilt {math.degrees(tilt):.0f}°", fontsize=9
+    )
+    ax_img.set_xticks([])
+    ax_img.set_yticks([])
+    draw_match_tick(
+        ax_top,
+        field,
+        camera,
+        info["pose"],
+        info["belief_mean"],
+        info["belief_cov"],
+        float(pan),
+        info["ball"],
+        bool(info["ball_in_view"]),
+        info["robots"],
+        robot_radius,
+    )
+    ax_top.set_title(title, fontsize=9)
+    fig.tight_layout()
+    return fig

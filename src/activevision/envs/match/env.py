@@ -153,7 +153,17 @@ class ActiveVisionMatchEnv(gym.Env):
         }
 
     def render(self) -> np.ndarray | None:
+        """With ``render_mode="rgb_array"``: an RGB picture of the last observation's camera
+        image beside the match from above (the true robot and its view, the belief's
+        2-sigma ellipse, the ball, the other robots), as ``activevision match``'s clip draws
+        it; None otherwise."""
         if self.render_mode != "rgb_array":
             return None
-        grey = self._frames[0, 0]
-        return np.repeat(grey[:, :, None], 3, axis=2)
+        from activevision.figures.canvas import figure_to_rgb  # imports matplotlib: only here
+        from activevision.figures.match import match_view
+
+        info = {key: value[0] for key, value in self.sim.info_arrays().items()}
+        title = f"tick {int(info['tick'])}: position error {float(info['position_error']):.2f} m"
+        cfg = self.config
+        fig = match_view(self._frames[0, 0], cfg.field, cfg.camera, info, title, cfg.robots.radius)
+        return figure_to_rgb(fig)
