@@ -228,3 +228,82 @@ def test_a_step_before_reset_is_refused_on_every_path(env_id: str, maker: str) -
     env.reset(seed=1)
     env.step(action)  # and a reset is all it takes
     env.close()
+
+
+def resets_rollout(envs: gym.vector.VectorEnv, actions: np.ndarray) -> list[Any]:
+    """Steps between every kind of reset a vector env takes: seeded, unseeded (each
+    sub-environment goes on drawing from its seeded generator), and partial ones through
+    ``options={"reset_mask": ...}`` (with a seed for the masked sub-environment only, then
+    none, one of them at an episode's end). Each reset's and step's full output."""
+    n = actions.shape[1]
+    out: list[Any] = [envs.reset(seed=SEED)]
+    out += [envs.step(a) for a in actions[:25]]  # past the first episodes' ends
+    out.append(envs.reset())
+    out += [envs.step(a) for a in actions[25:30]]
+    first = np.zeros(n, dtype=bool)
+    first[0] = True
+    out.append(envs.reset(seed=[11] + [None] * (n - 1), options={"reset_mask": first}))
+    # 20 steps: the first sub-environment's match ends on the last, and the partial reset
+    # after leaves it to be autoreset on the next step
+    out += [envs.step(a) for a in actions[30:50]]
+    out.append(envs.reset(options={"reset_mask": ~first}))
+    out += [envs.step(a) for a in actions[50:]]
+    return out
+
+
+@pytest.mark.parametrize(
+    ("env_id", "kwargs"),
+    [
+        ("ActiveVision-v0", {}),
+        ("ActiveVision-v0", {"frame_stack": 3}),
+        ("ActiveVisionMatch-v0", {"ticks": 20}),
+    ],
+    ids=["episodic", "episodic-stack3", "match"],
+)
+def test_unseeded_and_partial_resets_agree_in_every_mode(env_id: str, kwargs: dict) -> None:
+    """``reset()`` after ``reset(seed=s)`` goes on from the seeded generators, and
+    ``reset_mask`` resets just its sub-environments, in every vectorizer alike (the native
+    envs drew fresh entropy for an unseeded reset and reset every sub-environment)."""
+    actions = random_actions(70)
+    got = {}
+    for mode in ("sync", "async", "vector_entry_point"):
+        envs = gym.make_vec(env_id, num_envs=N, vectorization_mode=mode, **kwargs)
+        try:
+            got[mode] = resets_rollout(envs, actions)
+        finally:
+            envs.close()
+    for mode in ("async", "vector_entry_point"):
+        for t, (a, b) in enumerate(zip(got["sync"], got[mode], strict=True)):
+            assert len(a) == len(b)
+            names = ("observations", "rewards", "terminated", "truncated")[: len(a) - 1]
+            for name, x, y in zip(names, a[:-1], b[:-1], strict=True):
+                assert_same_bytes(x, y, f"{mode} output {t}: {name}")
+            assert a[-1].keys() == b[-1].keys(), f"{mode} output {t}: info keys"
+            for key in a[-1]:
+                assert_same_bytes(a[-1][key], b[-1][key], f"{mode} output {t}: info[{key!r}]")
+    # the unseeded reset drew from the seeded generators: a second sync run repeats it
+    envs = gym.make_vec(env_id, num_envs=N, vectorization_mode="sync", **kwargs)
+    again = resets_rollout(envs, actions)
+    assert_same_bytes(again[26][0], got["sync"][26][0], "sync again: unseeded reset")
+    if env_id == "ActiveVisionMatch-v0":  # 20 ticks a match: its end is known
+        before_partial = got["sync"][52]  # the step before the second partial reset
+        assert before_partial[3][0]  # the first sub-environment's match ended there
+
+
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_reset_options_the_env_does_not_take_are_refused(env_id: str) -> None:
+    single = gym.make(env_id)
+    with pytest.raises(ValueError, match=r"reset takes no options, got \['start'\]"):
+        single.reset(seed=0, options={"start": 1})
+    single.reset(seed=0, options={})  # SyncVectorEnv passes {} after taking its reset_mask
+    native = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+    with pytest.raises(ValueError, match=r"only the option 'reset_mask', got \['start'\]"):
+        native.reset(options={"start": 1})
+    with pytest.raises(TypeError, match="numpy array"):
+        native.reset(options={"reset_mask": [True, False]})
+    with pytest.raises(ValueError, match=r"shape \(2,\)"):
+        native.reset(options={"reset_mask": np.ones(3, dtype=bool)})
+    with pytest.raises(TypeError, match="dtype bool"):
+        native.reset(options={"reset_mask": np.ones(2, dtype=int)})
+    with pytest.raises(ValueError, match="at least one True"):
+        native.reset(options={"reset_mask": np.zeros(2, dtype=bool)})

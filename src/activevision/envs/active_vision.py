@@ -22,6 +22,7 @@ from activevision.envs.observations import (
     observation_space,
     single,
 )
+from activevision.envs.reset_options import check_no_options
 from activevision.envs.simulation import EpisodeBatch, StepOutcome
 from activevision.localisation import LocalisationConfig
 
@@ -158,6 +159,7 @@ class ActiveVisionEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
+        check_no_options(options)
         super().reset(seed=seed)
         self.sim.reset(self._slot, [self.np_random])
         self._observations.start(self._slot)

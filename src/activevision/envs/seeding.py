@@ -14,10 +14,16 @@ def episode_seed(base_seed: int, episode: int) -> int:
     return base_seed * 1_000_003 + episode
 
 
-def reseed_generators(rngs: list[np.random.Generator], seed: int | list[int | None] | None) -> None:
-    """Gymnasium's ``VectorEnv.reset(seed=...)`` for N sub-environment generators, in place:
-    an int ``s`` seeds sub-environment ``i`` with ``s + i``; a list gives each its own seed
-    (None: keep its generator); None draws fresh entropy for all."""
+def reseed_generators(
+    rngs: list[np.random.Generator],
+    seed: int | list[int | None] | None,
+    slots: np.ndarray | None = None,
+) -> None:
+    """Gymnasium's ``VectorEnv.reset(seed=...)`` for N sub-environment generators, in place,
+    as ``SyncVectorEnv`` resets its sub-environments: an int ``s`` seeds sub-environment
+    ``i`` with ``s + i``; a list gives each its own seed; None (for all, or in the list)
+    keeps the generator, so that ``reset(seed=s)`` then ``reset()`` goes on drawing from the
+    seeded streams. Only the sub-environments ``slots`` (default: all) are reset."""
     n = len(rngs)
     seeds: list[int | None]
     if seed is None:
@@ -28,6 +34,6 @@ def reseed_generators(rngs: list[np.random.Generator], seed: int | list[int | No
         seeds = list(seed)
         if len(seeds) != n:
             raise ValueError(f"expected {n} seeds, got {len(seeds)}")
-    for i, s in enumerate(seeds):
-        if s is not None or seed is None:
-            rngs[i] = seeding.np_random(s)[0]
+    for i in range(n) if slots is None else slots:
+        if seeds[i] is not None:
+            rngs[i] = seeding.np_random(seeds[i])[0]

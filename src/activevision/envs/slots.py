@@ -12,6 +12,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from activevision.envs.reset_options import reset_mask
 from activevision.envs.seeding import reseed_generators
 
 
@@ -41,15 +42,34 @@ class SlotVectorEnv(VectorEnv):
         self._every_env = np.ones(num_envs, dtype=bool)
         self._every_env.flags.writeable = False
 
-    def _reseed(self, seed: int | list[int | None] | None) -> None:
-        """Sub-environment ``i`` reset with ``seed=s`` draws from a generator seeded ``s + i``
-        (``envs.seeding.reseed_generators``); no slot awaits an autoreset after."""
-        reseed_generators(self._rngs, seed)
-        self._needs_reset[:] = False
+    def _reset_mask(
+        self, seed: int | list[int | None] | None, options: dict[str, Any] | None
+    ) -> np.ndarray:
+        """The sub-environments (bool (N,)) a ``reset(seed, options)`` resets: every one, or
+        those of ``options["reset_mask"]``, reseeded: sub-environment ``i`` reset with
+        ``seed=s`` draws from a generator seeded ``s + i`` (``envs.seeding.
+        reseed_generators``). None of them awaits an autoreset after; the others keep their
+        state, their generators and their flags."""
+        mask = reset_mask(options, self.num_envs)
+        slots = np.flatnonzero(mask)
+        reseed_generators(self._rngs, seed, slots)
+        self._needs_reset[slots] = False
+        return mask
 
-    def _with_masks(self, infos: dict[str, Any]) -> dict[str, Any]:
-        """``infos`` (arrays over sub-environments) with Gymnasium's ``_key`` masks."""
-        infos.update({f"_{key}": self._every_env for key in list(infos)})
+    def _with_masks(
+        self, infos: dict[str, Any], present: np.ndarray | None = None
+    ) -> dict[str, Any]:
+        """``infos`` (arrays over sub-environments) with Gymnasium's ``_key`` masks. With
+        ``present`` (a partial reset's mask), only those sub-environments report, and the
+        others' entries are zeros, as ``SyncVectorEnv`` fills them."""
+        if present is None or present.all():
+            infos.update({f"_{key}": self._every_env for key in list(infos)})
+            return infos
+        for key in list(infos):
+            values = np.array(infos[key])
+            values[~present] = 0
+            infos[key] = values
+            infos[f"_{key}"] = present
         return infos
 
 

@@ -24,7 +24,10 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
     """N ActiveVision episodes in lock-step (see :class:`ActiveVisionEnv` for the task).
 
     Sub-environment ``i`` reset with ``seed=s`` is seeded with ``s + i`` and draws from its own
-    generator, so its trajectory equals a single ``ActiveVision-v0`` reset with ``seed=s + i``.
+    generator, so its trajectory equals a single ``ActiveVision-v0`` reset with ``seed=s + i``;
+    ``reset()`` without a seed goes on drawing from each generator, and ``reset(options=
+    {"reset_mask": mask})`` resets only the sub-environments of ``mask``, as with
+    ``SyncVectorEnv`` (the others' entries in the infos are zeros, their ``_key`` masks False).
     Autoreset follows Gymnasium's default (``NEXT_STEP``): the step after an episode ends
     resets that sub-environment and ignores its action. Truncation follows Gymnasium's
     ``TimeLimit`` (truncated once ``max_episode_steps`` steps are done, even on a step that
@@ -59,11 +62,14 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
-        self._reseed(seed)
-        self.sim.reset(self._all, self._rngs)
-        self._observations.start(self._all)
-        self._render(started=self._all)
-        return self._observe(), self._infos()
+        mask = self._reset_mask(seed, options)
+        slots = np.flatnonzero(mask)
+        self.sim.reset(slots, [self._rngs[i] for i in slots])
+        self._observations.start(slots)
+        # a reset sub-environment's whole frame stack is its first frame; the others keep
+        # theirs (a state renders the same image each time)
+        self._frames[slots] = self.sim.render(slots)[:, None]
+        return self._observe(), self._with_masks(self.sim.info_arrays(self.max_episode_steps), mask)
 
     def _observe(self) -> Observation:
         sim = self.sim

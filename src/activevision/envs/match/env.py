@@ -18,6 +18,7 @@ from activevision.envs.match.observations import (
     single,
 )
 from activevision.envs.match.simulation import MatchBatch
+from activevision.envs.reset_options import check_no_options
 
 
 def resolve_match_config(config: MatchConfig | None, overrides: dict[str, Any]) -> MatchConfig:
@@ -130,6 +131,7 @@ class ActiveVisionMatchEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
+        check_no_options(options)
         super().reset(seed=seed)
         self.sim.reset(self._slot, [self.np_random])
         return self._observe(), self._info()

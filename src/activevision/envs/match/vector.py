@@ -24,8 +24,9 @@ from activevision.envs.slots import SlotVectorEnv
 class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     """N matches in lock-step (see :class:`ActiveVisionMatchEnv`). Sub-environment ``i``
     reset with ``seed=s`` is seeded with ``s + i``, so its trajectory equals a single env's
-    reset with ``seed=s + i``. Autoreset follows Gymnasium's default (``NEXT_STEP``); infos
-    hold the single env's keys as arrays over sub-environments."""
+    reset with ``seed=s + i``; ``reset()`` without a seed and ``options={"reset_mask": mask}``
+    behave as in ``ActiveVisionVectorEnv``. Autoreset follows Gymnasium's default
+    (``NEXT_STEP``); infos hold the single env's keys as arrays over sub-environments."""
 
     def __init__(
         self, num_envs: int = 1, config: MatchConfig | None = None, **config_overrides: Any
@@ -43,9 +44,10 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
-        self._reseed(seed)
-        self.sim.reset(self._all, self._rngs)
-        return self._observe(), self._infos()
+        mask = self._reset_mask(seed, options)
+        slots = np.flatnonzero(mask)
+        self.sim.reset(slots, [self._rngs[i] for i in slots])
+        return self._observe(), self._with_masks(self.sim.info_arrays(), mask)
 
     def step(
         self, actions: np.ndarray
