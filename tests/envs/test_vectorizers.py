@@ -307,3 +307,16 @@ def test_reset_options_the_env_does_not_take_are_refused(env_id: str) -> None:
         native.reset(options={"reset_mask": np.ones(2, dtype=int)})
     with pytest.raises(ValueError, match="at least one True"):
         native.reset(options={"reset_mask": np.zeros(2, dtype=bool)})
+
+
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_a_first_reset_that_raises_leaves_the_env_usable(env_id: str) -> None:
+    """Gymnasium's passive checker failed every later step of an env whose first reset had
+    raised; the envs are registered without it (the tests run the full check_env)."""
+    env = gym.make(env_id)
+    for bad in ({"seed": -1}, {"options": {"start": 1}}):
+        with pytest.raises(Exception, match=r"[Ss]eed|options"):
+            env.reset(**bad)
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(env.action_space.sample())
