@@ -320,3 +320,33 @@ def test_a_first_reset_that_raises_leaves_the_env_usable(env_id: str) -> None:
     env.reset(seed=0)
     for _ in range(3):
         env.step(env.action_space.sample())
+
+
+@pytest.mark.parametrize("maker", ["make", "native vector"])
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_a_copied_or_pickled_env_goes_on_as_the_original(env_id: str, maker: str) -> None:
+    """``copy.deepcopy`` and a pickle round trip (planning by simulation, checkpointing a
+    rollout) give an env that continues exactly as the original. (The episodic env's head
+    angles were views of one array, which a copy turned into separate arrays: its head
+    then moved without the image following.)"""
+    import copy
+    import pickle
+
+    env = MAKERS[maker](env_id)
+    env.reset(seed=1)
+    rng = np.random.default_rng(0)
+    batch = maker == "native vector"
+    actions = rng.integers(0, 9, (12, 2) if batch else 12)
+    for a in actions[:4]:
+        env.step(a if batch else int(a))
+    copies = [copy.deepcopy(env), pickle.loads(pickle.dumps(env))]
+    for a in actions[4:]:
+        want = env.step(a if batch else int(a))
+        for twin in copies:
+            got = twin.step(a if batch else int(a))
+            for name, x, y in zip(
+                ("obs", "reward", "terminated", "truncated"), got, want, strict=False
+            ):
+                assert_same_bytes(x, y, f"{name} at a step after the copy")
+            for key in want[4]:
+                assert_same_bytes(got[4][key], want[4][key], f"info[{key!r}]")

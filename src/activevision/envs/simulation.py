@@ -60,12 +60,10 @@ class EpisodeBatch:
         k = len(self.landmarks)
         self.pose = np.zeros((num_envs, 3))
         self.believed_pose = np.zeros((num_envs, 3))
-        # (pan, tilt) pairs; pan/tilt are views of the columns (no copies when reporting).
+        # (pan, tilt) pairs; the pan/tilt properties are views of their columns
         self.head = np.zeros((num_envs, 2))
-        self.pan, self.tilt = self.head[:, 0], self.head[:, 1]
         self.ball = np.zeros((num_envs, 2))
         self.goal = np.zeros((num_envs, 2))
-        self.goal_pan, self.goal_tilt = self.goal[:, 0], self.goal[:, 1]
         self.goal_entropy = np.zeros(num_envs)
         self.desired = np.zeros((num_envs, k), dtype=bool)
         self.observed = np.zeros((num_envs, k), dtype=bool)
@@ -86,6 +84,25 @@ class EpisodeBatch:
         self.tone = np.repeat(identity_tone()[None], num_envs, axis=0)
         self.last_move = np.zeros((num_envs, 2))
         self.started = np.zeros(num_envs, dtype=bool)  #: reset at least once
+
+    # Views of the (pan, tilt) columns, made on each access: views kept as attributes
+    # would become copies in a deepcopy or pickle of the batch (and its env), which then
+    # moved its head without rendering the move.
+    @property
+    def pan(self) -> np.ndarray:
+        return self.head[:, 0]
+
+    @property
+    def tilt(self) -> np.ndarray:
+        return self.head[:, 1]
+
+    @property
+    def goal_pan(self) -> np.ndarray:
+        return self.goal[:, 0]
+
+    @property
+    def goal_tilt(self) -> np.ndarray:
+        return self.goal[:, 1]
 
     # ------------------------------------------------------------------ starts
     def reset(self, indices: np.ndarray, rngs: list[np.random.Generator]) -> None:
