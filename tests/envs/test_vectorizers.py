@@ -350,3 +350,28 @@ def test_a_copied_or_pickled_env_goes_on_as_the_original(env_id: str, maker: str
                 assert_same_bytes(x, y, f"{name} at a step after the copy")
             for key in want[4]:
                 assert_same_bytes(got[4][key], want[4][key], f"info[{key!r}]")
+
+
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_the_native_vector_env_renders_as_sync_does(env_id: str) -> None:
+    """``render_mode="rgb_array"``: a tuple of each sub-environment's picture, the very
+    pictures of ``SyncVectorEnv`` (the native envs took no render_mode)."""
+    pictures = {}
+    for mode in ("sync", "vector_entry_point"):
+        envs = gym.make_vec(env_id, num_envs=2, vectorization_mode=mode, render_mode="rgb_array")
+        envs.reset(seed=4)
+        envs.step(np.array([1, 7]))
+        pictures[mode] = envs.render()
+        envs.close()
+    assert len(pictures["sync"]) == len(pictures["vector_entry_point"]) == 2
+    for a, b in zip(pictures["sync"], pictures["vector_entry_point"], strict=True):
+        assert a.shape == (340, 900, 3)
+        assert_same_bytes(b, a, "picture")
+    assert not np.array_equal(*pictures["sync"])  # two sub-environments, two pictures
+    plain = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+    plain.reset(seed=4)
+    assert plain.render() is None
+    with pytest.raises(ValueError, match="render_mode"):
+        gym.make_vec(
+            env_id, num_envs=2, vectorization_mode="vector_entry_point", render_mode="human"
+        )

@@ -12,6 +12,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from activevision.envs.config import check_render_mode
 from activevision.envs.reset_options import reset_mask
 from activevision.envs.seeding import reseed_generators
 
@@ -20,7 +21,11 @@ class SlotVectorEnv(VectorEnv):
     """Spaces, per-slot generators, the frame buffer and the info masks of a native vector
     env; subclasses build their simulation and call :meth:`_set_up_slots`."""
 
-    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+    metadata = {
+        "render_modes": ["rgb_array"],
+        "render_fps": 3,
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
 
     def _set_up_slots(
         self,
@@ -28,7 +33,10 @@ class SlotVectorEnv(VectorEnv):
         observation_space: gym.Space[Any],
         action_space: gym.Space[Any],
         frame_shape: tuple[int, ...],
+        render_mode: str | None = None,
     ) -> None:
+        check_render_mode(render_mode, self.metadata["render_modes"])
+        self.render_mode = render_mode
         self.num_envs = num_envs
         self.single_observation_space = observation_space
         self.single_action_space = action_space
@@ -55,6 +63,17 @@ class SlotVectorEnv(VectorEnv):
         reseed_generators(self._rngs, seed, slots)
         self._needs_reset[slots] = False
         return mask
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """With ``render_mode="rgb_array"``: each sub-environment's picture, as its single
+        env's ``render()`` draws it (what ``SyncVectorEnv.render`` returns); None
+        otherwise."""
+        if self.render_mode != "rgb_array":
+            return None
+        return tuple(self._picture(i) for i in range(self.num_envs))
+
+    def _picture(self, i: int) -> np.ndarray:
+        raise NotImplementedError
 
     def _with_masks(
         self, infos: dict[str, Any], present: np.ndarray | None = None

@@ -44,6 +44,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         config: EnvConfig | None = None,
         localisation: LocalisationConfig | None = None,
         max_episode_steps: int = 20,
+        render_mode: str | None = None,
         **config_overrides: Any,
     ) -> None:
         num_envs = check_count("num_envs", num_envs)
@@ -56,6 +57,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
             observation_space(config, n_actions),
             head_action_space(config.action_type, n_actions),
             image_space(config).shape,
+            render_mode,
         )
         self._observations = ObservationBuilder(config, num_envs, n_actions)
 
@@ -105,6 +107,11 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         infos = self._infos()
         self._needs_reset = terminated | truncated
         return self._observe(), reward, terminated, truncated, infos
+
+    def _picture(self, i: int) -> np.ndarray:
+        from activevision.envs.view import episode_panel  # imports matplotlib: only here
+
+        return episode_panel(self.sim, i, self._frames[i, -1])
 
     def _infos(self) -> dict[str, Any]:
         return self._with_masks(self.sim.info_arrays(self.max_episode_steps))

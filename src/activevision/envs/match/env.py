@@ -18,6 +18,7 @@ from activevision.envs.match.observations import (
     single,
 )
 from activevision.envs.match.simulation import MatchBatch
+from activevision.envs.match.view import match_panel
 from activevision.envs.reset_options import check_no_options
 
 
@@ -161,11 +162,4 @@ class ActiveVisionMatchEnv(gym.Env):
         it; None otherwise."""
         if self.render_mode != "rgb_array":
             return None
-        from activevision.figures.canvas import figure_to_rgb  # imports matplotlib: only here
-        from activevision.figures.match import match_view
-
-        info = {key: value[0] for key, value in self.sim.info_arrays().items()}
-        title = f"tick {int(info['tick'])}: position error {float(info['position_error']):.2f} m"
-        cfg = self.config
-        fig = match_view(self._frames[0, 0], cfg.field, cfg.camera, info, title, cfg.robots.radius)
-        return figure_to_rgb(fig)
+        return match_panel(self.sim, 0, self._frames[0, 0])

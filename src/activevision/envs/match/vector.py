@@ -18,6 +18,7 @@ from activevision.envs.match.observations import (
     observe,
 )
 from activevision.envs.match.simulation import MatchBatch
+from activevision.envs.match.view import match_panel
 from activevision.envs.slots import SlotVectorEnv
 
 
@@ -29,7 +30,11 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     (``NEXT_STEP``); infos hold the single env's keys as arrays over sub-environments."""
 
     def __init__(
-        self, num_envs: int = 1, config: MatchConfig | None = None, **config_overrides: Any
+        self,
+        num_envs: int = 1,
+        config: MatchConfig | None = None,
+        render_mode: str | None = None,
+        **config_overrides: Any,
     ) -> None:
         num_envs = check_count("num_envs", num_envs)
         self.config = config = resolve_match_config(config, config_overrides)
@@ -39,6 +44,7 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
             observation_space(config),
             head_action_space(config.action_type, len(self.sim.actions)),
             image_space(config).shape,
+            render_mode,
         )
 
     def reset(
@@ -65,6 +71,9 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     def _observe(self) -> Observation:
         self.sim.render(out=self._frames[:, 0])
         return observe(self._frames, self.sim)
+
+    def _picture(self, i: int) -> np.ndarray:
+        return match_panel(self.sim, i, self._frames[i, 0])
 
     def _infos(self) -> dict[str, Any]:
         return self._with_masks(self.sim.info_arrays())
