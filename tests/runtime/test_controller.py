@@ -168,6 +168,15 @@ def test_missing_files(policy_copy):
         HeadController(policy_copy)
 
 
+def test_metadata_given_for_the_model_is_named(policy_copy):
+    """policy.json passed where policy.onnx is meant: one line saying so, not a checksum
+    mismatch blaming another export (or, unchecked, an invalid ONNX model)."""
+    metadata = policy_copy.with_suffix(".json")
+    for verify in (True, False):
+        with pytest.raises(PolicyFileError, match=r"policy\.json is the policy's metadata; pass"):
+            HeadController(metadata, verify_checksum=verify)
+
+
 def test_corrupt_model(policy_copy):
     policy_copy.write_bytes(policy_copy.read_bytes()[:5000])  # truncated
     with pytest.raises(PolicyFileError, match="does not match its metadata"):

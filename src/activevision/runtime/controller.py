@@ -129,6 +129,11 @@ class HeadController:
         if self.model_path.is_dir():  # a run or export folder: its policy.onnx
             self.model_path = self.model_path / "policy.onnx"
         self.metadata_path = metadata_path_for(self.model_path)
+        if self.model_path == self.metadata_path:  # policy.json given for policy.onnx
+            raise PolicyFileError(
+                f"{self.model_path} is the policy's metadata; pass the ONNX model beside it,"
+                f" {self.model_path.with_suffix('.onnx')}"
+            )
         if not self.model_path.is_file():
             raise PolicyFileError(
                 f"policy model {self.model_path} not found"
