@@ -103,6 +103,16 @@ def test_controller_names_the_inputs_it_needs(tmp_path):
     assert 0 <= command.action < 9
 
 
+def test_an_unexpected_input_names_what_the_policy_was_trained_on(tmp_path):
+    _, paths, _, _ = exported(tmp_path)
+    controller = HeadController(paths.model_path)
+    given = {"pose": (0.0, 0.0, 0.0), "pose_error": 0.1, "proposal": (0.1, 0.3)}
+    with pytest.raises(ValueError) as error:
+        controller.act(np.zeros((120, 160), np.uint8), 0.1, 0.3, **given, belief=(1, 1, 1))
+    trained = "image, head, pose, pose_error, proposal, actions"
+    assert str(error.value).endswith(f"takes no belief; it was trained on {trained}")
+
+
 def test_image_policy_refuses_a_pose(tmp_path):
     _, paths, _, _ = exported(tmp_path, "image+head", history=0)
     controller = HeadController(paths.model_path)

@@ -337,7 +337,7 @@ class HeadController:
             if name not in keys and value is not None:
                 raise ValueError(
                     f"this policy ({self.metadata.observation!r}) takes no {name}; it was"
-                    f" trained on {', '.join(('image', 'head', *keys)[: 1 + len(keys)])}"
+                    f" trained on {', '.join(('image', *keys))}"
                 )
         parts: list[np.ndarray] = []
         for key in keys:
