@@ -140,6 +140,10 @@ def test_bad_arguments(policy):
         controller.act(frame, 45.0, 0.3)
     with pytest.raises(ValueError, match="tilt must be radians"):
         controller.act(frame, 0.0, -30.0)
+    with pytest.raises(ValueError, match="pan must be a number of radians, got True"):
+        controller.act(frame, True, 0.3)  # float(True) is 1 rad
+    with pytest.raises(ValueError, match=r"tilt must be a number of radians, got '0\.3'"):
+        controller.act(frame, 0.0, "0.3")
     with pytest.raises(ValueError, match="num_threads"):
         HeadController(policy.model_path, num_threads=0)
     with pytest.raises(ValueError, match="color_order"):

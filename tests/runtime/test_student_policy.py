@@ -113,6 +113,28 @@ def test_an_unexpected_input_names_what_the_policy_was_trained_on(tmp_path):
     assert str(error.value).endswith(f"takes no belief; it was trained on {trained}")
 
 
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [
+        ({"pose_error": -0.5}, r"pose_error must be standard deviations >= 0 .*got \[-0\.5\]"),
+        ({"pose_error": True}, "pose_error must be a number, got True"),
+        ({"proposal": (45.0, 20.0)}, r"proposal pan must be radians within \+-pi, got 45 \(deg"),
+        ({"proposal": (0.2, 40.0)}, r"proposal tilt must be radians within \+-pi, got 40"),
+        ({"proposal": (True, 0.3)}, "proposal pan must be a number of radians, got True"),
+        ({"pose": (1.0, "2", 0.0)}, r"pose must be 3 numbers, got \(1\.0, '2', 0\.0\)"),
+    ],
+    ids=["negative-error", "bool-error", "proposal-degrees", "tilt-degrees", "bool", "str"],
+)
+def test_nonsense_inputs_are_refused_by_name(tmp_path, given, message):
+    """What a robot gets wrong (a negative standard deviation, degrees for radians, a flag
+    or a string for a number) is one ValueError naming the value, not a silent decision."""
+    _, paths, _, _ = exported(tmp_path)
+    controller = HeadController(paths.model_path)
+    inputs = {"pose": (0.5, 0.2, 0.3), "pose_error": 0.1, "proposal": (0.2, 0.3)} | given
+    with pytest.raises(ValueError, match=message):
+        controller.act(np.zeros((120, 160), np.uint8), 0.1, 0.3, **inputs)
+
+
 def test_image_policy_refuses_a_pose(tmp_path):
     _, paths, _, _ = exported(tmp_path, "image+head", history=0)
     controller = HeadController(paths.model_path)

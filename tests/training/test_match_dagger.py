@@ -229,6 +229,8 @@ def test_head_controller_bounds_the_vectors_as_the_match_env_does(tmp_path):
     controller.act(frame, 0.1, 0.3, pose=(1, 2, 0.5), belief=(50, 0.2, 0.1), ball=(2, -1, 30))
     vector = controller._vector[0]  # head 2, pose 4, belief 3, ball 3
     np.testing.assert_allclose(vector[6:], [VECTOR_BOUND, 0.2, 0.1, 2, -1, VECTOR_BOUND])
+    with pytest.raises(ValueError, match=r"belief must be standard deviations >= 0"):
+        controller.act(frame, 0.1, 0.3, pose=(1, 2, 0.5), belief=(0.1, -0.2, 0.1), ball=(2, -1, 3))
 
 
 def test_a_student_refuses_what_it_was_not_trained_for(tmp_path, capsys):

@@ -347,10 +347,12 @@ class HeadController:
                 x, y, theta = _finite_vector("pose", pose, 3)
                 parts.append(np.array([x, y, math.cos(theta), math.sin(theta)]))
             elif key == "pose_error":
-                parts.append(_finite_vector("pose_error", pose_error, 1))
+                parts.append(_non_negative("pose_error", _finite_vector(key, pose_error, 1)))
             elif key in ("belief", "ball"):
                 # the match env's bound on its vectors (stds, ball age in seconds)
                 known = _finite_vector(key, belief if key == "belief" else ball, 3)
+                if key == "belief":
+                    _non_negative("belief", known)
                 parts.append(np.clip(known, -MATCH_VECTOR_BOUND, MATCH_VECTOR_BOUND))
             elif key == "proposal":
                 parts.append(_proposal_vector(proposal, pan, tilt))
@@ -492,28 +494,45 @@ def _caller_level() -> int:
 
 def _finite_vector(name: str, value: Any, size: int) -> np.ndarray:
     try:
+        if np.asarray(value).dtype.kind in "bSU":  # True, "0.5": float64 would take them
+            raise TypeError(name)
         array = np.asarray(value, dtype=np.float64).reshape(size)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{name} must be {size} numbers, got {value!r}") from error
+        count = "a number" if size == 1 else f"{size} numbers"
+        raise ValueError(f"{name} must be {count}, got {value!r}") from error
     if not np.isfinite(array).all():
         raise ValueError(f"{name} must be finite, got {value!r}")
     return array
 
 
+def _non_negative(name: str, values: np.ndarray) -> np.ndarray:
+    """``values``, or ValueError: a standard deviation below 0."""
+    if (values < 0).any():
+        raise ValueError(
+            f"{name} must be standard deviations >= 0 (m and rad), got {values.tolist()}"
+        )
+    return values
+
+
 def _proposal_vector(proposal: Any, pan: float, tilt: float) -> np.ndarray:
     """(pan, tilt, d_pan, d_tilt, found); a (nan, nan) proposal is "none found"."""
     try:
-        p_pan, p_tilt = (float(v) for v in proposal)
+        raw_pan, raw_tilt = proposal
+        p_pan, p_tilt = float(raw_pan), float(raw_tilt)
     except (TypeError, ValueError) as error:
         raise ValueError(f"proposal must be (pan, tilt) radians, got {proposal!r}") from error
     if math.isnan(p_pan) and math.isnan(p_tilt):
         return np.zeros(5)
     if not (math.isfinite(p_pan) and math.isfinite(p_tilt)):
         raise ValueError(f"proposal must be finite, or (nan, nan) for none, got {proposal!r}")
+    # radians within +-pi, as the head angles (no degrees, no True for 1 rad)
+    p_pan, p_tilt = _finite_angle("proposal pan", raw_pan), _finite_angle("proposal tilt", raw_tilt)
     return np.array([p_pan, p_tilt, p_pan - pan, p_tilt - tilt, 1.0])
 
 
 def _finite_angle(name: str, value: float) -> float:
+    if isinstance(value, bool | np.bool_ | str | bytes):  # float() would take them
+        raise ValueError(f"{name} must be a number of radians, got {value!r}")
     try:
         angle = float(value)
     except (TypeError, ValueError) as error:
