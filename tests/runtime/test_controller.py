@@ -226,6 +226,14 @@ def test_corrupt_metadata(policy_copy):
             {"head_limits_deg": {"pan_min": -90, "pan_max": 90, "tilt_min": 5, "tilt_max": 900}},
             "outside",
         ),
+        (  # float(true) is 1 degree: every command would be clipped to pan <= 1 degree
+            {"head_limits_deg": {"pan_min": -90, "pan_max": True, "tilt_min": 5, "tilt_max": 65}},
+            "'head_limits_deg' pan_max must be a number of degrees, got True",
+        ),
+        (
+            {"head_limits_deg": {"pan_min": "-90", "pan_max": 90, "tilt_min": 5, "tilt_max": 65}},
+            "'head_limits_deg' pan_min must be a number of degrees, got '-90'",
+        ),
     ],
 )
 def test_metadata_mismatch(policy_copy, change, message):

@@ -640,15 +640,16 @@ class _MetadataReader:
             raise self.fail(
                 f"'head_limits_deg' must be an object with keys {list(_HEAD_LIMIT_KEYS)}"
             )
-        try:
-            degrees = {k: float(limits_deg[k]) for k in _HEAD_LIMIT_KEYS}
-        except (TypeError, ValueError) as error:
-            raise self.fail(f"'head_limits_deg' holds a non-numeric value: {error}") from error
+        degrees: dict[str, float] = {}
         for key, bound in _HEAD_LIMIT_BOUNDS_DEG.items():
-            if not (math.isfinite(degrees[key]) and -bound <= degrees[key] <= bound):
+            value = _real(limits_deg[key])
+            if value is None:  # float() took "90" and true (1 degree)
                 raise self.fail(
-                    f"'head_limits_deg' {key} = {degrees[key]} lies outside +-{bound} degrees"
+                    f"'head_limits_deg' {key} must be a number of degrees, got {limits_deg[key]!r}"
                 )
+            if not (math.isfinite(value) and -bound <= value <= bound):
+                raise self.fail(f"'head_limits_deg' {key} = {value} lies outside +-{bound} degrees")
+            degrees[key] = value
         limits = HeadLimits(*(math.radians(degrees[k]) for k in _HEAD_LIMIT_KEYS))
         if not (limits.pan_min <= limits.pan_max and limits.tilt_min <= limits.tilt_max):
             raise self.fail(f"'head_limits_deg' are not ordered (min <= max): {dict(limits_deg)}")
