@@ -150,11 +150,19 @@ def test_malformed_record_is_a_policy_file_error(camera_policy, record, helpers)
         ({"camera_height_m": None}, "camera_height must be a finite number"),
         ({"tilt_max_deg": 120.0}, "tilt_max = 120"),
         ({"pan_min_deg": 90.0, "pan_max_deg": -90.0}, "must be ordered"),
+        ({"hfov_deg": 1.1}, r"hfov_deg must be degrees, at least 5; got 1\.1 \(radians\?\)"),
+        ({"width_px": 640}, r"is 640x120 px \(aspect 5\.333\) but the policy's input is 160x120"),
+        ({"height_px": 90}, r"is 160x90 px \(aspect 1\.778\) but the policy's input is 160x120"),
     ],
 )
 def test_invalid_value_is_a_policy_file_error(camera_policy, changes, message, helpers):
     record = {**CameraModel.of(TRAINED).to_json(), **changes}
     helpers.assert_record_rejected(camera_policy, "camera", record, f"'camera' .*{message}")
+
+
+def test_a_record_of_another_resolution_at_the_inputs_aspect_loads(camera_policy):
+    rewrite_camera(camera_policy, width_px=640, height_px=480)  # the robot's resolution
+    assert HeadController(camera_policy).trained_camera.aspect == pytest.approx(160 / 120)
 
 
 def test_robot_camera_must_be_a_camera(camera_policy):

@@ -35,8 +35,10 @@ radians. ``action_table_deg[a] = (d_pan, d_tilt)``: pan positive to the left, ti
 *down* (the conventions of :mod:`activevision.geometry.camera`).
 
 ``camera`` is the camera the policy was trained with (the run's ``env.camera``; see
-:class:`CameraModel`). Files written before it existed lack it: the trained camera is then
-unknown and :class:`~activevision.runtime.HeadController` cannot compare the robot's with it.
+:class:`CameraModel`), of the input's aspect ratio (its width and height are the input's),
+its field of view at least ``MIN_HFOV_DEG``. Files written before it existed lack it: the
+trained camera is then unknown and :class:`~activevision.runtime.HeadController` cannot
+compare the robot's with it.
 ``head_limits_deg`` is what the controller clips its commands to; export writes the trained
 camera's pan and tilt range to both.
 
@@ -598,12 +600,30 @@ class _MetadataReader:
                 degrees = _real(value)
                 if degrees is None:
                     raise self.fail(f"'camera' {key} must be a number, got {value!r}")
+                if key == "hfov_deg" and 0 < degrees < MIN_HFOV_DEG:  # as from_degrees
+                    raise self.fail(
+                        f"'camera' hfov_deg must be degrees, at least {MIN_HFOV_DEG:g}; got"
+                        f" {degrees:g} (radians?)"
+                    )
                 value = math.radians(degrees)
             values[name] = value
         try:
-            return CameraModel(**values)
+            camera = CameraModel(**values)
         except ValueError as error:
             raise self.fail(f"'camera' is invalid: {error}") from error
+        return self.camera_fits_input(camera)
+
+    def camera_fits_input(self, camera: CameraModel) -> CameraModel:
+        """``camera``, or PolicyFileError: its aspect ratio is not the policy input's (the
+        network sees the trained camera's image, so the two are the same shape)."""
+        width, height = self.positive_int("image_width"), self.positive_int("image_height")
+        if abs(camera.aspect / (width / height) - 1) > CAMERA_TOLERANCES["aspect"]:
+            raise self.fail(
+                f"'camera' is {camera.width}x{camera.height} px (aspect {camera.aspect:.3f}) but"
+                f" the policy's input is {width}x{height} px (aspect {width / height:.3f}):"
+                " the record cannot be the camera the policy was trained with"
+            )
+        return camera
 
     def world(self) -> dict[str, dict[str, Any]] | None:
         """The training world (an object of objects of numbers and ``[low, high]`` pairs),
