@@ -331,6 +331,22 @@ def test_frames_of_another_aspect_ratio_warn_once_without_a_camera(camera_policy
     )
 
 
+def test_a_later_frame_of_another_aspect_ratio_warns_once(camera_policy):
+    """A camera switched to 16:9 after a 4:3 first frame: one warning, at the first 16:9
+    frame (the README's promise; only the very first frame was checked)."""
+    controller = HeadController(camera_policy)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        controller.act(np.zeros((480, 640), np.uint8), 0.0, 0.3)
+        assert caught == []
+        for _ in range(3):
+            controller.act(np.zeros((360, 640), np.uint8), 0.0, 0.3)
+            controller.act(np.zeros((480, 640), np.uint8), 0.0, 0.3)
+    assert [w.category for w in caught] == [CameraMismatchWarning]
+    assert "640x360 px (aspect 1.778)" in str(caught[0].message)
+    assert caught[0].filename == __file__
+
+
 def test_camera_config_of_the_trained_camera(camera_policy):
     """Views for a policy trained on another camera are planned with that camera."""
     trained = HeadController(camera_policy).trained_camera

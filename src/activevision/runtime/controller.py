@@ -101,8 +101,9 @@ class HeadController:
             CAMERA_TOLERANCES`, one :class:`CameraMismatchWarning` names each difference
             and how to retrain. Resolution alone does not matter: frames are resized. No
             check when the policy.json predates the camera record (``trained_camera`` None).
-            Without ``camera``, the first frame's aspect ratio is still checked against the
-            policy input's (one CameraMismatchWarning: frames would be stretched).
+            With or without ``camera``, the frames' aspect ratio is checked against the
+            policy input's, whenever their size changes, until the first that differs (one
+            CameraMismatchWarning: frames would be stretched).
 
     Raises:
         PolicyFileError: (a ValueError) the model or metadata is missing, unreadable,
@@ -182,7 +183,8 @@ class HeadController:
         self._max_move = np.asarray(meta.max_move) if continuous else None
         self.last_q_values: np.ndarray | None = None
         self.last_goal_logits: np.ndarray | None = None
-        self._frame_aspect_checked = False  # the first frame's, once (observe)
+        # the frame size last checked against the policy's aspect ratio, None once warned
+        self._frame_size: tuple[int, int] | None = (0, 0)
 
     @property
     def trained_camera(self) -> CameraModel | None:
@@ -232,9 +234,10 @@ class HeadController:
             newest = self._preprocess(frame, order)  # validate before shifting the stack
             frames[:-1] = frames[1:]
             frames[-1] = newest
-        if not self._frame_aspect_checked:
-            self._frame_aspect_checked = True
-            self._check_frame_aspect(frame.shape[1], frame.shape[0])
+        height, width = frame.shape[0], frame.shape[1]
+        if self._frame_size is not None and (height, width) != self._frame_size:
+            self._frame_size = (height, width)  # a new size (a camera's is fixed): check it
+            self._check_frame_aspect(width, height)
         return frames
 
     def q_values(self, frame: np.ndarray, color_order: ColorOrder | None = None) -> np.ndarray:
@@ -382,10 +385,11 @@ class HeadController:
 
     def _check_frame_aspect(self, width: int, height: int) -> None:
         """One CameraMismatchWarning when the frames' aspect ratio is not the policy
-        input's: resizing stretches them."""
+        input's: resizing stretches them. Not again after it."""
         meta = self.metadata
         trained = meta.image_width / meta.image_height
         if abs((width / height) / trained - 1) > CAMERA_TOLERANCES["aspect"]:
+            self._frame_size = None
             warnings.warn(
                 f"frames of {width}x{height} px (aspect {width / height:.3f}) are stretched to"
                 f" the policy's {meta.image_width}x{meta.image_height} input (aspect"
