@@ -87,6 +87,20 @@ def test_readme_env_example_runs(example):
             namespace[name].close()  # type: ignore[attr-defined]
 
 
+def test_the_quick_start_example_prints_the_same_every_run(capsys):
+    """reset(seed=0) does not seed Gymnasium's action_space.sample(): the first example's
+    random moves, and so what it prints, differed from run to run until it seeded them."""
+    import gymnasium
+
+    finals = []
+    for _ in range(2):
+        namespace: dict[str, object] = {"gym": gymnasium}
+        exec(compile(ENV_EXAMPLES[0], str(README), "exec"), namespace)
+        finals.append((capsys.readouterr().out, namespace["obs"].tobytes()))  # type: ignore[attr-defined]
+        namespace["env"].close()  # type: ignore[attr-defined]
+    assert finals[0] == finals[1]
+
+
 def test_the_readme_has_its_env_examples():
     # the quick start, the randomised world, the match
     assert len(ENV_EXAMPLES) == 3
