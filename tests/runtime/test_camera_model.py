@@ -296,6 +296,21 @@ def test_the_retrain_hint_trains(tmp_path):
         assert got == pytest.approx(getattr(want, f.name), abs=1e-8)
 
 
+def test_the_retrain_hint_trains_a_neck_at_its_physical_limits():
+    """CameraModel takes a neck reaching 180 degrees pan and 90 tilt; training's camera
+    wants them strictly inside: the hint gives them just inside (it gave 1.57079633 > pi/2,
+    which `activevision train` refused)."""
+    pytest.importorskip("torch")
+    from activevision.runtime.controller import camera_mismatch_message
+    from activevision.training import TrainConfig, apply_overrides
+
+    robot = CameraModel.from_degrees(640, 480, 58.0, 0.5, (-180, 180), (-90, 90))
+    message = camera_mismatch_message(Path("p.onnx"), robot, {"tilt_max": "..."}, 160)
+    words = message.split("activevision train ... ")[1].split(" (and")[0].split()
+    camera = apply_overrides(TrainConfig(), [w for w in words if w != "--set"]).env.camera
+    assert CameraModel.of(camera).differences(robot) == {}
+
+
 def test_warning_can_be_made_an_error(camera_policy):
     with warnings.catch_warnings():
         warnings.simplefilter("error", CameraMismatchWarning)

@@ -467,8 +467,9 @@ def camera_mismatch_message(
     differ): its angles and height, and an image ``input_width`` wide (the policy's) at the
     robot's aspect ratio (training renders at the network's input size, not the camera's)."""
     height = max(1, round(input_width / robot.aspect))
-    values = {"width": input_width, "height": height}
-    values |= {name: getattr(robot, name) for name in ("hfov", "camera_height", *_HEAD_LIMITS)}
+    values: dict[str, float] = {"width": input_width, "height": height}
+    values |= {name: getattr(robot, name) for name in ("hfov", "camera_height")}
+    values |= {name: _trainable_limit(name, getattr(robot, name)) for name in _HEAD_LIMITS}
     settings = " ".join(f"--set env.camera.{name}={value:.9g}" for name, value in values.items())
     lines = "\n".join(f"  - {line}" for line in differences.values())
     low, high = (math.degrees(getattr(robot, f"tilt_{end}")) for end in ("min", "max"))
@@ -484,6 +485,16 @@ def camera_mismatch_message(
 
 #: CameraModel's head limit fields
 _HEAD_LIMITS = ("pan_min", "pan_max", "tilt_min", "tilt_max")
+#: How far inside its open range (pan (-pi, pi), tilt (-pi/2, pi/2)) training's
+#: CameraConfig is given a robot's limit at the end of CameraModel's closed one (rad)
+_LIMIT_MARGIN = 1e-6
+
+
+def _trainable_limit(name: str, value: float) -> float:
+    """A robot's head limit as training's CameraConfig takes it: a neck that reaches 180
+    degrees pan or 90 tilt (CameraModel takes them) trained just inside them."""
+    bound = (math.pi if name.startswith("pan") else math.pi / 2) - _LIMIT_MARGIN
+    return min(max(value, -bound), bound)
 
 
 def _caller_level() -> int:
