@@ -424,6 +424,14 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         "config.json",
     ),
     (
+        "edited config exported",
+        lambda r: (r / "config.json").write_text(
+            (r / "config.json").read_text().replace('"step_deg": 3.0', '"step_deg": 5.0')
+        ),
+        ["export", "{run}", "-o", "{run}/../out.onnx"],
+        "changed after checkpoint",
+    ),
+    (
         "config not JSON",
         lambda r: (r / "config.json").write_text("{"),
         ["evaluate", "--run", "{run}", "--methods", "learned"],

@@ -112,3 +112,27 @@ def test_export_run(tmp_path, frames):
     np.testing.assert_allclose(meta.action_table, action_table(4.0), atol=1e-12)
     batch = frames(160, 120)[:, None]
     assert np.abs(onnx_q(paths.model_path, batch) - torch_q(network, batch)).max() <= 1e-4
+
+
+def test_export_run_refuses_a_config_edited_after_training(tmp_path):
+    """config.json edited after the newest checkpoint (its SHA-256 is in state.json): the
+    export would have recorded the edited moves (5 degrees a step for a 3-degree policy)."""
+    from activevision.agents.q_network import QNetwork
+    from activevision.export import export_run
+    from activevision.training.checkpoint import save_tensors
+
+    run = tmp_path / "run"
+    checkpoint = run / "checkpoints" / "step_000000300"
+    checkpoint.mkdir(parents=True)
+    config = json.dumps({"seed": 0, "env": {"step_deg": 3.0}}).encode()
+    (run / "config.json").write_bytes(config)
+    digest = hashlib.sha256(config).hexdigest()
+    (checkpoint / "state.json").write_text(json.dumps({"config_sha256": digest}))
+    shape = {"n_actions": 9, "stack": 1, "image_shape": [120, 160], "dueling": False}
+    save_tensors(run / "policy.safetensors", QNetwork(9).state_dict(), shape)
+    export_run(run, tmp_path / "ok" / "policy.onnx")  # unchanged: exported
+    (run / "config.json").write_text(json.dumps({"seed": 0, "env": {"step_deg": 5.0}}))
+    message = r"config\.json was changed after checkpoint step_000000300: policy\.json would"
+    with pytest.raises(ValueError, match=message):
+        export_run(run, tmp_path / "edited" / "policy.onnx")
+    assert not (tmp_path / "edited").exists()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -46,8 +47,9 @@ def export_run(
     except FileNotFoundError as error:
         raise FileNotFoundError(f"{run_dir} is not a training run: no {CONFIG_FILENAME}") from error
     config = load_config(config_path)
-    network = load_policy(run_dir, weights=weights)
     sha256 = hashlib.sha256(config_bytes).hexdigest()
+    _check_config_unchanged(run_dir, sha256)
+    network = load_policy(run_dir, weights=weights)
     if config.env_id == MATCH_ENV_ID:
         # a policy trained on the match: its world, observation and moves are the match's
         from activevision.envs.match.observations import vector_keys as match_keys
@@ -83,6 +85,28 @@ def export_run(
         metadata["goal_frame"] = config.dagger.goal_frame
         metadata["goal_views_deg"] = np.degrees(grid.views).tolist()
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)
+
+
+def _check_config_unchanged(run_dir: Path, sha256: str) -> None:
+    """ValueError if ``config.json`` (SHA-256 ``sha256``) is not the file the run's newest
+    checkpoint was taken under: policy.json would record the edited camera and moves, not
+    those the network learnt (no checkpoint, or an unreadable one: nothing to compare)."""
+    from activevision.training.checkpoint import list_checkpoints
+    from activevision.training.state import STATE_FILE
+
+    checkpoints = list_checkpoints(run_dir)
+    if not checkpoints:
+        return
+    try:
+        saved = json.loads((checkpoints[-1] / STATE_FILE).read_text()).get("config_sha256")
+    except (OSError, ValueError, AttributeError):
+        return  # loading the weights reports a corrupt checkpoint
+    if saved is not None and saved != sha256:
+        raise ValueError(
+            f"{run_dir / CONFIG_FILENAME} was changed after checkpoint {checkpoints[-1].name}:"
+            " policy.json would record the edited camera and moves, not those the policy was"
+            " trained with; restore the file"
+        )
 
 
 def _world_metadata(
