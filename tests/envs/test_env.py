@@ -147,3 +147,33 @@ def test_batched_starts_use_each_generator_as_alone():
     assert np.all((dist >= 1.0) & (dist <= 3.0))
     shift = np.hypot(*(together["believed_pose"] - together["pose"])[:, :2].T)
     assert np.allclose(shift, 0.4)
+
+
+#: a team's camera: a narrower neck than the paper's (pan +-60 deg, tilt 0..60)
+NARROW_NECK = {"pan_min": -np.pi / 3, "pan_max": np.pi / 3, "tilt_min": 0.0, "tilt_max": np.pi / 3}
+
+
+def test_goals_lie_within_the_head_limits_of_any_camera():
+    """The candidate views span the env's camera's head limits (the paper's grid for the
+    paper's camera), so every goal can be reached: with the paper's grid and a narrower neck,
+    about 1 goal in 5 lay beyond it and its episode could never succeed."""
+    import dataclasses
+
+    from activevision.experiments.evaluate import evaluate_policy
+    from activevision.experiments.policies import OraclePolicy
+    from activevision.localisation import DEFAULT_GRID, LocalisationConfig
+
+    paper = EnvConfig().camera
+    assert LocalisationConfig.for_camera(paper) == LocalisationConfig()
+    assert LocalisationConfig.for_camera(paper).grid == DEFAULT_GRID
+    config = EnvConfig(camera=dataclasses.replace(paper, **NARROW_NECK))
+    cam = config.camera
+    env = ActiveVisionEnv(config)
+    for seed in range(60):
+        _, info = env.reset(seed=seed)
+        pan, tilt = info["goal_viewpoint"]
+        assert cam.pan_min <= pan <= cam.pan_max and cam.tilt_min <= tilt <= cam.tilt_max, seed
+    _, summary, _ = evaluate_policy(OraclePolicy(config), 30, seed=0, config=config)
+    assert summary["success"].mean == 1.0  # every goal reached
+    with pytest.raises(ValueError, match="beyond the camera's head limits"):
+        ActiveVisionEnv(config, localisation=LocalisationConfig())

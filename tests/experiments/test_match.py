@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from activevision.envs.match.config import MatchConfig
-from activevision.envs.match.heads import TRACK_GRID
+from activevision.envs.match.heads import track_grid
 from activevision.experiments.match import (
     MATCH_METRICS,
     MatchClip,
@@ -40,6 +40,8 @@ from activevision.experiments.match_methods import (
 from activevision.geometry import field_landmarks
 
 SMALL = MatchConfig(ticks=12)
+
+TRACK = track_grid(MatchConfig().camera)  # entropy_track's candidates, paper camera
 
 
 @pytest.mark.parametrize("method", default_match_methods(None))
@@ -251,10 +253,10 @@ def test_entropy_track_keeps_the_ball_inside_its_margin():
         ball_on_field(info),
         field_landmarks(config.field),
         cam,
-        grid=TRACK_GRID,
+        grid=TRACK,
         ukf=config.tracker.ukf,
     )
-    views = {tuple(v): i for i, v in enumerate(TRACK_GRID.views)}
+    views = {tuple(v): i for i, v in enumerate(TRACK.views)}
     entropies = []
     for margin in (0.0, 10.0, 20.0):
         policy = EntropyTrack(config, margin)
@@ -269,7 +271,7 @@ def test_entropy_track_keeps_the_ball_inside_its_margin():
         entropies.append([search.entropies[i, v] for i, v in enumerate(chosen)])
         # the least expected entropy of the views allowed, by brute force
         for i, v in enumerate(chosen):
-            gaps = np.abs(TRACK_GRID.views - ball[i])
+            gaps = np.abs(TRACK.views - ball[i])
             ok = (gaps[:, 0] <= cam.hfov / 2 - math.radians(margin)) & (
                 gaps[:, 1] <= cam.vfov / 2 - math.radians(margin)
             )
@@ -317,10 +319,10 @@ def test_glance_track_tracks_the_ball_unless_unsure_or_the_ball_is_out_of_reach(
         ball_on_field(info)[6:],
         field_landmarks(config.field),
         config.camera,
-        grid=TRACK_GRID,
+        grid=TRACK,
         ukf=config.tracker.ukf,
     )
-    best = TRACK_GRID.views[np.argmin(search.entropies, axis=1)]
+    best = TRACK.views[np.argmin(search.entropies, axis=1)]
     np.testing.assert_array_equal(target[6:], best)
     for i in np.random.default_rng(0).permutation(9):  # alone, in shuffled order
         row = {k: v[i : i + 1] for k, v in info.items()}

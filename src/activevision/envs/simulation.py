@@ -24,6 +24,7 @@ from activevision.localisation import (
     LocalisationConfig,
     ViewpointBatch,
     best_viewpoints,
+    check_grid_reachable,
     entropy,
     hx_range_bearing,
     ukf_update_sequential,
@@ -53,7 +54,9 @@ class EpisodeBatch:
             )
         self.cfg = cfg
         self.n = num_envs
-        self.localisation = localisation or LocalisationConfig()
+        # the candidate views span this camera's head limits (the paper's grid for its camera)
+        self.localisation = localisation or LocalisationConfig.for_camera(cfg.camera)
+        check_grid_reachable(self.localisation.grid, cfg.camera)
         self.landmarks = field_landmarks(cfg.field)
         self.renderer = Renderer(cfg.field, cfg.camera)
         self.actions = action_table(cfg.step_deg, cfg.action_set)

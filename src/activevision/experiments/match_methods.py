@@ -223,7 +223,7 @@ class EntropyGreedy(TargetPolicy):
         super().__init__(config)
         self.every = every
         self.landmarks = field_landmarks(config.field)
-        self.localisation = LocalisationConfig(ukf=config.tracker.ukf)
+        self.localisation = LocalisationConfig.for_camera(config.camera, config.tracker.ukf)
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         super().reset(n, rng)
@@ -308,7 +308,7 @@ class OnnxMatchPolicy:
         self.model = Path(model) if model is not None else pretrained_policy_path()
         self.every = every
         self.landmarks = field_landmarks(config.field)
-        self.localisation = LocalisationConfig()
+        self.localisation = LocalisationConfig.for_camera(config.camera)
         self._make = lambda: HeadController(self.model)
 
     def reset(self, n: int, rng: np.random.Generator) -> None:

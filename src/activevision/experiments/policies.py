@@ -110,7 +110,7 @@ class EntropyPolicy:
         localisation: LocalisationConfig | None = None,
     ) -> None:
         self.cfg = config or EnvConfig()
-        self.loc = localisation or LocalisationConfig()
+        self.loc = localisation or LocalisationConfig.for_camera(self.cfg.camera)
         self.error = localisation_error
         self.jump = jump
         self.name = "entropy_jump" if jump else "entropy_steps"
@@ -224,7 +224,8 @@ class LearnedPolicy:
         keys = vector_keys(config.env)
         evidence = None
         if config.algo == "dagger" and config.dagger.act_by == "goal":
-            grid = LocalisationConfig().grid  # the candidate views the goal head names
+            # the candidate views the goal head names: those of the run's camera
+            grid = LocalisationConfig.for_camera(config.env.camera).grid
             table = action_table(config.env.step_deg, config.env.action_set)
             dag = config.dagger
             evidence = GoalEvidence(1, grid.views, table, dag.switch_margin, dag.goal_frame)

@@ -79,7 +79,8 @@ def export_run(
     if config.algo == "dagger":
         from activevision.localisation import LocalisationConfig
 
-        grid = LocalisationConfig().grid  # the views the student's goal head names
+        # the views the student's goal head names: those the trainer's env searched
+        grid = LocalisationConfig.for_camera(env.camera).grid
         metadata["act_by"] = config.dagger.act_by
         metadata["goal_switch_margin"] = config.dagger.switch_margin
         metadata["goal_frame"] = config.dagger.goal_frame

@@ -39,6 +39,8 @@ from activevision.localisation.viewpoint_types import (
     ViewpointGrid,
     ViewpointResult,
     ViewpointStatus,
+    check_grid_reachable,
+    grid_spanning,
 )
 
 __all__ = [
@@ -57,9 +59,11 @@ __all__ = [
     "best_viewpoint_loop",
     "best_viewpoints",
     "candidate_footprints",
+    "check_grid_reachable",
     "circular_mean",
     "entropy",
     "fx_odometry",
+    "grid_spanning",
     "hx_range_bearing",
     "measurement_mean",
     "measurement_noise",

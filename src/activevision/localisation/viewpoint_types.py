@@ -10,6 +10,7 @@ from functools import cached_property
 
 import numpy as np
 
+from activevision.geometry.camera import CameraConfig
 from activevision.localisation.config import DEFAULT_UKF, UKFConfig
 
 
@@ -198,3 +199,38 @@ class LocalisationConfig:
 
     grid: ViewpointGrid = DEFAULT_GRID  #: 10 x 4 candidates (paper)
     ukf: UKFConfig = DEFAULT_UKF  #: sensor model and start belief
+
+    @classmethod
+    def for_camera(cls, camera: CameraConfig, ukf: UKFConfig = DEFAULT_UKF) -> LocalisationConfig:
+        """The paper's 10 x 4 candidates spread over ``camera``'s head limits (for the
+        paper's camera, :data:`DEFAULT_GRID` itself), so that no goal lies beyond what the
+        head can reach."""
+        return cls(grid_spanning(camera), ukf)
+
+
+def grid_spanning(
+    camera: CameraConfig, n_pan: int = DEFAULT_GRID.n_pan, n_tilt: int = DEFAULT_GRID.n_tilt
+) -> ViewpointGrid:
+    """``n_pan`` x ``n_tilt`` candidates from ``camera``'s lowest to highest pan and tilt."""
+    return ViewpointGrid(
+        camera.pan_min, camera.pan_max, n_pan, camera.tilt_min, camera.tilt_max, n_tilt
+    )
+
+
+def check_grid_reachable(grid: ViewpointGrid, camera: CameraConfig) -> None:
+    """ValueError when a candidate of ``grid`` lies beyond ``camera``'s head limits (a goal
+    there could never be reached)."""
+    if (
+        grid.pan_min < camera.pan_min
+        or grid.pan_max > camera.pan_max
+        or grid.tilt_min < camera.tilt_min
+        or grid.tilt_max > camera.tilt_max
+    ):
+        raise ValueError(
+            f"the candidate views (pan {math.degrees(grid.pan_min):.1f} to"
+            f" {math.degrees(grid.pan_max):.1f} deg, tilt {math.degrees(grid.tilt_min):.1f} to"
+            f" {math.degrees(grid.tilt_max):.1f}) reach beyond the camera's head limits (pan"
+            f" {math.degrees(camera.pan_min):.1f} to {math.degrees(camera.pan_max):.1f}, tilt"
+            f" {math.degrees(camera.tilt_min):.1f} to {math.degrees(camera.tilt_max):.1f}):"
+            " use LocalisationConfig.for_camera(camera)"
+        )

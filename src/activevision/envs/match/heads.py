@@ -21,17 +21,23 @@ so watching for it costs localisation and gains nothing).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 from activevision.envs.actions import action_table, oracle_actions
 from activevision.envs.match.config import MatchConfig
-from activevision.geometry import LandmarkSet, clip_head, field_landmarks
-from activevision.localisation import ViewpointGrid, best_viewpoints
+from activevision.geometry import CameraConfig, LandmarkSet, clip_head, field_landmarks
+from activevision.localisation import ViewpointGrid, best_viewpoints, grid_spanning
 
-#: entropy_track's candidate views: pan -90..90 deg at 37 points, tilt 5..65 at 13 (5 deg)
-TRACK_GRID = ViewpointGrid(n_pan=37, n_tilt=13)
+
+@functools.lru_cache(maxsize=8)
+def track_grid(camera: CameraConfig) -> ViewpointGrid:
+    """entropy_track's candidate views: 37 pans and 13 tilts over ``camera``'s head limits
+    (for the paper's camera, pan -90..90 deg and tilt 5..65 in 5-degree steps). One object
+    per camera, so that the search reuses what it builds from the grid."""
+    return grid_spanning(camera, n_pan=37, n_tilt=13)
 
 
 def ball_direction(info: dict[str, np.ndarray], config: MatchConfig) -> np.ndarray:
@@ -65,13 +71,14 @@ def entropy_track_targets(
     config: MatchConfig,
     margin: float,
     landmarks: LandmarkSet | None = None,
-    grid: ViewpointGrid = TRACK_GRID,
+    grid: ViewpointGrid | None = None,
 ) -> np.ndarray:
     """Head targets (N, 2) rad: the least expected entropy (Algorithm 1 from each belief's
-    mean and covariance) among ``grid``'s views within half the field of view less
-    ``margin`` (rad) of the ball model's direction on each axis; the ball's direction where
-    none is."""
+    mean and covariance) among ``grid``'s views (default: :func:`track_grid`) within half
+    the field of view less ``margin`` (rad) of the ball model's direction on each axis; the
+    ball's direction where none is."""
     ball = ball_direction(info, config)
+    grid = track_grid(config.camera) if grid is None else grid
     result = best_viewpoints(
         info["belief_mean"],
         info["belief_cov"],
@@ -109,7 +116,7 @@ def glance_track_targets(
     std_m: float,
     reach_margin: float,
     landmarks: LandmarkSet | None = None,
-    grid: ViewpointGrid = TRACK_GRID,
+    grid: ViewpointGrid | None = None,
     track_margin: float = math.inf,
 ) -> np.ndarray:
     """Head targets (N, 2) rad: the ball model's direction (with a finite ``track_margin``,
