@@ -45,7 +45,6 @@ class SlotVectorEnv(VectorEnv):
         self._rngs = [seeding.np_random()[0] for _ in range(num_envs)]
         self._frames = np.zeros((num_envs, *frame_shape), dtype=np.uint8)
         self._needs_reset = np.zeros(num_envs, dtype=bool)
-        self._all = np.arange(num_envs)
         # Gymnasium's "_key" masks: every sub-environment reports every key, every step.
         self._every_env = np.ones(num_envs, dtype=bool)
         self._every_env.flags.writeable = False
