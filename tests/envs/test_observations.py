@@ -31,6 +31,23 @@ def test_dict_observation_in_space_every_step(kind):
     assert set(obs) == {"image", *vector_keys(env.config)}
 
 
+@pytest.mark.parametrize(
+    "error", [{"localisation_error": 12.0}, {"prior_error_range": (5.0, 30.0)}], ids=str
+)
+def test_a_prior_error_beyond_the_bound_stays_in_the_space(error):
+    """A prior error over 10 m put ``pose_error`` (and the prior pose) outside the Dict's
+    Box(-10, 10): the vectors are clipped to the bound, as on the robot."""
+    env = ActiveVisionEnv(observation="image+head+pose+proposal", **error)
+    for seed in range(4):
+        obs, info = env.reset(seed=seed)
+        assert env.observation_space.contains(obs), seed
+        want = np.clip(info["prior_error"], -10.0, 10.0)
+        np.testing.assert_array_equal(obs["pose_error"], np.float32([want]))
+        x, y = np.clip(info["prior_pose"][:2], -10.0, 10.0)
+        np.testing.assert_array_equal(obs["pose"][:2], np.float32([x, y]))
+        assert env.observation_space.contains(env.step(0)[0])
+
+
 def test_action_history_remembers_the_last_actions_oldest_first():
     env = ActiveVisionEnv(observation="image+head", action_history=2)
     obs, _ = env.reset(seed=1)

@@ -14,7 +14,7 @@ pytest.importorskip("onnxruntime")
 
 from activevision.agents.student import StudentNetwork  # noqa: E402
 from activevision.envs import ActiveVisionEnv, EnvConfig  # noqa: E402
-from activevision.envs.observations import vector_keys, vector_sizes  # noqa: E402
+from activevision.envs.observations import flatten_vectors, vector_keys, vector_sizes  # noqa: E402
 from activevision.experiments.policies import LearnedPolicy, OnnxPolicy  # noqa: E402
 from activevision.export import export_onnx, policy_metadata  # noqa: E402
 from activevision.runtime import HeadController  # noqa: E402
@@ -101,6 +101,26 @@ def test_controller_names_the_inputs_it_needs(tmp_path):
         frame, 0.1, 0.3, pose=(1.0, -0.5, 2.0), pose_error=0.3, proposal=(math.nan, math.nan)
     )
     assert 0 <= command.action < 9
+
+
+def test_controller_clips_its_vector_as_the_env_clips_observations(tmp_path):
+    """The env clips a prior pose or error scale beyond 10 to the observation space's bound;
+    the controller feeds the network the same vector."""
+    _, paths, _, _ = exported(tmp_path)
+    controller = HeadController(paths.model_path)
+    env = ActiveVisionEnv(
+        observation="image+head+pose+proposal", action_history=2, prior_error_range=(12.0, 30.0)
+    )
+    obs, info = env.reset(seed=0)
+    assert obs["pose_error"][0] == 10.0  # the error is 12 m or more
+    proposal = tuple(obs["proposal"][:2]) if obs["proposal"][4] else (math.nan, math.nan)
+    pan, tilt = info["head"]
+    controller.act(
+        obs["image"][0], pan, tilt, pose=tuple(info["prior_pose"]),
+        pose_error=info["prior_error"], proposal=proposal,
+    )  # fmt: skip
+    keys = vector_keys(env.config)
+    np.testing.assert_allclose(controller._vector[0], flatten_vectors(obs, keys), rtol=0, atol=1e-6)
 
 
 def test_an_unexpected_input_names_what_the_policy_was_trained_on(tmp_path):

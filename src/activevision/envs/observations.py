@@ -16,7 +16,8 @@ a robot knows of itself (``EnvConfig.observation``).
 adds proposal. ``action_history > 0`` adds actions to any of them. The prior pose is the
 believed pose (the true pose corrupted as ``localisation_error`` does), or with
 ``prior_error_range`` one corrupted by an error drawn per episode, and is quantised to
-``prior_grid``. Every vector is what a robot computes itself, so a policy trained on them
+``prior_grid``. Every entry is clipped to +-10, the spaces' bound (only a prior error over
+10 m reaches it). Every vector is what a robot computes itself, so a policy trained on them
 runs on a robot (:class:`activevision.runtime.HeadController` takes the same inputs).
 
 SB3's ``MultiInputPolicy`` takes these Dict spaces; the package's networks concatenate the
@@ -32,14 +33,15 @@ from gymnasium import spaces
 
 from activevision.envs.config import EnvConfig
 from activevision.envs.simulation import EpisodeBatch
-from activevision.runtime.metadata import VECTOR_KEY_SIZES
+from activevision.runtime.metadata import VECTOR_BOUND, VECTOR_KEY_SIZES
 
 IMAGE_KEY = "image"
 #: Size of each vector key (``"actions"`` is per remembered action): the runtime's table,
 #: so that HeadController builds exactly this layout on the robot.
 VECTOR_SIZES = VECTOR_KEY_SIZES
-#: Bound of every vector entry (angles in rad, positions in m, one-hots, cos/sin).
-_VECTOR_BOUND = 10.0
+#: Bound of every vector entry (angles in rad, positions in m, one-hots, cos/sin): entries
+#: beyond it (a prior pose or error scale over 10 m) are clipped to it, as on the robot.
+_VECTOR_BOUND = VECTOR_BOUND
 
 Observation = np.ndarray | dict[str, np.ndarray]
 
@@ -161,7 +163,9 @@ class ObservationBuilder:
             rows, cols = np.nonzero(self.history >= 0)
             onehot[rows, cols, self.history[rows, cols]] = 1.0
             values = onehot.reshape(n, -1)
-        return np.asarray(values, dtype=np.float32)
+        # inside the observation space: a prior error over 10 m (localisation_error or
+        # prior_error_range) gave a pose_error and a prior pose beyond the Box's bound
+        return np.clip(values, -_VECTOR_BOUND, _VECTOR_BOUND).astype(np.float32)
 
 
 def single(obs: Observation, i: int = 0) -> Observation:

@@ -21,6 +21,7 @@ import numpy as np
 from activevision.runtime.goal_evidence import GoalEvidence, goal_output_count, policy_actions
 from activevision.runtime.metadata import (
     CAMERA_TOLERANCES,
+    VECTOR_BOUND,
     CameraModel,
     PolicyFileError,
     PolicyMetadata,
@@ -28,10 +29,6 @@ from activevision.runtime.metadata import (
     metadata_path_for,
 )
 from activevision.runtime.preprocess import ColorOrder, FramePreprocessor, luma_weights
-
-#: A match student's vectors are clipped to +-this, as the match env clips its observations
-#: (``envs.match.observations``: belief stds and the ball's age, in m, rad and s)
-MATCH_VECTOR_BOUND = 10.0
 
 
 class CameraMismatchWarning(UserWarning):
@@ -356,7 +353,7 @@ class HeadController:
                 known = _finite_vector(key, belief if key == "belief" else ball, 3)
                 if key == "belief":
                     _non_negative("belief", known)
-                parts.append(np.clip(known, -MATCH_VECTOR_BOUND, MATCH_VECTOR_BOUND))
+                parts.append(known)
             elif key == "proposal":
                 parts.append(_proposal_vector(proposal, pan, tilt))
             else:
@@ -365,7 +362,9 @@ class HeadController:
                 onehot[np.flatnonzero(seen), self._history[seen]] = 1.0
                 parts.append(onehot.reshape(-1))
         if parts:
-            self._vector[0] = np.concatenate(parts)
+            # the envs' observation bound on every entry (envs.observations and
+            # envs.match.observations clip theirs the same way)
+            self._vector[0] = np.clip(np.concatenate(parts), -VECTOR_BOUND, VECTOR_BOUND)
 
     # ------------------------------------------------------------------ internals
     def _check_camera(self) -> None:

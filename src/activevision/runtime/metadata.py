@@ -113,6 +113,10 @@ VECTOR_KEY_SIZES = {
     "proposal": 5,
     "actions": 1,
 }
+#: Every vector input is clipped to +-this, the bound of the envs' observation spaces (m,
+#: rad, s): what lies beyond it (a prior pose or error scale over 10, a belief std or ball
+#: age over 10) is fed as the bound, in the envs and on the robot alike.
+VECTOR_BOUND = 10.0
 
 
 #: Keys of policy.json's ``camera`` record -> :class:`CameraModel` field (the suffix says the
