@@ -375,3 +375,30 @@ def test_the_native_vector_env_renders_as_sync_does(env_id: str) -> None:
         gym.make_vec(
             env_id, num_envs=2, vectorization_mode="vector_entry_point", render_mode="human"
         )
+
+
+@pytest.mark.parametrize("ticks", [20, 4], ids=["limit-first", "ticks-first"])
+def test_a_match_time_limit_is_taken_by_every_vectorizer(ticks: int) -> None:
+    """``make_vec("ActiveVisionMatch-v0", max_episode_steps=n)``: sync and async wrap each
+    match in Gymnasium's ``TimeLimit``; the native env refused the keyword as an unknown
+    ``MatchConfig`` field. It now ends matches after ``min(n, ticks)`` ticks, as they do."""
+    actions = random_actions(16)
+    got = {}
+    for mode in ("sync", "async", "vector_entry_point"):
+        envs = gym.make_vec(
+            "ActiveVisionMatch-v0",
+            num_envs=N,
+            vectorization_mode=mode,
+            max_episode_steps=6,
+            ticks=ticks,
+        )
+        try:
+            got[mode] = vector_rollout(envs, SEED, actions)
+        finally:
+            envs.close()
+    truncated = np.array([batch[3][0] for batch in got["sync"]])
+    ends = min(6, ticks)
+    # truncated every ``ends`` ticks, each followed by the autoreset step
+    assert np.flatnonzero(truncated).tolist() == list(range(ends, len(actions) + 1, ends + 1))
+    for mode in ("async", "vector_entry_point"):
+        assert_same_batches(got[mode], got["sync"])

@@ -90,7 +90,9 @@ class ActiveVisionMatchEnv(gym.Env):
     its position known to the ball model. The head anywhere within its limits.
 
     ## Episode End
-    Never terminates; truncates after ``ticks`` ticks (600: 3.2 minutes of play).
+    Never terminates; truncates after ``ticks`` ticks (600: 3.2 minutes of play), or
+    after ``max_episode_steps`` ticks if sooner: ``gymnasium.make`` and the sync and async
+    ``make_vec`` modes apply it in Gymnasium's ``TimeLimit``, the native vector env itself.
 
     ## Info
     What the robot knows: ``belief_mean`` (3,), ``belief_cov`` (3, 3), ``entropy``,

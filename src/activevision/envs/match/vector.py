@@ -27,17 +27,29 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     reset with ``seed=s`` is seeded with ``s + i``, so its trajectory equals a single env's
     reset with ``seed=s + i``; ``reset()`` without a seed and ``options={"reset_mask": mask}``
     behave as in ``ActiveVisionVectorEnv``. Autoreset follows Gymnasium's default
-    (``NEXT_STEP``); infos hold the single env's keys as arrays over sub-environments."""
+    (``NEXT_STEP``); infos hold the single env's keys as arrays over sub-environments.
+    ``max_episode_steps`` (``gymnasium.make_vec(..., max_episode_steps=n)``, which gives the
+    sync and async modes Gymnasium's ``TimeLimit``) truncates a match after ``n`` ticks when
+    that comes before ``ticks``, as the ``TimeLimit`` does."""
 
     def __init__(
         self,
         num_envs: int = 1,
         config: MatchConfig | None = None,
         render_mode: str | None = None,
+        max_episode_steps: int | None = None,
         **config_overrides: Any,
     ) -> None:
         num_envs = check_count("num_envs", num_envs)
         self.config = config = resolve_match_config(config, config_overrides)
+        # the match truncates itself after config.ticks; a time limit may end it sooner
+        self.max_episode_steps = (
+            None
+            if max_episode_steps is None
+            else check_count("max_episode_steps", max_episode_steps)
+        )
+        limit = self.max_episode_steps
+        self._last_tick = config.ticks if limit is None else min(config.ticks, limit)
         self.sim = MatchBatch(config, num_envs)
         self._set_up_slots(
             num_envs,
@@ -60,7 +72,7 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     ) -> tuple[Observation, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         resetting = self._needs_reset.copy()
         reward = self.sim.step(actions, active=~resetting)
-        truncated = ~resetting & (self.sim.tick >= self.config.ticks)
+        truncated = ~resetting & (self.sim.tick >= self._last_tick)
         started = np.flatnonzero(resetting)
         if len(started):
             self.sim.reset(started, [self._rngs[i] for i in started])
