@@ -427,12 +427,17 @@ class MatchBatch:
     def info_arrays(self) -> dict[str, np.ndarray]:
         """Per-slot facts as arrays over all N slots (the env's Info section): what the robot
         knows (``belief_mean``, ``belief_cov``, ``head``, ``ball_relative``, ``ball_age``) and
-        what only the simulator knows (``pose``, ``ball``, the errors)."""
+        what only the simulator knows (``pose``, ``ball``, the errors). A slot never reset
+        (a vector env's first reset with a ``reset_mask``) reports entropy 0: its belief is
+        the zeros the state starts as, whose entropy does not exist."""
+        started = np.flatnonzero(self.started)
+        entropies = np.zeros(self.n)
+        entropies[started] = self.entropy(started)
         return {
             "pose": self.pose.copy(),
             "belief_mean": self.mean.copy(),
             "belief_cov": self.cov.copy(),
-            "entropy": self.entropy(),
+            "entropy": entropies,
             "position_error": self.position_error(),
             "heading_error": self.heading_error(),
             "head": self.head.copy(),
