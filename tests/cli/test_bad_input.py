@@ -297,6 +297,16 @@ def test_a_compare_folder_another_compare_writes_is_refused(tmp_path, one_clear_
     assert main([*argv, "--out", str(out)]) == 0  # free again, and released after the run
     assert main([*argv, "--out", str(out), "--overwrite"]) == 0
     assert "wrote" in capsys.readouterr().out
+    assert sorted(p.name for p in out.iterdir()) == ["compare.csv", "compare.png"]  # no .lock
+    # a compare that fails before its first row leaves no folder (nor lock) behind
+    failed = tmp_path / "failed"
+    assert (
+        main(
+            [*argv[:-2], "--episodes", "1", "--runs", str(tmp_path / "none"), "--out", str(failed)]
+        )
+        == 2
+    )
+    assert not failed.exists()
 
 
 def test_finished_run_resumes_to_nothing_and_says_so(run, capsys):

@@ -21,9 +21,11 @@ from activevision.cli.args import (
     seed,
 )
 from activevision.cli.outputs import (
+    OutputError,
     check_figure_path,
     check_outputs,
     figure_and_gif,
+    is_training_run,
     make_output_folder,
     removed_on_failure,
 )
@@ -169,16 +171,21 @@ def cmd_compare(args: argparse.Namespace) -> None:
     check_weights(args)
     check_run(args.run)  # before the outputs inside it
     out = args.out or (args.run / "compare" if args.run else Path("compare"))
+    if is_training_run(out):  # its folder is the trainer's (and its lock the trainer's)
+        raise OutputError(f"refusing to write into the training run {out}; choose another --out")
     # compare.csv is resumed, not replaced (outputs.py, rule 3): only rules 1 and 4 apply
     check_outputs(own=[out / "compare.csv", out / "compare.png"], overwrite=True)
     check_runs(args.methods or [], args.run)
-    make_output_folder(out, None if args.out else str(out))  # its rows are written as played
-    # one compare per folder: two would append their rows to one compare.csv
-    lock = RunLock(out, ("written", "let it finish (or stop it), or give this one another --out"))
-    try:
-        _compare_into(out, args)
-    finally:
-        lock.release()
+    made = make_output_folder(out, None if args.out else str(out))  # rows written as played
+    with removed_on_failure(made):  # a folder with rows stays, to be resumed
+        # one compare per folder: two would append their rows to one compare.csv
+        lock = RunLock(
+            out, ("written", "let it finish (or stop it), or give this one another --out")
+        )
+        try:
+            _compare_into(out, args)
+        finally:
+            lock.release(remove=True)
 
 
 def _compare_into(out: Path, args: argparse.Namespace) -> None:

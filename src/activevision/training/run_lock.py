@@ -69,9 +69,12 @@ class RunLock:
         file.flush()
         self._file = file
 
-    def release(self) -> None:
-        """Let another trainer take the run (idempotent)."""
+    def release(self, remove: bool = False) -> None:
+        """Let another trainer take the run (idempotent). With ``remove``, the lock file
+        goes too (removed while still held, so no other process can hold it by then)."""
         if self._file is not None:
+            if remove:
+                self.path.unlink(missing_ok=True)
             self._file.close()  # closing the descriptor drops the flock
             self._file = None
 
