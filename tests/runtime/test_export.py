@@ -119,7 +119,7 @@ def test_export_run_refuses_a_config_edited_after_training(tmp_path):
     export would have recorded the edited moves (5 degrees a step for a 3-degree policy)."""
     from activevision.agents.q_network import QNetwork
     from activevision.export import export_run
-    from activevision.training.checkpoint import save_tensors
+    from activevision.training.checkpoint import CheckpointError, save_tensors
 
     run = tmp_path / "run"
     checkpoint = run / "checkpoints" / "step_000000300"
@@ -133,6 +133,6 @@ def test_export_run_refuses_a_config_edited_after_training(tmp_path):
     export_run(run, tmp_path / "ok" / "policy.onnx")  # unchanged: exported
     (run / "config.json").write_text(json.dumps({"seed": 0, "env": {"step_deg": 5.0}}))
     message = r"config\.json was changed after checkpoint step_000000300: policy\.json would"
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(CheckpointError, match=message):
         export_run(run, tmp_path / "edited" / "policy.onnx")
     assert not (tmp_path / "edited").exists()

@@ -48,7 +48,7 @@ def export_run(
         raise FileNotFoundError(f"{run_dir} is not a training run: no {CONFIG_FILENAME}") from error
     config = load_config(config_path)
     sha256 = hashlib.sha256(config_bytes).hexdigest()
-    _check_config_unchanged(run_dir, sha256)
+    _check_config_unchanged(run_dir)
     network = load_policy(run_dir, weights=weights)
     if config.env_id == MATCH_ENV_ID:
         # a policy trained on the match: its world, observation and moves are the match's
@@ -88,12 +88,12 @@ def export_run(
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)
 
 
-def _check_config_unchanged(run_dir: Path, sha256: str) -> None:
-    """ValueError if ``config.json`` (SHA-256 ``sha256``) is not the file the run's newest
-    checkpoint was taken under: policy.json would record the edited camera and moves, not
-    those the network learnt (no checkpoint, or an unreadable one: nothing to compare)."""
+def _check_config_unchanged(run_dir: Path) -> None:
+    """CheckpointError if ``config.json`` is not the file the run's newest checkpoint was
+    taken under: policy.json would record the edited camera and moves, not those the network
+    learnt (no checkpoint, or an unreadable one: nothing to compare)."""
     from activevision.training.checkpoint import list_checkpoints
-    from activevision.training.state import STATE_FILE
+    from activevision.training.state import STATE_FILE, check_config_unchanged
 
     checkpoints = list_checkpoints(run_dir)
     if not checkpoints:
@@ -102,11 +102,13 @@ def _check_config_unchanged(run_dir: Path, sha256: str) -> None:
         saved = json.loads((checkpoints[-1] / STATE_FILE).read_text()).get("config_sha256")
     except (OSError, ValueError, AttributeError):
         return  # loading the weights reports a corrupt checkpoint
-    if saved is not None and saved != sha256:
-        raise ValueError(
-            f"{run_dir / CONFIG_FILENAME} was changed after checkpoint {checkpoints[-1].name}:"
-            " policy.json would record the edited camera and moves, not those the policy was"
-            " trained with; restore the file"
+    if saved is not None:
+        check_config_unchanged(
+            run_dir,
+            checkpoints[-1],
+            saved,
+            "policy.json would record the edited camera and moves, not those the policy was"
+            " trained with; restore the file",
         )
 
 

@@ -279,7 +279,7 @@ def load_checkpoint(run_dir: Path, checkpoint: Path | None = None) -> LoadedChec
     except OSError as error:
         raise ckpt.CheckpointError(f"cannot read {path / STATE_FILE}: {error}") from error
     state = TrainerState.from_json(text, str(path / STATE_FILE))
-    _check_config_unchanged(run_dir, path, state.config_sha256)
+    check_config_unchanged(run_dir, path, state.config_sha256)
     return LoadedCheckpoint(path, state, tensors, optimizer, replay)
 
 
@@ -306,17 +306,26 @@ def restore_learning(
     return buffer
 
 
-def _check_config_unchanged(run_dir: Path, checkpoint: Path, saved: str) -> None:
-    """A resumed run must go on with the config its checkpoint was taken under."""
+#: what resuming from a checkpoint under a changed config.json would do
+RESUMING_WOULD = (
+    "resuming would mix two configurations: restore the file, or start a new run with the new"
+    " config"
+)
+
+
+def check_config_unchanged(
+    run_dir: Path, checkpoint: Path, saved: str | None, consequence: str = RESUMING_WOULD
+) -> None:
+    """CheckpointError unless ``run_dir``'s config.json is the file (SHA-256 ``saved``, from
+    the checkpoint's state) that ``checkpoint`` was taken under; ``consequence`` says what
+    going on regardless would do (a resume, an export)."""
     try:
         current = config_digest(run_dir)
     except OSError as error:
         raise ckpt.CheckpointError(f"cannot read {run_dir / CONFIG_FILE}: {error}") from error
     if current != saved:
         raise ckpt.CheckpointError(
-            f"{run_dir / CONFIG_FILE} was changed after checkpoint {checkpoint.name}; resuming"
-            " would mix two configurations: restore the file, or start a new run with the"
-            " new config"
+            f"{run_dir / CONFIG_FILE} was changed after checkpoint {checkpoint.name}: {consequence}"
         )
 
 

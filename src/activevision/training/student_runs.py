@@ -167,10 +167,7 @@ class StudentRun:
             config = load_config(run_dir / run_state.CONFIG_FILE)
             path = newest
             state = json.loads((path / run_state.STATE_FILE).read_text())
-            if state.get("config_sha256") != run_state.config_digest(run_dir):
-                raise ckpt.CheckpointError(
-                    f"{run_dir / run_state.CONFIG_FILE} was changed after checkpoint {path.name}"
-                )
+            run_state.check_config_unchanged(run_dir, path, state.get("config_sha256"))
             trainer = cls(config, run_dir, loggers=loggers, _resuming=True)  # type: ignore[call-arg]
             trainer._lock = lock  # handed over: close() releases it
             tensors, _ = ckpt.load_tensors(path / "model.safetensors")
