@@ -20,10 +20,10 @@ from gymnasium import spaces
 
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.simulation import MatchBatch
+from activevision.runtime.metadata import VECTOR_BOUND  # every vector is clipped to +-this
 
 IMAGE_KEY = "image"
 VECTOR_SIZES = {"head": 2, "pose": 4, "belief": 3, "ball": 3}
-VECTOR_BOUND = 10.0  #: every vector is clipped to +-this (HeadController does the same)
 
 Observation = np.ndarray | dict[str, np.ndarray]
 
