@@ -142,8 +142,17 @@ def test_an_unexpected_input_names_what_the_policy_was_trained_on(tmp_path):
         ({"proposal": (0.2, 40.0)}, r"proposal tilt must be radians within \+-pi, got 40"),
         ({"proposal": (True, 0.3)}, "proposal pan must be a number of radians, got True"),
         ({"pose": (1.0, "2", 0.0)}, r"pose must be 3 numbers, got \(1\.0, '2', 0\.0\)"),
+        ({"pose": (1, 2, True)}, r"pose must be 3 numbers, got \(1, 2, True\)"),
     ],
-    ids=["negative-error", "bool-error", "proposal-degrees", "tilt-degrees", "bool", "str"],
+    ids=[
+        "negative-error",
+        "bool-error",
+        "proposal-degrees",
+        "tilt-degrees",
+        "bool",
+        "str",
+        "bool-in-list",
+    ],
 )
 def test_nonsense_inputs_are_refused_by_name(tmp_path, given, message):
     """What a robot gets wrong (a negative standard deviation, degrees for radians, a flag

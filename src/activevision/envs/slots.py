@@ -87,7 +87,7 @@ class SlotVectorEnv(VectorEnv):
             values = np.array(infos[key])
             values[~present] = 0
             infos[key] = values
-            infos[f"_{key}"] = present
+            infos[f"_{key}"] = present.copy()  # one array a key, as Sync gives
         return infos
 
 

@@ -508,7 +508,9 @@ def _caller_level() -> int:
 
 def _finite_vector(name: str, value: Any, size: int) -> np.ndarray:
     try:
-        if np.asarray(value).dtype.kind in "bSU":  # True, "0.5": float64 would take them
+        # True, "0.5", alone or in a list: float64 would take them ((1, 2, True) as 1.0)
+        items = np.ravel(np.asarray(value, dtype=object))
+        if any(isinstance(v, bool | np.bool_ | str | bytes) for v in items):
             raise TypeError(name)
         array = np.asarray(value, dtype=np.float64).reshape(size)
     except (TypeError, ValueError) as error:
