@@ -146,3 +146,15 @@ def test_only_the_command_picks_agg_and_help_imports_no_matplotlib(tmp_path):
         [sys.executable, "-c", code], env=_env_without_backend(), capture_output=True, text=True
     )
     assert done.returncode == 0, done.stderr[-3000:]
+
+
+def test_the_success_rate_panel_names_both_curves():
+    """Beside the greedy validation, the training episodes' success rate (a DAgger run's
+    first epochs played partly by the teacher) had no legend entry: it read as the policy's."""
+    from activevision.figures.canvas import new_figure
+    from activevision.figures.training import CURVES, draw_curve
+
+    ax = new_figure().subplots()
+    metrics = {"epoch": [1, 2], "step": [10, 20], "success_rate": [0.9, 0.7]}
+    draw_curve(ax, CURVES[2], metrics, {"step": [20], "success_rate": [0.8]})
+    assert ax.get_legend_handles_labels()[1] == ["training episodes", "greedy validation"]

@@ -125,7 +125,10 @@ def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> N
             ax.plot(x, moving_average(y, window), color="tab:blue", label=f"mean of {window}")
             ax.legend(loc="lower right", fontsize=8)
         else:
-            ax.plot(x, y, color="tab:blue", marker="o", markersize=3, linewidth=1.2)
+            # beside the greedy validation, say whose these are: the training episodes'
+            # (exploring, or a DAgger run's teacher acting for part of them)
+            label = "training episodes" if curve.y == "success_rate" else None
+            ax.plot(x, y, color="tab:blue", marker="o", markersize=3, linewidth=1.2, label=label)
         if curve.y == "success_rate" and validation:
             _draw_validation(ax, x, table, validation)
     ax.set_title(curve.title)
