@@ -115,6 +115,7 @@ def test_pareto_front_by_hand():
     assert pareto_front(results) == ["a", "b", "d"]  # c is beaten by a on both
     rows = csv_rows(results, 4, 0)
     assert rows[0]["position_rmse"] == pytest.approx(0.1) and rows[0]["matches"] == 4
+    assert rows[0]["ticks"] == 1  # how long the matches were (report.md says it)
 
 
 def test_paired_differences_by_hand():

@@ -243,7 +243,13 @@ def csv_rows(results: Sequence[MethodResult], matches: int, seed: int) -> list[d
     No wall-clock time: the same seed writes the same bytes (the console prints the time)."""
     rows = []
     for r in results:
-        row: dict[str, object] = {"method": r.method, "matches": matches, "seed": seed}
+        ticks = r.error_curve.shape[0]
+        row: dict[str, object] = {
+            "method": r.method,
+            "matches": matches,
+            "ticks": ticks,
+            "seed": seed,
+        }
         for name, iv in r.summary().items():
             row[name] = iv.mean
             row[f"{name}_low"] = iv.low

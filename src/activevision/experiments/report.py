@@ -15,11 +15,13 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import platform
 from pathlib import Path
 
 import activevision
 from activevision.io import read_json, write_text
+from activevision.training.config import MATCH_ENV_ID
 
 
 def _csv_rows(path: Path) -> list[dict]:
@@ -48,12 +50,16 @@ def write_report(run_dir: str | Path) -> Path:
     if not (run / "config.json").exists():
         raise FileNotFoundError(f"{run} is not a training run (no config.json)")
     config = read_json(run / "config.json")
+    algo = config.get("algo", "ddqn")
+    env_id = config.get("env_id", "ActiveVision-v0")
     parts = [
         f"# activevision report: `{run.name}`",
         "",
         f"activevision {activevision.__version__}, Python {platform.python_version()}, "
-        f"training seed {config.get('seed')}, {config.get('algo', 'ddqn')},"
-        f" {config.get('run', {}).get('total_timesteps')} steps.",
+        f"training seed {config.get('seed')}, {algo} on `{env_id}`,"
+        f" {config.get('run', {}).get('total_timesteps')} steps"
+        + (" (match ticks)" if env_id == MATCH_ENV_ID else "")
+        + ".",
         "",
         "## Training",
     ]
@@ -61,12 +67,7 @@ def write_report(run_dir: str | Path) -> Path:
         parts += ["", "![training curves](plots/training.png)"]
     metrics = _csv_rows(run / "metrics.csv")
     if metrics:
-        last = metrics[-1]
-        parts += [
-            "",
-            "Last epoch: "
-            + ", ".join(f"{k} {float(v):.4g}" for k, v in last.items() if _is_number(v)),
-        ]
+        parts += ["", "Last epoch: " + _last_epoch(metrics[-1], algo)]
     evaluation = run / "evaluation" / "evaluation.json"
     if evaluation.exists():
         data = read_json(evaluation)
@@ -76,9 +77,14 @@ def write_report(run_dir: str | Path) -> Path:
             "## Evaluation",
             "",
             f"{data['episodes']} episodes, seed {data['seed']}, identical starts for every "
-            "method; mean [95% confidence interval].",
+            f"method{_error_text(rows)}; mean [95% confidence interval].",
             "",
             _table(rows, ["success", "success_rate", "success_duration", "ball_loss_duration"]),
+            "",
+            "success: the share of episodes that reach the goal view; success_rate: the"
+            " paper's |observed ∩ desired| / |desired| landmarks at the end; success_duration:"
+            " steps to success, ball_loss_duration: steps until the ball was lost (20 if"
+            " never, as the paper counts).",
             "",
             _table(rows, ["entropy_regret", "regret_within", "oscillating"]),
             "",
@@ -88,6 +94,9 @@ def write_report(run_dir: str | Path) -> Path:
             "",
             # head travel (degrees per episode): evaluations written before it lack it
             _table(rows, [m for m in ("reward", "score", "head_travel") if m in rows[0]]),
+            "",
+            "reward: the episode's total; score: the authors' release's (1 success, 0 ball"
+            " lost, else success_rate); head_travel: degrees the head moved in the episode.",
         ]
         if data.get("latency"):
             lat = data["latency"]
@@ -114,13 +123,20 @@ def write_report(run_dir: str | Path) -> Path:
             "",
             "## Head control through whole matches",
             "",
-            f"`ActiveVisionMatch-v0`: {first['matches']} matches from seed {first['seed']}, the"
+            f"`ActiveVisionMatch-v0`: {first['matches']} matches"
+            + (f" of {first['ticks']} ticks" if first.get("ticks") else "")
+            + f" from seed {first['seed']}, the"
             " same for every strategy; the robot walks, the ball is kicked about, the UKF"
             " tracks every tick. Mean [95% interval] over matches.",
             "",
             _table(match_rows, ["position_rmse", "heading_rmse", "lost_share"]),
             "",
             _table(match_rows, ["ball_in_view", "entropy", "head_travel"]),
+            "",
+            "position_rmse (m) and heading_rmse (degrees): the belief's error over every"
+            " tick; lost_share, ball_in_view: shares of ticks; entropy: the belief's mean"
+            " (nats); head_travel: degrees per second."
+            f" {_match_policies_text(match_rows)}",
             "",
             "![Pareto front](match/match_pareto.png)",
             "",
@@ -148,3 +164,59 @@ def _is_number(value: str) -> bool:
     except (TypeError, ValueError):
         return False
     return True
+
+
+#: ``metrics.csv`` columns that count something (written as integers)
+_COUNTS = ("epoch", "step", "episodes", "updates")
+#: the learners that write no exploration epsilon or PER beta (those columns hold 0)
+_NO_EXPLORATION = ("sac", "td3", "ppo")
+
+
+def _last_epoch(row: dict, algo: str) -> str:
+    """``metrics.csv``'s last row as text: counts as integers, no column that was not
+    measured (NaN: a match has no success), and ``epsilon`` named for what it is (a DAgger
+    run's is the teacher's share; an SB3 learner's and DAgger's ``beta`` are unused 0s)."""
+    cells = []
+    for key, value in row.items():
+        if not _is_number(value) or not math.isfinite(float(value)):
+            continue
+        unused = key == "beta" and algo != "ddqn"
+        if unused or (key == "epsilon" and algo in _NO_EXPLORATION):
+            continue
+        name = "teacher's share" if key == "epsilon" and algo == "dagger" else key
+        number = float(value)
+        text = f"{number:.0f}" if key in _COUNTS and number.is_integer() else f"{number:.4g}"
+        cells.append(f"{name} {text}")
+    return ", ".join(cells)
+
+
+def _error_text(rows: list[dict]) -> str:
+    """``", localisation error 1 m and rad"`` (the entropy methods' belief and a learned
+    policy's prior pose that far off), or ``", exact localisation"``."""
+    errors = {float(r["error"]) for r in rows if _is_number(r.get("error", ""))}
+    if not errors:
+        return ""
+    if errors == {0.0}:
+        return ", exact localisation (error 0)"
+    return ", localisation error " + "/".join(f"{e:g}" for e in sorted(errors)) + " m and rad"
+
+
+def _match_policies_text(rows: list[dict]) -> str:
+    """What ``onnx_policy`` and ``learned`` are, and whether a training run's own network
+    played (``match.csv`` does not record which model or run they were)."""
+    methods = [r["method"] for r in rows]
+    text = []
+    if any(m.startswith("onnx_policy") for m in methods):
+        text.append(
+            "onnx_policy: an exported policy, the package's shipped one unless `match"
+            " --model` named another."
+        )
+    if "learned" in methods:
+        text.append("learned: the training run `match --run` named.")
+    else:
+        text.append(
+            "There is no `learned` row: `match --run RUN` adds one (a match student or an"
+            " image DDQN run); an exported policy plays as onnx_policy with `match --model"
+            " RUN/policy.onnx`."
+        )
+    return " ".join(text)

@@ -1,0 +1,118 @@
+"""report.md says what was run: the evaluation's localisation error, the last epoch's
+columns as what they are, and what the match comparison's strategies are."""
+
+import csv
+import json
+
+import pytest
+
+from activevision.experiments.report import write_report
+
+METRICS = {
+    "epoch": 8,
+    "step": 40331,
+    "episodes": 448,
+    "success_rate": 0.857,
+    "success_duration": 12.4,
+    "ball_loss_duration": 19.4,
+    "episode_reward": 4.2,
+    "loss": 1.6,
+    "updates": 112,
+    "epsilon": 0.25,
+    "beta": 0.0,
+    "steps_per_s": 402.1,
+}
+
+
+def write_rows(path, rows):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def make_run(tmp_path, algo="dagger", env_id="ActiveVision-v0", metrics=None):
+    run = tmp_path / "run"
+    run.mkdir(parents=True)
+    config = {"algo": algo, "env_id": env_id, "seed": 0, "run": {"total_timesteps": 40000}}
+    (run / "config.json").write_text(json.dumps(config))
+    write_rows(run / "metrics.csv", [metrics or METRICS])
+    return run
+
+
+def evaluation_row(method, error):
+    row = {"episodes": 100, "seed": 0, "error": error, "method": method}
+    for name in ("success", "success_rate", "success_duration", "ball_loss_duration") + (
+        "entropy_regret",
+        "regret_within",
+        "oscillating",
+        "reward",
+        "score",
+        "head_travel",
+    ):
+        row |= {name: 0.5, f"{name}_low": 0.4, f"{name}_high": 0.6}
+    return row
+
+
+def write_evaluation(run, error):
+    rows = [evaluation_row(m, error) for m in ("learned", "oracle")]
+    path = run / "evaluation" / "evaluation.json"
+    path.parent.mkdir()
+    path.write_text(json.dumps({"methods": rows, "latency": {}, "episodes": 100, "seed": 0}))
+
+
+def match_row(method, ticks=True):
+    row = {"method": method, "matches": 16, "seed": 0} | ({"ticks": 300} if ticks else {})
+    for name in ("position_rmse", "heading_rmse", "lost_share", "ball_in_view", "entropy"):
+        row |= {name: 0.5, f"{name}_low": 0.4, f"{name}_high": 0.6}
+    return row | {"head_travel": 7.0, "head_travel_low": 6.0, "head_travel_high": 8.0}
+
+
+@pytest.mark.parametrize(("error", "said"), [(0.0, "exact localisation"), (1.0, "error 1 m")])
+def test_the_evaluation_names_its_localisation_error(tmp_path, error, said):
+    """evaluate --error 1 used to be reported as plain 'identical starts for every method'."""
+    run = make_run(tmp_path)
+    write_evaluation(run, error)
+    report = write_report(run).read_text()
+    line = next(x for x in report.splitlines() if x.startswith("100 episodes"))
+    assert said in line
+    assert "degrees the head moved in the episode" in report  # head_travel's unit
+
+
+def test_the_last_epoch_shows_counts_whole_and_names_dagger_epsilon(tmp_path):
+    last = write_report(make_run(tmp_path)).read_text().split("Last epoch: ")[1].splitlines()[0]
+    assert "step 40331," in last and "episodes 448," in last  # not 4.033e+04
+    assert "teacher's share 0.25" in last  # DAgger's epsilon is the teacher's share
+    assert "epsilon" not in last and "beta" not in last  # no PER in DAgger
+
+
+def test_the_last_epoch_leaves_out_what_a_learner_does_not_measure(tmp_path):
+    ppo = write_report(make_run(tmp_path, algo="ppo")).read_text()
+    assert "epsilon" not in ppo.split("## Configuration")[0]
+    assert "beta" not in ppo.split("## Configuration")[0]
+    match_metrics = METRICS | {"success_rate": "nan", "success_duration": "nan"}
+    run = make_run(tmp_path / "m", env_id="ActiveVisionMatch-v0", metrics=match_metrics)
+    report = write_report(run).read_text()
+    assert "dagger on `ActiveVisionMatch-v0`, 40000 steps (match ticks)" in report
+    last = report.split("Last epoch: ")[1].splitlines()[0]
+    assert "nan" not in last and "success_rate" not in last and "loss 1.6" in last
+    ddqn = write_report(make_run(tmp_path / "d", algo="ddqn")).read_text()
+    assert "epsilon 0.25, beta 0" in ddqn
+
+
+def test_the_match_section_says_how_long_and_whose_policies(tmp_path):
+    """onnx_policy in the quickstart's match table is the package's shipped policy, not
+    the run's; and the section gave neither the matches' length nor head_travel's unit
+    (degrees per second there, per episode in the evaluation)."""
+    run = make_run(tmp_path)
+    write_rows(run / "match" / "match.csv", [match_row("ball_track"), match_row("onnx_policy")])
+    report = write_report(run).read_text()
+    assert "16 matches of 300 ticks from seed 0" in report
+    assert "the package's shipped one unless `match --model` named another" in report
+    assert "There is no `learned` row" in report and "degrees per second" in report
+    write_rows(run / "match" / "match.csv", [match_row("learned", ticks=False)])
+    report = write_report(run).read_text()
+    assert "16 matches from seed 0" in report  # a match.csv written before the ticks column
+    assert "learned: the training run `match --run` named" in report
+    assert "There is no `learned` row" not in report and "onnx_policy:" not in report
