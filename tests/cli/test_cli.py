@@ -89,3 +89,5 @@ def test_one_episode_says_its_means_have_no_intervals(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "one episode: the means' 95% intervals need 2 or more" in printed
     assert "nan" in printed
+    written = json.loads((tmp_path / "e" / "evaluation.json").read_text())
+    assert (written["episodes"], written["weights"]) == (1, "final")  # for the report

@@ -55,11 +55,12 @@ def evaluation_row(method, error):
     return row
 
 
-def write_evaluation(run, error):
+def write_evaluation(run, error, **more):
     rows = [evaluation_row(m, error) for m in ("learned", "oracle")]
     path = run / "evaluation" / "evaluation.json"
     path.parent.mkdir()
-    path.write_text(json.dumps({"methods": rows, "latency": {}, "episodes": 100, "seed": 0}))
+    data = {"methods": rows, "latency": {}, "episodes": 100, "seed": 0} | more
+    path.write_text(json.dumps(data))
 
 
 def match_row(method, ticks=True):
@@ -78,6 +79,26 @@ def test_the_evaluation_names_its_localisation_error(tmp_path, error, said):
     line = next(x for x in report.splitlines() if x.startswith("100 episodes"))
     assert said in line
     assert "degrees the head moved in the episode" in report  # head_travel's unit
+
+
+@pytest.mark.parametrize(
+    ("weights", "said"),
+    [
+        ({"weights": "best"}, "best validated weights"),
+        ({"weights": "final"}, "final weights"),
+        ({}, None),
+    ],
+    ids=["best", "final", "unrecorded"],
+)
+def test_the_evaluation_names_the_weights_learned_played(tmp_path, weights, said):
+    """evaluate --weights best was reported like the final weights."""
+    run = make_run(tmp_path)
+    write_evaluation(run, 0.0, **weights)
+    line = next(x for x in write_report(run).read_text().splitlines() if x.startswith("100 "))
+    if said is None:  # an evaluation from before the record: nothing claimed
+        assert "weights" not in line
+    else:
+        assert f"`learned` plays the run's {said}." in line
 
 
 def test_the_last_epoch_shows_counts_whole_and_names_dagger_epsilon(tmp_path):

@@ -158,6 +158,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
             "steps_where_all_solve": solved,
             "episodes": args.episodes,
             "seed": args.seed,
+            "weights": args.weights,  # of --run's learned policy: final or best validated
         },
     )
     print(f"wrote {out}/evaluation.csv, evaluation.json, episodes.csv")

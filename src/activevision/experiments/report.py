@@ -77,7 +77,8 @@ def write_report(run_dir: str | Path) -> Path:
             "## Evaluation",
             "",
             f"{data['episodes']} episodes, seed {data['seed']}, identical starts for every "
-            f"method{_error_text(rows)}; mean [95% confidence interval].",
+            f"method{_error_text(rows)}; mean [95% confidence interval]."
+            + _weights_text(data, rows),
             "",
             _table(rows, ["success", "success_rate", "success_duration", "ball_loss_duration"]),
             "",
@@ -188,6 +189,15 @@ def _last_epoch(row: dict, algo: str) -> str:
         text = f"{number:.0f}" if key in _COUNTS and number.is_integer() else f"{number:.4g}"
         cells.append(f"{name} {text}")
     return ", ".join(cells)
+
+
+def _weights_text(data: dict, rows: list[dict[str, str]]) -> str:
+    """Which weights the run's ``learned`` row played (evaluations before the record: none
+    said)."""
+    if "weights" not in data or not any(r.get("method") == "learned" for r in rows):
+        return ""
+    which = "best validated" if data["weights"] == "best" else "final"
+    return f" `learned` plays the run's {which} weights."
 
 
 def _error_text(rows: list[dict]) -> str:
