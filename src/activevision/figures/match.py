@@ -109,7 +109,7 @@ def plot_error_over_time(
         ax.plot(t, mean, lw=1.2, label=name, color=colour)
         ax.fill_between(t, mean - half, mean + half, alpha=0.2, color=colour)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("position error (m), mean over matches")
+    ax.set_ylabel("position error (m): mean over matches, band 95% interval")
     ax.set_title(title, fontsize=9)
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
