@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Ellipse, Polygon
 
 from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
+from activevision.figures.scene import camera_beside
 from activevision.figures.topview import draw_field
 from activevision.geometry import CameraConfig, FieldSpec
 
@@ -220,15 +221,8 @@ def match_view(
     """The camera image (grayscale (H, W) uint8) beside the top view of one match tick
     (:func:`draw_match_tick`), from one robot's match info (``pose``, ``belief_mean``,
     ``belief_cov``, ``head``, ``ball``, ``ball_in_view``, ``robots``): ``env.render()``."""
-    fig = new_figure(figsize=(9, 3.4))
-    ax_img, ax_top = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.45]})
     pan, tilt = info["head"]
-    ax_img.imshow(image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
-    ax_img.set_title(
-        f"camera: pan {math.degrees(pan):+.0f}°, tilt {math.degrees(tilt):.0f}°", fontsize=9
-    )
-    ax_img.set_xticks([])
-    ax_img.set_yticks([])
+    fig, ax_top = camera_beside(image, pan, tilt)
     draw_match_tick(
         ax_top,
         field,

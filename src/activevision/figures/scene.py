@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import matplotlib
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
@@ -19,6 +20,20 @@ from matplotlib.patches import Polygon
 from activevision.figures.canvas import new_figure, save_figure
 from activevision.figures.topview import draw_field, draw_landmarks, draw_robot, draw_topview
 from activevision.geometry import CameraConfig, FieldSpec, LandmarkSet
+
+
+def camera_beside(image: np.ndarray, pan: float, tilt: float) -> tuple[Figure, Axes]:
+    """A figure with the camera image (grayscale (H, W) uint8, titled with the head angles,
+    rad) on the left, and the empty axes beside it for a top view."""
+    fig = new_figure(figsize=(9, 3.4))
+    ax_img, ax_top = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.45]})
+    ax_img.imshow(image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+    ax_img.set_title(
+        f"camera: pan {np.degrees(pan):+.0f}°, tilt {np.degrees(tilt):.0f}°", fontsize=9
+    )
+    ax_img.set_xticks([])
+    ax_img.set_yticks([])
+    return fig, ax_top
 
 
 def view_figure(
@@ -38,14 +53,7 @@ def view_figure(
 ) -> Figure:
     """Camera image (grayscale, (H, W) uint8) beside the top view (other ``robots`` as
     grey discs: :func:`~activevision.figures.topview.draw_topview`), as a figure."""
-    fig = new_figure(figsize=(9, 3.4))
-    ax_img, ax_top = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.45]})
-    ax_img.imshow(image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
-    ax_img.set_title(
-        f"camera: pan {np.degrees(pan):+.0f}°, tilt {np.degrees(tilt):.0f}°", fontsize=9
-    )
-    ax_img.set_xticks([])
-    ax_img.set_yticks([])
+    fig, ax_top = camera_beside(image, pan, tilt)
     draw_topview(
         ax_top,
         spec,
