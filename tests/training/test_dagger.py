@@ -379,10 +379,10 @@ def test_warm_start_takes_the_source_weights_resumes_without_them_and_refuses_ot
         **{"run.checkpoint_interval": 300, "dagger.init_from": str(tmp_path / "source")},
     )
     trainer = DaggerTrainer(warm, tmp_path / "split", loggers=[])
-    start = trainer.network.state_dict()
-    assert all(torch.equal(start[k], source[k]) for k in source)
+    start = trainer.network.state_dict()  # on the training device (a GPU where there is one)
+    assert all(torch.equal(start[k].cpu(), source[k]) for k in source)
     cold = DaggerTrainer(tiny(steps=300), tmp_path / "cold", loggers=[]).network.state_dict()
-    assert not all(torch.equal(cold[k], source[k]) for k in source)
+    assert not all(torch.equal(cold[k].cpu(), source[k]) for k in source)
     trainer.train(350)
     trainer.close()
     train(warm, tmp_path / "whole")

@@ -311,7 +311,7 @@ def test_a_match_student_starts_from_another_runs_weights(tmp_path):
     source = load_policy(tmp_path / "source").state_dict()
     warm = tiny(**{"dagger.init_from": str(tmp_path / "source")})
     start = MatchDaggerTrainer(warm, tmp_path / "warm", loggers=[]).network.state_dict()
-    assert all(torch.equal(start[k], source[k]) for k in source)
+    assert all(torch.equal(start[k].cpu(), source[k]) for k in source)  # from the GPU too
     # a continuous student has another action head: refused, naming the difference
     other = tiny(action_type="continuous", **{"dagger.init_from": str(tmp_path / "source")})
     with pytest.raises(ValueError, match=r"dagger\.init_from: .* another network or input"):

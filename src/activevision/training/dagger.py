@@ -63,7 +63,7 @@ from activevision.runtime.goal_evidence import (
 )
 from activevision.training import checkpoint as ckpt
 from activevision.training.config import TrainConfig
-from activevision.training.cpu import configure_torch_cpu, resolve_device
+from activevision.training.cpu import configure_torch_cpu, training_device
 from activevision.training.loggers import Logger
 from activevision.training.metrics import episode_record
 from activevision.training.policy_files import load_policy_and_metadata
@@ -176,7 +176,7 @@ class ImitationRun(StudentRun):
         its optimiser and the state dataset, all seeded from ``config.seed``, and open the
         run directory. Subclasses set ``config`` and ``continuous`` first."""
         config, dag = self.config, self.config.dagger
-        self.device = resolve_device(config.run.device)
+        self.device = training_device(config.run.device)
         trainer_seed, init_seed = np.random.SeedSequence(config.seed).generate_state(2)
         self.rng = np.random.default_rng(int(trainer_seed))
         with torch.random.fork_rng(devices=[]):

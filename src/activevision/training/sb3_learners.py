@@ -46,7 +46,7 @@ from activevision.agents.student import StudentNetwork
 from activevision.envs.observations import vector_keys
 from activevision.training import checkpoint as ckpt
 from activevision.training.config import SB3_ALGORITHMS, TrainConfig
-from activevision.training.cpu import configure_torch_cpu, resolve_device
+from activevision.training.cpu import configure_torch_cpu, training_device
 from activevision.training.dagger import play_greedy
 from activevision.training.environment import make_env
 from activevision.training.loggers import Logger
@@ -134,7 +134,7 @@ class Sb3Trainer(StudentRun):
         if config.algo not in SB3_ALGORITHMS:
             raise ValueError(f"Sb3Trainer trains {SB3_ALGORITHMS}, got algo={config.algo!r}")
         self.config = config
-        self.device = resolve_device(config.run.device)
+        self.device = training_device(config.run.device)
         configure_torch_cpu(config.run.num_threads)
         self.env = make_vec_env(config)
         self.env.seed(config.seed)

@@ -37,7 +37,7 @@ from activevision.training import state as run_state
 from activevision.training.aux_targets import AuxTarget, aux_dim, aux_vector, resolve_aux_target
 from activevision.training.build import build_learning
 from activevision.training.config import TrainConfig, load_config, save_config
-from activevision.training.cpu import configure_torch_cpu, resolve_device
+from activevision.training.cpu import configure_torch_cpu, training_device
 from activevision.training.environment import EnvFactory, chw_shape, discrete_actions, make_env
 from activevision.training.loggers import Logger, LoggerGroup, default_loggers
 from activevision.training.metrics import EpochAccumulator, episode_record
@@ -78,7 +78,7 @@ class Trainer:
         self.run_dir = Path(run_dir)
         if not _resuming and ckpt.list_checkpoints(self.run_dir):
             raise ValueError(f"{self.run_dir} already holds a run; use Trainer.resume()")
-        self.device = resolve_device(config.run.device)  # bad device or env: before any write
+        self.device = training_device(config.run.device)  # bad device or env: before any write
         self.aux_target = resolve_aux_target(config, aux_target)
         self.env_factory = env_factory or (lambda: make_env(config))
         self.env = self.env_factory()
