@@ -158,3 +158,16 @@ def test_the_success_rate_panel_names_both_curves():
     metrics = {"epoch": [1, 2], "step": [10, 20], "success_rate": [0.9, 0.7]}
     draw_curve(ax, CURVES[2], metrics, {"step": [20], "success_rate": [0.8]})
     assert ax.get_legend_handles_labels()[1] == ["training episodes", "greedy validation"]
+
+
+def test_a_match_runs_reward_panel_counts_matches():
+    """A match student's reward is one value a match: its panel said "episode"."""
+    from activevision.figures.canvas import new_figure
+    from activevision.figures.training import CURVES, MATCH_CURVES, draw_curve
+
+    episodes = {"episode": list(range(1, 31)), "reward": [float(i % 7) for i in range(30)]}
+    for curves, word in ((MATCH_CURVES, "match"), (CURVES, "episode")):
+        ax = new_figure().subplots()
+        draw_curve(ax, curves[0], episodes, {})
+        assert ax.get_xlabel() == word
+        assert ax.get_legend_handles_labels()[1][0] == word

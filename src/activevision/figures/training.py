@@ -29,6 +29,7 @@ class Curve:
     y: str
     title: str
     ylabel: str
+    xlabel: str = ""  #: the x axis's name where the column's is not the word for it ("match")
 
 
 CURVES = (
@@ -50,7 +51,7 @@ CURVES = (
 
 #: a match run's curves: a match has no success, so its validation matches take those panels
 MATCH_CURVES = (
-    dataclasses.replace(CURVES[0], title="Total reward per match"),
+    dataclasses.replace(CURVES[0], title="Total reward per match", xlabel="match"),
     CURVES[1],
     Curve(
         "validation_position_rmse.png",
@@ -120,7 +121,8 @@ def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> N
     else:
         x, y = np.asarray(table[curve.x]), np.asarray(table[curve.y])
         if curve.source == "episodes":  # noisy: raw values faint, moving average on top
-            ax.plot(x, y, color="tab:blue", alpha=0.25, linewidth=0.8, label="episode")
+            raw = curve.xlabel or curve.x  # one value an episode (or match)
+            ax.plot(x, y, color="tab:blue", alpha=0.25, linewidth=0.8, label=raw)
             window = max(len(y) // 50, 10)
             ax.plot(x, moving_average(y, window), color="tab:blue", label=f"mean of {window}")
             ax.legend(loc="lower right", fontsize=8)
@@ -132,7 +134,7 @@ def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> N
         if curve.y == "success_rate" and validation:
             _draw_validation(ax, x, table, validation)
     ax.set_title(curve.title)
-    ax.set_xlabel(curve.x)
+    ax.set_xlabel(curve.xlabel or curve.x)
     ax.set_ylabel(curve.ylabel)
     ax.grid(True, alpha=0.3)
 
