@@ -171,9 +171,12 @@ def test_refuses_a_training_run(trained, one_clear_line):
 
 def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys):
     """--preset match_ddqn trains the package's DDQN on ActiveVisionMatch-v0; the run plays
-    as ``learned`` (PyTorch, batched) and, exported, as ``onnx_policy`` (HeadController)."""
+    as ``learned`` (PyTorch, batched) and, exported, as ``onnx_policy`` (HeadController).
+    Trained with a weaker detector, it plays in that world unless --detection says otherwise,
+    and match.csv records the detector for the report."""
     run = tmp_path / "match_run"
     argv = [*tiny_train, "--out", str(run), "--set", "eval_interval=30", "--set", "eval_episodes=2"]
+    argv += ["--set", "match.detection.far=0.2"]
     argv[argv.index("quickstart_ddqn")] = "match_ddqn"
     assert main(argv) == 0
     # validated as DDQN runs are (its episodes, success rate), not as a match student
@@ -182,7 +185,19 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
         assert len(list(reader)) == 2 and "success_rate" in (reader.fieldnames or ())
     assert (run / "plots" / "success_rate.png").exists()
     out = tmp_path / "m"
+    capsys.readouterr()
     assert main([*TINY, "--out", str(out), "--run", str(run), "--methods", "learned"]) == 0
+    assert f"detector 0.95/0.2/0.05 (the one {run} was trained with)" in capsys.readouterr().out
+    with (out / "match.csv").open() as f:
+        row = next(csv.DictReader(f))
+    detector = (row["detect_near"], row["detect_far"], row["false_detections"])
+    assert detector == ("0.95", "0.2", "0.05")
+    played = [*TINY, "--out", str(out), "--run", str(run), "--methods", "learned", "--overwrite"]
+    assert main([*played, "--detection", "0.95", "0.5", "0.05"]) == 0
+    printed = capsys.readouterr().out
+    note = f"note: {run} was trained with detector 0.95/0.2/0.05; these matches use 0.95/0.5/0.05"
+    assert note in printed
+    assert ", detector" not in printed  # the default world, as asked
     assert main(["export", str(run), "-o", str(tmp_path / "policy.onnx")]) == 0
     onnx = ["--methods", "onnx_policy", "--model", str(tmp_path / "policy.onnx")]
     assert main([*TINY, "--out", str(out), "--overwrite", *onnx]) == 0

@@ -113,9 +113,12 @@ def fake(method: str, rmse: float, ball: float) -> MethodResult:
 def test_pareto_front_by_hand():
     results = [fake("a", 0.1, 0.5), fake("b", 0.2, 0.6), fake("c", 0.2, 0.4), fake("d", 0.1, 0.5)]
     assert pareto_front(results) == ["a", "b", "d"]  # c is beaten by a on both
-    rows = csv_rows(results, 4, 0)
+    rows = csv_rows(results, 4, 0, SMALL)
     assert rows[0]["position_rmse"] == pytest.approx(0.1) and rows[0]["matches"] == 4
     assert rows[0]["ticks"] == 1  # how long the matches were (report.md says it)
+    # the world, which report.md names: SMALL's head and the default detector
+    world = ("action_type", "step_deg", "robots", "detect_near", "detect_far", "false_detections")
+    assert [rows[0][key] for key in world] == ["discrete", 3.0, "0", 0.95, 0.5, 0.05]
 
 
 def test_paired_differences_by_hand():

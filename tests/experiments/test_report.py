@@ -137,3 +137,19 @@ def test_the_match_section_says_how_long_and_whose_policies(tmp_path):
     assert "16 matches from seed 0" in report  # a match.csv written before the ticks column
     assert "learned: the training run `match --run` named" in report
     assert "There is no `learned` row" not in report and "onnx_policy:" not in report
+    assert "detected with probability" not in report  # a match.csv without the world's columns
+
+
+def test_the_match_section_names_the_world(tmp_path):
+    """match --run on a student trained with a weaker detector plays that detector: the
+    report said nothing of which detector, head or other robots the matches had."""
+    run = make_run(tmp_path)
+    world = {"action_type": "continuous", "step_deg": 3.0, "robots": "2"}
+    world |= {"detect_near": 0.6, "detect_far": 0.15, "false_detections": 0.2}
+    write_rows(run / "match" / "match.csv", [match_row("learned") | world])
+    report = write_report(run).read_text()
+    assert (
+        "; continuous head moves of up to 3 degrees a tick, 2 other robots, a landmark in view"
+        " detected with probability 0.6 next to the robot falling to 0.15 at its detection"
+        " range, and 0.2 false detections per tick." in report
+    )

@@ -28,7 +28,7 @@ from activevision.cli.outputs import (
 )
 
 if TYPE_CHECKING:
-    from activevision.envs.match.config import MatchConfig
+    from activevision.envs.match.config import DetectionConfig, MatchConfig
     from activevision.experiments.match_methods import StrategyOptions
 
 OUTPUT_FILES = ("match.csv", "match_pareto.png", "match_error.png", "match_clip.gif")
@@ -41,18 +41,45 @@ def _method_names() -> tuple[str, ...]:
     return match_method_names()
 
 
-def _world_text(args: argparse.Namespace) -> str:
+def _world_text(args: argparse.Namespace, config: MatchConfig) -> str:
     """What differs from the default world: ``", 4 other robots walking at 0.2 m/s,
     detector 0.6/0.15/0.2"``, or nothing."""
+    from activevision.envs.match.config import DetectionConfig
+
     text = ""
     if args.robots:
         moving = f"walking at {args.robot_speed:g} m/s" if args.robot_speed else "standing"
         text += f", {args.robots} other robot{'s' if args.robots > 1 else ''} {moving}"
-    if args.detection:
-        text += ", detector {:g}/{:g}/{:g}".format(*args.detection)
+    if config.detection != DetectionConfig():
+        text += f", detector {detector_text(config.detection)}"
+        if args.detection is None:
+            text += f" (the one {args.run} was trained with)"
     if args.ball_bounces_off_us:
         text += ", the ball bouncing off our robot"
     return text
+
+
+def detector_text(detection: DetectionConfig) -> str:
+    """``"0.6/0.15/0.2"`` (near/far/false per tick), with the ball detector's noise when it
+    is not the default's."""
+    from activevision.envs.match.config import DetectionConfig
+
+    text = f"{detection.near:g}/{detection.far:g}/{detection.false_rate:g}"
+    if detection.ball_noise != DetectionConfig().ball_noise:
+        text += f", ball noise {detection.ball_noise:g} of its range"
+    return text
+
+
+def _run_detection(run: Path | None) -> DetectionConfig | None:
+    """The detector a training run on the match was trained with (None: the run is not on
+    the match, or there is no run)."""
+    from activevision.training import load_config
+    from activevision.training.config import MATCH_ENV_ID
+
+    if run is None or not (run / "config.json").is_file():
+        return None  # no run, or not one: _strategies says so
+    run_config = load_config(run / "config.json")
+    return run_config.match.detection if run_config.env_id == MATCH_ENV_ID else None
 
 
 def _match_config(args: argparse.Namespace) -> MatchConfig:
@@ -68,6 +95,16 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
 
     if args.robot_speed and not args.robots:
         raise ValueError("--robot-speed moves the other robots: give --robots N (1-8) too")
+    trained = _run_detection(args.run)
+    if args.detection:
+        detection = DetectionConfig(*args.detection)
+        if trained is not None and trained != detection:
+            print(
+                f"note: {args.run} was trained with detector {detector_text(trained)};"
+                f" these matches use {detector_text(detection)} (--detection)"
+            )
+    else:  # a run on the match plays the world it was trained for
+        detection = trained or DetectionConfig()
     return MatchConfig(
         ticks=args.ticks,
         step_deg=args.step_deg,
@@ -77,7 +114,7 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
         robots=RobotsConfig(count=(args.robots, args.robots)),
         others=OthersConfig(speed=args.robot_speed),
         ball=BallConfig(bounces_off_own_robot=args.ball_bounces_off_us),
-        detection=DetectionConfig(*args.detection) if args.detection else DetectionConfig(),
+        detection=detection,
     )
 
 
@@ -176,7 +213,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         f"{len(labels)} methods x {args.matches} matches of {args.ticks} ticks"
         f" ({minutes:.1f} min of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
-        f" walking to {args.walk}{_world_text(args)}"
+        f" walking to {args.walk}{_world_text(args, config)}"
     )
     if args.matches == 1:
         print("one match gives no 95% intervals (they need 2 or more matches): nan below")
@@ -200,7 +237,7 @@ def cmd_match(args: argparse.Namespace) -> None:
             f"privileged references (read the simulator's truth): {', '.join(sorted(references))}"
         )
     csv_path, pareto_path, error_path, clip_path = files
-    write_csv(csv_path, csv_rows(results, args.matches, args.seed))
+    write_csv(csv_path, csv_rows(results, args.matches, args.seed, config))
     if args.baseline is None and args.overwrite and paired_path.exists():
         paired_path.unlink()  # --overwrite (match.csv was there): not this run's pairs
     if args.baseline is not None:
@@ -213,7 +250,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         files.append(paired_path)
     title = (
         f"{args.matches} matches x {minutes:.1f} min, seed {args.seed},"
-        f" {args.action_type} head {args.step_deg:g} deg/tick{_world_text(args)}"
+        f" {args.action_type} head {args.step_deg:g} deg/tick{_world_text(args, config)}"
     )
     points = {
         r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()} for r in results
@@ -309,7 +346,8 @@ def add_parsers(sub: Any) -> None:
         type=float_in(0, 1),
         metavar=("NEAR", "FAR", "FALSE"),
         help="the landmark detector: probability of detecting a landmark in view at the robot"
-        " and at its detection range, and false detections per tick (default 0.95 0.5 0.05)",
+        " and at its detection range, and false detections per tick (default 0.95 0.5 0.05;"
+        " with --run, the detector that run was trained with)",
     )
     p.add_argument(
         "--model",

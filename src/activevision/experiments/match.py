@@ -237,8 +237,11 @@ def format_result(result: MethodResult, width: int = NAME_WIDTH) -> str:
     return f"{result.method:<{width}}" + "".join(f"{c:>22}" for c in cells)
 
 
-def csv_rows(results: Sequence[MethodResult], matches: int, seed: int) -> list[dict]:
-    """One CSV row per method: every metric's mean, low and high, plus the run's facts.
+def csv_rows(
+    results: Sequence[MethodResult], matches: int, seed: int, config: MatchConfig
+) -> list[dict]:
+    """One CSV row per method: every metric's mean, low and high, plus the run's facts and
+    the world's (the head's move, the other robots, the detector: what the report names).
 
     No wall-clock time: the same seed writes the same bytes (the console prints the time)."""
     rows = []
@@ -249,6 +252,14 @@ def csv_rows(results: Sequence[MethodResult], matches: int, seed: int) -> list[d
             "matches": matches,
             "ticks": ticks,
             "seed": seed,
+            "action_type": config.action_type,
+            "step_deg": (  # the most the head moves per tick and axis
+                config.step_deg if config.action_type == "discrete" else max(config.max_move_deg)
+            ),
+            "robots": "-".join(str(n) for n in sorted(set(config.robots.count))),
+            "detect_near": config.detection.near,
+            "detect_far": config.detection.far,
+            "false_detections": config.detection.false_rate,
         }
         for name, iv in r.summary().items():
             row[name] = iv.mean

@@ -128,7 +128,7 @@ def write_report(run_dir: str | Path) -> Path:
             + (f" of {first['ticks']} ticks" if first.get("ticks") else "")
             + f" from seed {first['seed']}, the"
             " same for every strategy; the robot walks, the ball is kicked about, the UKF"
-            " tracks every tick. Mean [95% interval] over matches.",
+            f" tracks every tick{_match_world_text(first)}. Mean [95% interval] over matches.",
             "",
             _table(match_rows, ["position_rmse", "heading_rmse", "lost_share"]),
             "",
@@ -209,6 +209,21 @@ def _error_text(rows: list[dict]) -> str:
     if errors == {0.0}:
         return ", exact localisation (error 0)"
     return ", localisation error " + "/".join(f"{e:g}" for e in sorted(errors)) + " m and rad"
+
+
+def _match_world_text(row: dict) -> str:
+    """The world ``match.csv``'s row records: the head's moves, the other robots and the
+    detector (``""`` for a file written before it recorded them)."""
+    if not row.get("false_detections"):
+        return ""
+    robots = row["robots"]
+    return (
+        f"; {row['action_type']} head moves of up to {float(row['step_deg']):g} degrees a"
+        f" tick, {'no' if robots == '0' else robots} other robot{'' if robots == '1' else 's'},"
+        f" a landmark in view detected with probability {float(row['detect_near']):g} next"
+        f" to the robot falling to {float(row['detect_far']):g} at its detection range, and"
+        f" {float(row['false_detections']):g} false detections per tick"
+    )
 
 
 def _match_policies_text(rows: list[dict]) -> str:
