@@ -21,7 +21,8 @@ minibatch is rendered on the fly by the exact renderer (about 30,000 frames/s), 
 states take ~200 MB and a checkpoint stores them whole.
 
 A run directory looks like a DDQN run's: ``config.json``, ``metrics.csv`` (one row per round
-that crosses an ``epoch_steps`` boundary; ``loss`` is the imitation loss, ``epsilon`` the
+that crosses an ``epoch_steps`` boundary, numbered ``step // epoch_steps``: a round longer
+than ``epoch_steps`` skips numbers; ``loss`` is the imitation loss, ``epsilon`` the
 teacher's share ``beta``), ``episodes.csv``, ``evaluations.csv`` and ``best_policy`` (with
 ``eval_interval``), TensorBoard, ``policy.safetensors`` and ``checkpoints/``. Rounds start
 fresh episodes, so a checkpoint taken between rounds holds everything: resuming continues
