@@ -91,3 +91,25 @@ def test_one_episode_says_its_means_have_no_intervals(tmp_path, capsys):
     assert "nan" in printed
     written = json.loads((tmp_path / "e" / "evaluation.json").read_text())
     assert (written["episodes"], written["weights"]) == (1, "final")  # for the report
+
+
+def test_an_evaluation_is_the_same_bytes_its_latency_apart(trained, tmp_path, capsys):
+    """evaluation.json held the learned policy's measured latency (wall clock), so the same
+    seed wrote other bytes each time; the latency has a file of its own."""
+    out = tmp_path / "e"
+    argv = ["evaluate", "--run", str(trained), "--methods", "learned", "scan", "--episodes", "2"]
+    argv += ["--out", str(out)]
+    assert main(argv) == 0
+    first = {name: (out / name).read_bytes() for name in ("evaluation.json", "evaluation.csv")}
+    latency = json.loads((out / "latency.json").read_text())
+    assert latency["p99_ms"] >= latency["p50_ms"] > 0 and latency["batch"] == 1
+    assert main([*argv, "--overwrite"]) == 0
+    assert {name: (out / name).read_bytes() for name in first} == first
+    assert "latency" not in json.loads(first["evaluation.json"])
+    # an evaluation with no learned policy measures none: an earlier one's is not left
+    assert (
+        main(["evaluate", "--methods", "scan", "--episodes", "2", "--out", str(out), "--overwrite"])
+        == 0
+    )
+    assert not (out / "latency.json").exists()
+    assert "wrote" in capsys.readouterr().out

@@ -59,7 +59,7 @@ def write_evaluation(run, error, **more):
     rows = [evaluation_row(m, error) for m in ("learned", "oracle")]
     path = run / "evaluation" / "evaluation.json"
     path.parent.mkdir()
-    data = {"methods": rows, "latency": {}, "episodes": 100, "seed": 0} | more
+    data = {"methods": rows, "episodes": 100, "seed": 0} | more
     path.write_text(json.dumps(data))
 
 
@@ -153,3 +153,18 @@ def test_the_match_section_names_the_world(tmp_path):
         " detected with probability 0.6 next to the robot falling to 0.15 at its detection"
         " range, and 0.2 false detections per tick." in report
     )
+
+
+def test_the_latency_is_reported_from_its_own_file_or_an_older_evaluation(tmp_path):
+    """latency.json beside evaluation.json (which is seed-exact without it); an evaluation
+    written before that kept it inside."""
+    run = make_run(tmp_path / "new")
+    write_evaluation(run, 0.0)
+    (run / "evaluation" / "latency.json").write_text(json.dumps({"p50_ms": 1.5, "p99_ms": 2.25}))
+    assert "p50 1.50 ms, p99 2.25 ms" in write_report(run).read_text()
+    old = make_run(tmp_path / "old")
+    write_evaluation(old, 0.0, latency={"p50_ms": 0.5, "p99_ms": 0.75})
+    assert "p50 0.50 ms, p99 0.75 ms" in write_report(old).read_text()
+    plain = make_run(tmp_path / "plain")
+    write_evaluation(plain, 0.0)
+    assert "p50" not in write_report(plain).read_text()

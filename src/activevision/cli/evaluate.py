@@ -99,7 +99,8 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     check_run(args.run)  # before the outputs inside it
     out = args.out or (args.run / "evaluation" if args.run else Path("evaluation"))
     files = [out / n for n in ("evaluation.csv", "episodes.csv", "evaluation.json")]
-    check_outputs(own=files, overwrite=args.overwrite)
+    latency_path = out / "latency.json"  # wall clock: apart, so the others are seed-exact
+    check_outputs(own=[*files, latency_path], overwrite=args.overwrite)
     from activevision.experiments.compare import config_at_error
     from activevision.experiments.methods import runnable_methods
     from activevision.experiments.policies import OnnxPolicy
@@ -154,14 +155,19 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         files[2],
         {
             "methods": rows,
-            "latency": latency,
             "steps_where_all_solve": solved,
             "episodes": args.episodes,
             "seed": args.seed,
             "weights": args.weights,  # of --run's learned policy: final or best validated
         },
     )
-    print(f"wrote {out}/evaluation.csv, evaluation.json, episodes.csv")
+    written = "evaluation.csv, evaluation.json, episodes.csv"
+    if latency:
+        write_json(latency_path, {"policy": "learned", "batch": 1, "device": "cpu"} | latency)
+        written += ", latency.json"
+    elif latency_path.exists():
+        latency_path.unlink()  # --overwrite: an earlier evaluation's, not this one's
+    print(f"wrote {out}/{written}")
 
 
 def cmd_compare(args: argparse.Namespace) -> None:

@@ -99,8 +99,9 @@ def write_report(run_dir: str | Path) -> Path:
             "reward: the episode's total; score: the authors' release's (1 success, 0 ball"
             " lost, else success_rate); head_travel: degrees the head moved in the episode.",
         ]
-        if data.get("latency"):
-            lat = data["latency"]
+        latency_path = evaluation.with_name("latency.json")  # older evaluations: inside
+        lat = read_json(latency_path) if latency_path.exists() else data.get("latency")
+        if lat:
             parts += [
                 "",
                 f"Learned policy, batch 1 on CPU (PyTorch): p50 {lat['p50_ms']:.2f} ms, "
