@@ -64,6 +64,8 @@ BAD_VECTOR_KWARGS: list[tuple[str, Any, str]] = [
     ("max_episode_steps", 0, "0"),
     ("max_episode_steps", True, "True"),
     ("max_episode_steps", 2.5, "2.5"),
+    ("max_episode_steps", -2, "-2"),  # -1 is Gymnasium's "no limit" (tests/envs/test_time_limit.py)
+    ("max_episode_steps", "20", "'20'"),
 ]
 
 

@@ -181,3 +181,8 @@ def test_the_table_stays_aligned_with_long_method_names():
     lines = format_table({"oracle": summary, "onnx_policy[a_long_run_name]": summary}).splitlines()
     starts = {line.index("0.500") for line in lines[2:]}
     assert len(starts) == 1 and lines[0].index("method") == 0  # every row's cells line up
+
+
+def test_evaluation_needs_a_time_limit() -> None:
+    with pytest.raises(ValueError, match="time limit, got max_episode_steps=-1"):
+        evaluate_policy(RandomPolicy(), episodes=1, env=ActiveVisionEnv(max_episode_steps=-1))

@@ -11,7 +11,6 @@ import numpy as np
 from activevision.envs.actions import check_actions, check_continuous_actions, head_action_space
 from activevision.envs.config import (
     EnvConfig,
-    check_count,
     check_render_mode,
     resolve_config,
 )
@@ -24,6 +23,7 @@ from activevision.envs.observations import (
 )
 from activevision.envs.reset_options import check_no_options
 from activevision.envs.simulation import EpisodeBatch, StepOutcome
+from activevision.envs.time_limit import limit_from_make, never, resolve_limit
 from activevision.localisation import LocalisationConfig
 
 
@@ -109,16 +109,18 @@ class ActiveVisionEnv(gym.Env):
     Terminates with success when the head is within ``success_tolerance_deg`` (3 deg, one
     action step) of the goal viewpoint (``success_mode="landmarks"``: when every landmark of
     the goal view is in view, the release's rule), and with failure when the ball leaves the
-    image. Truncates after 20 steps (``max_episode_steps`` of the registration).
+    image. Truncates after 20 steps (``max_episode_steps`` of the registration), or after
+    ``gymnasium.make``'s ``max_episode_steps=n`` (``-1``: never truncates).
 
     ## Info
     ``goal_viewpoint`` (pan, tilt rad), ``goal_entropy``, ``desired_mask`` and
     ``observed_mask`` (the goal view's and the current view's landmarks: (K,) bool over
     landmark ids, K the field's landmark count), ``success_rate`` (|observed ∩ desired| /
-    |desired|), ``success``, ``ball_lost``, ``steps_to_success`` and ``ball_lost_step`` (20
-    if it did not happen), ``episode_score`` (the release's: 1 success, 0 ball lost, else the
-    success rate), ``head``, ``pose``, ``believed_pose``, ``ball``, ``step``; with a prior
-    pose in the observation also ``prior_pose`` and ``prior_error``. Every value
+    |desired|), ``success``, ``ball_lost``, ``steps_to_success`` and ``ball_lost_step`` (the
+    time limit if it did not happen: 20, ``n``, or -1 without a limit), ``episode_score``
+    (the release's: 1 success, 0 ball lost, else the success rate), ``head``, ``pose``,
+    ``believed_pose``, ``ball``, ``step``; with a prior pose in the observation also
+    ``prior_pose`` and ``prior_error``. Every value
     keeps its shape and type at every step (arrays float64 or bool; scalars Python float,
     int or bool), so ``gymnasium.make_vec`` stacks them in every vectorization mode.
 
@@ -126,6 +128,10 @@ class ActiveVisionEnv(gym.Env):
     ``gymnasium.make("ActiveVision-v0", config=EnvConfig(...), localisation=..., render_mode=...)``
     or any :class:`EnvConfig` field as a keyword (``frame_stack=4``, ``success_mode=...``).
     A wrong type, a value out of range or an unknown keyword raises ``ValueError`` naming it.
+    ``max_episode_steps`` of the constructor only sets the infos' time limit (the
+    ``TimeLimit`` wrapper truncates; ``None`` is 20, ``-1`` none, as ``gymnasium.make`` reads
+    it); under ``gymnasium.make`` the env takes ``make``'s instead, which ``make`` never
+    passes on (:func:`activevision.envs.time_limit.limit_from_make`).
     ``render_mode="rgb_array"`` returns the camera image beside a top view of the field.
 
     ## Version History
@@ -140,15 +146,17 @@ class ActiveVisionEnv(gym.Env):
         config: EnvConfig | None = None,
         localisation: LocalisationConfig | None = None,
         render_mode: str | None = None,
-        max_episode_steps: int = 20,
+        max_episode_steps: int | None = 20,
         **config_overrides: Any,
     ) -> None:
         config = resolve_config(config, config_overrides)
         check_render_mode(render_mode, self.metadata["render_modes"])
         self.config = config
         self.render_mode = render_mode
-        # Only the info's "did not happen" value: the time limit is gymnasium.make's TimeLimit.
-        self.max_episode_steps = check_count("max_episode_steps", max_episode_steps)
+        # Only the info's "did not happen" value: the time limit itself is the TimeLimit
+        # wrapper's. gymnasium.make never passes its max_episode_steps on: read it from make.
+        made, limit = limit_from_make(type(self))
+        self.max_episode_steps = limit if made else resolve_limit(max_episode_steps, 20)
         self.sim = EpisodeBatch(config, 1, localisation)
         self.action_space = head_action_space(config.action_type, len(self.sim.actions))
         self.observation_space = observation_space(config, len(self.sim.actions))
@@ -165,7 +173,7 @@ class ActiveVisionEnv(gym.Env):
         self._observations.start(self._slot)
         frame = self.sim.render(self._slot)[0]
         self._frames[:] = frame
-        return self._observe(), self.sim.info(0, self.max_episode_steps)
+        return self._observe(), self.sim.info(0, never(self.max_episode_steps))
 
     def step(self, action: object) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         if self.config.action_type == "continuous":
@@ -201,7 +209,7 @@ class ActiveVisionEnv(gym.Env):
         if self.config.frame_stack > 1:
             self._frames[:-1] = self._frames[1:]
         self.sim.render(self._slot, out=self._frames[-1:])
-        info = self.sim.info(0, self.max_episode_steps)
+        info = self.sim.info(0, never(self.max_episode_steps))
         return self._observe(), float(reward[0]), bool(terminated[0]), False, info
 
     def render(self) -> np.ndarray | None:

@@ -387,8 +387,10 @@ class EpisodeBatch:
             cylinders=robot_cylinders(robots, cfg.robots.radius) if cfg.robots.max_count else None,
         )
 
-    def info_arrays(self, max_episode_steps: int) -> dict[str, np.ndarray]:
-        """Per-slot episode facts as arrays over all N slots (see the env's Info section).
+    def info_arrays(self, never: int) -> dict[str, np.ndarray]:
+        """Per-slot episode facts as arrays over all N slots (see the env's Info section);
+        ``never`` is ``steps_to_success`` and ``ball_lost_step`` of an episode where that did
+        not happen (the time limit, or -1 without one).
 
         Every entry has the same shape and dtype at every step (float64, int64 or bool,
         landmark sets as (N, K) boolean masks over landmark ids), so Gymnasium's vectorizers
@@ -403,8 +405,8 @@ class EpisodeBatch:
             "success_rate": rate,
             "success": success,
             "ball_lost": lost,
-            "steps_to_success": np.where(success, self.success_step, max_episode_steps),
-            "ball_lost_step": np.where(lost, self.ball_lost_step, max_episode_steps),
+            "steps_to_success": np.where(success, self.success_step, never),
+            "ball_lost_step": np.where(lost, self.ball_lost_step, never),
             "episode_score": np.where(success, 1.0, np.where(lost, 0.0, rate)),
             "head": self.head.copy(),
             "pose": self.pose.copy(),
@@ -450,7 +452,7 @@ class EpisodeBatch:
             out[j] = entropy(cov) - self.goal_entropy[i]
         return out
 
-    def info(self, i: int, max_episode_steps: int) -> dict[str, Any]:
+    def info(self, i: int, never: int) -> dict[str, Any]:
         """The single-environment ``info`` dict of slot ``i``: slot ``i`` of
         :meth:`info_arrays`, scalars as Python ``float``, ``int`` and ``bool``.
 
@@ -459,5 +461,5 @@ class EpisodeBatch:
         """
         return {
             key: value[i].item() if value.ndim == 1 else value[i]
-            for key, value in self.info_arrays(max_episode_steps).items()
+            for key, value in self.info_arrays(never).items()
         }

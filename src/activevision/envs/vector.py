@@ -17,6 +17,7 @@ from activevision.envs.observations import (
 )
 from activevision.envs.simulation import EpisodeBatch
 from activevision.envs.slots import SlotVectorEnv
+from activevision.envs.time_limit import never, resolve_limit
 from activevision.localisation import LocalisationConfig
 
 
@@ -31,7 +32,9 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
     Autoreset follows Gymnasium's default (``NEXT_STEP``): the step after an episode ends
     resets that sub-environment and ignores its action. Truncation follows Gymnasium's
     ``TimeLimit`` (truncated once ``max_episode_steps`` steps are done, even on a step that
-    also terminates), as single envs from ``gymnasium.make`` do. Infos hold the single env's
+    also terminates), as single envs from ``gymnasium.make`` do; ``max_episode_steps=-1`` never
+    truncates and ``None`` is the registration's 20, as ``make`` and the sync and async modes
+    read them. Infos hold the single env's
     keys as arrays over sub-environments (landmark sets as (N, K) boolean masks
     ``desired_mask`` and ``observed_mask``): the very arrays ``SyncVectorEnv`` and
     ``AsyncVectorEnv`` stack from single envs. Actions must lie in the action space (integers;
@@ -43,13 +46,16 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         num_envs: int = 1,
         config: EnvConfig | None = None,
         localisation: LocalisationConfig | None = None,
-        max_episode_steps: int = 20,
+        max_episode_steps: int | None = 20,
         render_mode: str | None = None,
         **config_overrides: Any,
     ) -> None:
         num_envs = check_count("num_envs", num_envs)
         self.config = config = resolve_config(config, config_overrides)
-        self.max_episode_steps = check_count("max_episode_steps", max_episode_steps)
+        # gymnasium.make_vec passes its max_episode_steps as given (20, the registration's,
+        # when not given): -1 is no limit, None the registration's 20, as gymnasium.make
+        # reads them for the sync and async modes' TimeLimit wrappers
+        self.max_episode_steps = resolve_limit(max_episode_steps, 20)
         self.sim = EpisodeBatch(config, num_envs, localisation)
         n_actions = len(self.sim.actions)
         self._set_up_slots(
@@ -71,7 +77,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         # a reset sub-environment's whole frame stack is its first frame; the others keep
         # theirs (a state renders the same image each time)
         self._frames[slots] = self.sim.render(slots)[:, None]
-        return self._observe(), self._with_masks(self.sim.info_arrays(self.max_episode_steps), mask)
+        return self._observe(), self._with_masks(self._info_arrays(), mask)
 
     def _observe(self) -> Observation:
         sim = self.sim
@@ -98,7 +104,8 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         self._observations.record(np.asarray(actions)[stepping], np.flatnonzero(stepping))
         # Gymnasium's TimeLimit rule, which single envs from gymnasium.make follow: truncated
         # whenever the limit is reached, even on a step that also terminates.
-        truncated = stepping & (self.sim.step_count >= self.max_episode_steps)
+        limit = self.max_episode_steps
+        truncated = stepping & (self.sim.step_count >= (np.inf if limit is None else limit))
         started = np.flatnonzero(resetting)
         if len(started):
             self.sim.reset(started, [self._rngs[i] for i in started])
@@ -114,4 +121,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         return episode_panel(self.sim, i, self._frames[i, -1])
 
     def _infos(self) -> dict[str, Any]:
-        return self._with_masks(self.sim.info_arrays(self.max_episode_steps))
+        return self._with_masks(self._info_arrays())
+
+    def _info_arrays(self) -> dict[str, np.ndarray]:
+        return self.sim.info_arrays(never(self.max_episode_steps))

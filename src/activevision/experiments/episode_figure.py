@@ -10,6 +10,7 @@ import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.envs.observations import IMAGE_KEY, Observation
+from activevision.experiments.evaluate import time_limit
 from activevision.experiments.policies import HeadPolicy, HeadTarget
 from activevision.figures.episode import EpisodeTrace, Snapshot
 
@@ -33,7 +34,7 @@ def trace_episode(policy: HeadPolicy, seed: int, config: EnvConfig | None = None
     obs, info = env.reset(seed=seed)
     policy.reset(info, np.random.default_rng([seed, 7]))
     shots = [_snapshot(obs, info, 0.0)]
-    for _ in range(env.max_episode_steps):
+    for _ in range(time_limit(env)):
         action = policy.act(obs, info)
         if isinstance(action, HeadTarget):
             obs, reward, terminated, _, info = env.jump_head(action.pan, action.tilt)

@@ -88,6 +88,14 @@ def summarise(episodes: Sequence[dict]) -> dict[str, Interval]:
     return out
 
 
+def time_limit(env: ActiveVisionEnv) -> int:
+    """``env.max_episode_steps``, the most steps an evaluated episode runs; an env made
+    without a time limit (``max_episode_steps=-1``) is a ValueError."""
+    if env.max_episode_steps is None:
+        raise ValueError("evaluation needs an env with a time limit, got max_episode_steps=-1")
+    return env.max_episode_steps
+
+
 def run_episode(
     env: ActiveVisionEnv,
     policy: HeadPolicy,
@@ -164,7 +172,7 @@ def evaluate_policy(
     env = env or ActiveVisionEnv(config or EnvConfig())
     latencies: list[float] | None = [] if measure_latency else None
     records = [
-        run_episode(env, policy, episode_seed(seed, i), env.max_episode_steps, latencies)
+        run_episode(env, policy, episode_seed(seed, i), time_limit(env), latencies)
         for i in range(episodes)
     ]
     return records, summarise(records), latencies or []

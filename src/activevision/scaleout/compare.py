@@ -37,13 +37,13 @@ def evaluate_chunk(
     from activevision.envs import ActiveVisionEnv
     from activevision.envs.seeding import episode_seed
     from activevision.experiments.compare import config_at_error
-    from activevision.experiments.evaluate import run_episode
+    from activevision.experiments.evaluate import run_episode, time_limit
 
     env = ActiveVisionEnv(config_at_error(config, error))
     policy = make_policy(method, error, config, run_dir, weights)
     try:
         return [
-            run_episode(env, policy, episode_seed(base_seed, i), env.max_episode_steps)
+            run_episode(env, policy, episode_seed(base_seed, i), time_limit(env))
             for i in episode_indices
         ]
     finally:

@@ -7,8 +7,8 @@ Gymnasium environment works:
 |--------------------|-------------------------------------------------------|---------------|
 | ``success``        | the goal viewpoint was reached                        | False         |
 | ``success_rate``   | fraction of the goal view's landmarks observed        | success (0/1) |
-| ``steps_to_success`` | steps until success (20 if never)                   | NaN           |
-| ``ball_lost_step`` | step the ball left the view (20 if never)             | NaN           |
+| ``steps_to_success`` | steps until success (the time limit, 20, if never)  | NaN           |
+| ``ball_lost_step`` | step the ball left the view (the limit if never)      | NaN           |
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@ from activevision.envs.match.observations import (
 from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.match.view import match_panel
 from activevision.envs.slots import SlotVectorEnv
+from activevision.envs.time_limit import resolve_limit
 
 
 class ActiveVisionMatchVectorEnv(SlotVectorEnv):
@@ -30,7 +31,8 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     (``NEXT_STEP``); infos hold the single env's keys as arrays over sub-environments.
     ``max_episode_steps`` (``gymnasium.make_vec(..., max_episode_steps=n)``, which gives the
     sync and async modes Gymnasium's ``TimeLimit``) truncates a match after ``n`` ticks when
-    that comes before ``ticks``, as the ``TimeLimit`` does."""
+    that comes before ``ticks``, as the ``TimeLimit`` does; ``None`` and ``-1`` (Gymnasium's
+    "no ``TimeLimit``") leave matches their ``ticks``."""
 
     def __init__(
         self,
@@ -43,11 +45,8 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
         num_envs = check_count("num_envs", num_envs)
         self.config = config = resolve_match_config(config, config_overrides)
         # the match truncates itself after config.ticks; a time limit may end it sooner
-        self.max_episode_steps = (
-            None
-            if max_episode_steps is None
-            else check_count("max_episode_steps", max_episode_steps)
-        )
+        # (None or -1: none, as gymnasium.make applies no TimeLimit for either here)
+        self.max_episode_steps = resolve_limit(max_episode_steps, None)
         limit = self.max_episode_steps
         self._last_tick = config.ticks if limit is None else min(config.ticks, limit)
         self.sim = MatchBatch(config, num_envs)
