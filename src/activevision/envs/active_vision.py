@@ -23,7 +23,7 @@ from activevision.envs.observations import (
 )
 from activevision.envs.reset_options import check_no_options
 from activevision.envs.simulation import EpisodeBatch, StepOutcome
-from activevision.envs.time_limit import limit_from_make, never, resolve_limit
+from activevision.envs.time_limit import never, resolve_limit
 from activevision.localisation import LocalisationConfig
 
 
@@ -110,14 +110,16 @@ class ActiveVisionEnv(gym.Env):
     action step) of the goal viewpoint (``success_mode="landmarks"``: when every landmark of
     the goal view is in view, the release's rule), and with failure when the ball leaves the
     image. Truncates after 20 steps (``max_episode_steps`` of the registration), or after
-    ``gymnasium.make``'s ``max_episode_steps=n`` (``-1``: never truncates).
+    ``gymnasium.make``'s ``max_episode_steps=n`` (``-1``: never truncates; Gymnasium's
+    ``TimeLimit`` wrapper).
 
     ## Info
     ``goal_viewpoint`` (pan, tilt rad), ``goal_entropy``, ``desired_mask`` and
     ``observed_mask`` (the goal view's and the current view's landmarks: (K,) bool over
     landmark ids, K the field's landmark count), ``success_rate`` (|observed ∩ desired| /
     |desired|), ``success``, ``ball_lost``, ``steps_to_success`` and ``ball_lost_step`` (the
-    time limit if it did not happen: 20, ``n``, or -1 without a limit), ``episode_score``
+    constructor's ``max_episode_steps`` if it did not happen: 20, or -1 for none; ``make``'s
+    limit does not reach the env, see the README's known limitations), ``episode_score``
     (the release's: 1 success, 0 ball lost, else the success rate), ``head``, ``pose``,
     ``believed_pose``, ``ball``, ``step``; with a prior pose in the observation also
     ``prior_pose`` and ``prior_error``. Every value
@@ -128,10 +130,9 @@ class ActiveVisionEnv(gym.Env):
     ``gymnasium.make("ActiveVision-v0", config=EnvConfig(...), localisation=..., render_mode=...)``
     or any :class:`EnvConfig` field as a keyword (``frame_stack=4``, ``success_mode=...``).
     A wrong type, a value out of range or an unknown keyword raises ``ValueError`` naming it.
-    ``max_episode_steps`` of the constructor only sets the infos' time limit (the
+    ``max_episode_steps`` of the constructor only sets the infos' "did not happen" value (the
     ``TimeLimit`` wrapper truncates; ``None`` is 20, ``-1`` none, as ``gymnasium.make`` reads
-    it); under ``gymnasium.make`` the env takes ``make``'s instead, which ``make`` never
-    passes on (:func:`activevision.envs.time_limit.limit_from_make`).
+    it): ``TimeLimit(ActiveVisionEnv(max_episode_steps=n), n)`` agrees with itself.
     ``render_mode="rgb_array"`` returns the camera image beside a top view of the field.
 
     ## Version History
@@ -154,9 +155,8 @@ class ActiveVisionEnv(gym.Env):
         self.config = config
         self.render_mode = render_mode
         # Only the info's "did not happen" value: the time limit itself is the TimeLimit
-        # wrapper's. gymnasium.make never passes its max_episode_steps on: read it from make.
-        made, limit = limit_from_make(type(self))
-        self.max_episode_steps = limit if made else resolve_limit(max_episode_steps, 20)
+        # wrapper's, whose limit gymnasium.make does not pass on to the env.
+        self.max_episode_steps = resolve_limit(max_episode_steps, 20)
         self.sim = EpisodeBatch(config, 1, localisation)
         self.action_space = head_action_space(config.action_type, len(self.sim.actions))
         self.observation_space = observation_space(config, len(self.sim.actions))
