@@ -139,6 +139,23 @@ def test_the_match_config_travels_through_config_json(tmp_path):
     # the same short name on the episodic env (named in the same --set) is the env's field
     episodic = apply_overrides(config, ["env_id=ActiveVision-v0", "algo=ddqn", "step_deg=4"])
     assert episodic.env.step_deg == 4
+    # the episodic env's field by its full path is as unread on the match: refused too
+    with pytest.raises(ValueError, match=r"'env.camera.hfov' sets .*set match.camera.hfov"):
+        apply_overrides(config, ["env.camera.hfov=1.2"])
+
+
+def test_match_keys_on_an_episodic_run_are_refused_not_stored_unread():
+    """--set match.detection.far=0.2 on an episodic preset was stored in config.json and
+    never read (only a run on ActiveVisionMatch-v0 reads TrainConfig.match)."""
+    with pytest.raises(ValueError, match=r"'match.detection.far' sets the match env's config"):
+        apply_overrides(preset("dagger_prior"), ["match.detection.far=0.2"])
+    with pytest.raises(ValueError, match="never reads"):
+        preset("paper").replace(**{"match.ticks": 40})
+    # named with the match env in the same --set, it is that run's config
+    config = apply_overrides(
+        preset("paper"), ["env_id=ActiveVisionMatch-v0", "match.detection.far=0.2"]
+    )
+    assert config.match.detection.far == 0.2
 
 
 @pytest.mark.parametrize(

@@ -428,8 +428,17 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
                     f" {', '.join(twins)}"
                 )
             raise ValueError(f"unknown TrainConfig key {key!r}")
-        if env_id == MATCH_ENV_ID and path.startswith("env.") and key.strip() != path:
-            # a short name means the episodic env's field, which a match run never reads
+        on_match = str(env_id).removeprefix("activevision:") == MATCH_ENV_ID
+        if path.startswith("match.") and not on_match:
+            # only a run on the match env reads its config: refused, not stored unread
+            raise ValueError(
+                f"{key.strip()!r} sets the match env's config, which this run never reads: it"
+                f" trains on {env_id}, not {MATCH_ENV_ID} (set env_id={MATCH_ENV_ID}, or use a"
+                " match preset such as match_dagger)"
+            )
+        if on_match and path.startswith("env."):
+            # the episodic env's field (a short name or its full path): a match run never
+            # reads it
             twin = "match." + path.removeprefix("env.")
             instead = (
                 f"set {twin} (full path)" if twin in paths else "the match has no such setting"
