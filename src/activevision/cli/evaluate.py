@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import functools
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -83,6 +85,41 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
     return policies
 
 
+def _user_methods(
+    args: argparse.Namespace, env_config: Any, taken: Any
+) -> dict[str, Callable[[float], HeadPolicy]]:
+    """``--strategy FILE.py:NAME``: each user's method as a factory of the error level,
+    under its label (not one of ``taken``)."""
+    from activevision.experiments.methods import MethodContext, user_method
+
+    methods: dict[str, Callable[[float], HeadPolicy]] = {}
+    for spec in dict.fromkeys(args.strategy or ()):
+        label, factory = user_method(spec)
+        if label in taken or label in methods:
+            raise ValueError(f"--strategy {spec}: a method named {label!r} plays already")
+
+        def at_error(error: float, factory: Any = factory) -> HeadPolicy:
+            return factory(MethodContext(env_config, error, args.run, args.weights))
+
+        methods[label] = at_error
+    return methods
+
+
+@contextmanager
+def _users_code(label: str, user: bool) -> Iterator[None]:
+    """An exception a user's method raises as it plays: one line naming it (its type,
+    message and the line of the user's file)."""
+    from activevision.experiments.match_methods import USER_ERRORS, user_code_error
+
+    if not user:
+        yield
+        return
+    try:
+        yield
+    except USER_ERRORS as error:
+        raise user_code_error(f"--strategy {label}: playing", error) from None
+
+
 def cmd_evaluate(args: argparse.Namespace) -> None:
     """Fixed-seed evaluation of every method: table, CSV and JSON."""
     from activevision.envs import ActiveVisionEnv
@@ -110,6 +147,8 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     names = args.methods or runnable_methods(_compare_method_names(), args.run)
     policies = _policies(names, args, env_config, args.error)
     policies.update(_more_runs(args, env_config))
+    users = _user_methods(args, env_config, policies)
+    policies.update({label: make(args.error) for label, make in users.items()})
     shipped = policies.get("shipped")
     if args.run is None and isinstance(shipped, OnnxPolicy):
         # every method plays the shipped policy's observation (the others read only info)
@@ -120,13 +159,14 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     latency: dict[str, float] = {}
     with removed_on_failure(made):
         for name, policy in policies.items():
-            records, summary, lat = evaluate_policy(
-                policy,
-                args.episodes,
-                args.seed,
-                env=env,
-                measure_latency=name.startswith("learned") and not latency,  # the first one
-            )
+            with _users_code(name, name in users):
+                records, summary, lat = evaluate_policy(
+                    policy,
+                    args.episodes,
+                    args.seed,
+                    env=env,
+                    measure_latency=name.startswith("learned") and not latency,  # the first one
+                )
             summaries[name] = summary
             episodes += [{"method": name, **r} for r in records]
             if lat:
@@ -204,6 +244,8 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
     env_config = env_config_of_run(args.run)
     if args.ray and args.runs:
         raise ValueError("--runs plays in this process: leave out --ray")
+    if args.ray and args.strategy:
+        raise ValueError("--strategy plays in this process: leave out --ray")
     if args.ray:
         from activevision.scaleout.compare import compare_ray, default_method_names
 
@@ -230,9 +272,28 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
             methods = {k: v for k, v in methods.items() if k in args.methods}
         for name, policy in _more_runs(args, env_config).items():
             methods[name] = functools.partial(_same, policy)
+        users = _user_methods(args, env_config, methods)
+        _try_users(users, args, env_config)
+        methods.update(users)
         compare(out, methods, args.errors, args.episodes, args.seed, env_config)
     plot_compare(out / "compare.csv", out / "compare.png")
     print(f"wrote {out}/compare.csv and compare.png")
+
+
+def _try_users(
+    users: dict[str, Callable[[float], HeadPolicy]], args: argparse.Namespace, env_config: Any
+) -> None:
+    """Each user's method plays one episode of the first error level before any level
+    does: a mistake in it shows in seconds, as one line."""
+    from activevision.envs import ActiveVisionEnv
+    from activevision.experiments.compare import config_at_error
+    from activevision.experiments.evaluate import evaluate_policy
+
+    error = args.errors[0]
+    for label, make in users.items():
+        with _users_code(label, True):
+            env = ActiveVisionEnv(config_at_error(env_config, error))
+            evaluate_policy(make(error), 1, args.seed, env=env)
 
 
 def cmd_episode(args: argparse.Namespace) -> None:
@@ -283,6 +344,14 @@ def _add_runs(p: argparse.ArgumentParser) -> None:
         metavar="RUN",
         help="more training runs, each scored as method learned:NAME on the same episodes"
         " (e.g. a discrete and a continuous policy side by side)",
+    )
+    p.add_argument(
+        "--strategy",
+        nargs="+",
+        metavar="FILE.py:NAME",
+        help="your own methods, played beside --methods on the same episodes: NAME(context)"
+        " in FILE.py (or MODULE:NAME), given an experiments.methods.MethodContext, returns a"
+        " HeadPolicy (reset(info, rng), act(obs, info)); examples/centre_ball.py",
     )
 
 

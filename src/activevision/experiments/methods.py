@@ -6,6 +6,10 @@ their help from it, so a method added here is everywhere at once::
     @register_method("my_scan", help="my team's scan")
     def _my_scan(context: MethodContext) -> HeadPolicy:
         return MyScan(context.config)
+
+A method of your own plays without editing the package: ``activevision evaluate`` /
+``compare --strategy FILE.py:NAME`` calls ``NAME(context)`` (a :class:`MethodContext`) for
+each policy it needs (:func:`user_method`).
 """
 
 from __future__ import annotations
@@ -143,3 +147,34 @@ def _shipped(context: MethodContext) -> HeadPolicy:
     from activevision.runtime import pretrained_policy_path
 
     return OnnxPolicy(pretrained_policy_path())
+
+
+def user_method(spec: str) -> tuple[str, MethodFactory]:
+    """A user's method from ``"path/to/file.py:NAME"`` or ``"package.module:NAME"``
+    (``--strategy``): ``NAME`` is a factory like the registry's, a class or function that
+    takes a :class:`MethodContext` and returns a :class:`HeadPolicy` (``reset(info, rng)``,
+    ``act(obs, info)``). Returns its label (its ``name`` attribute, else ``NAME``) and the
+    factory, checked as it builds; ValueError names what is wrong, in one line."""
+    from activevision.experiments.match_methods import USER_ERRORS, load_strategy, user_code_error
+
+    label, factory = load_strategy(spec)
+    if label in _REGISTRY:
+        raise ValueError(
+            f"--strategy {spec}: its label {label!r} is a built-in method's; give NAME a"
+            " name attribute of its own"
+        )
+
+    def make(context: MethodContext) -> HeadPolicy:
+        try:
+            policy = factory(context)  # type: ignore[arg-type]
+        except USER_ERRORS as error:  # the user's code failed as it ran
+            raise user_code_error(f"--strategy {label}: {label}(context)", error) from None
+        missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
+        if missing:
+            raise ValueError(
+                f"--strategy {label}: what it returns has no {' or '.join(missing)} method"
+                " (a policy has reset(info, rng) and act(obs, info): see HeadPolicy)"
+            )
+        return policy  # type: ignore[return-value]
+
+    return label, make
