@@ -90,7 +90,7 @@ def _user_methods(
 ) -> dict[str, Callable[[float], HeadPolicy]]:
     """``--strategy FILE.py:NAME``: each user's method as a factory of the error level,
     under its label (not one of ``taken``)."""
-    from activevision.experiments.methods import MethodContext, user_method
+    from activevision.experiments.methods import MethodContext, MethodFactory, user_method
 
     methods: dict[str, Callable[[float], HeadPolicy]] = {}
     for spec in dict.fromkeys(args.strategy or ()):
@@ -98,7 +98,7 @@ def _user_methods(
         if label in taken or label in methods:
             raise ValueError(f"--strategy {spec}: a method named {label!r} plays already")
 
-        def at_error(error: float, factory: Any = factory) -> HeadPolicy:
+        def at_error(error: float, factory: MethodFactory = factory) -> HeadPolicy:
             return factory(MethodContext(env_config, error, args.run, args.weights))
 
         methods[label] = at_error
