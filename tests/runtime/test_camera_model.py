@@ -272,6 +272,8 @@ def test_one_warning_for_many_differences(camera_policy):
         " --set env.camera.tilt_max=0.785398163 (and --set env.start_tilt_range_deg=[LOW,HIGH]"
         " within the tilt limits, 0 to 45 degrees"
     )
+    # a match run reads match.camera (env.* is refused there): the hint says so
+    assert "as match.camera.* (--set match.camera.hfov=...)" in message
 
 
 def test_the_retrain_hint_trains(tmp_path):

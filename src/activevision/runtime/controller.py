@@ -478,7 +478,9 @@ def camera_mismatch_message(
         f" in radians, height in metres): activevision train ... {settings} (and"
         f" --set env.start_tilt_range_deg=[LOW,HIGH] within the tilt limits, {low:.4g} to"
         f" {high:.4g} degrees, if the preset's lie outside them); then `activevision export"
-        " RUN_DIR` and load that policy.onnx."
+        " RUN_DIR` and load that policy.onnx. A policy trained on ActiveVisionMatch-v0"
+        " takes the same values as match.camera.* (--set match.camera.hfov=...): a match"
+        " run refuses env.*."
     )
 
 
