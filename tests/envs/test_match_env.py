@@ -10,6 +10,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import activevision.envs  # noqa: F401  (registers the envs)
+from activevision.envs import EnvConfig
 from activevision.envs.match.config import (
     BallConfig,
     DetectionConfig,
@@ -301,6 +302,8 @@ def test_randomised_world_with_robots_plays():
         ({"observation": "pose"}, "observation"),
         ({"detection": DetectionConfig(near=0.2, far=0.5)}, "far"),
         ({"no_such": 1}, "unknown keyword"),
+        ({"field": "paper2020"}, "MatchConfig.field.*paper2020"),
+        ({"field": 3}, "MatchConfig.field.*preset name"),
     ],
 )
 def test_bad_config_is_one_clear_error(kwargs, match):
@@ -320,6 +323,13 @@ def test_bad_config_is_one_clear_error(kwargs, match):
 def test_bad_part_config_names_the_field(make, match):
     with pytest.raises(ValueError, match=match):
         make()
+
+
+def test_a_field_preset_name_is_its_field_as_in_the_episodic_env():
+    """``MatchConfig(field="paper2019")`` was refused while ``EnvConfig`` took the name."""
+    assert MatchConfig(field="paper2019").field == FieldSpec.paper_2019()
+    env = gym.make("ActiveVisionMatch-v0", field="paper2019", ticks=3)
+    assert env.unwrapped.config.field == EnvConfig(field="paper2019").field
 
 
 def test_a_striker_aims_short_of_the_ball():

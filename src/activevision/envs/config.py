@@ -75,7 +75,7 @@ class EnvConfig:
     robots: RobotsConfig = dataclasses.field(default_factory=RobotsConfig)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "field", _field_spec(self.field))
+        object.__setattr__(self, "field", field_spec(self.field, "EnvConfig.field"))
         # Types first (one message naming field and value), so that the range checks below
         # compare numbers, never strings or None.
         check_dataclass_fields(self)
@@ -168,19 +168,18 @@ class EnvConfig:
         return replace_fields(self, changes)
 
 
-def _field_spec(value: object) -> FieldSpec:
-    """``EnvConfig.field`` as a FieldSpec: a preset name (how JSON run configs store the
-    field) becomes its FieldSpec. Checked here, not by the generic type check, so that the
-    message names the presets too."""
+def field_spec(value: object, name: str) -> FieldSpec:
+    """A config's ``field`` (``name``, for messages) as a FieldSpec: a preset name (how JSON
+    run configs store the field) becomes its FieldSpec. Checked here, not by the generic
+    type check, so that the message names the presets too."""
     if isinstance(value, str):
         try:
             return field_preset(value)
         except ValueError as e:
-            raise ValueError(f"EnvConfig.field: {e}") from None
+            raise ValueError(f"{name}: {e}") from None
     if not isinstance(value, FieldSpec):
         raise ValueError(
-            f"EnvConfig.field: expects FieldSpec or a preset name {sorted(FIELD_PRESETS)}, "
-            f"got {value!r}"
+            f"{name}: expects FieldSpec or a preset name {sorted(FIELD_PRESETS)}, got {value!r}"
         )
     return value
 

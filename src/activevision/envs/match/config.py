@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from activevision.envs.actions import ActionType
+from activevision.envs.config import field_spec
 from activevision.envs.robots import RobotsConfig
 from activevision.geometry import CameraConfig, FieldSpec
 from activevision.localisation.config import UKFConfig
@@ -150,7 +151,8 @@ def _match_tracker() -> TrackerConfig:
 class MatchConfig:
     """Everything that defines a match of ``ActiveVisionMatch-v0``."""
 
-    field: FieldSpec = dataclasses.field(default_factory=FieldSpec)  #: KidSize field
+    #: KidSize field (current rules); a preset name ("kidsize", "paper2019") is accepted
+    field: FieldSpec = dataclasses.field(default_factory=FieldSpec)
     camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)  #: the paper's camera
     #: control ticks per match: 600 ticks of 0.32 s is 3.2 minutes of play
     ticks: int = dataclasses.field(default=600, metadata=in_range(1))
@@ -174,6 +176,7 @@ class MatchConfig:
     others: OthersConfig = dataclasses.field(default_factory=OthersConfig)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "field", field_spec(self.field, "MatchConfig.field"))
         check_dataclass_fields(self)
         if self.detection.far > self.detection.near:
             raise ValueError("MatchConfig.detection: far must not exceed near")
