@@ -3,7 +3,9 @@ matches, and the registry ``activevision match`` takes its ``--methods`` from.
 
 A strategy sees what a robot knows -- its head angles, its UKF belief and its ball model
 (the env's info keys ``head``, ``belief_mean``, ``belief_cov``, ``ball_relative``,
-``ball_age``) -- and, if it is learned, the camera image. It returns one action per match,
+``ball_age``, each an array over the N matches; the info is the vector env's, so it also
+holds Gymnasium's ``_key`` masks and the simulator's truth, which a fair strategy leaves
+alone) -- and, if it is learned, the camera image. It returns one action per match,
 of the env's kind (``MatchConfig.action_type``): most strategies pick a head *target* and
 move towards it at head speed, as a real head does -- the greedy discrete move, or the
 continuous move straight there, at most ``max_move_deg`` per axis.
