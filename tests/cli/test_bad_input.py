@@ -491,6 +491,32 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         ["train", "--resume", "{run}"],
         "checkpoint",
     ),
+    # a training log damaged after the checkpoint: resuming would append rows to a file
+    # that reads as whole but lost rows (or has no header), so it is refused, naming the file
+    (
+        "metrics.csv emptied",
+        lambda r: (r / "metrics.csv").write_text(""),
+        ["train", "--resume", "{run}"],
+        "metrics.csv does not start with its header",
+    ),
+    (
+        "metrics.csv missing",
+        lambda r: (r / "metrics.csv").unlink(),
+        ["train", "--resume", "{run}"],
+        "metrics.csv holds 0 whole rows where the checkpoint logged 1",
+    ),
+    (
+        "episodes.csv cut short",
+        lambda r: (r / "episodes.csv").write_bytes((r / "episodes.csv").read_bytes()[:100]),
+        ["train", "--resume", "{run}"],
+        "episodes.csv holds",
+    ),
+    (
+        "episodes.csv binary",
+        lambda r: (r / "episodes.csv").write_bytes(b"\xff\xfe" * 50),
+        ["train", "--resume", "{run}"],
+        "episodes.csv is not a CSV table",
+    ),
     (
         "compare.csv of other episodes",
         lambda r: write_compare_csv(r, episodes=50),

@@ -134,7 +134,11 @@ class CsvLogger:
             EPISODES_CSV: CsvLog(self.run_dir / EPISODES_CSV, EPISODE_FIELDS),
             EVALUATIONS_CSV: CsvLog(self.run_dir / EVALUATIONS_CSV, self.evaluation_fields),
         }
-        rows = (0, 0, 0) if resume is None else (resume.epochs, resume.episodes, resume.validations)
+        if resume is None:
+            for log in self._logs.values():
+                log.clear()
+            return
+        rows = (resume.epochs, resume.episodes, resume.validations)
         for log, keep in zip(self._logs.values(), rows, strict=True):
             log.truncate(keep)
 

@@ -21,6 +21,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from activevision.io import write_text
+
 EPISODE_FIELDS = (
     "episode",
     "step",
@@ -146,12 +148,43 @@ class CsvLog:
         with open(self.path, newline="") as file:
             return list(csv.DictReader(file))
 
+    def clear(self) -> None:
+        """Leave the header alone in the file (a new run's log)."""
+        write_text(self.path, ",".join(self.fieldnames) + "\r\n")
+
     def truncate(self, n_rows: int) -> None:
-        """Keep the header and the first ``n_rows`` rows (rows written after a checkpoint)."""
-        with open(self.path, newline="") as file:
-            lines = file.readlines()
-        with open(self.path, "w", newline="") as file:
-            file.writelines(lines[: 1 + n_rows])
+        """Keep the header and the first ``n_rows`` rows (rows written after a checkpoint).
+
+        RunLogError naming the file when it does not start with this log's header and
+        ``n_rows`` whole rows (emptied, cut short, binary, another table): appending to it
+        would make a log that reads as whole but is not. The cut is written atomically."""
+        if n_rows == 0:  # nothing to lose
+            self.clear()
+            return
+        try:
+            with open(self.path, newline="", encoding="utf-8") as file:
+                lines = file.readlines()
+        except UnicodeDecodeError:
+            raise RunLogError(f"{self.path} is not a CSV table (binary data){_RESTORE}") from None
+        rows = list(csv.reader(lines[: 1 + n_rows]))
+        if not rows or rows[0] != self.fieldnames:
+            raise RunLogError(f"{self.path} does not start with its header row{_RESTORE}")
+        width = len(self.fieldnames)
+        whole = [a.endswith("\n") and len(b) == width for a, b in zip(lines, rows, strict=False)]
+        if len(rows) < 1 + n_rows or not all(whole):
+            raise RunLogError(
+                f"{self.path} holds {sum(whole) - 1} whole rows where the checkpoint logged"
+                f" {n_rows}{_RESTORE}"
+            )
+        if len(lines) > 1 + n_rows:
+            write_text(self.path, "".join(lines[: 1 + n_rows]))
+
+
+class RunLogError(ValueError):
+    """A training log (``metrics.csv``...) that a resumed run cannot continue."""
+
+
+_RESTORE = ": it was damaged after the checkpoint; restore it, or train a new run"
 
 
 def read_csv_columns(path: str | os.PathLike[str]) -> dict[str, list[float]]:

@@ -40,7 +40,7 @@ from activevision.training.config import TrainConfig, load_config, save_config
 from activevision.training.cpu import configure_torch_cpu, training_device
 from activevision.training.environment import EnvFactory, chw_shape, discrete_actions, make_env
 from activevision.training.loggers import Logger, LoggerGroup, default_loggers
-from activevision.training.metrics import EpochAccumulator, episode_record
+from activevision.training.metrics import EpochAccumulator, RunLogError, episode_record
 from activevision.training.policy_files import BestWeights, network_metadata, write_policy
 from activevision.training.progress import postfix, progress_bar
 from activevision.training.run_lock import RunLock
@@ -351,7 +351,7 @@ class Trainer:
             try:
                 trainer._restore(loaded)
             except (KeyError, TypeError, ValueError, IndexError, RuntimeError) as error:
-                if isinstance(error, ckpt.CheckpointError):
+                if isinstance(error, ckpt.CheckpointError | RunLogError):  # names its file
                     raise
                 raise ckpt.CheckpointError(
                     f"checkpoint {loaded.path} does not fit this run"
