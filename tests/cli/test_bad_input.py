@@ -539,6 +539,44 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         ["report", "{run}"],
         "evaluation.json",
     ),
+    # report reads config.json, the logs, evaluation.json and match.csv: a damaged one is
+    # named on one line, never a traceback
+    (
+        "evaluation.json of another shape",
+        lambda r: write_file(r / "evaluation" / "evaluation.json", '{"methods": 5}'),
+        ["report", "{run}"],
+        "evaluation.json is damaged",
+    ),
+    (
+        "evaluation.json a list",
+        lambda r: write_file(r / "evaluation" / "evaluation.json", "[]"),
+        ["report", "{run}"],
+        "evaluation.json is damaged",
+    ),
+    (
+        "match.csv of another layout",
+        lambda r: write_file(r / "match" / "match.csv", "a,b\n1,2\n"),
+        ["report", "{run}"],
+        "match.csv is damaged",
+    ),
+    (
+        "config.json a list, report",
+        lambda r: (r / "config.json").write_text("[]"),
+        ["report", "{run}"],
+        "config.json must hold a training run's config",
+    ),
+    (
+        "config.json of wrong types, report",
+        lambda r: (r / "config.json").write_text('{"run": 5}'),
+        ["report", "{run}"],
+        "config.json must hold a training run's config",
+    ),
+    (
+        "metrics.csv binary, report",
+        lambda r: (r / "metrics.csv").write_bytes(b"\xff\xfe" * 50),
+        ["report", "{run}"],
+        "metrics.csv is damaged",
+    ),
     (
         "metrics.csv garbage",
         lambda r: (r / "metrics.csv").write_text("epoch,step\nx,y\n"),

@@ -13,10 +13,12 @@ Layout of a run directory after the quickstart::
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import math
 import platform
+from collections.abc import Iterator
 from pathlib import Path
 
 import activevision
@@ -27,8 +29,20 @@ from activevision.training.config import MATCH_ENV_ID
 def _csv_rows(path: Path) -> list[dict]:
     if not path.exists():
         return []
-    with path.open() as f:
+    with _reading(path), path.open(encoding="utf-8", newline="") as f:
         return list(csv.DictReader(f))
+
+
+@contextlib.contextmanager
+def _reading(path: Path) -> Iterator[None]:
+    """Turn what a damaged file (binary, cut, of another layout) raises while the block
+    reads it into a ValueError naming it."""
+    try:
+        yield
+    except (KeyError, TypeError, AttributeError, IndexError, ValueError, csv.Error) as error:
+        raise ValueError(
+            f"{path} is damaged or not a file activevision wrote ({type(error).__name__}: {error})"
+        ) from None
 
 
 def _table(rows: list[dict], metrics: list[str]) -> str:
@@ -50,6 +64,8 @@ def write_report(run_dir: str | Path) -> Path:
     if not (run / "config.json").exists():
         raise FileNotFoundError(f"{run} is not a training run (no config.json)")
     config = read_json(run / "config.json")
+    if not isinstance(config, dict) or not isinstance(config.get("run", {}), dict):
+        raise ValueError(f"{run / 'config.json'} must hold a training run's config object")
     algo = config.get("algo", "ddqn")
     env_id = config.get("env_id", "ActiveVision-v0")
     parts = [
@@ -71,42 +87,15 @@ def write_report(run_dir: str | Path) -> Path:
     evaluation = run / "evaluation" / "evaluation.json"
     if evaluation.exists():
         data = read_json(evaluation)
-        rows = [{k: str(v) for k, v in r.items()} for r in data["methods"]]
-        parts += [
-            "",
-            "## Evaluation",
-            "",
-            f"{data['episodes']} episodes, seed {data['seed']}, identical starts for every "
-            f"method{_error_text(rows)}; mean [95% confidence interval]."
-            + _weights_text(data, rows),
-            "",
-            _table(rows, ["success", "success_rate", "success_duration", "ball_loss_duration"]),
-            "",
-            "success: the share of episodes that reach the goal view; success_rate: the"
-            " paper's |observed ∩ desired| / |desired| landmarks at the end; success_duration:"
-            " steps to success, ball_loss_duration: steps until the ball was lost (20 if"
-            " never, as the paper counts).",
-            "",
-            _table(rows, ["entropy_regret", "regret_within", "oscillating"]),
-            "",
-            "Entropy regret: the belief's entropy after the final view's landmarks minus the"
-            " goal view's (nats); regret_within: the share of episodes within 0.25 nats;"
-            " oscillating: unsolved episodes that end swinging between two views.",
-            "",
-            # head travel (degrees per episode): evaluations written before it lack it
-            _table(rows, [m for m in ("reward", "score", "head_travel") if m in rows[0]]),
-            "",
-            "reward: the episode's total; score: the authors' release's (1 success, 0 ball"
-            " lost, else success_rate); head_travel: degrees the head moved in the episode.",
-        ]
-        latency_path = evaluation.with_name("latency.json")  # older evaluations: inside
-        lat = read_json(latency_path) if latency_path.exists() else data.get("latency")
-        if lat:
-            parts += [
-                "",
-                f"Learned policy, batch 1 on CPU (PyTorch): p50 {lat['p50_ms']:.2f} ms, "
-                f"p99 {lat['p99_ms']:.2f} ms; the paper: 2.3 ms on a GTX 1060.",
-            ]
+        with _reading(evaluation):
+            latency = data.get("latency")  # where evaluations before latency.json kept it
+        latency_path = evaluation.with_name("latency.json")
+        if latency_path.exists():
+            latency = read_json(latency_path)
+            with _reading(latency_path):
+                float(latency["p50_ms"]), float(latency["p99_ms"])
+        with _reading(evaluation):
+            parts += _evaluation_part(data, latency)
     if (run / "compare" / "compare.png").exists():
         parts += ["", "## Success vs localisation error", "", "![comparison](compare/compare.png)"]
     if (run / "episode.png").exists():
@@ -118,34 +107,11 @@ def write_report(run_dir: str | Path) -> Path:
             "",
             "Animated: [episode.gif](episode.gif)",
         ]
-    match_rows = _csv_rows(run / "match" / "match.csv")
+    match_csv = run / "match" / "match.csv"
+    match_rows = _csv_rows(match_csv)
     if match_rows:
-        first = match_rows[0]
-        parts += [
-            "",
-            "## Head control through whole matches",
-            "",
-            f"`ActiveVisionMatch-v0`: {first['matches']} matches"
-            + (f" of {first['ticks']} ticks" if first.get("ticks") else "")
-            + f" from seed {first['seed']}, the"
-            " same for every strategy; the robot walks, the ball is kicked about, the UKF"
-            f" tracks every tick{_match_world_text(first)}. Mean [95% interval] over matches.",
-            "",
-            _table(match_rows, ["position_rmse", "heading_rmse", "lost_share"]),
-            "",
-            _table(match_rows, ["ball_in_view", "entropy", "head_travel"]),
-            "",
-            "position_rmse (m) and heading_rmse (degrees): the belief's error over every"
-            " tick; lost_share, ball_in_view: shares of ticks; entropy: the belief's mean"
-            " (nats); head_travel: degrees per second."
-            f" {_match_policies_text(match_rows)}",
-            "",
-            "![Pareto front](match/match_pareto.png)",
-            "",
-            "![error over time](match/match_error.png)",
-            "",
-            "Animated: [match_clip.gif](match/match_clip.gif)",
-        ]
+        with _reading(match_csv):
+            parts += _match_part(match_rows)
     parts += [
         "",
         "## Configuration",
@@ -158,6 +124,76 @@ def write_report(run_dir: str | Path) -> Path:
     out = run / "report.md"
     write_text(out, "\n".join(parts))
     return out
+
+
+def _evaluation_part(data: dict, latency: dict | None) -> list[str]:
+    """The report's evaluation section, from ``evaluation.json``'s ``data`` and the
+    learned policy's measured ``latency`` (``latency.json``), if any."""
+    rows = [{k: str(v) for k, v in r.items()} for r in data["methods"]]
+    parts = [
+        "",
+        "## Evaluation",
+        "",
+        f"{data['episodes']} episodes, seed {data['seed']}, identical starts for every "
+        f"method{_error_text(rows)}; mean [95% confidence interval]." + _weights_text(data, rows),
+        "",
+        _table(rows, ["success", "success_rate", "success_duration", "ball_loss_duration"]),
+        "",
+        "success: the share of episodes that reach the goal view; success_rate: the"
+        " paper's |observed ∩ desired| / |desired| landmarks at the end; success_duration:"
+        " steps to success, ball_loss_duration: steps until the ball was lost (20 if"
+        " never, as the paper counts).",
+        "",
+        _table(rows, ["entropy_regret", "regret_within", "oscillating"]),
+        "",
+        "Entropy regret: the belief's entropy after the final view's landmarks minus the"
+        " goal view's (nats); regret_within: the share of episodes within 0.25 nats;"
+        " oscillating: unsolved episodes that end swinging between two views.",
+        "",
+        # head travel (degrees per episode): evaluations written before it lack it
+        _table(rows, [m for m in ("reward", "score", "head_travel") if m in rows[0]]),
+        "",
+        "reward: the episode's total; score: the authors' release's (1 success, 0 ball"
+        " lost, else success_rate); head_travel: degrees the head moved in the episode.",
+    ]
+    if latency:
+        lat = latency
+        parts += [
+            "",
+            f"Learned policy, batch 1 on CPU (PyTorch): p50 {lat['p50_ms']:.2f} ms, "
+            f"p99 {lat['p99_ms']:.2f} ms; the paper: 2.3 ms on a GTX 1060.",
+        ]
+    return parts
+
+
+def _match_part(match_rows: list[dict]) -> list[str]:
+    """The report's section on whole matches, from ``match.csv``'s rows."""
+    first = match_rows[0]
+    return [
+        "",
+        "## Head control through whole matches",
+        "",
+        f"`ActiveVisionMatch-v0`: {first['matches']} matches"
+        + (f" of {first['ticks']} ticks" if first.get("ticks") else "")
+        + f" from seed {first['seed']}, the"
+        " same for every strategy; the robot walks, the ball is kicked about, the UKF"
+        f" tracks every tick{_match_world_text(first)}. Mean [95% interval] over matches.",
+        "",
+        _table(match_rows, ["position_rmse", "heading_rmse", "lost_share"]),
+        "",
+        _table(match_rows, ["ball_in_view", "entropy", "head_travel"]),
+        "",
+        "position_rmse (m) and heading_rmse (degrees): the belief's error over every"
+        " tick; lost_share, ball_in_view: shares of ticks; entropy: the belief's mean"
+        " (nats); head_travel: degrees per second."
+        f" {_match_policies_text(match_rows)}",
+        "",
+        "![Pareto front](match/match_pareto.png)",
+        "",
+        "![error over time](match/match_error.png)",
+        "",
+        "Animated: [match_clip.gif](match/match_clip.gif)",
+    ]
 
 
 def _is_number(value: str) -> bool:
