@@ -517,6 +517,20 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         ["train", "--resume", "{run}"],
         "episodes.csv is not a CSV table",
     ),
+    # weights another run trained (a student's in a DDQN run): one line naming the mismatch,
+    # not a shape error deep in the first episode
+    (
+        "weights of another run",
+        lambda r: put_student_weights(r),
+        ["evaluate", "--run", "{run}", "--methods", "learned", "--episodes", "2"],
+        "do not fit its config.json",
+    ),
+    (
+        "weights of another run, robustness",
+        lambda r: put_student_weights(r),
+        ["robustness", "--run", "{run}", "--perturbations", "clean", "--episodes", "2"],
+        "do not fit its config.json",
+    ),
     (
         "compare.csv of other episodes",
         lambda r: write_compare_csv(r, episodes=50),
@@ -594,6 +608,15 @@ def write_file(path: Path, text: str) -> None:
 def write_compare_csv(run: Path, episodes: int) -> None:
     header = "error,episodes,seed,method,success_rate\n"
     write_file(run / "compare" / "compare.csv", header + f"0.0,{episodes},0,random,0.7\n")
+
+
+def put_student_weights(run: Path) -> None:
+    """A DAgger student's policy.safetensors (image + a 30-vector) in place of the run's."""
+    from activevision.agents.student import StudentNetwork
+    from activevision.training.policy_files import write_policy
+
+    student = StudentNetwork(8, vector_size=30)
+    write_policy(run, student.state_dict(), {**student.metadata(), "step": 60})
 
 
 def swap_optimizer_state(run: Path) -> None:

@@ -19,7 +19,13 @@ from numpy.typing import ArrayLike
 
 from activevision.envs.actions import action_table, greedy_actions
 from activevision.envs.config import EnvConfig
-from activevision.envs.observations import IMAGE_KEY, Observation, flatten_vectors, vector_keys
+from activevision.envs.observations import (
+    IMAGE_KEY,
+    Observation,
+    flatten_vectors,
+    vector_keys,
+    vector_sizes,
+)
 from activevision.envs.robots import RobotsConfig
 from activevision.envs.starts import corrupt_pose
 from activevision.geometry import field_landmarks
@@ -232,6 +238,7 @@ class LearnedPolicy:
         env = config.env
         max_move = env.max_move if env.action_type == "continuous" else None
         network = load_policy(run_dir, weights=weights)
+        _check_weights_fit(network, config, run_dir, weights)
         return cls(network, device, num_threads, keys, evidence, max_move)
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
@@ -265,6 +272,22 @@ class LearnedPolicy:
                 pan, tilt = head[0] + action * self.max_move
                 return HeadTarget(float(pan), float(tilt))
             return int(action)
+
+
+def _check_weights_fit(network: Any, config: Any, run_dir: Any, weights: str) -> None:
+    """ValueError unless ``network`` is what a run of ``config`` (a TrainConfig) trains: a
+    Q-network for DDQN, a student taking the observation's vector for the others (weights
+    copied in from another run would otherwise fail deep in the first episode)."""
+    env = config.env
+    size = getattr(network, "vector_size", None)  # a student's; None: a Q-network
+    want = sum(vector_sizes(env, len(action_table(env.step_deg, env.action_set))).values())
+    if (size is None) != (config.algo == "ddqn") or (size is not None and size != want):
+        have = "a Q-network" if size is None else f"a student taking a vector of {size}"
+        need = "a Q-network" if config.algo == "ddqn" else f"a student taking a vector of {want}"
+        raise ValueError(
+            f"the {weights} weights of {run_dir} do not fit its config.json: {have}, where its"
+            f" {config.algo} run on {env.observation!r} trains {need} (copied from another run?)"
+        )
 
 
 def with_world(
