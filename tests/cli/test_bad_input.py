@@ -216,6 +216,20 @@ def test_a_folder_of_other_files_is_no_place_for_a_run(tmp_path, tiny_train, one
     assert sorted(p.name for p in folder.iterdir()) == ["episodes.csv"]
 
 
+def test_a_run_that_fails_before_training_leaves_no_folder(tmp_path, tiny_train, one_clear_line):
+    """A world with no start (the ball is below a camera tilted 50-60 degrees down) fails at
+    the first reset: the folder it made held only config.json and empty logs, and the next
+    try needed --overwrite. A folder that was there before stays."""
+    argv = [*tiny_train, "--set", "env.start_tilt_range_deg=[50,60]"]
+    assert main([*argv, "--out", str(tmp_path / "new")]) == 2
+    one_clear_line("no start")
+    assert not (tmp_path / "new").exists()
+    (tmp_path / "mine").mkdir()
+    assert main([*argv, "--out", str(tmp_path / "mine")]) == 2
+    one_clear_line("no start")
+    assert (tmp_path / "mine").is_dir()
+
+
 def test_evaluating_again_needs_overwrite(tmp_path, capsys, one_clear_line):
     argv = ["evaluate", "--methods", "random", "--episodes", "2", "--out", str(tmp_path / "e")]
     assert main(argv) == 0

@@ -169,5 +169,5 @@ def test_the_latency_is_reported_from_its_own_file_or_an_older_evaluation(tmp_pa
     write_evaluation(plain, 0.0)
     assert "p50" not in write_report(plain).read_text()
     (plain / "evaluation" / "latency.json").write_text("[]")
-    with pytest.raises(ValueError, match="latency.json is damaged"):
+    with pytest.raises(ValueError, match=r"latency\.json is damaged"):
         write_report(plain)

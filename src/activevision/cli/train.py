@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -117,8 +118,25 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     if args.algo is not None:
         overrides.append(f"algo={args.algo}")
     run_dir: Path = args.out
-    train(apply_overrides(config, overrides), run_dir)
+    config = apply_overrides(config, overrides)
+    new_folder = not run_dir.exists()
+    try:
+        train(config, run_dir)
+    except Exception:
+        if new_folder and _nothing_trained(run_dir):
+            shutil.rmtree(run_dir, ignore_errors=True)  # e.g. no start found: try again freely
+        raise
     return run_dir
+
+
+def _nothing_trained(run_dir: Path) -> bool:
+    """A run that failed before its first checkpoint and its first logged epoch: its
+    folder holds nothing worth keeping (only the config and empty logs)."""
+    from activevision.training.checkpoint import list_checkpoints
+
+    metrics = run_dir / "metrics.csv"
+    logged = metrics.is_file() and len(metrics.read_bytes().splitlines()) > 1
+    return not list_checkpoints(run_dir) and not logged
 
 
 def cmd_plot(args: argparse.Namespace) -> None:
