@@ -378,7 +378,7 @@ def test_warm_start_takes_the_source_weights_resumes_without_them_and_refuses_ot
         steps=600,
         **{"run.checkpoint_interval": 300, "dagger.init_from": str(tmp_path / "source")},
     )
-    trainer = DaggerTrainer(warm, tmp_path / "split", loggers=[])
+    trainer = DaggerTrainer(warm, tmp_path / "split")  # its logs, which the resume continues
     start = trainer.network.state_dict()  # on the training device (a GPU where there is one)
     assert all(torch.equal(start[k].cpu(), source[k]) for k in source)
     cold = DaggerTrainer(tiny(steps=300), tmp_path / "cold", loggers=[]).network.state_dict()
