@@ -455,6 +455,46 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         ["export", "{run}", "-o", "{run}/../out.onnx"],
         "changed after checkpoint",
     ),
+    # evaluate, compare, robustness and match play the run's network in its config.json's world:
+    # an edit after training (5-degree steps for a 3-degree policy) is refused like export's
+    *[
+        (
+            f"edited config {argv[0]}",
+            lambda r: (r / "config.json").write_text(
+                (r / "config.json").read_text().replace('"step_deg": 3.0', '"step_deg": 5.0')
+            ),
+            argv,
+            "changed after checkpoint step_000000030: playing its network",
+        )
+        for argv in (
+            ["evaluate", "--run", "{run}", "--methods", "learned", "--episodes", "1"],
+            [
+                "compare",
+                "--run",
+                "{run}",
+                "--methods",
+                "learned",
+                "--errors",
+                "0",
+                "--episodes",
+                "1",
+            ],
+            ["robustness", "--run", "{run}", "--perturbations", "clean", "--episodes", "1"],
+            [
+                "match",
+                "--run",
+                "{run}",
+                "--methods",
+                "learned",
+                "--matches",
+                "1",
+                "--ticks",
+                "2",
+                "--out",
+                "{run}/../match",
+            ],
+        )
+    ],
     (
         "config not JSON",
         lambda r: (r / "config.json").write_text("{"),

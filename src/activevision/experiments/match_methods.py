@@ -398,11 +398,13 @@ class LearnedMatchPolicy:
         from activevision.training import load_config, load_policy
         from activevision.training.config import MATCH_ENV_ID
         from activevision.training.match_dagger import student_match_actions
+        from activevision.training.state import PLAYING_WOULD, check_run_config_unchanged
 
         self.student_actions = student_match_actions
         self.student_class = StudentNetwork
 
         run_config = load_config(run / "config.json")
+        check_run_config_unchanged(run, PLAYING_WOULD)
         self.student = run_config.match_student
         if not self.student and run_config.algo != "ddqn":
             raise ValueError(

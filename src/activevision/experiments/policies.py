@@ -218,10 +218,15 @@ class LearnedPolicy:
         num_threads: int | None = 1,
         weights: str = "final",
     ) -> LearnedPolicy:
-        """The run's final weights, or with ``weights="best"`` its best validated ones."""
+        """The run's final weights, or with ``weights="best"`` its best validated ones.
+
+        CheckpointError if the run's config.json was edited after its newest checkpoint:
+        its observation, moves and camera would no longer be those the network learnt."""
         from activevision.training import load_config, load_policy
+        from activevision.training.state import PLAYING_WOULD, check_run_config_unchanged
 
         config = load_config(Path(run_dir) / "config.json")
+        check_run_config_unchanged(Path(run_dir), PLAYING_WOULD)
         if config.algo == "dagger" and config.env_id == "ActiveVisionMatch-v0":
             raise ValueError(
                 f"{run_dir} is a match student (it takes the belief and the ball model): play"

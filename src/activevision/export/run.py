@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -39,6 +38,7 @@ def export_run(
     """
     from activevision.envs.observations import vector_keys
     from activevision.training import load_config, load_policy
+    from activevision.training.state import check_run_config_unchanged
 
     run_dir = Path(run_dir)
     config_path = run_dir / CONFIG_FILENAME
@@ -48,7 +48,11 @@ def export_run(
         raise FileNotFoundError(f"{run_dir} is not a training run: no {CONFIG_FILENAME}") from error
     config = load_config(config_path)
     sha256 = hashlib.sha256(config_bytes).hexdigest()
-    _check_config_unchanged(run_dir)
+    check_run_config_unchanged(
+        run_dir,
+        "policy.json would record the edited camera and moves, not those the policy was"
+        " trained with; restore the file",
+    )
     network = load_policy(run_dir, weights=weights)
     if config.env_id == MATCH_ENV_ID:
         # a policy trained on the match: its world, observation and moves are the match's
@@ -86,30 +90,6 @@ def export_run(
         metadata["goal_frame"] = config.dagger.goal_frame
         metadata["goal_views_deg"] = np.degrees(grid.views).tolist()
     return export_onnx(network, out_path or run_dir / MODEL_FILENAME, metadata, **export_options)
-
-
-def _check_config_unchanged(run_dir: Path) -> None:
-    """CheckpointError if ``config.json`` is not the file the run's newest checkpoint was
-    taken under: policy.json would record the edited camera and moves, not those the network
-    learnt (no checkpoint, or an unreadable one: nothing to compare)."""
-    from activevision.training.checkpoint import list_checkpoints
-    from activevision.training.state import STATE_FILE, check_config_unchanged
-
-    checkpoints = list_checkpoints(run_dir)
-    if not checkpoints:
-        return
-    try:
-        saved = json.loads((checkpoints[-1] / STATE_FILE).read_text()).get("config_sha256")
-    except (OSError, ValueError, AttributeError):
-        return  # loading the weights reports a corrupt checkpoint
-    if saved is not None:
-        check_config_unchanged(
-            run_dir,
-            checkpoints[-1],
-            saved,
-            "policy.json would record the edited camera and moves, not those the policy was"
-            " trained with; restore the file",
-        )
 
 
 def _world_metadata(

@@ -311,6 +311,11 @@ RESUMING_WOULD = (
     "resuming would mix two configurations: restore the file, or start a new run with the new"
     " config"
 )
+#: what playing a run's network under a config.json edited after training would do
+PLAYING_WOULD = (
+    "playing its network would read the edited world, moves and observation, not those it was"
+    " trained with; restore the file"
+)
 
 
 def check_config_unchanged(
@@ -329,9 +334,32 @@ def check_config_unchanged(
         )
 
 
+def check_run_config_unchanged(run_dir: Path, consequence: str) -> None:
+    """CheckpointError unless ``run_dir``'s config.json is the file its newest checkpoint was
+    taken under (SHA-256 in the checkpoint's state.json): the run's weights were learnt in
+    the world and with the moves of that file, so reading them with an edited one (to
+    export, evaluate or play them) would pair the network with another world.
+    ``consequence`` says what going on regardless would do. No checkpoint, an unreadable one
+    or one from before the digest was kept: nothing to compare (loading the weights reports
+    a corrupt checkpoint). The policy files do not record the digest: every checkpoint
+    rewrites policy.safetensors, and a resume refuses an edited config.json, so the newest
+    checkpoint's digest is that of every weights file of the run."""
+    checkpoints = ckpt.list_checkpoints(run_dir)
+    if not checkpoints:
+        return
+    try:
+        saved = json.loads((checkpoints[-1] / STATE_FILE).read_text()).get("config_sha256")
+    except (OSError, ValueError, AttributeError):
+        return
+    if saved is not None:
+        check_config_unchanged(run_dir, checkpoints[-1], saved, consequence)
+
+
 __all__ = [
     "LoadedCheckpoint",
     "TrainerState",
+    "check_config_unchanged",
+    "check_run_config_unchanged",
     "config_digest",
     "load_checkpoint",
     "obs_digest",
