@@ -49,6 +49,18 @@ its shape (an object of objects whose values are finite numbers or ``[low, high]
 hands it out as a plain dict (:attr:`PolicyMetadata.world`); ``activevision robustness`` builds
 the configs from it. Files written before it existed lack it (None: unknown).
 
+Every key a reader acts on must be present and of its type, else :class:`PolicyFileError`
+names the file and the key: ``opset``, ``input_name``, ``input_dtype`` (``"uint8"``),
+``output_name``, ``n_actions``, the frame size, the action table and names, the head limits
+and ``model_sha256`` (every export has written them), and ``vector_input_name`` and
+``observation`` where ``vector_keys`` lists inputs. Keys older files lack keep a default:
+``observation`` ``"image"`` and no ``vector_keys`` (files from before vector inputs),
+``camera`` and ``world`` None, ``action_type`` ``"discrete"``, ``act_by`` ``"action"``.
+``step_deg`` and ``action_set`` (the env's discrete moves; ``export_onnx`` alone writes
+neither) come together, and the action table must be their moves. Keys no reader acts on
+(``dueling``, ``preprocessing``, ``package_version``, ``model_file``,
+``training_config_sha256``) are checked for their type where present.
+
 ``action_type`` is ``"discrete"`` (absent in older files: the graph scores the rows of
 ``action_table_deg``) or ``"continuous"``: the graph's output is one move ``(pan, tilt)`` in
 [-1, 1], scaled by ``max_move_deg`` (the largest move per decision on each axis, degrees).
@@ -141,6 +153,19 @@ CAMERA_TOLERANCES = {
     "angle": math.radians(1.0),  #: rad, each pan and tilt limit
     "aspect": 0.01,  #: relative difference of width / height
 }
+
+
+#: Rows of each discrete action set's table (activevision.envs.actions.action_table).
+_ACTION_SET_SIZES = {"8way": 9, "4way": 5}
+
+
+def _action_table_deg(step_deg: float, action_set: str) -> np.ndarray:
+    """The env's (A, 2) moves in degrees (``activevision.envs.actions.action_table``, written
+    out: the runtime imports no envs)."""
+    s = step_deg
+    d = math.degrees(math.radians(s) * math.sqrt(2) / 2)
+    moves = [(0, 0), (s, 0), (-s, 0), (0, -s), (0, s), (d, -d), (d, d), (-d, -d), (-d, d)]
+    return np.asarray(moves[: _ACTION_SET_SIZES[action_set]], dtype=np.float64)
 
 
 def vector_key_size(key: str, n_actions: int, action_history: int) -> int:
@@ -361,7 +386,7 @@ class PolicyMetadata:
     head_limits: HeadLimits
     input_name: str = "frames"
     output_name: str = "q_values"
-    opset: int | None = None
+    opset: int = 0
     package_version: str | None = None
     model_file: str | None = None
     model_sha256: str = ""
@@ -387,6 +412,10 @@ class PolicyMetadata:
     #: (pan, tilt) in [-1, 1], times ``max_move``
     action_type: str = "discrete"
     max_move: tuple[float, float] | None = None  #: continuous: the largest move (pan, tilt) rad
+    #: the env's discrete moves the action table holds: ``step_deg`` degrees a step in
+    #: ``action_set`` ("8way" or "4way"); None: a file written by ``export_onnx`` alone
+    step_deg: float | None = None
+    action_set: str | None = None
     #: the camera the policy was trained with (None: a policy.json from before it was kept)
     camera: CameraModel | None = None
     #: the world the policy was trained in, ``{"appearance": {factor: [low, high], ...},
@@ -422,6 +451,7 @@ class PolicyMetadata:
     ) -> PolicyMetadata:
         """Validate a decoded policy.json; :class:`PolicyFileError` names the bad key."""
         read = _MetadataReader(values, source)
+        read.check_informational()
         table_deg = read.action_table_deg()
         return cls(
             image_height=read.positive_int("image_height"),
@@ -429,18 +459,18 @@ class PolicyMetadata:
             stack=read.positive_int("stack"),
             action_table=np.radians(table_deg),
             head_limits=read.head_limits(),
-            input_name=read.optional_str("input_name") or "frames",
-            output_name=read.optional_str("output_name") or "q_values",
+            input_name=read.name("input_name"),
+            output_name=read.name("output_name"),
             opset=read.opset(),
             package_version=read.optional_str("package_version"),
             model_file=read.optional_str("model_file"),
             model_sha256=read.model_sha256(),
-            training_config_sha256=read.optional_str("training_config_sha256"),
+            training_config_sha256=read.training_config_sha256(),
             action_names=read.action_names(table_deg),
-            observation=read.optional_str("observation") or "image",
+            observation=read.observation(),
             vector_keys=read.vector_keys(),
             action_history=read.count("action_history"),
-            vector_input_name=read.optional_str("vector_input_name"),
+            vector_input_name=read.vector_input_name(),
             act_by=read.act_by(),
             goal_output_name=read.optional_str("goal_output_name"),
             goal_views=read.goal_views(),
@@ -448,6 +478,8 @@ class PolicyMetadata:
             goal_frame=read.goal_frame(),
             action_type=read.action_type(),
             max_move=read.max_move(),
+            step_deg=read.step_deg(table_deg),
+            action_set=read.action_set(table_deg),
             camera=read.camera(),
             world=read.world(),
             raw=dict(values),
@@ -473,6 +505,26 @@ class _MetadataReader:
 
     def fail(self, why: str) -> PolicyFileError:
         return PolicyFileError(f"{self.source}: {why}")
+
+    def check_informational(self) -> None:
+        """``input_dtype`` (required: every export writes it, and the runtime feeds uint8),
+        and keys no reader acts on: of their type where present (a file that says something
+        else of its model is not one export wrote)."""
+        dtype = self.values.get("input_dtype")
+        if dtype != "uint8":  # HeadController feeds the graph uint8 frames
+            raise self.fail(f"'input_dtype' must be 'uint8' (the frames fed), got {dtype!r}")
+        dueling = self.values.get("dueling", False)
+        if not isinstance(dueling, bool):
+            raise self.fail(f"'dueling' must be true or false, got {dueling!r}")
+        self.optional_str("preprocessing")
+
+    def name(self, key: str) -> str:
+        """A graph input's or output's name: required (every export writes it; a default
+        would name another tensor than the model's)."""
+        value = self.values.get(key)
+        if not isinstance(value, str) or not value:
+            raise self.fail(f"{key!r} must name the model's tensor (a string), got {value!r}")
+        return value
 
     def positive_int(self, key: str) -> int:
         value = self.values.get(key)
@@ -557,16 +609,84 @@ class _MetadataReader:
             raise self.fail(f"'vector_keys' must list some of {order}, in that order, got {keys!r}")
         return tuple(keys)
 
+    def observation(self) -> str:
+        """What the policy observes: "image" plus its vector inputs ("image+head+pose...");
+        files from before vector inputs lack it (and ``vector_keys``): "image"."""
+        keys = self.values.get("vector_keys", [])
+        value = self.values.get("observation")
+        if value is None:
+            if keys:
+                raise self.fail(f"'vector_keys' lists {keys!r} but 'observation' is missing")
+            return "image"
+        parts = value.split("+") if isinstance(value, str) else []
+        if (
+            not parts
+            or parts[0] != "image"
+            or any(p not in VECTOR_KEY_SIZES or p not in keys for p in parts[1:])
+            or (len(parts) == 1) != (not keys)
+        ):
+            raise self.fail(
+                f"'observation' must be 'image' or 'image+' its vector inputs"
+                f" ({'+'.join(k for k in keys if k != 'actions') or 'none'} by 'vector_keys'),"
+                f" got {value!r}"
+            )
+        return str(value)
+
+    def vector_input_name(self) -> str | None:
+        """The graph's vector input: required where ``vector_keys`` lists inputs."""
+        if not self.values.get("vector_keys"):
+            return self.optional_str("vector_input_name")
+        return self.name("vector_input_name")
+
+    def training_config_sha256(self) -> str | None:
+        digest = self.values.get("training_config_sha256")
+        if digest is not None and not (isinstance(digest, str) and _is_sha256(digest)):
+            raise self.fail(
+                f"'training_config_sha256' must be a SHA-256 (64 hex digits) or null, got"
+                f" {digest!r}"
+            )
+        return digest
+
+    def step_deg(self, table_deg: np.ndarray) -> float | None:
+        """The discrete step (degrees); None when absent (``export_onnx`` alone writes
+        neither it nor ``action_set``). With ``action_set``, the table must be its moves."""
+        value = self.values.get("step_deg")
+        if value is None:
+            if "action_set" in self.values:
+                raise self.fail("'action_set' is given but 'step_deg' is missing")
+            return None
+        step = _real(value)
+        if step is None or not 0 < step <= MAX_MOVE_DEG:
+            raise self.fail(
+                f"'step_deg' must be a number of degrees in (0, {MAX_MOVE_DEG:g}], got {value!r}"
+            )
+        action_set = self.action_set(table_deg)
+        if action_set is None:
+            raise self.fail("'step_deg' is given but 'action_set' is missing")
+        want = _action_table_deg(step, action_set)
+        if want.shape != table_deg.shape or not np.allclose(table_deg, want, atol=1e-6):
+            raise self.fail(
+                f"'action_table_deg' is not the {action_set} moves of 'step_deg' {step:g} degrees"
+            )
+        return step
+
+    def action_set(self, table_deg: np.ndarray) -> str | None:
+        value = self.values.get("action_set")
+        if value is not None and value not in _ACTION_SET_SIZES:
+            raise self.fail(f"'action_set' must be one of {list(_ACTION_SET_SIZES)}, got {value!r}")
+        return value
+
     def optional_str(self, key: str) -> str | None:
         value = self.values.get(key)
         if value is not None and not isinstance(value, str):
             raise self.fail(f"{key!r} must be a string, got {value!r}")
         return value
 
-    def opset(self) -> int | None:
+    def opset(self) -> int:
+        """The ONNX opset the model was written with: every export records it."""
         opset = self.values.get("opset")
-        if opset is not None and (isinstance(opset, bool) or not isinstance(opset, int)):
-            raise self.fail(f"'opset' must be an integer, got {opset!r}")
+        if isinstance(opset, bool) or not isinstance(opset, int) or opset < 1:
+            raise self.fail(f"'opset' must be a positive integer, got {opset!r}")
         return opset
 
     def action_table_deg(self) -> np.ndarray:
@@ -583,7 +703,9 @@ class _MetadataReader:
             raise self.fail("'action_table_deg' holds non-finite values")
         if np.abs(table).max() > MAX_MOVE_DEG:
             raise self.fail(f"'action_table_deg' moves more than {MAX_MOVE_DEG} degrees per action")
-        n_actions = self.values.get("n_actions", table.shape[0])
+        n_actions = self.values.get("n_actions")
+        if isinstance(n_actions, bool) or not isinstance(n_actions, int):
+            raise self.fail(f"'n_actions' must be an integer, got {n_actions!r}")
         if n_actions != table.shape[0]:
             raise self.fail(
                 f"'n_actions' is {n_actions!r} but 'action_table_deg' has {table.shape[0]} rows"
@@ -681,8 +803,12 @@ class _MetadataReader:
 
     def action_names(self, table_deg: np.ndarray) -> tuple[str, ...]:
         names = self.values.get("action_names")
-        if not isinstance(names, list) or len(names) != table_deg.shape[0]:
-            raise self.fail("'action_names' must list one name per action")
+        if (
+            not isinstance(names, list)
+            or len(names) != table_deg.shape[0]
+            or not all(isinstance(n, str) and n for n in names)
+        ):
+            raise self.fail("'action_names' must list one name per action, each a string")
         for name, row in zip(names, table_deg, strict=True):
             if name in _ACTION_SIGNS and tuple(np.sign(row)) != _ACTION_SIGNS[name]:
                 raise self.fail(f"action {name!r} moves the head by {row.tolist()} degrees")

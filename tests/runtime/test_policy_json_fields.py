@@ -1,0 +1,101 @@
+"""Every policy.json key a reader uses is present and of its type, or the file is refused on
+one line naming the file and the key; keys older exports lack keep their documented default."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import pytest
+
+from activevision.cli import main
+from activevision.runtime import PolicyFileError, PolicyMetadata, pretrained_policy_path
+from activevision.runtime.metadata import METADATA_FILENAME
+
+SHIPPED = json.loads(pretrained_policy_path().with_name(METADATA_FILENAME).read_text())
+REMOVED = object()
+
+
+def edited(changes: dict) -> dict:
+    values = {**SHIPPED, **changes}
+    return {k: v for k, v in values.items() if v is not REMOVED}
+
+
+@pytest.mark.parametrize(
+    ("changes", "key"),
+    [
+        ({"input_name": REMOVED}, "'input_name'"),
+        ({"output_name": REMOVED}, "'output_name'"),
+        ({"output_name": 7}, "'output_name'"),
+        ({"vector_input_name": REMOVED}, "'vector_input_name'"),
+        ({"opset": REMOVED}, "'opset'"),
+        ({"opset": "17"}, "'opset'"),
+        ({"n_actions": REMOVED}, "'n_actions'"),
+        ({"n_actions": 9.0}, "'n_actions'"),
+        ({"input_dtype": "float32"}, "'input_dtype'"),
+        ({"input_dtype": REMOVED}, "'input_dtype'"),
+        ({"dueling": "no"}, "'dueling'"),
+        ({"preprocessing": 1}, "'preprocessing'"),
+        ({"observation": REMOVED}, "'observation'"),
+        ({"observation": 5}, "'observation'"),
+        ({"observation": "image"}, "'observation'"),  # but it takes a vector
+        ({"observation": "image+head+pose+nonsense"}, "'observation'"),
+        ({"step_deg": "3"}, "'step_deg'"),
+        ({"step_deg": True}, "'step_deg'"),
+        ({"step_deg": 5.0}, "'step_deg' 5"),  # not the table's moves
+        ({"step_deg": REMOVED}, "'step_deg'"),
+        ({"action_set": "6way"}, "'action_set'"),
+        ({"action_set": "4way"}, "'action_table_deg' is not the 4way moves"),
+        ({"action_set": REMOVED}, "'action_set'"),
+        ({"training_config_sha256": "abc"}, "'training_config_sha256'"),
+        ({"action_names": [*SHIPPED["action_names"][:-1], 8]}, "'action_names'"),
+    ],
+    ids=repr,
+)
+def test_a_used_key_missing_or_of_the_wrong_type_is_named(changes, key):
+    with pytest.raises(PolicyFileError) as error:
+        PolicyMetadata.from_dict(edited(changes), source="x/policy.json")
+    message = str(error.value)
+    assert message.startswith("x/policy.json: ") and key in message
+    assert "\n" not in message
+
+
+def test_the_shipped_policy_and_older_files_load():
+    meta = PolicyMetadata.from_dict(SHIPPED)
+    assert (meta.step_deg, meta.action_set, meta.opset) == (3.0, "8way", 17)
+    assert meta.observation == "image+head+pose+proposal"
+    # keys an older export lacks (export_onnx alone writes no moves, observation, camera or
+    # world) keep their defaults
+    older = edited({k: REMOVED for k in ("step_deg", "action_set", "camera", "world")})
+    meta = PolicyMetadata.from_dict(older)
+    assert (meta.step_deg, meta.action_set, meta.camera, meta.world) == (None, None, None, None)
+    image_only = {
+        k: v
+        for k, v in SHIPPED.items()
+        if k
+        not in (
+            "observation",
+            "vector_keys",
+            "vector_input_name",
+            "act_by",
+            "goal_output_name",
+            "goal_views_deg",
+            "goal_switch_margin",
+            "goal_frame",
+        )
+    }
+    assert PolicyMetadata.from_dict(image_only).observation == "image"
+
+
+def test_a_command_names_the_file_and_the_key_on_one_line(tmp_path, capsys):
+    """demo --policy (and match --model, evaluate's shipped) read policy.json through
+    HeadController: a removed key is one line, before any episode."""
+    model = tmp_path / "policy.onnx"
+    shutil.copy(pretrained_policy_path(), model)
+    (tmp_path / METADATA_FILENAME).write_text(json.dumps(edited({"opset": REMOVED})))
+    argv = ["demo", "--policy", str(model), "--out", str(tmp_path / "demo.png")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert str(tmp_path / METADATA_FILENAME) in err and "'opset'" in err, err
+    assert not (tmp_path / "demo.png").exists()
