@@ -99,3 +99,18 @@ def test_a_command_names_the_file_and_the_key_on_one_line(tmp_path, capsys):
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     assert str(tmp_path / METADATA_FILENAME) in err and "'opset'" in err, err
     assert not (tmp_path / "demo.png").exists()
+
+
+def test_a_discrete_policy_is_played_with_its_own_moves(tmp_path, helpers):
+    """OnnxPolicy.env_config: action i of a 5-degree 4-way policy is its table's row i, so
+    the env (demo --policy) moves 5 degrees a step in 4 ways, not the paper's 3 in 8."""
+    from activevision.agents.q_network import QNetwork
+    from activevision.experiments.policies import OnnxPolicy
+    from activevision.export import export_onnx, policy_metadata
+    from activevision.geometry import CameraConfig
+
+    table = helpers.eight_way_table(5.0)[:5]
+    metadata = {**policy_metadata(table, CameraConfig()), "step_deg": 5.0, "action_set": "4way"}
+    exported = export_onnx(QNetwork(5).eval(), tmp_path / "policy.onnx", metadata)
+    config = OnnxPolicy(exported.model_path).env_config()
+    assert (config.step_deg, config.action_set) == (5.0, "4way")

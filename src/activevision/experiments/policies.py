@@ -342,7 +342,9 @@ class OnnxPolicy:
 
         ``trained_world``: also in the world it was trained in (policy.json's ``world``, its
         appearance ranges and other robots; ``base``'s when the file predates the record).
-        Evaluation plays the paper's clean world whatever the policy was trained in;
+        A discrete policy moves by its own steps (policy.json's ``step_deg`` and
+        ``action_set``). Evaluation plays the paper's clean world whatever the policy was
+        trained in;
         ``activevision robustness`` plays the trained one as its ``clean`` row.
         PolicyFileError if the record does not fit this activevision's configs.
         """
@@ -350,6 +352,12 @@ class OnnxPolicy:
         base = base or EnvConfig()
         if trained_world and meta.world is not None:
             base = with_world(base, meta.world, source=str(self.controller.metadata_path))
+        if not self.controller.continuous and meta.step_deg is not None:
+            # a discrete policy's action i is row i of its table: the env moves by the same
+            # (policy.json's step_deg and action_set; a bare export_onnx's: base's)
+            moves = {"step_deg": meta.step_deg, "action_set": meta.action_set}
+            if any(getattr(base, k) != v for k, v in moves.items()):
+                base = base.replace(**moves)
         if meta.observation == base.observation and meta.action_history == base.action_history:
             return base
         return base.replace(observation=meta.observation, action_history=meta.action_history)
