@@ -203,6 +203,12 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
     assert main([*TINY, "--out", str(out), "--overwrite", *onnx]) == 0
     with (out / "match.csv").open() as f:
         assert [r["method"] for r in csv.DictReader(f)] == ["onnx_policy"]
+    # its actions are 3-degree moves: a 6-degree discrete match would play them as 6-degree
+    capsys.readouterr()
+    assert main([*TINY, "--out", str(tmp_path / "m6"), "--step-deg", "6", *onnx]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "3-degree 8way moves; play it with --step-deg 3" in err and "\n" not in err
+    assert not (tmp_path / "m6").exists()
 
 
 MIRROR = """

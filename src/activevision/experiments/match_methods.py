@@ -60,7 +60,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -82,6 +82,9 @@ from activevision.envs.match.observations import (
 )
 from activevision.geometry import LandmarkSet, clip_head, field_landmarks
 from activevision.localisation import LocalisationConfig, best_viewpoints
+
+if TYPE_CHECKING:
+    from activevision.runtime.metadata import PolicyMetadata
 
 
 class MatchPolicy(Protocol):
@@ -312,6 +315,22 @@ class OnnxMatchPolicy:
         self.landmarks = field_landmarks(config.field)
         self.localisation = LocalisationConfig.for_camera(config.camera)
         self._make = lambda: HeadController(self.model)
+        self._check_moves(self._make().metadata)
+
+    def _check_moves(self, meta: PolicyMetadata) -> None:
+        """A discrete policy's actions index its own moves: in a discrete match they are
+        played as the match's (``step_deg`` in 8 ways), so the two must be the same."""
+        if self.config.action_type != "discrete" or meta.action_type != "discrete":
+            return  # the command is followed towards its target, at the match's speed
+        if meta.step_deg is None:
+            return  # a bare export_onnx file: its moves are not recorded
+        if meta.action_set != "8way" or not math.isclose(meta.step_deg, self.config.step_deg):
+            raise ValueError(
+                f"{self.model}: its policy's actions are {meta.step_deg:g}-degree"
+                f" {meta.action_set} moves; play it with --step-deg {meta.step_deg:g}"
+                + (" (the match's moves are 8-way)" if meta.action_set != "8way" else "")
+                + ", or with --action-type continuous, which follows its commands"
+            )
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         self.controllers = [self._make() for _ in range(n)]
