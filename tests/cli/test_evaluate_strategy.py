@@ -36,6 +36,17 @@ class Fails(Mirror):
 
     def act(self, obs, info):
         return 1 // 0
+
+
+class FailsOffTheTruePose(Mirror):
+    name = "fails_off"
+
+    def __init__(self, context):
+        super().__init__(context)
+        self.error = context.error
+
+    def act(self, obs, info):
+        return [][1] if self.error > 0 else super().act(obs, info)
 """
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "centre_ball.py"
@@ -97,3 +108,17 @@ def test_a_bad_policy_is_one_clear_line(
         argv += ["--errors", "0"]
     assert main([*argv, "--strategy", spec]) == 2
     one_clear_line(needle)
+
+
+def test_compare_names_your_policy_failing_at_a_later_level(tmp_path, capsys):
+    """The trial episode plays the first level only: an exception at another level is one
+    line naming the policy too, not a traceback (the progress bar's lines come before it)."""
+    (tmp_path / "mine.py").write_text(MINE)
+    argv = ["compare", "--methods", "oracle", "--episodes", "1", "--errors", "0,1"]
+    argv += ["--out", str(tmp_path / "c")]
+    assert main([*argv, "--strategy", f"{tmp_path / 'mine.py'}:FailsOffTheTruePose"]) == 2
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.out + captured.err
+    last = captured.err.splitlines()[-1]
+    assert last.startswith("activevision compare: error: --strategy fails_off: act raised"), last
+    assert "IndexError: list index out of range (mine.py, line" in last

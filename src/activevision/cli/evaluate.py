@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import argparse
 import functools
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -105,21 +104,6 @@ def _user_methods(
     return methods
 
 
-@contextmanager
-def _users_code(label: str, user: bool) -> Iterator[None]:
-    """An exception a user's method raises as it plays: one line naming it (its type,
-    message and the line of the user's file)."""
-    from activevision.experiments.match_methods import USER_ERRORS, user_code_error
-
-    if not user:
-        yield
-        return
-    try:
-        yield
-    except USER_ERRORS as error:
-        raise user_code_error(f"--strategy {label}: playing", error) from None
-
-
 def cmd_evaluate(args: argparse.Namespace) -> None:
     """Fixed-seed evaluation of every method: table, CSV and JSON."""
     from activevision.envs import ActiveVisionEnv
@@ -159,14 +143,13 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     latency: dict[str, float] = {}
     with removed_on_failure(made):
         for name, policy in policies.items():
-            with _users_code(name, name in users):
-                records, summary, lat = evaluate_policy(
-                    policy,
-                    args.episodes,
-                    args.seed,
-                    env=env,
-                    measure_latency=name.startswith("learned") and not latency,  # the first one
-                )
+            records, summary, lat = evaluate_policy(
+                policy,
+                args.episodes,
+                args.seed,
+                env=env,
+                measure_latency=name.startswith("learned") and not latency,  # the first one
+            )
             summaries[name] = summary
             episodes += [{"method": name, **r} for r in records]
             if lat:
@@ -290,10 +273,9 @@ def _try_users(
     from activevision.experiments.evaluate import evaluate_policy
 
     error = args.errors[0]
-    for label, make in users.items():
-        with _users_code(label, True):
-            env = ActiveVisionEnv(config_at_error(env_config, error))
-            evaluate_policy(make(error), 1, args.seed, env=env)
+    for make in users.values():
+        env = ActiveVisionEnv(config_at_error(env_config, error))
+        evaluate_policy(make(error), 1, args.seed, env=env)
 
 
 def cmd_episode(args: argparse.Namespace) -> None:

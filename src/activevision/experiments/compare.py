@@ -123,24 +123,28 @@ def compare(
         from tqdm import tqdm
 
         bar = tqdm(total=len(todo) * len(methods), desc="compare", unit="method")
-    for level, e in todo:
-        if config.observes_prior:  # the learned policy's prior is as wrong as the belief
-            env = ActiveVisionEnv(config_at_error(config, float(e)))
-        for name, factory in methods.items():
-            if (float(e), name) in done:
-                continue
-            _, summary, _ = evaluate_policy(factory(float(e)), episodes, seed=seed + level, env=env)
-            rows += summary_rows(
-                {name: summary},
-                error=float(e),
-                episodes=episodes,
-                seed=seed,
-                level_seed=seed + level,
-            )
-            if bar is not None:
-                bar.update()
-                bar.set_postfix(error=e, method=name, success=f"{summary['success'].mean:.2f}")
-        write_csv(csv_path, rows)
-    if bar is not None:
-        bar.close()
+    try:
+        for level, e in todo:
+            if config.observes_prior:  # the learned policy's prior is as wrong as the belief
+                env = ActiveVisionEnv(config_at_error(config, float(e)))
+            for name, factory in methods.items():
+                if (float(e), name) in done:
+                    continue
+                _, summary, _ = evaluate_policy(
+                    factory(float(e)), episodes, seed=seed + level, env=env
+                )
+                rows += summary_rows(
+                    {name: summary},
+                    error=float(e),
+                    episodes=episodes,
+                    seed=seed,
+                    level_seed=seed + level,
+                )
+                if bar is not None:
+                    bar.update()
+                    bar.set_postfix(error=e, method=name, success=f"{summary['success'].mean:.2f}")
+            write_csv(csv_path, rows)
+    finally:  # an error's line comes after the bar's, not glued to it
+        if bar is not None:
+            bar.close()
     return rows

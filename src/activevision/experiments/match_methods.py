@@ -60,7 +60,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -662,26 +662,38 @@ def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> Matc
     if factory is None:
         raise ValueError("a user's strategy needs its factory (--strategy FILE.py:NAME)")
     label = getattr(factory, "__name__", repr(factory))
+    contract = "a strategy has reset(n, rng) and act(obs, info): see MatchPolicy"
+    policy: MatchPolicy = built_by_user(factory, config, label, "config", contract)
+    return policy
+
+
+def built_by_user(
+    factory: Callable[[Any], Any], argument: object, label: str, parameter: str, contract: str
+) -> Any:
+    """``factory(argument)``, a user's ``--strategy`` (``label``): a call its signature does
+    not take, an exception their code raises (:func:`user_code_error`) and a result without
+    ``reset`` and ``act`` (``contract`` says what they are) are each one ValueError line
+    naming ``label(parameter)``."""
+    call = f"{label}({parameter})"
     try:
         signature = inspect.signature(factory)
     except (TypeError, ValueError):  # no signature to read (a builtin): just call it
         signature = None
     if signature is not None:
         try:
-            signature.bind(config)
-        except TypeError as error:  # NAME(config) is the contract
-            raise ValueError(f"--strategy {label}: {label}(config) failed: {error}") from None
+            signature.bind(argument)
+        except TypeError as error:  # NAME(argument) is the contract
+            raise ValueError(f"--strategy {label}: {call} failed: {error}") from None
     try:
-        policy = factory(config)
+        built = factory(argument)
     except USER_ERRORS as error:  # the user's code failed as it ran
-        raise user_code_error(f"--strategy {label}: {label}(config)", error) from None
-    missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
+        raise user_code_error(f"--strategy {label}: {call}", error) from None
+    missing = [m for m in ("reset", "act") if not callable(getattr(built, m, None))]
     if missing:
         raise ValueError(
-            f"--strategy {label}: what it returns has no {' or '.join(missing)} method"
-            " (a strategy has reset(n, rng) and act(obs, info): see MatchPolicy)"
+            f"--strategy {label}: what it returns has no {' or '.join(missing)} method ({contract})"
         )
-    return policy
+    return built
 
 
 def make_match_policy(

@@ -14,14 +14,19 @@ each policy it needs (:func:`user_method`).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import contextlib
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from activevision.envs.config import EnvConfig
+from activevision.envs.observations import Observation
 from activevision.experiments.policies import (
     EntropyPolicy,
     HeadPolicy,
+    HeadTarget,
     LearnedPolicy,
     OnnxPolicy,
     OraclePolicy,
@@ -154,8 +159,9 @@ def user_method(spec: str) -> tuple[str, MethodFactory]:
     (``--strategy``): ``NAME`` is a factory like the registry's, a class or function that
     takes a :class:`MethodContext` and returns a :class:`HeadPolicy` (``reset(info, rng)``,
     ``act(obs, info)``). Returns its label (its ``name`` attribute, else ``NAME``) and the
-    factory, checked as it builds; ValueError names what is wrong, in one line."""
-    from activevision.experiments.match_methods import USER_ERRORS, load_strategy, user_code_error
+    factory, checked as it builds; ValueError names what is wrong, in one line, and so does
+    the policy it builds for an exception in its ``reset`` or ``act``, wherever it plays."""
+    from activevision.experiments.match_methods import built_by_user, load_strategy
 
     label, factory = load_strategy(spec)
     if label in _REGISTRY:
@@ -165,16 +171,34 @@ def user_method(spec: str) -> tuple[str, MethodFactory]:
         )
 
     def make(context: MethodContext) -> HeadPolicy:
-        try:
-            policy = factory(context)  # type: ignore[arg-type]
-        except USER_ERRORS as error:  # the user's code failed as it ran
-            raise user_code_error(f"--strategy {label}: {label}(context)", error) from None
-        missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
-        if missing:
-            raise ValueError(
-                f"--strategy {label}: what it returns has no {' or '.join(missing)} method"
-                " (a policy has reset(info, rng) and act(obs, info): see HeadPolicy)"
-            )
-        return policy  # type: ignore[return-value]
+        contract = "a policy has reset(info, rng) and act(obs, info): see HeadPolicy"
+        return _UsersPolicy(built_by_user(factory, context, label, "context", contract), label)
 
     return label, make
+
+
+class _UsersPolicy:
+    """A user's policy, under its label: an exception its ``reset`` or ``act`` raises is one
+    ValueError line naming it, the method and the line of their file (in every episode of
+    ``evaluate`` and every level of ``compare``, not a traceback)."""
+
+    def __init__(self, policy: HeadPolicy, label: str) -> None:
+        self.policy = policy
+        self.name = label
+
+    def reset(self, info: dict, rng: np.random.Generator) -> None:
+        with self._theirs("reset"):
+            self.policy.reset(info, rng)
+
+    def act(self, obs: Observation, info: dict) -> int | HeadTarget:
+        with self._theirs("act"):
+            return self.policy.act(obs, info)
+
+    @contextlib.contextmanager
+    def _theirs(self, method: str) -> Iterator[None]:
+        from activevision.experiments.match_methods import USER_ERRORS, user_code_error
+
+        try:
+            yield
+        except USER_ERRORS as error:
+            raise user_code_error(f"--strategy {self.name}: {method}", error) from None
