@@ -23,6 +23,10 @@ class Mirror(OraclePolicy):
         super().__init__(context.config)
 
 
+class ByHand(Mirror):
+    name = "learned_by_hand"  # no learned policy, whatever its label says
+
+
 class Builtin(Mirror):
     name = "scan"
 
@@ -122,3 +126,14 @@ def test_compare_names_your_policy_failing_at_a_later_level(tmp_path, capsys):
     last = captured.err.splitlines()[-1]
     assert last.startswith("activevision compare: error: --strategy fails_off: act raised"), last
     assert "IndexError: list index out of range (mine.py, line" in last
+
+
+def test_a_policy_of_yours_labelled_learned_is_not_timed_as_the_learned_one(tmp_path):
+    """latency.json holds the learned policy's latency: a user's method labelled
+    ``learned_...`` is not it (it was timed, and written as the learned policy's)."""
+    (tmp_path / "mine.py").write_text(MINE)
+    out = tmp_path / "e"
+    argv = ["evaluate", "--methods", "oracle", "--episodes", "2", "--out", str(out)]
+    assert main([*argv, "--strategy", f"{tmp_path / 'mine.py'}:ByHand"]) == 0
+    assert set(_rows(out / "evaluation.csv")) == {"oracle", "learned_by_hand"}
+    assert not (out / "latency.json").exists()

@@ -148,7 +148,8 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
                 args.episodes,
                 args.seed,
                 env=env,
-                measure_latency=name.startswith("learned") and not latency,  # the first one
+                # the first learned policy's (a user's "learned_..." is not one)
+                measure_latency=name.startswith("learned") and name not in users and not latency,
             )
             summaries[name] = summary
             episodes += [{"method": name, **r} for r in records]
