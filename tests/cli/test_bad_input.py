@@ -3,6 +3,7 @@ on stderr that names the problem; no traceback, no silent acceptance, no file de
 
 from __future__ import annotations
 
+import csv
 import json
 import shutil
 import subprocess
@@ -228,6 +229,25 @@ def test_a_run_that_fails_before_training_leaves_no_folder(tmp_path, tiny_train,
     assert main([*argv, "--out", str(tmp_path / "mine")]) == 2
     one_clear_line("no start")
     assert (tmp_path / "mine").is_dir()
+
+
+def test_a_run_that_failed_after_playing_keeps_its_logs(
+    tmp_path, tiny_train, monkeypatch, one_clear_line
+):
+    """A new run that played episodes and then failed before its first epoch row and
+    checkpoint (here: a full disk as it logs the epoch) keeps its folder: its episodes.csv
+    shows what happened (it was removed as if nothing had run)."""
+    from activevision.training.loggers import CsvLogger
+
+    def disk_full(self: CsvLogger, row: object, step: int) -> None:
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(CsvLogger, "record_epoch", disk_full)
+    run = tmp_path / "new"
+    assert main([*tiny_train, "--out", str(run)]) == 2
+    one_clear_line("No space left on device")
+    with (run / "episodes.csv").open() as f:
+        assert len(list(csv.DictReader(f))) >= 1
 
 
 def test_evaluating_again_needs_overwrite(tmp_path, capsys, one_clear_line):

@@ -130,13 +130,18 @@ def _train_fresh(args: argparse.Namespace) -> Path:
 
 
 def _nothing_trained(run_dir: Path) -> bool:
-    """A run that failed before its first checkpoint and its first logged epoch: its
-    folder holds nothing worth keeping (only the config and empty logs)."""
+    """A run that failed before its first checkpoint and before it logged anything (no
+    episode ended): its folder holds only the config and empty logs. One that played and
+    failed later, even within its first epoch, keeps its logs to show what happened."""
     from activevision.training.checkpoint import list_checkpoints
+    from activevision.training.loggers import EPISODES_CSV, EVALUATIONS_CSV, METRICS_CSV
 
-    metrics = run_dir / "metrics.csv"
-    logged = metrics.is_file() and len(metrics.read_bytes().splitlines()) > 1
-    return not list_checkpoints(run_dir) and not logged
+    def logged(name: str) -> bool:
+        log = run_dir / name
+        return log.is_file() and len(log.read_bytes().splitlines()) > 1
+
+    csvs = (METRICS_CSV, EPISODES_CSV, EVALUATIONS_CSV)
+    return not list_checkpoints(run_dir) and not any(logged(n) for n in csvs)
 
 
 def cmd_plot(args: argparse.Namespace) -> None:
