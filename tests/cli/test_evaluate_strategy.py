@@ -137,3 +137,23 @@ def test_a_policy_of_yours_labelled_learned_is_not_timed_as_the_learned_one(tmp_
     assert main([*argv, "--strategy", f"{tmp_path / 'mine.py'}:ByHand"]) == 0
     assert set(_rows(out / "evaluation.csv")) == {"oracle", "learned_by_hand"}
     assert not (out / "latency.json").exists()
+
+
+def test_evaluate_tries_your_policy_before_the_built_in_ones_play(tmp_path, monkeypatch):
+    """As compare and match do: a mistake in your policy shows after one episode of it,
+    not after every built-in method has played its episodes."""
+    import activevision.experiments.evaluate as evaluation
+
+    played: list[str] = []
+    evaluate_policy = evaluation.evaluate_policy
+
+    def recording(policy, *args, **kwargs):
+        played.append(policy.name)
+        return evaluate_policy(policy, *args, **kwargs)
+
+    monkeypatch.setattr(evaluation, "evaluate_policy", recording)
+    (tmp_path / "mine.py").write_text(MINE)
+    argv = ["evaluate", "--methods", "oracle", "--episodes", "2", "--out", str(tmp_path / "e")]
+    assert main([*argv, "--strategy", f"{tmp_path / 'mine.py'}:Fails"]) == 2
+    assert played == ["fails"]
+    assert not (tmp_path / "e").exists()

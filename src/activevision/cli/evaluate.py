@@ -132,6 +132,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     policies = _policies(names, args, env_config, args.error)
     policies.update(_more_runs(args, env_config))
     users = _user_methods(args, env_config, policies)
+    _try_users(users, env_config, args.error, args.seed)  # before the built-in methods play
     policies.update({label: make(args.error) for label, make in users.items()})
     shipped = policies.get("shipped")
     if args.run is None and isinstance(shipped, OnnxPolicy):
@@ -257,7 +258,7 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
         for name, policy in _more_runs(args, env_config).items():
             methods[name] = functools.partial(_same, policy)
         users = _user_methods(args, env_config, methods)
-        _try_users(users, args, env_config)
+        _try_users(users, env_config, args.errors[0], args.seed)
         methods.update(users)
         compare(out, methods, args.errors, args.episodes, args.seed, env_config)
     plot_compare(out / "compare.csv", out / "compare.png")
@@ -265,18 +266,18 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
 
 
 def _try_users(
-    users: dict[str, Callable[[float], HeadPolicy]], args: argparse.Namespace, env_config: Any
+    users: dict[str, Callable[[float], HeadPolicy]], env_config: Any, error: float, seed: int
 ) -> None:
-    """Each user's method plays one episode of the first error level before any level
-    does: a mistake in it shows in seconds, as one line."""
+    """Each user's method, made afresh, plays one episode of localisation error ``error``
+    before any method's episodes (as ``match`` plays a trial): a mistake in it shows in
+    seconds, as one line, not after every built-in method has played."""
     from activevision.envs import ActiveVisionEnv
     from activevision.experiments.compare import config_at_error
     from activevision.experiments.evaluate import evaluate_policy
 
-    error = args.errors[0]
     for make in users.values():
         env = ActiveVisionEnv(config_at_error(env_config, error))
-        evaluate_policy(make(error), 1, args.seed, env=env)
+        evaluate_policy(make(error), 1, seed, env=env)
 
 
 def cmd_episode(args: argparse.Namespace) -> None:
