@@ -210,3 +210,14 @@ def test_presets_load_without_torch():
         "assert 'torch' not in sys.modules, 'torch imported'\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
+
+
+def test_the_module_prefixed_env_id_is_the_env_itself():
+    """Gymnasium's "activevision:ActiveVisionMatch-v0" trained a match student, but every
+    later check (match --run's detector, export, plots, the report) compared the bare id
+    and took the run for an episodic one."""
+    config = apply_overrides(preset("match_dagger"), ["env_id=activevision:ActiveVisionMatch-v0"])
+    assert config.env_id == "ActiveVisionMatch-v0" and config.match_student
+    assert TrainConfig.from_dict(config.to_dict()) == config
+    episodic = TrainConfig(env_id="activevision:ActiveVision-v0")
+    assert episodic.env_id == "ActiveVision-v0"

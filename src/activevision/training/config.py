@@ -24,6 +24,7 @@ from typing import Any
 from activevision.envs.config import EnvConfig
 from activevision.envs.match.config import MatchConfig
 from activevision.io import read_json, write_text
+from activevision.registration import MATCH_ENV_ID
 from activevision.runtime.goal_evidence import GoalFrame
 from activevision.typecheck import check_dataclass_fields, config_from_dict, config_to_dict
 from activevision.typecheck import in_range as _range
@@ -256,6 +257,9 @@ class TrainConfig:
         check_dataclass_fields(self)
         if not self.env_id:
             raise ValueError("TrainConfig.env_id: must not be empty")
+        # Gymnasium's "module:id" names the same env; this package registers its envs on
+        # import, so the bare id is the one every check below and later compares
+        object.__setattr__(self, "env_id", self.env_id.removeprefix("activevision:"))
         if self.algo == "dagger" and self.env_id not in ("ActiveVision-v0", MATCH_ENV_ID):
             raise ValueError(
                 f"TrainConfig.algo: 'dagger' trains on ActiveVision-v0 (the oracle teaches) or"
@@ -363,7 +367,6 @@ SECTIONS = ("env", "learner", "exploration", "replay", "run", "dagger", "sb3")
 #: sections set by their full dotted path only (``match.detection.near``): their
 #: leaf names repeat the episodic env's (``step_deg``, ``observation``)
 PATH_ONLY_SECTIONS = ("match",)
-MATCH_ENV_ID = "ActiveVisionMatch-v0"
 
 
 def field_paths() -> dict[str, str]:
