@@ -124,3 +124,37 @@ def test_a_sweep_is_refused_before_ray_starts(tmp_path):
     (tmp_path / "file").write_text("")
     with pytest.raises(ValueError, match="is a file"):
         specs({}, out_dir=tmp_path / "file")
+
+
+def test_an_address_nobody_answers_is_one_line_at_once():
+    """Ray retries a dead HOST:PORT for minutes (ray://: half a minute), printing its own log
+    lines; the check before ray.init names the address instead."""
+    import socket
+    import time
+
+    from activevision.scaleout.ray_session import check_reachable
+
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    started = time.perf_counter()
+    for address in (f"127.0.0.1:{port}", f"ray://127.0.0.1:{port}"):
+        with pytest.raises(ValueError, match=f"no Ray cluster answers at --address {address} "):
+            check_reachable(address, timeout_s=2.0)
+    assert time.perf_counter() - started < 5
+    check_reachable("auto")  # Ray's own: finds a local cluster or fails at once
+
+
+def test_a_failed_trial_names_its_error():
+    from activevision.scaleout.sweep import _error_line, _trial_row
+
+    class Wrapped(Exception):  # what Tune hands over: Ray's wrapper of the trainer's error
+        cause = ValueError("device 'cuda:99' requested\n but this machine has 0")
+
+    assert _error_line(Wrapped("traceback ...")) == (
+        "ValueError: device 'cuda:99' requested but this machine has 0"
+    )
+    trial = {"name": "seed=0", "seed": 0, "point": {}, "run_dir": "/nonexistent"}
+    row = _trial_row(trial, {"restarts": 0, "status": "ERROR", "error": "ValueError: x"})
+    assert (row["status"], row["error"]) == ("ERROR", "ValueError: x")
+    assert _trial_row(trial, {"restarts": 0})["error"] == ""

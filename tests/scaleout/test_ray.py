@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import csv
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -101,3 +105,53 @@ def test_compare_ray_equals_local(tmp_path):
     # a finished run is skipped: nothing is recomputed, the CSV stays the same
     again = compare_ray(tmp_path / "ray", order, errors, 6, seed=5, config=config, chunk=4)
     assert again == _read(tmp_path / "ray" / "compare.csv")
+
+
+def test_a_failing_trial_is_reported_with_its_error(tmp_path):
+    """A grid value the trainer refuses (no machine has CUDA device 99) fails its trial; the
+    sweep names the trial and the trainer's own error, and trials.csv keeps it."""
+    config = apply_overrides(preset("paper"), TINY)
+    grid = {"device": ['"cuda:99"']}
+    with pytest.warns(RuntimeWarning, match=r"seed=0,device=\"cuda:99\" \(ValueError: device"):
+        sweep(config, [0], grid, tmp_path, max_failures=0, verbose=0)
+    (trial,) = _read(tmp_path / "trials.csv")
+    assert trial["status"] == "ERROR"
+    assert trial["error"].startswith("ValueError: device 'cuda:99' requested"), trial["error"]
+
+
+def test_compare_ray_raises_a_tasks_own_error():
+    """A task's error reaches the CLI as itself (one line there), not as Ray's RayTaskError
+    carrying the worker's traceback."""
+    from activevision.scaleout.compare import _get
+    from activevision.training.checkpoint import CheckpointError
+
+    @ray.remote
+    def broken() -> None:
+        raise CheckpointError("no best_policy.safetensors in RUN")
+
+    with pytest.raises(CheckpointError, match="no best_policy") as caught:
+        _get(ray, [broken.remote()])
+    assert type(caught.value) is CheckpointError
+
+
+def test_sweep_ctrl_c_is_one_line_and_130(tmp_path):
+    """Ctrl-C ends a sweep as it ends any command (one line, exit code 130), not with Tune's
+    graceful stop that returned 0 as if done and advised Tuner.restore."""
+    out = tmp_path / "sweep"
+    sets = [a for kv in TINY for a in ("--set", kv.replace("600", "100000"))]
+    command = [sys.executable, "-m", "activevision.cli", "sweep", "--seeds", "0"]
+    command += ["--preset", "quickstart_ddqn", *sets, "--out", str(out), "--num-cpus", "1"]
+    proc = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        started = time.monotonic()
+        while not (out / "trials" / "seed=0" / "config.json").exists():  # the trial trains
+            assert proc.poll() is None and time.monotonic() - started < 120
+            time.sleep(0.2)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert err.splitlines()[-1] == (
+        f"activevision sweep: interrupted; the same command again resumes its trials in {out}"
+    )

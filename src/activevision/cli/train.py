@@ -175,6 +175,11 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     print(f"wrote {args.out}/trials.csv, sweep.csv and sweep.png")
 
 
+def _sweep_interrupted(args: argparse.Namespace) -> str:
+    """What an interrupted ``sweep`` can do next: its trials resume from their checkpoints."""
+    return f"; the same command again resumes its trials in {args.out}"
+
+
 def _add_config_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, help="TrainConfig JSON file (instead of --preset)")
     p.add_argument(
@@ -219,7 +224,7 @@ def add_parsers(sub: Any) -> None:
 
     text = "seed x grid sweep of training runs on Ray Tune (pip install activevision[ray])"
     p = sub.add_parser("sweep", help=text, description=text)
-    p.set_defaults(func=cmd_sweep)
+    p.set_defaults(func=cmd_sweep, interrupted=_sweep_interrupted)
     p.add_argument(
         "--seeds", type=seed_list, default="0..4", help="0..9 (inclusive) or 0,1,2 (default 0..4)"
     )

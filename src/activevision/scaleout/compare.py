@@ -112,7 +112,7 @@ def compare_ray(
                 pending.append((level, float(e), refs))
         for level, e, refs in pending:  # in level order, so the CSV matches the local run's
             for name, chunk_refs in refs.items():
-                records = [r for part in ray.get(chunk_refs) for r in part]
+                records = [r for part in _get(ray, chunk_refs) for r in part]
                 rows += summary_rows(
                     {name: summarise(records)},
                     error=e,
@@ -122,6 +122,19 @@ def compare_ray(
                 )
             write_csv(csv_path, rows)
     return rows
+
+
+def _get(ray: Any, refs: list[Any]) -> list[Any]:
+    """``ray.get(refs)``; a task's own error (a missing weights file, a bad run) is raised as
+    itself, as the local run raises it, not wrapped in Ray's RayTaskError with the worker's
+    traceback."""
+    try:
+        return list(ray.get(refs))
+    except ray.exceptions.RayTaskError as error:
+        cause = getattr(error, "cause", None)
+        if isinstance(cause, Exception):
+            raise cause from None
+        raise
 
 
 def default_method_names(run_dir: str | Path | None, selected: Sequence[str] | None) -> list[str]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import socket
 from collections.abc import Iterator
 from types import ModuleType
 from typing import Any
@@ -38,6 +39,8 @@ def ray_session(
     if ray.is_initialized():
         yield ray
         return
+    if address is not None:
+        check_reachable(address)
     init_kwargs.setdefault("include_dashboard", False)
     if address is None:
         ray.init(num_cpus=num_cpus, **init_kwargs)
@@ -50,3 +53,21 @@ def ray_session(
         yield ray
     finally:
         ray.shutdown()
+
+
+def check_reachable(address: str, timeout_s: float = 5.0) -> None:
+    """ValueError, naming ``address``, when a ``HOST:PORT`` or ``ray://HOST:PORT`` address
+    takes no connection within ``timeout_s``: Ray itself retries one for minutes (a GCS
+    address) or half a minute (a client address), printing its own log lines. Other forms
+    (``auto``, which finds a local cluster or fails at once) go to Ray as they are."""
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not host or not port.isdigit():
+        return
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+            pass
+    except OSError as error:
+        raise ValueError(
+            f"no Ray cluster answers at --address {address} ({error or type(error).__name__}):"
+            " start one there (ray start --head), or check the host and port"
+        ) from None

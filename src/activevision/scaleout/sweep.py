@@ -197,9 +197,17 @@ def sweep(
 
     trial_rows = [_trial_row(t, statuses[t["name"]]) for t in trials]
     write_csv(out_dir / "trials.csv", trial_rows)
-    failed = [r["name"] for r in trial_rows if r["status"] != "TERMINATED"]
+    failed = [
+        r["name"] + (f" ({r['error']})" if r["error"] else "")
+        for r in trial_rows
+        if r["status"] != "TERMINATED"
+    ]
     if failed:
-        warnings.warn(f"sweep trials did not finish: {failed}", RuntimeWarning, stacklevel=2)
+        warnings.warn(
+            f"sweep trials did not finish (trials.csv): {'; '.join(failed)}",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     rows = aggregate(trials, out_dir)
     write_csv(out_dir / "sweep.csv", rows)
     if rows:
@@ -322,7 +330,32 @@ def _fit(
             verbose=verbose,
         ),
     )
-    tuner.fit()
+    # Ctrl-C: a KeyboardInterrupt (one line, exit code 130; a rerun resumes the trials from
+    # their own checkpoints), not Tune's graceful stop that returns as if the sweep had ended
+    # and advises Tuner.restore
+    sigint = os.environ.get("TUNE_DISABLE_SIGINT_HANDLER")
+    os.environ["TUNE_DISABLE_SIGINT_HANDLER"] = "1"
+    try:
+        results = tuner.fit()
+    finally:
+        if sigint is None:
+            del os.environ["TUNE_DISABLE_SIGINT_HANDLER"]
+        else:
+            os.environ["TUNE_DISABLE_SIGINT_HANDLER"] = sigint
+    for i in range(len(results)):
+        result = results[i]
+        if result.error is not None and result.config:
+            statuses[result.config["trial"]["name"]]["error"] = _error_line(result.error)
+
+
+def _error_line(error: BaseException) -> str:
+    """A failed trial's error on one line: the trainer's own exception, not Ray's wrapper
+    (whose text holds the worker's traceback)."""
+    cause = getattr(error, "cause", None)
+    if isinstance(cause, BaseException):
+        error = cause
+    text = " ".join(str(error).split())
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
 def _tune_dirname(trial: Any) -> str:
@@ -354,6 +387,7 @@ def _trial_row(trial: Mapping[str, Any], status: Mapping[str, Any]) -> dict[str,
         "elapsed_s": round(float(state.get("elapsed_s", 0.0)), 3),
         "crashed": (run_dir / CRASH_MARKER).exists(),
         "run_dir": str(run_dir),
+        "error": status.get("error", ""),
     }
 
 
