@@ -22,8 +22,7 @@ TINY = [
     "4",
     "--perturbations",
     "robots-2",
-    "gain-dark-strong",
-    "defocus-strong",
+    "all-mild+robots-4",
 ]
 
 
@@ -33,23 +32,23 @@ def test_tiny_run_writes_its_rows_and_figure(tmp_path, capsys):
     printed = capsys.readouterr().out
     rows = read_rows(out / "robustness.csv")
     # clean first, then the chosen rows in table order, each on 4 episodes of seed 0
-    assert [r["name"] for r in rows] == ["clean", "gain-dark-strong", "defocus-strong", "robots-2"]
+    assert [r["name"] for r in rows] == ["clean", "robots-2", "all-mild+robots-4"]
     assert {r["method"] for r in rows} == {"oracle"}
     assert {(r["n"], r["seed"]) for r in rows} == {("4", "0")}
     for column in ("success_rate", "goal_reached"):
         for suffix in ("", "_low", "_high", "_drop_pts"):
             assert all(r[column + suffix] for r in rows)
     by = {r["name"]: r for r in rows}
-    # the oracle reads the true goal, never the image: the look changes nothing
-    for name in ("clean", "gain-dark-strong", "defocus-strong"):
+    # the oracle reads the true goal: it reaches it whoever stands on the field
+    for name in ("clean", "robots-2", "all-mild+robots-4"):
         assert float(by[name]["goal_reached"]) == 1.0
         assert float(by[name]["goal_reached_drop_pts"]) == 0.0
-    assert by["gain-dark-strong"]["setting"] == "gain=0.45"
-    assert by["gain-dark-strong"]["in_training_range"] == "False"
+    assert by["all-mild+robots-4"]["setting"] == "all factors mild, robots=4"
+    assert by["robots-2"]["in_training_range"] == "False"
     assert by["robots-2"]["in_robust_range"] == "True"
     assert (out / "robustness.png").read_bytes().startswith(b"\x89PNG")
     lines = printed.splitlines()
-    assert any(line.startswith("gain-dark-strong") for line in lines)
+    assert any(line.startswith("all-mild+robots-4") for line in lines)
     assert any(line.startswith("worst change vs clean:") for line in lines)
 
 
@@ -101,6 +100,9 @@ def test_list_prints_the_table(capsys):
         (["--shipped", "--run", "runs/x"], "--shipped and --run runs/x name two policies"),
         (["--method", "shipped", "--run", "runs/x"], "--shipped and --run"),
         ([], "--run"),
+        # a method that does not see the image would score an image-only row as clean's
+        (["--method", "oracle", "--perturbations", "gamma-strong", "robots-1"], "gamma-strong"),
+        (["--method", "scan", "--perturbations", "mount-fov+10%", "all-mild"], "does not see"),
     ],
     ids=" ".join,
 )
@@ -109,6 +111,19 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys, argv, needle, one_clear_l
     assert main(["robustness", *argv, "--out", str(out)]) == 2
     one_clear_line(needle)
     assert not out.exists()
+
+
+def test_a_method_blind_to_the_image_plays_only_the_rows_that_change_its_world(tmp_path, capsys):
+    # scan, the oracle and the entropy methods play from the env's state: every appearance
+    # and mount row scored them exactly as clean, a column of "no drop" read as robustness
+    out = tmp_path / "r"
+    assert main(["robustness", "--method", "scan", "--episodes", "1", "--out", str(out)]) == 0
+    assert "left out" in capsys.readouterr().out
+    names = [r["name"] for r in read_rows(out / "robustness.csv")]
+    assert names == ["clean", "robots-1", "robots-2", "robots-3", "robots-4", "all-mild+robots-4"]
+    assert main(["robustness", "--list", "--method", "entropy_jump"]) == 0
+    listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()[2:]]
+    assert listed == names
 
 
 @pytest.mark.parametrize("what", ["file", "missing", "empty folder"])

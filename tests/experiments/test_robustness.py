@@ -276,3 +276,26 @@ def test_a_world_this_version_cannot_play_is_a_policy_file_error():
     partial = with_world(RANDOMISED, {"robots": {"count": [1, 2]}})  # missing: the defaults
     assert partial.robots == RobotsConfig(count=(1, 2))
     assert partial.appearance == RANDOMISED.appearance  # a record not given is kept
+
+
+def test_a_blind_method_gets_only_the_rows_that_change_more_than_the_image():
+    from activevision.experiments.policies import ScanPolicy
+    from activevision.experiments.robustness import sees_image
+
+    assert not sees_image(ScanPolicy()) and not sees_image(OraclePolicy())
+    image_only = {p.name for p in PERTURBATIONS if p.image_only}
+    assert {"gain-dark-mild", "mount-tilt+4deg", "all-mild"} <= image_only
+    assert not image_only & {CLEAN, PAPER_CLEAN, "robots-1", "all-mild+robots-4"}
+    rows = [p.name for p in perturbations(RANDOMISED, blind="scan")]
+    assert rows == [
+        CLEAN,
+        PAPER_CLEAN,
+        "robots-1",
+        "robots-2",
+        "robots-3",
+        "robots-4",
+        "all-mild+robots-4",
+    ]
+    with pytest.raises(ValueError, match="grain-mild: changes only the camera image, which scan"):
+        perturbations(EnvConfig(), ["robots-2", "grain-mild"], blind="scan")
+    assert len(perturbations(EnvConfig(), blind=None)) == len(PERTURBATIONS) - 1

@@ -78,6 +78,13 @@ def _policy(name: str, args: argparse.Namespace) -> tuple[HeadPolicy, EnvConfig]
     return policy, clean
 
 
+def _blind(method: str, policy: HeadPolicy) -> str | None:
+    """``method`` where its policy does not see the camera image, else None."""
+    from activevision.experiments.robustness import sees_image
+
+    return None if sees_image(policy) else method
+
+
 def _outputs(args: argparse.Namespace, method: str) -> tuple[Path, Path]:
     out = args.out or (args.run / "robustness" if args.run else Path(f"robustness-{method}"))
     if is_training_run(out):
@@ -96,8 +103,12 @@ def cmd_robustness(args: argparse.Namespace) -> None:
         named = args.run is not None or args.shipped or args.method is not None
         if named:
             check_run(args.run)
-        clean = _policy(_method(args), args)[1] if named else None
-        print(list_table(clean, args.perturbations))
+        if named:
+            method = _method(args)
+            policy, clean = _policy(method, args)
+            print(list_table(clean, args.perturbations, _blind(method, policy)))
+        else:
+            print(list_table(None, args.perturbations))
         return
     method = _method(args)
     check_run(args.run)  # before RUN/robustness/..., which names a bad --run as an --out
@@ -113,13 +124,19 @@ def cmd_robustness(args: argparse.Namespace) -> None:
     from activevision.io import write_csv
 
     policy, clean = _policy(method, args)
-    rows = perturbations(clean, args.perturbations)
+    blind = _blind(method, policy)
+    rows = perturbations(clean, args.perturbations, blind)
     made = make_output_folder(csv_path.parent, None if args.out else str(csv_path.parent))
     what = f"{method} ({args.run})" if args.run else method
     print(
         f"robustness of {what}: {len(rows)} rows x {args.episodes} episodes"
         f" from seed {args.seed}, localisation error {args.error:g}"
     )
+    if blind is not None and not args.perturbations:
+        print(
+            f"{blind} does not see the camera image: the rows that change only the image"
+            " (appearance, camera mount, all-mild) are left out"
+        )
     print(table_header(), flush=True)
     with removed_on_failure(made):
         scored = score_perturbations(

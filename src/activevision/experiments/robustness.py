@@ -53,7 +53,7 @@ from typing import Any
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.experiments.evaluate import Interval, evaluate_policy
-from activevision.experiments.policies import HeadPolicy
+from activevision.experiments.policies import HeadPolicy, LearnedPolicy, OnnxPolicy
 from activevision.rendering.appearance import FACTORS, AppearanceConfig
 
 #: The robust training ranges (the ``dagger_robust`` preset's appearance and robot count).
@@ -107,6 +107,13 @@ class Perturbation:
     factor: str
     level: str  #: "trained", "neutral", "mild", "strong", or the robot count
     value: float | None = None
+
+    @property
+    def image_only(self) -> bool:
+        """Whether the row changes the camera image alone (an appearance factor, the camera
+        mount, ``all-mild``): the episodes, goals and hidden landmarks stay ``paper-clean``'s,
+        so a method that does not see the image plays it exactly as it plays that world."""
+        return self.factor in FACTORS or (self.factor == ALL and not self.value)
 
     @property
     def setting(self) -> str:
@@ -172,18 +179,44 @@ def is_randomised(config: EnvConfig) -> bool:
     return config.appearance.enabled or config.robots.max_count > 0
 
 
-def perturbations(clean: EnvConfig, names: Sequence[str] | None = None) -> tuple[Perturbation, ...]:
+def perturbations(
+    clean: EnvConfig, names: Sequence[str] | None = None, blind: str | None = None
+) -> tuple[Perturbation, ...]:
     """The rows to play for a policy trained on ``clean``: ``names`` (default: all) in table
     order, always with ``clean`` first (the reference of every drop); ``paper-clean`` by
-    default only when ``clean`` is randomised (otherwise it is ``clean`` again)."""
+    default only when ``clean`` is randomised (otherwise it is ``clean`` again).
+
+    ``blind``: the name of a method that does not see the camera image (it plays from the
+    env's state): the rows that change the image alone (:attr:`Perturbation.image_only`)
+    would score it exactly as ``paper-clean`` and read as robustness, so they are left out
+    by default and a ValueError when named."""
     known = perturbation_names()
     for name in names or ():
         if name not in known:
             raise ValueError(f"unknown perturbation {name!r}; choose from {', '.join(known)}")
+    unseen = {p.name for p in PERTURBATIONS if blind is not None and p.image_only}
     if names:
+        named = [name for name in names if name in unseen]
+        if named:
+            raise ValueError(
+                f"--perturbations {' '.join(named)}: {'changes' if len(named) == 1 else 'change'}"
+                f" only the camera image, which"
+                f" {blind} does not see (it plays from the env's state); score a policy that"
+                " sees it (--run, --shipped) or choose rows with other robots"
+            )
         wanted = {CLEAN, *names}
         return tuple(p for p in PERTURBATIONS if p.name in wanted)
-    return tuple(p for p in PERTURBATIONS if p.name != PAPER_CLEAN or is_randomised(clean))
+    return tuple(
+        p
+        for p in PERTURBATIONS
+        if (p.name != PAPER_CLEAN or is_randomised(clean)) and p.name not in unseen
+    )
+
+
+def sees_image(policy: HeadPolicy) -> bool:
+    """Whether ``policy`` reads the camera image (a trained network); the built-in
+    baselines (entropy methods, oracle, scan, random) play from the env's state."""
+    return isinstance(policy, (LearnedPolicy, OnnxPolicy))
 
 
 def within(config: EnvConfig, trained: EnvConfig) -> bool:
@@ -309,13 +342,15 @@ def worst_drops(rows: Sequence[dict[str, Any]]) -> str:
     return "worst change vs clean: " + ", ".join(parts)
 
 
-def list_table(clean: EnvConfig | None = None, names: Sequence[str] | None = None) -> str:
+def list_table(
+    clean: EnvConfig | None = None, names: Sequence[str] | None = None, blind: str | None = None
+) -> str:
     """The perturbations with their settings and whether each lies within the robust
     training ranges (``activevision robustness --list``): every one on the paper's default
     world, or, given a policy's ``clean`` world, the rows that ``names`` would play for it,
     built on that world, with whether each lies within its training ranges too (the CSV's
-    ``in_training_range`` and ``in_robust_range``)."""
-    rows = PERTURBATIONS if clean is None else perturbations(clean, names)
+    ``in_training_range`` and ``in_robust_range``; ``blind``: as :func:`perturbations`)."""
+    rows = PERTURBATIONS if clean is None else perturbations(clean, names, blind)
     world = clean or EnvConfig()
     robust = robust_config(world)
     if clean is None and names:
