@@ -299,3 +299,15 @@ def test_a_blind_method_gets_only_the_rows_that_change_more_than_the_image():
     with pytest.raises(ValueError, match="grain-mild: changes only the camera image, which scan"):
         perturbations(EnvConfig(), ["robots-2", "grain-mild"], blind="scan")
     assert len(perturbations(EnvConfig(), blind=None)) == len(PERTURBATIONS) - 1
+
+
+def test_the_figure_says_what_each_panel_and_the_clean_line_measure():
+    # "success rate" read as the share of episodes solved (that is goal reached), and the
+    # dashed "clean" line as the paper's clean world (for a randomised policy it is its
+    # randomised training world)
+    from activevision.figures.robustness import CLEAN_LABEL, PANELS
+
+    labels = dict(PANELS)
+    assert "landmarks" in labels["success_rate"] and "normal" in labels["success_rate"]
+    assert "episodes" in labels["goal_reached"] and "Wilson" in labels["goal_reached"]
+    assert "training world" in CLEAN_LABEL

@@ -13,9 +13,20 @@ import numpy as np
 from activevision.figures.canvas import new_figure, save_figure
 
 PANELS = (
-    ("success_rate", "success rate (%; whiskers: 95% interval)"),
-    ("goal_reached", "goal reached (%; whiskers: 95% interval)"),
+    (
+        "success_rate",
+        "success rate: mean share of the goal view's landmarks seen at the end"
+        "\n(%; whiskers: 95% interval, normal approximation)",
+    ),
+    (
+        "goal_reached",
+        "goal reached: share of episodes that end at the goal view"
+        "\n(%; whiskers: 95% Wilson interval)",
+    ),
 )
+#: the dashed line: the ``clean`` row, the policy's own training world (randomised for a
+#: policy trained so; the paper's clean world is the ``paper-clean`` row)
+CLEAN_LABEL = "clean: the policy's training world (every change is against it)"
 #: bar colours by level ("clean"/"paper-clean" rows, mild, strong, robots, camera mount)
 COLOURS = {
     "trained": "#555555",
@@ -112,7 +123,7 @@ def plot_robustness(
         Patch(color=COLOURS["robots"], label="other robots"),
         Patch(color=COLOURS["mount"], label="camera mounted off the model"),
         hatched,
-        Line2D([], [], color="black", ls="--", lw=1, label="clean"),
+        Line2D([], [], color="black", ls="--", lw=1, label=CLEAN_LABEL),
     ]
     fig.legend(
         handles=handles,
