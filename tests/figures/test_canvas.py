@@ -1,7 +1,10 @@
 """Figures are written in the format their file's suffix names, by both writers (a figure
-and an RGB array), atomically: no temporary file is left beside them."""
+and an RGB array), atomically: no temporary file is left beside them; the same figure is the
+same bytes (no creation date, no random SVG ids, no temporary file's name)."""
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 import pytest
@@ -56,3 +59,29 @@ def test_a_path_without_suffix_is_png_and_others_are_refused(tmp_path):
     for suffix in ("txt", "pgf", "raw", "gif"):
         with pytest.raises(ValueError, match=rf"not \.{suffix}"):
             figure_format(tmp_path / f"x.{suffix}")
+
+
+@pytest.mark.parametrize("suffix", sorted(FIGURE_FORMATS))
+def test_the_same_figure_is_the_same_bytes_in_every_format(tmp_path, suffix):
+    """matplotlib writes the time into PDF, SVG and PostScript, salts SVG ids with a random
+    UUID and titles PostScript with the file's name (here a random temporary one) unless
+    told otherwise: two writes under other names in other folders must still be equal."""
+    fig = new_figure(figsize=(2, 1.5))
+    ax = fig.add_subplot()
+    ax.imshow(np.arange(12).reshape(3, 4))
+    ax.plot([0, 3], [0, 2])
+    ax.set_title("same")
+    rgb = (np.arange(40 * 60 * 3) % 251).astype(np.uint8).reshape(40, 60, 3)
+    for name, write in [
+        ("figure", lambda p: save_figure(fig, p, dpi=50)),
+        ("rgb", lambda p: save_rgb(rgb, p)),
+    ]:
+        first, second = tmp_path / f"{name}.{suffix}", tmp_path / "other" / f"x.{suffix}"
+        write(first)
+        write(second)
+        data = first.read_bytes()
+        assert data == second.read_bytes(), name
+        assert b"CreationDate (" not in data and b"<dc:date>" not in data
+        if FIGURE_FORMATS[suffix] in ("ps", "eps"):
+            assert b"%%CreationDate: Thu Jan 01 00:00:00 1970" in data and b".tmp" not in data
+    assert "SOURCE_DATE_EPOCH" not in os.environ

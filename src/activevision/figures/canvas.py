@@ -3,11 +3,13 @@ canvas, so drawing never touches the user's backend or pyplot's global figures."
 
 from __future__ import annotations
 
+import contextlib
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import matplotlib
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -59,20 +61,46 @@ def figure_format(path: str | os.PathLike[str]) -> str:
     return FIGURE_FORMATS[suffix]
 
 
+#: Metadata that leaves out the creation date matplotlib writes by default (the same figure
+#: is then the same bytes at any time), by format; PNG and Pillow's formats write none.
+_NO_DATE: dict[str, dict[str, Any]] = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}
+
+
+@contextlib.contextmanager
+def _same_bytes(file_format: str) -> Iterator[dict[str, Any] | None]:
+    """The ``metadata`` for a writer of ``file_format``, in a context where the same figure is
+    written as the same bytes in any process and at any time: no creation date (PDF, SVG: by
+    metadata; PostScript has no such key, so its date is pinned through SOURCE_DATE_EPOCH,
+    the variable matplotlib reads for reproducible output), and SVG ids hashed with a fixed
+    salt (matplotlib salts them with a random UUID per process by default)."""
+    pin_date = file_format in ("ps", "eps") and "SOURCE_DATE_EPOCH" not in os.environ
+    with matplotlib.rc_context({"svg.hashsalt": "activevision"}):
+        if pin_date:
+            os.environ["SOURCE_DATE_EPOCH"] = "0"
+        try:
+            yield _NO_DATE.get(file_format)  # None: the writer's own (JPEG takes no metadata)
+        finally:
+            if pin_date:
+                os.environ.pop("SOURCE_DATE_EPOCH", None)
+
+
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: float) -> None:
-    """Write the figure atomically, in the format its suffix names (:func:`figure_format`)."""
+    """Write the figure atomically, in the format its suffix names (:func:`figure_format`),
+    the same bytes for the same figure (no dates, no random ids)."""
     file_format = figure_format(path)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=file_format)
+    # an open file, not the temporary's name, which PostScript would write as its title
+    with atomic_path(path) as tmp, tmp.open("wb") as f, _same_bytes(file_format) as metadata:
+        fig.savefig(f, dpi=dpi, format=file_format, metadata=metadata)
 
 
 def save_rgb(rgb: np.ndarray, path: str | os.PathLike[str]) -> None:
-    """Write an RGB array atomically, in the format its suffix names (:func:`figure_format`)."""
+    """Write an RGB array atomically, in the format its suffix names (:func:`figure_format`),
+    the same bytes for the same array (as :func:`save_figure`)."""
     from matplotlib.image import imsave
 
     file_format = figure_format(path)
-    with atomic_path(path) as tmp:
-        imsave(tmp, rgb, format=file_format)
+    with atomic_path(path) as tmp, tmp.open("wb") as f, _same_bytes(file_format) as metadata:
+        imsave(f, rgb, format=file_format, metadata=metadata)
 
 
 def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: float) -> None:
