@@ -169,7 +169,7 @@ def test_refuses_a_training_run(trained, one_clear_line):
     one_clear_line("training run")
 
 
-def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys):
+def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys, monkeypatch):
     """--preset match_ddqn trains the package's DDQN on ActiveVisionMatch-v0; the run plays
     as ``learned`` (PyTorch, batched) and, exported, as ``onnx_policy`` (HeadController).
     Trained with a weaker detector, it plays in that world unless --detection says otherwise,
@@ -192,6 +192,14 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
         row = next(csv.DictReader(f))
     detector = (row["detect_near"], row["detect_far"], row["false_detections"])
     assert detector == ("0.95", "0.2", "0.05")
+    # the figures' titles name the run by its folder ("the one match_run was trained with"),
+    # not by the path given: the same bytes from another directory
+    monkeypatch.chdir(tmp_path)
+    relative = [*TINY, "--out", "m_relative", "--run", "match_run", "--methods", "learned"]
+    assert main(relative) == 0
+    for name in ("match.csv", "match_pareto.png", "match_error.png"):
+        assert (out / name).read_bytes() == (tmp_path / "m_relative" / name).read_bytes(), name
+    capsys.readouterr()
     played = [*TINY, "--out", str(out), "--run", str(run), "--methods", "learned", "--overwrite"]
     assert main([*played, "--detection", "0.95", "0.5", "0.05"]) == 0
     printed = capsys.readouterr().out

@@ -75,9 +75,9 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
                 f" which the comparison's env ({env_config.observation!r}, from --run) does not"
                 " give: compare runs that observe the same inputs"
             )
-        name = f"learned:{run.name}"
+        name = f"learned:{run.resolve().name}"  # the folder's name, however it was given
         if name in policies:
-            raise ValueError(f"--runs names two runs {run.name!r}: rename one directory")
+            raise ValueError(f"--runs names two runs {run.resolve().name!r}: rename one directory")
         policy = LearnedPolicy.from_run(run, weights=args.weights)
         policy.name = name
         policies[name] = policy

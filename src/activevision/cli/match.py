@@ -41,9 +41,10 @@ def _method_names() -> tuple[str, ...]:
     return match_method_names()
 
 
-def _world_text(args: argparse.Namespace, config: MatchConfig) -> str:
+def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None = None) -> str:
     """What differs from the default world: ``", 4 other robots walking at 0.2 m/s,
-    detector 0.6/0.15/0.2"``, or nothing."""
+    detector 0.6/0.15/0.2"``, or nothing; ``run`` names the run a detector came from
+    (default: ``--run`` as given)."""
     from activevision.envs.match.config import DetectionConfig
 
     text = ""
@@ -53,7 +54,7 @@ def _world_text(args: argparse.Namespace, config: MatchConfig) -> str:
     if config.detection != DetectionConfig():
         text += f", detector {detector_text(config.detection)}"
         if args.detection is None:
-            text += f" (the one {args.run} was trained with)"
+            text += f" (the one {args.run if run is None else run} was trained with)"
     if args.ball_bounces_off_us:
         text += ", the ball bouncing off our robot"
     return text
@@ -248,9 +249,12 @@ def cmd_match(args: argparse.Namespace) -> None:
             print(format_difference(method, metrics, width))
         write_csv(paired_path, paired_rows(differences, args.baseline, args.matches, args.seed))
         files.append(paired_path)
+    # the run by its folder's name, not by the path given: the figures are the same bytes
+    # whatever the current directory and wherever the run lies
+    run_name = None if args.run is None else args.run.resolve().name
     title = (
         f"{args.matches} matches x {minutes:.1f} min, seed {args.seed},"
-        f" {args.action_type} head {args.step_deg:g} deg/tick{_world_text(args, config)}"
+        f" {args.action_type} head {args.step_deg:g} deg/tick{_world_text(args, config, run_name)}"
     )
     points = {
         r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()} for r in results

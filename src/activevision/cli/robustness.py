@@ -149,10 +149,12 @@ def cmd_robustness(args: argparse.Namespace) -> None:
         )
     print(worst_drops(scored))
     write_csv(csv_path, [{"method": method, "error": args.error, **r} for r in scored])
+    # the run by its folder's name, not the path given: the same figure from any directory
+    named = f"{method} ({args.run.resolve().name})" if args.run else method
     plot_robustness(
         scored,
         png_path,
-        title=f"{what}: {args.episodes} episode{'s' * (args.episodes != 1)} a row,"
+        title=f"{named}: {args.episodes} episode{'s' * (args.episodes != 1)} a row,"
         f" seed {args.seed}, localisation error {args.error:g}",
     )
     print(f"wrote {csv_path} and {png_path}")

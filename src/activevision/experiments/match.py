@@ -145,10 +145,14 @@ def users_code(method: str, what: str) -> Iterator[None]:
 def model_labels(models: Sequence[Path]) -> list[str]:
     """What each exported policy plays as: ``onnx_policy`` for one model, else
     ``onnx_policy[NAME]`` with NAME its training run's folder (``runs/NAME/policy.onnx``) or
-    its file name's stem, numbered where two coincide."""
+    its file name's stem, numbered where two coincide (the folder's own name, however the
+    path was given: ``policy.onnx`` in the run's folder is named after it too)."""
     if len(models) <= 1:
         return ["onnx_policy"]
-    names = [m.parent.name if m.stem == "policy" and m.parent.name else m.stem for m in models]
+    folders = [Path(m).resolve().parent.name for m in models]
+    names = [
+        f if m.stem == "policy" and f else m.stem for m, f in zip(models, folders, strict=True)
+    ]
     labels = []
     for i, name in enumerate(names):
         if names.count(name) > 1:

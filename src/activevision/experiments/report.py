@@ -69,7 +69,7 @@ def write_report(run_dir: str | Path) -> Path:
     algo = config.get("algo", "ddqn")
     env_id = config.get("env_id", "ActiveVision-v0")
     parts = [
-        f"# activevision report: `{run.name}`",
+        f"# activevision report: `{run.resolve().name}`",  # also for `report .`
         "",
         f"activevision {activevision.__version__}, Python {platform.python_version()}, "
         f"training seed {config.get('seed')}, {algo} on `{env_id}`,"

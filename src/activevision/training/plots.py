@@ -44,7 +44,7 @@ def plot_run(
     return plot_training(
         tables,
         out,
-        title=run_dir.name,
+        title=run_dir.resolve().name,  # the folder's name, also for `plot .`
         validation=validation,
         loss_title=loss_title,
         curves=MATCH_CURVES if match else CURVES,
