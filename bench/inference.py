@@ -195,6 +195,8 @@ def main() -> None:
         help="also time ONNX export/session variants (network only)",
     )
     args = parser.parse_args()
+    if args.run is not None and not (args.run / "config.json").is_file():
+        parser.error(f"--run {args.run}: not a training run (no config.json)")
 
     torch.set_num_threads(1)
     torch.set_num_interop_threads(1)

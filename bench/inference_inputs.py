@@ -27,7 +27,10 @@ from activevision.agents.q_network import QNetwork
 from activevision.cli.args import int_in
 from activevision.export import export_onnx, policy_metadata
 from activevision.geometry import CameraConfig
-from activevision.runtime import HeadController, pretrained_policy_path
+from activevision.runtime import HeadController, PolicyFileError, pretrained_policy_path
+
+#: the robot inputs an episodic policy may take besides the frame and head angles
+EXTRA = {"pose": (1.2, -0.4, 0.7), "pose_error": 0.3, "proposal": (0.35, 0.44)}
 
 
 def eight_way_table(step_deg: float = 3.0) -> np.ndarray:
@@ -53,6 +56,15 @@ def main() -> None:
         "--decisions", type=int_in(10, 10**7), default=3000, help="timed, in 10 rounds"
     )
     args = parser.parse_args()
+    try:
+        policy = HeadController(args.policy or pretrained_policy_path(), num_threads=1)
+    except PolicyFileError as error:
+        parser.error(f"--policy: {error}")
+    if not set(policy.inputs) <= set(EXTRA):
+        parser.error(
+            f"--policy {args.policy}: its policy takes {', '.join(policy.inputs)} (a match"
+            " student: bench/match_student.py --policy)"
+        )
     torch.set_num_threads(1)
     rng = np.random.default_rng(0)
     frames = rng.integers(0, 256, (16, 480, 640, 3), dtype=np.uint8)
@@ -61,13 +73,7 @@ def main() -> None:
         metadata = policy_metadata(eight_way_table(), CameraConfig())
         reference_path = export_onnx(QNetwork(9).eval(), Path(tmp) / "paper.onnx", metadata)
         reference = HeadController(reference_path.model_path, num_threads=1)
-        policy = HeadController(args.policy or pretrained_policy_path(), num_threads=1)
-        extra = {
-            "pose": (1.2, -0.4, 0.7),
-            "pose_error": 0.3,
-            "proposal": (0.35, 0.44),
-        }
-        given = {k: v for k, v in extra.items() if k in policy.inputs}
+        given = {k: v for k, v in EXTRA.items() if k in policy.inputs}
         state = {"i": 0}
 
         def decide(controller: HeadController, kwargs: dict) -> None:

@@ -24,7 +24,10 @@ from activevision.cli.args import int_in
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import EntropyTrackTeacher
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
-from activevision.runtime import HeadController
+from activevision.runtime import HeadController, PolicyFileError
+
+#: what a match student takes besides the frame and head angles
+STUDENT_INPUTS = ("pose", "belief", "ball")
 
 
 def untrained_student(run_dir: Path) -> Path:
@@ -40,6 +43,21 @@ def untrained_student(run_dir: Path) -> Path:
     return export_run(run_dir / "run").model_path
 
 
+def match_student(parser: argparse.ArgumentParser, policy: Path) -> HeadController:
+    """``--policy``'s controller, or one line naming it where it is not a match student's."""
+    try:
+        student = HeadController(policy, num_threads=1)
+    except PolicyFileError as error:
+        parser.error(f"--policy: {error}")
+    if set(student.inputs) != set(STUDENT_INPUTS):
+        parser.error(
+            f"--policy {policy}: not a match student (its robot inputs:"
+            f" {', '.join(student.inputs) or 'none'}; a student's: {', '.join(STUDENT_INPUTS)};"
+            " for episodic policies: bench/inference_inputs.py --policy)"
+        )
+    return student
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--policy", type=Path, help="a match student's policy.onnx")
@@ -47,6 +65,7 @@ def main() -> None:
         "--states", type=int_in(20, 10**6), default=200, help="match states timed, per round"
     )
     args = parser.parse_args()
+    student = None if args.policy is None else match_student(parser, args.policy)
     config = MatchConfig()
     env = ActiveVisionMatchVectorEnv(1, config)
     _, info = env.reset(seed=0)
@@ -57,8 +76,9 @@ def main() -> None:
     for _ in range(args.states):  # a walk through one match, the teacher at the head
         states.append({k: v.copy() for k, v in info.items()})
         _, _, _, _, info = env.step(teacher.actions(info))
-    with tempfile.TemporaryDirectory() as tmp:
-        student = HeadController(args.policy or untrained_student(Path(tmp)), num_threads=1)
+    if student is None:
+        with tempfile.TemporaryDirectory() as tmp:
+            student = HeadController(untrained_student(Path(tmp)), num_threads=1)
 
     def decide(i: int) -> None:
         s = states[i]

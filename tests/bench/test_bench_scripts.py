@@ -50,3 +50,24 @@ def test_help_and_a_bad_value(script):
     lines = [line for line in done.stderr.splitlines() if line.strip()]
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr and lines[-1].startswith(f"{script}: error: ")
+
+
+#: a path option naming what is not there, or not the kind of policy the script times
+BAD_PATHS = [
+    ("inference.py", ["--run", "/no/such/run"], "--run /no/such/run: not a training run"),
+    ("inference_inputs.py", ["--policy", "/no/such.onnx"], "/no/such.onnx not found"),
+    ("match_student.py", ["--policy", "/no/such.onnx"], "/no/such.onnx not found"),
+    ("match_student.py", ["--policy", "{shipped}"], "not a match student"),
+]
+
+
+@pytest.mark.parametrize(("script", "args", "named"), BAD_PATHS)
+def test_a_bad_path_is_one_line(script, args, named):
+    from activevision.runtime import pretrained_policy_path
+
+    done = run(script, *(a.format(shipped=pretrained_policy_path()) for a in args))
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr and lines[-1].startswith(f"{script}: error: ")
+    assert named in lines[-1]
+
