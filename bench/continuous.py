@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 import matplotlib
@@ -42,6 +43,9 @@ def main() -> None:
     for run in args.runs:
         if not (run / "config.json").is_file():
             parser.error(f"--runs {run}: not a training run (no config.json)")
+    names = [run.name for run in args.runs] + ["oracle"]
+    if len(set(names)) < len(names):  # a policy is known by its run's folder name
+        parser.error(f"--runs: two policies named alike ({', '.join(names)}): rename a folder")
     torch.set_num_threads(1)
 
     env_config = load_config(args.runs[0] / "config.json").env.replace(action_type="discrete")
@@ -101,21 +105,42 @@ def main() -> None:
         }
 
     if discrete and continuous:
-        ratio = paired[continuous]["median"] / paired[discrete]["median"]
         equal_or_better = (
             summaries[continuous]["success_rate"].mean >= summaries[discrete]["success_rate"].mean
         )
+        # no paired episode: no ratio (JSON null, as strict JSON has no NaN)
+        ratio = (
+            paired[continuous]["median"] / paired[discrete]["median"]
+            if paired["episodes"]
+            else None
+        )
+        shown = (
+            f"x{ratio:.2f}"
+            if ratio is not None
+            else f"undefined (none that {', '.join(pair)} all solve)"
+        )
         print(
             f"best continuous ({continuous}) over best discrete ({discrete}): median steps"
-            f" x{ratio:.2f} (target <= 0.70), success rate"
+            f" {shown} (target <= 0.70), success rate"
             f" {'equal or better' if equal_or_better else 'lower'}"
         )
         record["steps_ratio"] = ratio
-        record["target_met"] = bool(ratio <= 0.7 and equal_or_better)
+        record["target_met"] = bool(ratio is not None and ratio <= 0.7 and equal_or_better)
     if args.figure is not None:
         plot(episodes, pair, kinds, paired["episodes"], args.figure)
         print(f"wrote {args.figure}")
-    print(json.dumps(record))
+    print(json.dumps(finite(record), allow_nan=False))
+
+
+def finite(value):
+    """``value`` with every NaN (a median or mean over no episodes) as None: JSON null."""
+    if isinstance(value, dict):
+        return {k: finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [finite(v) for v in value]
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    return value
 
 
 def plot(episodes, names, kinds, n_paired, path: Path) -> None:

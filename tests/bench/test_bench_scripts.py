@@ -71,3 +71,18 @@ def test_a_bad_path_is_one_line(script, args, named):
     assert "Traceback" not in done.stderr and lines[-1].startswith(f"{script}: error: ")
     assert named in lines[-1]
 
+
+def test_continuous_writes_no_nan_into_its_json():
+    """A median over no episodes (no paired episode, a policy that solves none) is JSON
+    null: strict JSON (``allow_nan=False``, other languages' parsers) has no NaN."""
+    import importlib.util
+    import json
+    import math
+
+    spec = importlib.util.spec_from_file_location("continuous", BENCH / "continuous.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    record = {"paired": 0, "a": {"median": math.nan, "ci": [0.1, math.nan]}, "ok": True}
+    text = json.dumps(module.finite(record), allow_nan=False)
+    assert json.loads(text) == {"paired": 0, "a": {"median": None, "ci": [0.1, None]}, "ok": True}
