@@ -27,8 +27,12 @@ torch.backends.mkldnn.enabled = sys.argv[2] != "1"
 config = preset("quickstart_ddqn").replace(
     total_timesteps=900, learning_starts=300, num_threads=int(sys.argv[1]),
     progress_bar=False, tensorboard=False, checkpoint_interval=0, seed=0)
-trainer = Trainer(config, tempfile.mkdtemp())
-trainer.train()
+with tempfile.TemporaryDirectory() as run_dir:  # the run's files, removed after it
+    trainer = Trainer(config, run_dir)
+    try:
+        trainer.train()
+    finally:
+        trainer.close()
 weights = b"".join(p.detach().cpu().numpy().tobytes() for p in trainer.learner.online.parameters())
 print(hashlib.sha256(weights).hexdigest())
 """

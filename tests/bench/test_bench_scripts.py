@@ -86,3 +86,32 @@ def test_continuous_writes_no_nan_into_its_json():
     record = {"paired": 0, "a": {"median": math.nan, "ci": [0.1, math.nan]}, "ok": True}
     text = json.dumps(module.finite(record), allow_nan=False)
     assert json.loads(text) == {"paired": 0, "a": {"median": None, "ci": [0.1, None]}, "ok": True}
+
+
+def test_reproducibility_runs_leave_no_folder(tmp_path):
+    """Each of bench/reproducibility.py's training processes removes its run folder (it
+    left one in the temporary directory per process); here with 60 steps, not 900."""
+    import os
+    import sys
+
+    sys.path.insert(0, str(BENCH))
+    try:
+        import reproducibility
+    finally:
+        sys.path.remove(str(BENCH))
+    code = reproducibility.RUN.replace(
+        "total_timesteps=900, learning_starts=300", "total_timesteps=60, learning_starts=30"
+    )
+    assert code != reproducibility.RUN
+    (tmp_path / "tmp").mkdir()
+    done = subprocess.run(
+        [sys.executable, "-c", code, "1", "0"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "TMPDIR": str(tmp_path / "tmp")},
+    )
+    assert done.returncode == 0, done.stderr
+    assert len(done.stdout.split()[-1]) == 64  # the weights' sha256
+    # (torch's compile cache, torchinductor_USER, is a cache every torch process shares)
+    assert not [p for p in (tmp_path / "tmp").iterdir() if not p.name.startswith("torchinductor")]
