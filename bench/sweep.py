@@ -50,7 +50,12 @@ def run_sweep(steps: int, num_cpus: int, out_dir: Path) -> dict[str, Any]:
     import ray
 
     t0 = time.perf_counter()
-    ray.init(num_cpus=num_cpus, include_dashboard=False, log_to_driver=False)
+    # Ray's session folder (logs, sockets, spilled objects) in out_dir's temporary folder,
+    # not a new /tmp/ray/session_* left behind at every run
+    ray_dir = out_dir.parent / "ray"
+    ray.init(
+        num_cpus=num_cpus, include_dashboard=False, log_to_driver=False, _temp_dir=str(ray_dir)
+    )
     t1 = time.perf_counter()
     sweep(config, [0, 1], {}, out_dir, verbose=0)  # joins the instance started above
     t2 = time.perf_counter()
@@ -86,7 +91,9 @@ def main() -> None:
     import ray
 
     results = {}
-    with tempfile.TemporaryDirectory() as tmp:
+    # (Ray's processes may still be writing logs as they end: their leftovers must not stop
+    # the folder's removal)
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as tmp:
         for n in (1, 2):
             results[n] = run_sweep(args.steps, n, Path(tmp) / f"cpus{n}")
             print(f"{n} worker(s): {json.dumps(results[n])}", flush=True)
