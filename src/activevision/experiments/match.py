@@ -28,12 +28,11 @@ from activevision.envs.match.scores import MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.experiments.evaluate import Interval, mean_interval
 from activevision.experiments.match_methods import (
-    USER_ERRORS,
     USER_STRATEGY,
     StrategyFactory,
     StrategyOptions,
     make_match_policy,
-    user_code_error,
+    user_errors,
 )
 
 #: per-match metrics, in table order: name -> (column header, format)
@@ -136,10 +135,8 @@ def users_code(method: str, what: str) -> Iterator[None]:
     if method != USER_STRATEGY:
         yield
         return
-    try:
+    with user_errors(what):
         yield
-    except USER_ERRORS as error:
-        raise user_code_error(what, error) from None
 
 
 def model_labels(models: Sequence[Path]) -> list[str]:

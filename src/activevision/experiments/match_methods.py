@@ -54,9 +54,10 @@ can run them -- and bound what a learned strategy could reach from the same head
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -581,6 +582,16 @@ def default_match_methods(run: Path | None) -> tuple[str, ...]:
 USER_ERRORS = (Exception, SystemExit)
 
 
+@contextlib.contextmanager
+def user_errors(what: str) -> Iterator[None]:
+    """Run a user's code: an exception it raises is one ValueError line naming ``what``
+    (:func:`user_code_error`)."""
+    try:
+        yield
+    except USER_ERRORS as error:
+        raise user_code_error(what, error) from None
+
+
 def user_code_error(what: str, error: BaseException) -> ValueError:
     """A one-line error for an exception ``error`` that a user's strategy raised: its type,
     message and the line of the user's code it came from (the innermost frame outside this
@@ -684,10 +695,8 @@ def built_by_user(
             signature.bind(argument)
         except TypeError as error:  # NAME(argument) is the contract
             raise ValueError(f"--strategy {label}: {call} failed: {error}") from None
-    try:
+    with user_errors(f"--strategy {label}: {call}"):
         built = factory(argument)
-    except USER_ERRORS as error:  # the user's code failed as it ran
-        raise user_code_error(f"--strategy {label}: {call}", error) from None
     missing = [m for m in ("reset", "act") if not callable(getattr(built, m, None))]
     if missing:
         raise ValueError(

@@ -14,8 +14,7 @@ each policy it needs (:func:`user_method`).
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -187,18 +186,13 @@ class _UsersPolicy:
         self.name = label
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
-        with self._theirs("reset"):
+        from activevision.experiments.match_methods import user_errors
+
+        with user_errors(f"--strategy {self.name}: reset"):
             self.policy.reset(info, rng)
 
     def act(self, obs: Observation, info: dict) -> int | HeadTarget:
-        with self._theirs("act"):
+        from activevision.experiments.match_methods import user_errors
+
+        with user_errors(f"--strategy {self.name}: act"):
             return self.policy.act(obs, info)
-
-    @contextlib.contextmanager
-    def _theirs(self, method: str) -> Iterator[None]:
-        from activevision.experiments.match_methods import USER_ERRORS, user_code_error
-
-        try:
-            yield
-        except USER_ERRORS as error:
-            raise user_code_error(f"--strategy {self.name}: {method}", error) from None
