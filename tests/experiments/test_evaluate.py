@@ -7,6 +7,7 @@ from activevision.envs import ActiveVisionEnv
 from activevision.envs.actions import action_table
 from activevision.experiments.compare import compare
 from activevision.experiments.evaluate import (
+    Interval,
     episode_seed,
     evaluate_policy,
     mean_interval,
@@ -128,6 +129,23 @@ def test_a_share_keeps_its_interval_within_0_and_1_and_one_value_has_none():
     assert summarise_success_rates([1.0, 0.2]) == (iv.low, iv.high)
     one = mean_interval([0.7])
     assert one.mean == 0.7 and math.isnan(one.low) and math.isnan(one.high)
+
+
+@pytest.mark.parametrize("bounds", [(0.0, 1.0), (-2.0, 3.0)])
+def test_values_all_at_one_end_of_their_bounds_get_the_wilson_interval_not_zero_width(bounds):
+    # 200 episodes all at success rate 1 gave 100% [100, 100]: a certainty no sample gives.
+    # Wilson of 200/200 by hand: low = 1 / (1 + z^2/200) = 0.98115, high 1.
+    lo, hi = bounds
+    top = mean_interval([hi] * 200, bounds=bounds)
+    assert top.mean == hi and top.high == hi
+    assert top.low == pytest.approx(lo + (hi - lo) / (1 + 1.959963984540054**2 / 200))
+    bottom = mean_interval([lo] * 200, bounds=bounds)
+    assert bottom.mean == lo and bottom.low == lo
+    assert bottom.high == pytest.approx(lo + (hi - lo) * (1 - 1 / (1 + 1.959963984540054**2 / 200)))
+    assert summarise_success_rates([1.0] * 200)[0] == pytest.approx(0.98115, abs=1e-5)
+    # values all equal inside the bounds, or without bounds, keep the normal approximation
+    assert mean_interval([0.5] * 10, bounds=(0.0, 1.0)) == Interval(0.5, 0.5, 0.5)
+    assert mean_interval([1.0] * 10) == Interval(1.0, 1.0, 1.0)
 
 
 def summarise_success_rates(rates):

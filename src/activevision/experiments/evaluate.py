@@ -63,12 +63,24 @@ def mean_interval(
 ) -> Interval:
     """Mean +- z standard errors (sample standard deviation, ddof=1), cut to ``bounds``
     where the values cannot leave them (a share: (0, 1)). One value has no interval (NaN
-    ends: one sample says nothing of the spread)."""
+    ends: one sample says nothing of the spread).
+
+    Every value at one end of its bounds (an oracle's success rate of 1 in every episode, no
+    match ever lost) has no spread to estimate the error from, and the normal approximation
+    would claim a certain mean (a zero-width interval). There the interval is the Wilson
+    interval of n out of n (or 0 out of n) scaled to the bounds: a variable within bounds
+    spreads at most as far as one that only takes their ends, so this is what the n values
+    can vouch for."""
     x = np.asarray(values, float)
     if len(x) == 0:
         return Interval(math.nan, math.nan, math.nan)
     if len(x) == 1:
         return Interval(float(x[0]), math.nan, math.nan)
+    if bounds is not None and np.all(x == x[0]) and x[0] in bounds:
+        lo, hi = bounds
+        at_top = x[0] == hi
+        share = wilson_interval(len(x) if at_top else 0, len(x), z)
+        return Interval(float(x[0]), lo + share.low * (hi - lo), lo + share.high * (hi - lo))
     half = z * x.std(ddof=1) / math.sqrt(len(x))
     low, high = float(x.mean() - half), float(x.mean() + half)
     if bounds is not None:
