@@ -85,3 +85,21 @@ def test_the_same_figure_is_the_same_bytes_in_every_format(tmp_path, suffix):
         if FIGURE_FORMATS[suffix] in ("ps", "eps"):
             assert b"%%CreationDate: Thu Jan 01 00:00:00 1970" in data and b".tmp" not in data
     assert "SOURCE_DATE_EPOCH" not in os.environ
+
+
+@pytest.mark.parametrize("suffix", ["ps", "eps"])
+def test_postscript_is_dated_without_touching_the_environment(tmp_path, suffix, monkeypatch):
+    # The date was pinned by setting SOURCE_DATE_EPOCH for the write: any other thread saw
+    # the process's environment change. Now the environment is never written, and a user's
+    # own SOURCE_DATE_EPOCH still dates the file.
+    seen = []
+    monkeypatch.setattr(os, "putenv", lambda *a: seen.append(a))
+    monkeypatch.setattr(os, "unsetenv", lambda *a: seen.append(a))
+    fig = new_figure(figsize=(2, 1.5))
+    fig.add_subplot().plot([0, 1])
+    save_figure(fig, tmp_path / f"a.{suffix}", dpi=50)
+    assert seen == []
+    assert b"%%CreationDate: Thu Jan 01 00:00:00 1970\n" in (tmp_path / f"a.{suffix}").read_bytes()
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "86400")
+    save_figure(fig, tmp_path / f"b.{suffix}", dpi=50)
+    assert b"%%CreationDate: Fri Jan 02 00:00:00 1970" in (tmp_path / f"b.{suffix}").read_bytes()

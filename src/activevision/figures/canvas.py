@@ -3,11 +3,12 @@ canvas, so drawing never touches the user's backend or pyplot's global figures."
 
 from __future__ import annotations
 
-import contextlib
+import io
 import os
-from collections.abc import Iterator, Sequence
+import re
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import matplotlib
 import numpy as np
@@ -64,33 +65,42 @@ def figure_format(path: str | os.PathLike[str]) -> str:
 #: Metadata that leaves out the creation date matplotlib writes by default (the same figure
 #: is then the same bytes at any time), by format; PNG and Pillow's formats write none.
 _NO_DATE: dict[str, dict[str, Any]] = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}
+#: PostScript's date line, which no metadata key leaves out: it is set to the epoch after
+#: writing (as matplotlib writes it under SOURCE_DATE_EPOCH=0; setting that variable here
+#: would change the process's environment under any other thread).
+_PS_DATE = re.compile(rb"^%%CreationDate: [^\r\n]*", re.MULTILINE)
+_PS_EPOCH = b"%%CreationDate: Thu Jan 01 00:00:00 1970"
 
 
-@contextlib.contextmanager
-def _same_bytes(file_format: str) -> Iterator[dict[str, Any] | None]:
-    """The ``metadata`` for a writer of ``file_format``, in a context where the same figure is
-    written as the same bytes in any process and at any time: no creation date (PDF, SVG: by
-    metadata; PostScript has no such key, so its date is pinned through SOURCE_DATE_EPOCH,
-    the variable matplotlib reads for reproducible output), and SVG ids hashed with a fixed
-    salt (matplotlib salts them with a random UUID per process by default)."""
-    pin_date = file_format in ("ps", "eps") and "SOURCE_DATE_EPOCH" not in os.environ
-    with matplotlib.rc_context({"svg.hashsalt": "activevision"}):
-        if pin_date:
-            os.environ["SOURCE_DATE_EPOCH"] = "0"
-        try:
-            yield _NO_DATE.get(file_format)  # None: the writer's own (JPEG takes no metadata)
-        finally:
-            if pin_date:
-                os.environ.pop("SOURCE_DATE_EPOCH", None)
+def _write_same_bytes(
+    path: str | os.PathLike[str], write: Callable[[BinaryIO, str, dict[str, Any] | None], None]
+) -> None:
+    """Write ``path`` atomically with ``write(file, format, metadata)``, in the format its
+    suffix names (:func:`figure_format`), so that the same figure is the same bytes in any
+    process and at any time: no creation date (PDF, SVG: by metadata; PostScript: its date
+    line, unless the user's SOURCE_DATE_EPOCH sets it), and SVG ids hashed with a fixed salt
+    (matplotlib salts them with a random UUID per process by default). An open file, not the
+    temporary's name, which PostScript would write as its title."""
+    file_format = figure_format(path)
+    with (
+        atomic_path(path) as tmp,
+        tmp.open("wb") as f,
+        matplotlib.rc_context({"svg.hashsalt": "activevision"}),
+    ):
+        if file_format not in ("ps", "eps") or "SOURCE_DATE_EPOCH" in os.environ:
+            write(f, file_format, _NO_DATE.get(file_format))  # None: the writer's own
+            return
+        buffer = io.BytesIO()
+        write(buffer, file_format, None)
+        f.write(_PS_DATE.sub(_PS_EPOCH, buffer.getvalue(), count=1))
 
 
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: float) -> None:
     """Write the figure atomically, in the format its suffix names (:func:`figure_format`),
     the same bytes for the same figure (no dates, no random ids)."""
-    file_format = figure_format(path)
-    # an open file, not the temporary's name, which PostScript would write as its title
-    with atomic_path(path) as tmp, tmp.open("wb") as f, _same_bytes(file_format) as metadata:
-        fig.savefig(f, dpi=dpi, format=file_format, metadata=metadata)
+    _write_same_bytes(
+        path, lambda f, fmt, metadata: fig.savefig(f, dpi=dpi, format=fmt, metadata=metadata)
+    )
 
 
 def save_rgb(rgb: np.ndarray, path: str | os.PathLike[str]) -> None:
@@ -98,9 +108,7 @@ def save_rgb(rgb: np.ndarray, path: str | os.PathLike[str]) -> None:
     the same bytes for the same array (as :func:`save_figure`)."""
     from matplotlib.image import imsave
 
-    file_format = figure_format(path)
-    with atomic_path(path) as tmp, tmp.open("wb") as f, _same_bytes(file_format) as metadata:
-        imsave(f, rgb, format=file_format, metadata=metadata)
+    _write_same_bytes(path, lambda f, fmt, metadata: imsave(f, rgb, format=fmt, metadata=metadata))
 
 
 def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: float) -> None:
