@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import torch
 
-from activevision.cli.args import positive_int, seed
+from activevision.cli.args import positive_int, refused_by, seed
 from activevision.envs import ActiveVisionEnv
 from activevision.experiments.evaluate import evaluate_policy, paired_steps
 from activevision.experiments.policies import LearnedPolicy, OraclePolicy
@@ -48,14 +48,15 @@ def main() -> None:
         parser.error(f"--runs: two policies named alike ({', '.join(names)}): rename a folder")
     torch.set_num_threads(1)
 
-    env_config = load_config(args.runs[0] / "config.json").env.replace(action_type="discrete")
-    env = ActiveVisionEnv(env_config)
     kinds: dict[str, str] = {}
     policies = {}
-    for run in args.runs:
-        action_type = load_config(run / "config.json").env.action_type
-        kinds[run.name] = action_type
-        policies[run.name] = LearnedPolicy.from_run(run)
+    with refused_by(parser, "--runs"):  # a config or weights file truncated, garbage...
+        config = load_config(args.runs[0] / "config.json")
+        env_config = config.env.replace(action_type="discrete")
+        for run in args.runs:
+            kinds[run.name] = load_config(run / "config.json").env.action_type
+            policies[run.name] = LearnedPolicy.from_run(run)
+    env = ActiveVisionEnv(env_config)
     policies["oracle"] = OraclePolicy(env_config)
     kinds["oracle"] = "discrete"
 

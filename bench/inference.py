@@ -33,7 +33,7 @@ import torch
 
 import activevision
 from activevision.agents.q_network import QNetwork
-from activevision.cli.args import int_in, positive_int
+from activevision.cli.args import int_in, positive_int, refused_by
 from activevision.export import export_onnx, export_run, policy_metadata
 from activevision.geometry import CameraConfig
 from activevision.runtime import FramePreprocessor, HeadController, robot_session_options
@@ -207,8 +207,9 @@ def main() -> None:
         if args.run is not None:
             from activevision.training import load_policy
 
-            network = load_policy(args.run)
-            model_path = export_run(args.run, tmp_dir / "policy.onnx").model_path
+            with refused_by(parser, "--run"):  # weights truncated, garbage...
+                network = load_policy(args.run)
+                model_path = export_run(args.run, tmp_dir / "policy.onnx").model_path
         else:
             torch.manual_seed(0)
             network = QNetwork(9).eval()

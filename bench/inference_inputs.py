@@ -24,10 +24,10 @@ import numpy as np
 import torch
 
 from activevision.agents.q_network import QNetwork
-from activevision.cli.args import int_in
+from activevision.cli.args import int_in, refused_by
 from activevision.export import export_onnx, policy_metadata
 from activevision.geometry import CameraConfig
-from activevision.runtime import HeadController, PolicyFileError, pretrained_policy_path
+from activevision.runtime import HeadController, pretrained_policy_path
 
 #: the robot inputs an episodic policy may take besides the frame and head angles
 EXTRA = {"pose": (1.2, -0.4, 0.7), "pose_error": 0.3, "proposal": (0.35, 0.44)}
@@ -56,10 +56,8 @@ def main() -> None:
         "--decisions", type=int_in(10, 10**7), default=3000, help="timed, in 10 rounds"
     )
     args = parser.parse_args()
-    try:
+    with refused_by(parser, "--policy"):
         policy = HeadController(args.policy or pretrained_policy_path(), num_threads=1)
-    except PolicyFileError as error:
-        parser.error(f"--policy: {error}")
     if not set(policy.inputs) <= set(EXTRA):
         parser.error(
             f"--policy {args.policy}: its policy takes {', '.join(policy.inputs)} (a match"

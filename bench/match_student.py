@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from activevision.cli.args import int_in
+from activevision.cli.args import int_in, refused_by
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import EntropyTrackTeacher
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
-from activevision.runtime import HeadController, PolicyFileError
+from activevision.runtime import HeadController
 
 #: what a match student takes besides the frame and head angles
 STUDENT_INPUTS = ("pose", "belief", "ball")
@@ -45,10 +45,8 @@ def untrained_student(run_dir: Path) -> Path:
 
 def match_student(parser: argparse.ArgumentParser, policy: Path) -> HeadController:
     """``--policy``'s controller, or one line naming it where it is not a match student's."""
-    try:
+    with refused_by(parser, "--policy"):
         student = HeadController(policy, num_threads=1)
-    except PolicyFileError as error:
-        parser.error(f"--policy: {error}")
     if set(student.inputs) != set(STUDENT_INPUTS):
         parser.error(
             f"--policy {policy}: not a match student (its robot inputs:"

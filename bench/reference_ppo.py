@@ -21,7 +21,7 @@ import gymnasium as gym
 import torch
 
 import activevision  # noqa: F401  (registers ActiveVision-v0)
-from activevision.cli.args import positive_float, positive_int
+from activevision.cli.args import positive_float, positive_int, refused_by
 from activevision.envs import EnvConfig
 from activevision.experiments.compare import compare
 from activevision.experiments.policies import LearnedPolicy
@@ -77,6 +77,10 @@ def main() -> None:
         parser.error(f"--dagger {args.dagger}: not a training run (no config.json)")
     if (args.out / "ppo.zip").exists():
         parser.error(f"--out {args.out} holds a ppo.zip already: name another folder")
+    learned = None
+    if args.dagger is not None:  # read before the minutes of training, not after them
+        with refused_by(parser, "--dagger"):  # its weights truncated, garbage...
+            learned = LearnedPolicy.from_run(args.dagger)
 
     torch.set_num_threads(2)
     env_config: EnvConfig = preset("dagger_prior").env
@@ -91,8 +95,7 @@ def main() -> None:
 
     ppo = PPOPolicy(model)
     methods = {"ppo": lambda e: ppo}
-    if args.dagger:
-        learned = LearnedPolicy.from_run(args.dagger)
+    if learned is not None:
         methods["dagger"] = lambda e: learned
     rows = compare(args.out, methods, ERRORS, args.episodes, 0, env_config, progress=False)
     table: dict[str, dict[str, float]] = {}

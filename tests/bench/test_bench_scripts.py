@@ -72,6 +72,51 @@ def test_a_bad_path_is_one_line(script, args, named):
     assert named in lines[-1]
 
 
+@pytest.fixture(scope="module", params=["truncated", "garbage"])
+def broken_run(request, tmp_path_factory) -> Path:
+    """A run folder whose config.json is whole but whose policy.safetensors is not: cut
+    short, or random bytes."""
+    import numpy as np
+
+    from activevision.agents.q_network import QNetwork
+    from activevision.training import preset
+    from activevision.training.config import save_config
+    from activevision.training.policy_files import network_metadata, write_policy
+
+    run = tmp_path_factory.mktemp("runs") / request.param
+    run.mkdir()
+    save_config(preset("quickstart_ddqn"), run / "config.json")
+    network = QNetwork(9)
+    weights = write_policy(run, network.state_dict(), network_metadata(network, 0))
+    if request.param == "truncated":
+        weights.write_bytes(weights.read_bytes()[:300])
+    else:
+        weights.write_bytes(np.random.default_rng(0).bytes(5000))
+    return run
+
+
+#: the scripts that read a run's weights, and how they are called with ``{run}``
+READS_A_RUN = [
+    ("inference.py", ["--run", "{run}", "--iterations", "10", "--warmup", "0"], "--run"),
+    ("continuous.py", ["--runs", "{run}", "--episodes", "1"], "--runs"),
+    # the run is read before PPO trains (--minutes would otherwise pass first)
+    ("reference_ppo.py", ["--dagger", "{run}", "--minutes", "0.001", "--out", "{out}"], "--dagger"),
+]
+
+
+@pytest.mark.parametrize(("script", "args", "option"), READS_A_RUN)
+def test_a_broken_weights_file_is_one_line(script, args, option, broken_run, tmp_path):
+    """A run whose weights file is truncated or garbage: one line naming the file, exit 2
+    (it was a traceback)."""
+    done = run(script, *(a.format(run=broken_run, out=tmp_path / "out") for a in args))
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr, done.stderr
+    assert lines[-1].startswith(f"{script}: error: {option}: ")
+    assert str(broken_run / "policy.safetensors") in lines[-1]
+    assert not (tmp_path / "out").exists()
+
+
 def test_continuous_writes_no_nan_into_its_json():
     """A median over no episodes (no paired episode, a policy that solves none) is JSON
     null: strict JSON (``allow_nan=False``, other languages' parsers) has no NaN."""
@@ -115,3 +160,17 @@ def test_reproducibility_runs_leave_no_folder(tmp_path):
     assert len(done.stdout.split()[-1]) == 64  # the weights' sha256
     # (torch's compile cache, torchinductor_USER, is a cache every torch process shares)
     assert not [p for p in (tmp_path / "tmp").iterdir() if not p.name.startswith("torchinductor")]
+
+
+def test_refused_by_keeps_a_bugs_traceback():
+    """``refused_by`` turns a refused file into one line, never a bug: a KeyError (not a
+    ValueError, not activevision's) still raises."""
+    from activevision.cli.args import ArgumentParser, refused_by
+    from activevision.training.checkpoint import CheckpointError
+
+    parser = ArgumentParser(prog="script.py")
+    with pytest.raises(SystemExit) as exit_, refused_by(parser, "--run"):
+        raise CheckpointError("cannot read weights from run/policy.safetensors")
+    assert exit_.value.code == 2
+    with pytest.raises(KeyError), refused_by(parser, "--run"):
+        raise KeyError("a bug")

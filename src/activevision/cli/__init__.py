@@ -17,7 +17,7 @@ import warnings
 from collections.abc import Callable
 
 from activevision.cli import deploy, evaluate, match, quickstart, robustness, scene, train
-from activevision.cli.args import ArgumentParser
+from activevision.cli.args import ArgumentParser, is_refusal
 
 _COMMAND_GROUPS = (train, evaluate, robustness, match, deploy, quickstart, scene)
 
@@ -57,9 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except Exception as err:
         # Our own errors and bad input get one clear line; anything else is a bug: traceback.
-        if not isinstance(err, ValueError | OSError | ImportError) and not type(
-            err
-        ).__module__.startswith("activevision"):
+        if not is_refusal(err):
             raise
         print(f"activevision {args.command}: error: {err}", file=sys.stderr)
         return 2

@@ -36,6 +36,30 @@ def _integer(text: str) -> int:
         raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
 
 
+def is_refusal(error: BaseException) -> bool:
+    """Whether ``error`` is bad input or a refused file, told in one line (a ValueError, an
+    OSError, an ImportError, or an error of activevision's own: a run's weights that fail
+    their checksum, a policy file that does not match its metadata...), not a bug, which
+    keeps its traceback."""
+    return isinstance(error, ValueError | OSError | ImportError) or type(
+        error
+    ).__module__.startswith("activevision")
+
+
+@contextlib.contextmanager
+def refused_by(parser: argparse.ArgumentParser, option: str) -> Iterator[None]:
+    """Read what ``option`` names (a run, a policy file) inside: an error :func:`is_refusal`
+    takes for a refusal (its weights file truncated, garbage bytes...) ends as
+    ``parser.error`` (``PROG: error: OPTION: why``, exit code 2); any other keeps its
+    traceback. For the scripts that build their own parser (``bench/``)."""
+    try:
+        yield
+    except Exception as error:
+        if not is_refusal(error):
+            raise
+        parser.error(f"{option}: {error}")
+
+
 def figure_file(text: str) -> Path:
     """A figure's file (``--out view.png``): a path that ends in a separator names a folder,
     which ``Path`` would silently make a file of that name (``--out figs/`` wrote a PNG
