@@ -174,3 +174,34 @@ def test_refused_by_keeps_a_bugs_traceback():
     assert exit_.value.code == 2
     with pytest.raises(KeyError), refused_by(parser, "--run"):
         raise KeyError("a bug")
+
+
+def test_train_prints_its_ratios_before_the_json():
+    """bench/train.py prints, like every bench script, its measurements beside the
+    references of the same run and their ratios (it printed the JSON line alone)."""
+    sys.path.insert(0, str(BENCH))
+    try:
+        import train
+    finally:
+        sys.path.remove(str(BENCH))
+    result = {
+        "update_ms": 20.0,
+        "reference_update_ms": 80.0,
+        "reference_update_ms_tuned_allocator": 60.0,
+        "speedup": 4.0,
+        "speedup_tuned_allocator": 3.0,
+        "env": "ActiveVision-v0",
+        "env_steps_per_s": 30.0,
+        "fake_env_training_steps_per_s": 40.0,
+        "env_vs_fake_env_training": 0.75,
+        "env_only_steps_per_s": 9000.0,
+        "threads": 2,
+        "paper_run_minutes_estimate": 16.7,
+    }
+    text = "\n".join(train.report_lines(result))
+    assert "20.00 ms" in text and "80.00 ms" in text and "60.00 ms" in text
+    assert "speed-up over the plain update in the same run: 4.00x (3.00x over the tuned one)" in (
+        text
+    )
+    assert "30.0 steps/s, 0.75x the same trainer on a free fake env (40.0 steps/s)" in text
+    assert not text.lstrip().startswith("{")
