@@ -126,6 +126,34 @@ def test_a_method_blind_to_the_image_plays_only_the_rows_that_change_its_world(t
     assert listed == names
 
 
+@pytest.mark.parametrize("method", ["scan", "random", "oracle", "entropy_jump"])
+def test_a_method_never_trained_has_no_training_range(method, tmp_path, capsys):
+    """--list and the scored table of a built-in baseline say it has no training range (it
+    read yes / no, compared with a world the method never learnt in)."""
+    assert main(["robustness", "--list", "--method", method]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split()[-2:] == ["training", "range"]
+    for line in lines[2:]:
+        assert line.endswith("— (untrained)"), line
+    if method != "scan":
+        return
+    out = tmp_path / "r"
+    argv = ["robustness", "--method", method, "--episodes", "1", "--out", str(out)]
+    assert main([*argv, "--perturbations", "robots-1"]) == 0
+    table = capsys.readouterr().out.splitlines()
+    rows = [line for line in table if line.startswith(("clean ", "robots-1 "))]
+    assert len(rows) == 2
+    for line in rows:
+        assert line[25 + 28 : 25 + 28 + 7].strip() == "—", line  # name, setting, trained
+
+
+def test_a_trained_policy_keeps_its_training_range(capsys):
+    assert main(["robustness", "--list", "--shipped", "--perturbations", "robots-4"]) == 0
+    lines = capsys.readouterr().out.splitlines()[2:]
+    assert [line[25 + 16 + 9 + 28 + 14 :] for line in lines] == ["yes", "yes"]  # the column
+    assert "untrained" not in "".join(lines)
+
+
 @pytest.mark.parametrize("what", ["file", "missing", "empty folder"])
 def test_a_run_that_is_no_run_is_named_as_the_run(tmp_path, capsys, what, one_clear_line):
     # The default output lies inside the run (RUN/robustness): a --run that is a file was

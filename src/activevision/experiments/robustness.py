@@ -215,7 +215,8 @@ def perturbations(
 
 def sees_image(policy: HeadPolicy) -> bool:
     """Whether ``policy`` reads the camera image (a trained network); the built-in
-    baselines (entropy methods, oracle, scan, random) play from the env's state."""
+    baselines (entropy methods, oracle, scan, random) play from the env's state. They were
+    not trained either, so they have no training range (:data:`NO_TRAINING_RANGE`)."""
     return isinstance(policy, (LearnedPolicy, OnnxPolicy))
 
 
@@ -295,8 +296,14 @@ def _change(drop_pts: float) -> float:
     return round(-drop_pts, 1) + 0.0
 
 
-def format_row(row: dict[str, Any]) -> str:
-    """One line of :func:`format_table`."""
+#: the ``trained`` / ``training range`` cell of a method that was not trained (scan, random,
+#: the oracle, the entropy methods: they play from the env's state)
+NO_TRAINING_RANGE = "— (untrained)"
+
+
+def format_row(row: dict[str, Any], untrained: bool = False) -> str:
+    """One line of :func:`format_table`; ``untrained``: the method was not trained, so its
+    ``trained`` cell is :data:`NO_TRAINING_RANGE`, not a yes or no."""
 
     def cell(column: str) -> str:
         return (
@@ -304,7 +311,7 @@ def format_row(row: dict[str, Any]) -> str:
             f"{100 * row[f'{column}_high']:5.1f}] {_change(row[f'{column}_drop_pts']):+7.1f}"
         )
 
-    trained = "yes" if row["in_training_range"] else "no"
+    trained = "—" if untrained else "yes" if row["in_training_range"] else "no"
     return (
         f"{row['name']:<25}{row['setting']:<28}{trained:>7}  "
         f"{cell('success_rate')}   {cell('goal_reached')}"
@@ -320,10 +327,11 @@ def table_header() -> str:
     return "\n".join([groups, names, "-" * len(names)])
 
 
-def format_table(rows: Sequence[dict[str, Any]]) -> str:
+def format_table(rows: Sequence[dict[str, Any]], untrained: bool = False) -> str:
     """The scored rows as a plain-text table: percent, and the change vs clean in points;
-    ``trained``: whether the row lies within the policy's training ranges."""
-    return "\n".join([table_header(), *(format_row(r) for r in rows)])
+    ``trained``: whether the row lies within the policy's training ranges ("—" for a method
+    that was not trained: ``untrained``)."""
+    return "\n".join([table_header(), *(format_row(r, untrained) for r in rows)])
 
 
 def worst_drops(rows: Sequence[dict[str, Any]]) -> str:
@@ -349,7 +357,10 @@ def list_table(
     training ranges (``activevision robustness --list``): every one on the paper's default
     world, or, given a policy's ``clean`` world, the rows that ``names`` would play for it,
     built on that world, with whether each lies within its training ranges too (the CSV's
-    ``in_training_range`` and ``in_robust_range``; ``blind``: as :func:`perturbations`)."""
+    ``in_training_range`` and ``in_robust_range``; ``blind``: as :func:`perturbations`).
+    A ``blind`` method is a built-in baseline, never trained: its training range column
+    says so (:data:`NO_TRAINING_RANGE`) instead of comparing with a world it never
+    learnt in."""
     rows = PERTURBATIONS if clean is None else perturbations(clean, names, blind)
     world = clean or EnvConfig()
     robust = robust_config(world)
@@ -363,7 +374,7 @@ def list_table(
         line = f"{p.name:<25}{p.factor:<16}{p.level:<9}{p.setting:<28}"
         line += f"{_yes_no(within(config, robust)):<14}"
         if clean is not None:
-            line += _yes_no(within(config, clean))
+            line += NO_TRAINING_RANGE if blind is not None else _yes_no(within(config, clean))
         lines.append(line.rstrip())
     return "\n".join(lines)
 
