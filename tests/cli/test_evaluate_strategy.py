@@ -157,3 +157,61 @@ def test_evaluate_tries_your_policy_before_the_built_in_ones_play(tmp_path, monk
     assert main([*argv, "--strategy", f"{tmp_path / 'mine.py'}:Fails"]) == 2
     assert played == ["fails"]
     assert not (tmp_path / "e").exists()
+
+
+ENV_RECORDING = """
+import json
+import os
+
+from activevision.experiments.policies import OraclePolicy
+
+
+class Recorded(OraclePolicy):
+    name = "recorded"
+
+    def __init__(self, context):
+        super().__init__(context.config)
+        self.observation = context.config.observation
+        with open(os.environ["RECORDED"], "a") as f:
+            f.write(json.dumps([context.config.observation, context.config.step_deg]) + "\\n")
+
+    def act(self, obs, info):
+        if isinstance(obs, dict) != (self.observation != "image"):
+            raise ValueError(f"built for {self.observation!r}, given a {type(obs).__name__}")
+        return super().act(obs, info)
+"""
+
+
+def test_your_policy_is_built_for_the_env_the_shipped_policy_plays(tmp_path, monkeypatch):
+    """With the shipped policy in the evaluation every method plays its env (its
+    observation, moves): a user's policy is built with a MethodContext of that env (it was
+    built for the defaults, before the switch, and given observations it was not built
+    for)."""
+    from activevision.envs import EnvConfig
+    from activevision.experiments.policies import OnnxPolicy
+    from activevision.runtime import pretrained_policy_path
+
+    played = OnnxPolicy(pretrained_policy_path()).env_config(EnvConfig())
+    assert played.observation != EnvConfig().observation  # so the difference shows
+    (tmp_path / "mine.py").write_text(ENV_RECORDING)
+    monkeypatch.setenv("RECORDED", str(tmp_path / "recorded.jsonl"))
+    out = tmp_path / "e"
+    argv = ["evaluate", "--methods", "shipped", "oracle", "--episodes", "2", "--out", str(out)]
+    assert main([*argv, "--strategy", f"{tmp_path / 'mine.py'}:Recorded"]) == 0
+    recorded = (tmp_path / "recorded.jsonl").read_text().splitlines()
+    assert len(recorded) == 2  # the trial episode's policy, the evaluated one
+    assert set(recorded) == {f'["{played.observation}", {played.step_deg}]'}
+    assert set(_rows(out / "evaluation.csv")) == {"shipped", "oracle", "recorded"}
+
+
+def test_runs_are_checked_against_the_env_the_shipped_policy_plays(
+    trained, tmp_path, one_clear_line
+):
+    """``--runs`` beside the shipped policy: a run that observes another input than the
+    shipped policy's env gives is one line (it was checked against the defaults, then fed
+    the shipped env's observations: a traceback)."""
+    out = tmp_path / "e"
+    argv = ["evaluate", "--methods", "shipped", "--runs", str(trained), "--episodes", "1"]
+    assert main([*argv, "--out", str(out)]) == 2
+    one_clear_line(f"--runs {trained} observes 'image'", "shipped policy's")
+    assert not out.exists()

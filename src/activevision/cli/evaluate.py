@@ -72,8 +72,9 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
         ) <= set(given):
             raise ValueError(
                 f"--runs {run} observes {other.observation!r} ({', '.join(wanted) or 'image'}),"
-                f" which the comparison's env ({env_config.observation!r}, from --run) does not"
-                " give: compare runs that observe the same inputs"
+                f" which the comparison's env ({env_config.observation!r}, from --run, or the"
+                " shipped policy's where it plays) does not give: compare runs that observe"
+                " the same inputs"
             )
         name = f"learned:{run.resolve().name}"  # the folder's name, however it was given
         if name in policies:
@@ -129,15 +130,18 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     # a policy that observes a prior pose gets one --error off, as the entropy methods do
     env_config = config_at_error(env_config_of_run(args.run), args.error)
     names = args.methods or runnable_methods(_compare_method_names(), args.run)
-    policies = _policies(names, args, env_config, args.error)
+    shipped = _policies(["shipped"], args, env_config, args.error) if "shipped" in names else {}
+    if args.run is None and isinstance(shipped.get("shipped"), OnnxPolicy):
+        # every method plays the shipped policy's env (its observation and moves): settled
+        # before any other policy is built (a MethodContext, a --runs check) for that env
+        env_config = config_at_error(shipped["shipped"].env_config(env_config), args.error)
+    others = [name for name in names if name not in shipped]
+    policies = shipped | _policies(others, args, env_config, args.error)
+    policies = {name: policies[name] for name in names}  # in the order named
     policies.update(_more_runs(args, env_config))
     users = _user_methods(args, env_config, policies)
     _try_users(users, env_config, args.error, args.seed)  # before the built-in methods play
     policies.update({label: make(args.error) for label, make in users.items()})
-    shipped = policies.get("shipped")
-    if args.run is None and isinstance(shipped, OnnxPolicy):
-        # every method plays the shipped policy's observation (the others read only info)
-        env_config = config_at_error(shipped.env_config(env_config), args.error)
     env = ActiveVisionEnv(env_config)
     made = make_output_folder(out, None if args.out else str(out))
     summaries, episodes = {}, []
