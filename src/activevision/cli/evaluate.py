@@ -131,10 +131,11 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     env_config = config_at_error(env_config_of_run(args.run), args.error)
     names = args.methods or runnable_methods(_compare_method_names(), args.run)
     shipped = _policies(["shipped"], args, env_config, args.error) if "shipped" in names else {}
-    if args.run is None and isinstance(shipped.get("shipped"), OnnxPolicy):
+    onnx = shipped.get("shipped")
+    if args.run is None and isinstance(onnx, OnnxPolicy):
         # every method plays the shipped policy's env (its observation and moves): settled
         # before any other policy is built (a MethodContext, a --runs check) for that env
-        env_config = config_at_error(shipped["shipped"].env_config(env_config), args.error)
+        env_config = config_at_error(onnx.env_config(env_config), args.error)
     others = [name for name in names if name not in shipped]
     policies = shipped | _policies(others, args, env_config, args.error)
     policies = {name: policies[name] for name in names}  # in the order named
