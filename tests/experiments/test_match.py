@@ -121,6 +121,48 @@ def test_pareto_front_by_hand():
     assert [rows[0][key] for key in world] == ["discrete", 3.0, "0", 0.95, 0.5, 0.05]
 
 
+def test_match_csv_records_the_walk_the_other_robots_speed_and_the_ball():
+    """match.csv recorded the head, the robots' count and the detector, not how our robot
+    walked, how fast the others did, nor the ball: a strategy's scores without the world
+    they were scored in. Each WORLD_COLUMNS column follows its MatchConfig field."""
+    import dataclasses
+
+    from activevision.envs.match.config import BallConfig, OthersConfig, WalkConfig
+    from activevision.experiments.match import WORLD_COLUMNS, world_differences
+
+    world = SMALL.replace(
+        walk=WalkConfig(target="ball", speed=0.3, turn_rate=0.8),
+        others=OthersConfig(speed=0.25, ball_restitution=0.3),
+        ball=BallConfig(
+            deceleration=0.6, kick_rate=0.05, kick_speed=(1, 2), bounces_off_own_robot=True
+        ),
+        tick_seconds=0.5,
+        detection=dataclasses.replace(SMALL.detection, ball_noise=0.1),
+    )
+    row = csv_rows([fake("a", 0.1, 0.5)], 4, 0, world)[0]
+    recorded = {name: row[name] for name in WORLD_COLUMNS}
+    assert recorded == {
+        "walk": "ball",
+        "walk_speed": 0.3,
+        "turn_rate": 0.8,
+        "robot_speed": 0.25,
+        "ball_decel": 0.6,
+        "kick_rate": 0.05,
+        "kick_speed": "1-2",
+        "bounce_us": True,
+        "restitution": 0.3,
+        "tick_s": 0.5,
+        "ball_noise": 0.1,
+    }
+    assert all(column.meaning for column in WORLD_COLUMNS.values())
+    # as the CSV gives them back (text): every one differs from the default world
+    as_text = {name: str(value) for name, value in row.items()}
+    assert len(world_differences(as_text)) == len(WORLD_COLUMNS)
+    default = {k: str(v) for k, v in csv_rows([fake("a", 0.1, 0.5)], 4, 0, SMALL)[0].items()}
+    assert world_differences(default) == []
+    assert world_differences({"method": "a", "robots": "0"}) == []  # an older match.csv
+
+
 def test_paired_differences_by_hand():
     """Matches that vary far more than the methods: a is 1 cm better in every match, which
     the paired interval resolves ([-0.01, -0.01]) and the per-method intervals do not."""

@@ -153,6 +153,28 @@ def test_the_match_section_names_the_world(tmp_path):
         " detected with probability 0.6 next to the robot falling to 0.15 at its detection"
         " range, and 0.2 false detections per tick." in report
     )
+    assert "unlike the default world" not in report  # written before the walk, the ball...
+
+
+def test_the_match_section_names_the_walk_robots_speed_and_ball_unlike_the_default(tmp_path):
+    """match.csv records how our robot walked, the other robots' speed and the ball; the
+    report names the settings that are not the default world's, and no others."""
+    run = make_run(tmp_path)
+    world = {"action_type": "discrete", "step_deg": 3.0, "robots": "2"}
+    world |= {"detect_near": 0.95, "detect_far": 0.5, "false_detections": 0.05}
+    world |= {"walk": "ball", "walk_speed": 0.2, "turn_rate": 0.5, "robot_speed": 0.2}
+    world |= {"ball_decel": 0.4, "kick_rate": 0.02, "kick_speed": "0.5-2.5"}
+    world |= {"bounce_us": True, "restitution": 0.5, "tick_s": 0.32, "ball_noise": 0.05}
+    write_rows(run / "match" / "match.csv", [match_row("learned") | world])
+    report = write_report(run).read_text()
+    assert (
+        "0.05 false detections per tick; unlike the default world: our robot walking to the"
+        " ball, the other robots walking at 0.2 m/s, the ball bouncing off our robot." in report
+    )
+    world |= {"walk": "waypoints", "robot_speed": 0.0, "bounce_us": False}
+    write_rows(run / "match" / "match.csv", [match_row("learned") | world])
+    report = write_report(run).read_text()
+    assert "0.05 false detections per tick. Mean" in report
 
 
 def test_the_latency_is_reported_from_its_own_file_or_an_older_evaluation(tmp_path):

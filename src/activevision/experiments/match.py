@@ -238,14 +238,139 @@ def format_result(result: MethodResult, width: int = NAME_WIDTH) -> str:
     return f"{result.method:<{width}}" + "".join(f"{c:>22}" for c in cells)
 
 
+def _float_text(value: str) -> str:
+    return f"{float(value):g}"
+
+
+@dataclass(frozen=True)
+class WorldColumn:
+    """A ``match.csv`` column recording one setting of the world the strategies were scored
+    in: ``read`` takes it from the MatchConfig, ``meaning`` says what it is (and its unit),
+    ``phrase`` words a value other than the default's for ``report.md`` (from the CSV's
+    text)."""
+
+    read: Callable[[MatchConfig], object]
+    meaning: str
+    phrase: Callable[[str], str]
+
+
+#: ``match.csv``'s world columns after ``action_type, step_deg, robots, detect_near,
+#: detect_far, false_detections`` (the head's moves, the other robots' count, the detector):
+#: how our robot walks, the other robots' speed, the ball, the tick, the ball detector.
+#: ``report.md`` names those that differ from ``MatchConfig()``'s.
+WORLD_COLUMNS: dict[str, WorldColumn] = {
+    "walk": WorldColumn(
+        lambda c: c.walk.target,
+        "where our robot walks: waypoints or ball (--walk; walk.target)",
+        lambda v: f"our robot walking to the {v}",
+    ),
+    "walk_speed": WorldColumn(
+        lambda c: c.walk.speed,
+        "our robot's forward speed, m/s (walk.speed)",
+        lambda v: f"our robot walking at {_float_text(v)} m/s",
+    ),
+    "turn_rate": WorldColumn(
+        lambda c: c.walk.turn_rate,
+        "our robot's turn rate, rad/s (walk.turn_rate)",
+        lambda v: f"our robot turning at {_float_text(v)} rad/s",
+    ),
+    "robot_speed": WorldColumn(
+        lambda c: c.others.speed,
+        "the other robots' walking speed, m/s; 0: they stand (--robot-speed; others.speed)",
+        lambda v: f"the other robots walking at {_float_text(v)} m/s",
+    ),
+    "ball_decel": WorldColumn(
+        lambda c: c.ball.deceleration,
+        "the ball's rolling deceleration, m/s^2 (ball.deceleration)",
+        lambda v: f"the ball slowing by {_float_text(v)} m/s²",
+    ),
+    "kick_rate": WorldColumn(
+        lambda c: c.ball.kick_rate,
+        "kicks per tick (ball.kick_rate)",
+        lambda v: f"{_float_text(v)} kicks per tick",
+    ),
+    "kick_speed": WorldColumn(
+        lambda c: "-".join(f"{v:g}" for v in c.ball.kick_speed),
+        "a kick's initial speed, m/s, uniform LOW-HIGH (ball.kick_speed)",
+        lambda v: f"kicks of {v} m/s",
+    ),
+    "bounce_us": WorldColumn(
+        lambda c: c.ball.bounces_off_own_robot,
+        "the ball bounces off our robot too, True/False (--ball-bounces-off-us;"
+        " ball.bounces_off_own_robot)",
+        lambda v: (
+            "the ball bouncing off our robot"
+            if v == "True"
+            else "the ball rolling through our robot"
+        ),
+    ),
+    "restitution": WorldColumn(
+        lambda c: c.others.ball_restitution,
+        "the share of its speed towards a robot the ball keeps in a bounce"
+        " (others.ball_restitution)",
+        lambda v: f"the ball keeping {_float_text(v)} of its speed off a robot",
+    ),
+    "tick_s": WorldColumn(
+        lambda c: c.tick_seconds,
+        "seconds a tick (tick_seconds)",
+        lambda v: f"ticks of {_float_text(v)} s",
+    ),
+    "ball_noise": WorldColumn(
+        lambda c: c.detection.ball_noise,
+        "the ball detector's noise, a fraction of the ball's range (detection.ball_noise)",
+        lambda v: f"ball detections off by {_float_text(v)} of their range",
+    ),
+}
+
+
+def world_columns(config: MatchConfig) -> dict[str, object]:
+    """``match.csv``'s world columns of ``config``: the head's moves, the other robots, the
+    detector, then :data:`WORLD_COLUMNS`."""
+    return {
+        "action_type": config.action_type,
+        "step_deg": (  # the most the head moves per tick and axis
+            config.step_deg if config.action_type == "discrete" else max(config.max_move_deg)
+        ),
+        "robots": "-".join(str(n) for n in sorted(set(config.robots.count))),
+        "detect_near": config.detection.near,
+        "detect_far": config.detection.far,
+        "false_detections": config.detection.false_rate,
+        **{name: column.read(config) for name, column in WORLD_COLUMNS.items()},
+    }
+
+
+def world_differences(row: dict[str, str]) -> list[str]:
+    """The phrases of a ``match.csv`` row's :data:`WORLD_COLUMNS` whose value is not the
+    default world's (``MatchConfig()``), in column order; none for a file written before
+    they were recorded."""
+    defaults = world_columns(MatchConfig())
+    phrases = []
+    for name, column in WORLD_COLUMNS.items():
+        value = row.get(name)
+        if value is None or value == "" or _same_text(value, str(defaults[name])):
+            continue
+        phrases.append(column.phrase(value))
+    return phrases
+
+
+def _same_text(a: str, b: str) -> bool:
+    """Two CSV cells alike: equal numbers (``0.20`` and ``0.2``), else equal text."""
+    try:
+        return float(a) == float(b)
+    except ValueError:
+        return a == b
+
+
 def csv_rows(
     results: Sequence[MethodResult], matches: int, seed: int, config: MatchConfig
 ) -> list[dict]:
     """One CSV row per method: every metric's mean, low and high, plus the run's facts and
-    the world's (the head's move, the other robots, the detector: what the report names).
+    the world's (:func:`world_columns`: the head's move, the other robots, the detector, the
+    walk, the ball: what the report names).
 
     No wall-clock time: the same seed writes the same bytes (the console prints the time)."""
     rows = []
+    world = world_columns(config)
     for r in results:
         ticks = r.error_curve.shape[0]
         row: dict[str, object] = {
@@ -253,14 +378,7 @@ def csv_rows(
             "matches": matches,
             "ticks": ticks,
             "seed": seed,
-            "action_type": config.action_type,
-            "step_deg": (  # the most the head moves per tick and axis
-                config.step_deg if config.action_type == "discrete" else max(config.max_move_deg)
-            ),
-            "robots": "-".join(str(n) for n in sorted(set(config.robots.count))),
-            "detect_near": config.detection.near,
-            "detect_far": config.detection.far,
-            "false_detections": config.detection.false_rate,
+            **world,
         }
         for name, iv in r.summary().items():
             row[name] = iv.mean

@@ -250,17 +250,25 @@ def _error_text(rows: list[dict]) -> str:
 
 def _match_world_text(row: dict) -> str:
     """The world ``match.csv``'s row records: the head's moves, the other robots and the
-    detector (``""`` for a file written before it recorded them)."""
+    detector, then the walk, the other robots' speed, the ball... where they differ from
+    the default world (``experiments.match.WORLD_COLUMNS``; ``""`` for a file written
+    before it recorded the world, nothing more for one written before those columns)."""
+    from activevision.experiments.match import world_differences
+
     if not row.get("false_detections"):
         return ""
     robots = row["robots"]
-    return (
+    text = (
         f"; {row['action_type']} head moves of up to {float(row['step_deg']):g} degrees a"
         f" tick, {'no' if robots == '0' else robots} other robot{'' if robots == '1' else 's'},"
         f" a landmark in view detected with probability {float(row['detect_near']):g} next"
         f" to the robot falling to {float(row['detect_far']):g} at its detection range, and"
         f" {float(row['false_detections']):g} false detections per tick"
     )
+    differences = world_differences(row)
+    if differences:
+        text += "; unlike the default world: " + ", ".join(differences)
+    return text
 
 
 def _match_policies_text(rows: list[dict]) -> str:
