@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from activevision.cli import main
+from activevision.figures.robustness import plot_robustness
 
 
 def read_rows(path: Path) -> list[dict]:
@@ -44,7 +45,7 @@ def test_tiny_run_writes_its_rows_and_figure(tmp_path, capsys):
         assert float(by[name]["goal_reached"]) == 1.0
         assert float(by[name]["goal_reached_drop_pts"]) == 0.0
     assert by["all-mild+robots-4"]["setting"] == "all factors mild, robots=4"
-    assert by["robots-2"]["in_training_range"] == "False"
+    assert by["robots-2"]["in_training_range"] == ""  # the oracle was never trained
     assert by["robots-2"]["in_robust_range"] == "True"
     assert (out / "robustness.png").read_bytes().startswith(b"\x89PNG")
     lines = printed.splitlines()
@@ -145,6 +146,24 @@ def test_a_method_never_trained_has_no_training_range(method, tmp_path, capsys):
     assert len(rows) == 2
     for line in rows:
         assert line[25 + 28 : 25 + 28 + 7].strip() == "—", line  # name, setting, trained
+    # the CSV says the same (empty, not True/False), and the figure hatches no bar as
+    # "outside the training ranges", its legend naming no training world
+    assert [r["in_training_range"] for r in read_rows(out / "robustness.csv")] == ["", ""]
+    from matplotlib.figure import Figure
+
+    labels = []
+    real_legend = Figure.legend
+    with pytest.MonkeyPatch.context() as mp:
+
+        def legend(fig, *args, **kwargs):
+            labels.extend(h.get_label() for h in kwargs["handles"])
+            return real_legend(fig, *args, **kwargs)
+
+        mp.setattr(Figure, "legend", legend)
+        plot_robustness(read_rows(out / "robustness.csv"), tmp_path / "again.png")
+    assert not any("this policy's training ranges" in label for label in labels), labels
+    assert not any("training world" in label for label in labels), labels
+    assert "clean: the env's own world (every change is against it)" in labels
 
 
 def test_a_trained_policy_keeps_its_training_range(capsys):

@@ -145,7 +145,8 @@ def cmd_robustness(args: argparse.Namespace) -> None:
             rows,
             args.episodes,
             args.seed,
-            progress=lambda row: print(format_row(row, blind is not None), flush=True),
+            progress=lambda row: print(format_row(row), flush=True),
+            trained=blind is None,
         )
     print(worst_drops(scored))
     write_csv(csv_path, [{"method": method, "error": args.error, **r} for r in scored])

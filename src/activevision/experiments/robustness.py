@@ -47,7 +47,7 @@ them on that policy's world, as the CSV does, and adds its training range.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -253,11 +253,13 @@ def score_perturbations(
     episodes: int,
     seed: int,
     progress: Callable[[dict[str, Any]], None] | None = None,
+    trained: bool = True,
 ) -> list[dict[str, Any]]:
     """Play ``policy`` on ``episodes`` fixed-seed episodes under each of ``rows`` (its
     ``clean`` row first); one flat dict a row (the CSV's columns), with each metric's
     mean, 95% interval and drop vs ``clean`` in percentage points. ``progress`` is called
-    with each row as it is done."""
+    with each row as it is done. A method that was not ``trained`` has no training range:
+    its rows' ``in_training_range`` is None (empty in the CSV)."""
     if not rows or rows[0].name != CLEAN:
         raise ValueError("the perturbations must start with 'clean' (the reference)")
     robust = robust_config(clean)
@@ -274,7 +276,7 @@ def score_perturbations(
             "factor": p.factor,
             "level": p.level,
             "setting": p.setting,
-            "in_training_range": within(config, clean),
+            "in_training_range": within(config, clean) if trained else None,
             "in_robust_range": within(config, robust),
             "n": episodes,
             "seed": seed,
@@ -301,9 +303,15 @@ def _change(drop_pts: float) -> float:
 NO_TRAINING_RANGE = "— (untrained)"
 
 
-def format_row(row: dict[str, Any], untrained: bool = False) -> str:
-    """One line of :func:`format_table`; ``untrained``: the method was not trained, so its
-    ``trained`` cell is :data:`NO_TRAINING_RANGE`, not a yes or no."""
+def untrained(row: Mapping[str, Any]) -> bool:
+    """Whether a scored row is of a method that was not trained (``in_training_range`` None
+    as scored, or empty as read back from the CSV)."""
+    return row["in_training_range"] in (None, "")
+
+
+def format_row(row: dict[str, Any]) -> str:
+    """One line of :func:`format_table`; a method that was not trained (:func:`untrained`)
+    has "—" in the ``trained`` cell, not a yes or no."""
 
     def cell(column: str) -> str:
         return (
@@ -311,7 +319,7 @@ def format_row(row: dict[str, Any], untrained: bool = False) -> str:
             f"{100 * row[f'{column}_high']:5.1f}] {_change(row[f'{column}_drop_pts']):+7.1f}"
         )
 
-    trained = "—" if untrained else "yes" if row["in_training_range"] else "no"
+    trained = "—" if untrained(row) else "yes" if row["in_training_range"] else "no"
     return (
         f"{row['name']:<25}{row['setting']:<28}{trained:>7}  "
         f"{cell('success_rate')}   {cell('goal_reached')}"
@@ -327,11 +335,11 @@ def table_header() -> str:
     return "\n".join([groups, names, "-" * len(names)])
 
 
-def format_table(rows: Sequence[dict[str, Any]], untrained: bool = False) -> str:
+def format_table(rows: Sequence[dict[str, Any]]) -> str:
     """The scored rows as a plain-text table: percent, and the change vs clean in points;
     ``trained``: whether the row lies within the policy's training ranges ("—" for a method
-    that was not trained: ``untrained``)."""
-    return "\n".join([table_header(), *(format_row(r, untrained) for r in rows)])
+    that was not trained)."""
+    return "\n".join([table_header(), *(format_row(r) for r in rows)])
 
 
 def worst_drops(rows: Sequence[dict[str, Any]]) -> str:

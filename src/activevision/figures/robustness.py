@@ -27,6 +27,8 @@ PANELS = (
 #: the dashed line: the ``clean`` row, the policy's own training world (randomised for a
 #: policy trained so; the paper's clean world is the ``paper-clean`` row)
 CLEAN_LABEL = "clean: the policy's training world (every change is against it)"
+#: the same for a method that was not trained (no training world, no training ranges)
+CLEAN_LABEL_UNTRAINED = "clean: the env's own world (every change is against it)"
 #: bar colours by level ("clean"/"paper-clean" rows, mild, strong, robots, camera mount)
 COLOURS = {
     "trained": "#555555",
@@ -66,14 +68,17 @@ def plot_robustness(
     """One bar per row (top to bottom in ``rows`` order) in each panel of :data:`PANELS`:
     ``<metric>`` with whiskers to ``<metric>_low`` / ``<metric>_high`` (proportions, drawn
     in percent) and its value beside; the row named ``clean`` as a dashed line; rows whose
-    ``in_training_range`` is false hatched; a thin rule between factors."""
+    ``in_training_range`` is false hatched (none for a method that was not trained: None,
+    or empty as read from the CSV); a thin rule between factors."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     n = len(rows)
     y = np.arange(n)
     colours = [_colour(r) for r in rows]
-    outside = [not _truth(r["in_training_range"]) for r in rows]
+    # a method that was not trained has no training range (None, or empty in the CSV)
+    trained = all(r["in_training_range"] not in (None, "") for r in rows)
+    outside = [trained and not _truth(r["in_training_range"]) for r in rows]
     factors = [str(r["factor"]) for r in rows]
     breaks = [i - 0.5 for i in range(1, n) if factors[i] != factors[i - 1]]
     clean = next((r for r in rows if r["name"] == "clean"), None)
@@ -122,8 +127,15 @@ def plot_robustness(
         Patch(color=COLOURS["strong"], label="strong (beyond them)"),
         Patch(color=COLOURS["robots"], label="other robots"),
         Patch(color=COLOURS["mount"], label="camera mounted off the model"),
-        hatched,
-        Line2D([], [], color="black", ls="--", lw=1, label=CLEAN_LABEL),
+        *([hatched] if trained else []),
+        Line2D(
+            [],
+            [],
+            color="black",
+            ls="--",
+            lw=1,
+            label=CLEAN_LABEL if trained else CLEAN_LABEL_UNTRAINED,
+        ),
     ]
     fig.legend(
         handles=handles,
