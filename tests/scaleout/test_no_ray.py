@@ -41,6 +41,10 @@ def test_grid_points_and_trial_configs():
     config = trial_config(TrainConfig(), 4, points[0])
     assert (config.seed, config.learner.batch_size, config.learner.learning_rate) == (4, 16, 1e-3)
     assert trial_name(4, points[0]) == "seed=4,batch_size=16,learning_rate=0.001"
+    # a quoted value names its folder without the quotes, unless unquoted it means another
+    # value ("null" is not null, "1" not 1)
+    quoted = {"device": '"cuda:0"', "run.name": '"null"', "x": '"1"'}
+    assert trial_name(0, quoted) == 'seed=0,device=cuda:0,run.name="null",x="1"'
     assert grid_points({}) == [{}]
     with pytest.raises(ValueError):
         grid_points({"batch_size": []})

@@ -112,9 +112,10 @@ def test_a_failing_trial_is_reported_with_its_error(tmp_path):
     sweep names the trial and the trainer's own error, and trials.csv keeps it."""
     config = apply_overrides(preset("paper"), TINY)
     grid = {"device": ['"cuda:99"']}
-    with pytest.warns(RuntimeWarning, match=r"seed=0,device=\"cuda:99\" \(ValueError: device"):
+    with pytest.warns(RuntimeWarning, match=r"seed=0,device=cuda:99 \(ValueError: device"):
         sweep(config, [0], grid, tmp_path, max_failures=0, verbose=0)
     (trial,) = _read(tmp_path / "trials.csv")
+    assert trial["run_dir"] == str(tmp_path / "trials" / "seed=0,device=cuda:99")  # no quotes
     assert trial["status"] == "ERROR"
     assert trial["error"].startswith("ValueError: device 'cuda:99' requested"), trial["error"]
 

@@ -46,8 +46,31 @@ STATE_FILE = "scaleout.json"
 
 # ---------------------------------------------------------------------- trial points
 def trial_name(seed: int, point: Mapping[str, Any]) -> str:
-    """Directory name of a trial: ``seed=0`` then ``,key=value`` per grid key (sorted)."""
-    return ",".join([f"seed={seed}", *(f"{k}={point[k]}" for k in sorted(point))])
+    """Directory name of a trial: ``seed=0`` then ``,key=value`` per grid key (sorted); a
+    value typed as a JSON string (``device="cpu"``) is named by its plain text (``cpu``)."""
+    return ",".join([f"seed={seed}", *(f"{k}={_plain(point[k])}" for k in sorted(point))])
+
+
+def _plain(value: Any) -> str:
+    """A grid value as text, without the quotes of a JSON string (``"cpu"`` -> ``cpu``)
+    unless the text means something else unquoted (``"null"``, ``"1"`` keep them)."""
+    if not isinstance(value, str):
+        return str(value)
+    unquoted = _json(value)
+    if isinstance(unquoted, str) and _json(unquoted) is _NOT_JSON:
+        return unquoted
+    return value
+
+
+_NOT_JSON = object()
+
+
+def _json(text: str) -> Any:
+    """``text`` parsed as JSON, :data:`_NOT_JSON` when it is no JSON."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return _NOT_JSON
 
 
 def grid_points(grid: Mapping[str, Sequence[Any]]) -> list[dict[str, Any]]:
