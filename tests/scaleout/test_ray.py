@@ -56,6 +56,8 @@ def test_sweep_two_seeds_aggregates(tmp_path):
         "seed=1,learning_rate=0.0005",
     ]
     assert all(t["status"] == "TERMINATED" and t["epochs"] == "2" for t in trials)
+    # each trial has the figures of a `train` run
+    assert all((Path(t["run_dir"]) / "plots" / "training.png").stat().st_size > 0 for t in trials)
     on_disk = _read(tmp_path / "sweep.csv")
     assert len(on_disk) == len(rows) == 2
     assert [int(r["epoch"]) for r in on_disk] == [1, 2]
@@ -87,6 +89,18 @@ def test_trial_survives_worker_crash(tmp_path):
         ("2", "600"),
     ]
     assert [int(r["epoch"]) for r in _read(tmp_path / "sweep.csv")] == [1, 2]
+    assert (run_dir / "plots" / "training.png").is_file()
+
+    # a rerun re-reads the finished trial: its run time and sessions stay what they were,
+    # and a figure it lacks (a trial of an older sweep) is drawn
+    (run_dir / "plots" / "training.png").unlink()
+    metrics = (run_dir / "metrics.csv").read_text()
+    sweep(config, [3], {}, tmp_path, max_failures=1, verbose=0, crash_after_epoch=1)
+    (again,) = _read(tmp_path / "trials.csv")
+    assert again["status"] == "TERMINATED"
+    assert (again["elapsed_s"], again["sessions"]) == (trial["elapsed_s"], trial["sessions"])
+    assert (run_dir / "metrics.csv").read_text() == metrics
+    assert (run_dir / "plots" / "training.png").is_file()
 
 
 def test_compare_ray_equals_local(tmp_path):

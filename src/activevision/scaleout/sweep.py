@@ -1,14 +1,16 @@
 """Seed x grid sweeps of training runs on Ray Tune, with per-epoch aggregation over seeds.
 
 Each trial is one :class:`~activevision.training.Trainer` run in a fixed directory
-``out_dir/trials/<name>`` (e.g. ``seed=3,learning_rate=0.001``). The trainable trains one
-``checkpoint_interval`` at a time and then reports each 300-step epoch of it to Tune, with a
-Tune checkpoint that records that directory (not the trainer's checkpoint files, which hold
-the replay buffer and would be copied on every report). When a trial's
-worker dies, Tune restarts it (up to ``max_failures`` times) and the trainable resumes from
+``out_dir/trials/<name>`` (e.g. ``seed=3,learning_rate=0.001``); a finished trial gets the
+figures of a ``train`` run (``plots/training.png``, :func:`~activevision.training.plot_run`).
+The trainable trains one ``checkpoint_interval`` at a time and then reports each 300-step
+epoch of it to Tune, with a Tune checkpoint that records that directory (not the trainer's
+checkpoint files, which hold the replay buffer and would be copied on every report). When a
+trial's worker dies, Tune restarts it (up to ``max_failures`` times) and the trainable resumes from
 the run directory's newest trainer checkpoint with :meth:`Trainer.resume`, which also drops
 ``metrics.csv`` rows written after that checkpoint, so every epoch appears exactly once.
-Re-running a sweep into the same ``out_dir`` likewise continues (or just re-reads) its trials.
+Re-running a sweep into the same ``out_dir`` likewise continues (or just re-reads) its trials;
+a trial that had finished keeps its run time and session count.
 
 On a multi-node cluster ``out_dir`` must be a shared filesystem mounted at the same path on
 every node (NFS, etc.): trials write their run directories there, a restarted trial may land on
@@ -127,7 +129,7 @@ def train_trial(params: dict[str, Any]) -> None:
     from ray import tune
 
     from activevision.io import write_json
-    from activevision.training import Trainer
+    from activevision.training import Trainer, plot_run
     from activevision.training.checkpoint import list_checkpoints
 
     params = params["trial"]
@@ -138,15 +140,19 @@ def train_trial(params: dict[str, Any]) -> None:
         with restored.as_directory() as d:
             run_dir = Path(json.loads((Path(d) / "trial.json").read_text())["run_dir"])
     state = _read_state(run_dir)
-    state["sessions"] = int(state.get("sessions", 0)) + 1
+    prior_sessions = int(state.get("sessions", 0))
     prior_s = float(state.get("elapsed_s", 0.0))
     resumed = bool(list_checkpoints(run_dir))
     trainer = Trainer.resume(run_dir) if resumed else Trainer(config, run_dir)
     crash_after = params.get("crash_after_epoch")
 
-    def report(row: Mapping[str, float]) -> None:
-        state["elapsed_s"] = prior_s + time.perf_counter() - started
-        write_json(run_dir / STATE_FILE, state)
+    def report(row: Mapping[str, float], trained: bool = True) -> None:
+        # a trial finished in an earlier sweep keeps its run time and sessions: re-reading
+        # it is no training
+        if trained:
+            state["sessions"] = prior_sessions + 1
+            state["elapsed_s"] = prior_s + time.perf_counter() - started
+            write_json(run_dir / STATE_FILE, state)
         metrics = {
             **row,
             "trial_elapsed_s": state["elapsed_s"],
@@ -173,9 +179,11 @@ def train_trial(params: dict[str, Any]) -> None:
                     marker.write_text(f"crashed after epoch {int(row['epoch'])}\n")
                     os._exit(1)  # the testing hook: a worker dying mid-run
         if not reported:  # finished in an earlier sweep: report its final epoch once
-            report(_last_metrics_row(run_dir))
+            report(_last_metrics_row(run_dir), trained=False)
     finally:
         trainer.close()
+    if reported or not (run_dir / "plots" / "training.png").exists():
+        plot_run(run_dir)  # the figures `activevision train` draws, in the trial's plots/
 
 
 # ---------------------------------------------------------------------- the sweep
