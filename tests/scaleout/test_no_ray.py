@@ -162,3 +162,44 @@ def test_a_failed_trial_names_its_error():
     row = _trial_row(trial, {"restarts": 0, "status": "ERROR", "error": "ValueError: x"})
     assert (row["status"], row["error"]) == ("ERROR", "ValueError: x")
     assert _trial_row(trial, {"restarts": 0})["error"] == ""
+
+
+def test_sweep_command_with_failed_trials_exits_2_after_its_outputs(tmp_path, monkeypatch, capsys):
+    """A sweep whose trials failed writes the outputs of the others, then ends with one line
+    (how many failed, where their errors are) and exit code 2; by default Tune is quiet
+    (--verbose: its tables) and each trial's end is one line."""
+    import importlib
+
+    from activevision.cli import main
+    from activevision.io import write_csv
+
+    calls = []
+
+    def fake_sweep(config, seeds, grid, out_dir, **kwargs):
+        calls.append(kwargs)
+        kwargs["progress"]({"name": "seed=0", "status": "TERMINATED", "ended": 1, "trials": 2})
+        kwargs["progress"]({"name": "seed=1", "status": "ERROR", "ended": 2, "trials": 2})
+        rows = [{"name": f"seed={s}", "status": st} for s, st in ((0, "TERMINATED"), (1, "ERROR"))]
+        write_csv(Path(out_dir) / "trials.csv", rows)
+        return [{"epoch": 1}]
+
+    # the module (the package's attribute `sweep` is the function)
+    sweep_module = importlib.import_module("activevision.scaleout.sweep")
+    monkeypatch.setattr(sweep_module, "sweep", fake_sweep)
+    out = tmp_path / "s"
+    out.mkdir()
+    assert main(["sweep", "--seeds", "0,1", "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out.splitlines() == [
+        "trial 1/2 finished: seed=0",
+        "trial 2/2 failed: seed=1",
+        "1 aggregated rows",
+        f"wrote {out}/trials.csv, sweep.csv and sweep.png",
+    ]
+    assert captured.err.splitlines() == [
+        f"activevision sweep: error: 1 of 2 trials failed: their errors are in the error column"
+        f" of {out / 'trials.csv'}"
+    ]
+    assert calls[0]["verbose"] == 0
+    assert main(["sweep", "--seeds", "0,1", "--out", str(out), "--verbose"]) == 2
+    assert calls[1]["verbose"] == 1

@@ -17,7 +17,11 @@ pytest.importorskip("ray.tune")
 from activevision.envs import EnvConfig  # noqa: E402
 from activevision.experiments.compare import compare, default_methods  # noqa: E402
 from activevision.scaleout import compare_ray, sweep  # noqa: E402
-from activevision.scaleout.sweep import CRASH_MARKER  # noqa: E402
+from activevision.scaleout.sweep import (  # noqa: E402
+    CRASH_MARKER,
+    TrialsFailedError,
+    check_trials_finished,
+)
 from activevision.training import apply_overrides, preset  # noqa: E402
 
 TINY = [
@@ -46,9 +50,18 @@ def _read(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(f))
 
 
-def test_sweep_two_seeds_aggregates(tmp_path):
+def test_sweep_two_seeds_aggregates(tmp_path, capsys):
     config = apply_overrides(preset("paper"), TINY)
-    rows = sweep(config, [0, 1], {"learning_rate": [5e-4]}, tmp_path, verbose=0)
+    ended = []
+    rows = sweep(config, [0, 1], {"learning_rate": [5e-4]}, tmp_path, progress=ended.append)
+    # by default Tune prints no status tables (they were ~300 lines a trial), and each
+    # trial's end is reported once
+    assert len(capsys.readouterr().out.splitlines()) < 20
+    assert sorted((e["name"], e["status"], e["trials"]) for e in ended) == [
+        ("seed=0,learning_rate=0.0005", "TERMINATED", 2),
+        ("seed=1,learning_rate=0.0005", "TERMINATED", 2),
+    ]
+    assert sorted(e["ended"] for e in ended) == [1, 2]
 
     trials = _read(tmp_path / "trials.csv")
     assert [t["name"] for t in trials] == [
@@ -132,6 +145,9 @@ def test_a_failing_trial_is_reported_with_its_error(tmp_path):
     assert trial["run_dir"] == str(tmp_path / "trials" / "seed=0,device=cuda:99")  # no quotes
     assert trial["status"] == "ERROR"
     assert trial["error"].startswith("ValueError: device 'cuda:99' requested"), trial["error"]
+    # what ends `activevision sweep` with exit code 2 after writing the outputs
+    with pytest.raises(TrialsFailedError, match=r"^1 of 1 trials failed: .* error column of"):
+        check_trials_finished(tmp_path)
 
 
 def test_compare_ray_raises_a_tasks_own_error():

@@ -34,8 +34,8 @@ def build_parser() -> ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run one command; returns the exit code (0 done, 2 bad input or a refused file, 130
-    interrupted)."""
+    """Run one command; returns the exit code (0 done, 2 bad input, a refused file or a failure
+    such as a sweep's failed trials, 130 interrupted)."""
     # Headless by default; an environment variable, so --help needs no matplotlib import.
     os.environ.setdefault("MPLBACKEND", "Agg")
     try:

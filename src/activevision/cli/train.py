@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import shutil
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -155,9 +156,14 @@ def cmd_plot(args: argparse.Namespace) -> None:
 
 
 def cmd_sweep(args: argparse.Namespace) -> None:
-    """Run a Ray Tune sweep; print where its outputs went."""
-    from activevision.scaleout.sweep import sweep
+    """Run a Ray Tune sweep; print a line per trial that ends and where the outputs went.
+    Trials that failed end it with an error (exit code 2) after the outputs of the others."""
+    from activevision.scaleout.sweep import check_trials_finished, sweep
     from activevision.training import apply_overrides, load_config, preset
+
+    def ended(trial: Mapping[str, Any]) -> None:
+        status = "finished" if trial["status"] == "TERMINATED" else "failed"
+        print(f"trial {trial['ended']}/{trial['trials']} {status}: {trial['name']}", flush=True)
 
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     config = apply_overrides(config, list(args.set or []))
@@ -170,9 +176,12 @@ def cmd_sweep(args: argparse.Namespace) -> None:
         num_cpus=args.num_cpus,
         max_failures=args.max_failures,
         cpus_per_trial=args.cpus_per_trial,
+        verbose=1 if args.verbose else 0,
+        progress=ended,
     )
     print(f"{len(rows)} aggregated rows")
-    print(f"wrote {args.out}/trials.csv, sweep.csv and sweep.png")
+    print(f"wrote {args.out}/trials.csv, sweep.csv" + (" and sweep.png" if rows else ""))
+    check_trials_finished(args.out)
 
 
 def _sweep_interrupted(args: argparse.Namespace) -> str:
@@ -245,4 +254,10 @@ def add_parsers(sub: Any) -> None:
         type=int_in(0, 100),
         default=2,
         help="restarts of a failed trial (default 2)",
+    )
+    p.add_argument(
+        "--verbose",
+        action="store_true",
+        help="print Ray Tune's status tables and Ray's log of each trial (default: a line per"
+        " trial that ends)",
     )

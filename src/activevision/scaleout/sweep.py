@@ -24,12 +24,14 @@ run time), ``sweep.csv`` (per grid point and epoch: mean, std, min, max over see
 from __future__ import annotations
 
 import json
+import logging
 import math
 import os
 import tempfile
 import time
 import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -44,6 +46,10 @@ METRICS = ("success_rate", "episode_reward", "success_duration", "ball_loss_dura
 CRASH_MARKER = ".scaleout_crashed"
 #: Per-trial bookkeeping the trainable keeps in its run directory.
 STATE_FILE = "scaleout.json"
+
+
+class TrialsFailedError(RuntimeError):
+    """Trials of a sweep did not finish (their errors: trials.csv's ``error`` column)."""
 
 
 # ---------------------------------------------------------------------- trial points
@@ -132,6 +138,8 @@ def train_trial(params: dict[str, Any]) -> None:
     from activevision.training import Trainer, plot_run
     from activevision.training.checkpoint import list_checkpoints
 
+    if params.get("quiet"):  # not a log line per report: "Checkpoint successfully created"
+        logging.getLogger("ray.train").setLevel(logging.WARNING)
     params = params["trial"]
     config = TrainConfig.from_dict(params["config"])
     run_dir = Path(params["run_dir"])
@@ -198,7 +206,8 @@ def sweep(
     *,
     cpus_per_trial: float = 1.0,
     gpus_per_trial: float | None = None,
-    verbose: int = 1,
+    verbose: int = 0,
+    progress: Callable[[Mapping[str, Any]], None] | None = None,
     crash_after_epoch: int | None = None,
 ) -> list[dict[str, Any]]:
     """One Ray Tune trial per (seed x grid point); returns the aggregated ``sweep.csv`` rows.
@@ -212,7 +221,11 @@ def sweep(
         max_failures: restarts of a failed trial (each resumes from its checkpoint).
         cpus_per_trial: CPUs per trial; a config with ``num_threads=0`` gets that many
             torch threads. gpus_per_trial: default 1 when the cluster has GPUs, else 0.
-        verbose: Tune's console verbosity (0 silent).
+        verbose: Tune's console verbosity: 0 (default) none, nor Ray's log of each report's
+            checkpoint and each failed trial's traceback (its error is in trials.csv and
+            the closing warning); 1 Tune's status tables, 2 also every result.
+        progress: called in the driver as each trial ends, with ``name``, ``status``
+            (``TERMINATED`` or ``ERROR``), ``ended`` (trials ended so far) and ``trials``.
         crash_after_epoch: testing hook, see :func:`train_trial`.
     """
     from activevision.io import write_csv
@@ -224,7 +237,8 @@ def sweep(
     with ray_session(address, num_cpus) as ray:
         if gpus_per_trial is None:
             gpus_per_trial = 1.0 if ray.cluster_resources().get("GPU", 0) > 0 else 0.0
-        _fit(trials, statuses, out_dir, cpus_per_trial, gpus_per_trial, max_failures, verbose)
+        resources = {"cpu": cpus_per_trial, "gpu": gpus_per_trial}
+        _fit(trials, statuses, out_dir, resources, max_failures, verbose, progress)
 
     trial_rows = [_trial_row(t, statuses[t["name"]]) for t in trials]
     write_csv(out_dir / "trials.csv", trial_rows)
@@ -321,13 +335,20 @@ def _fit(
     trials: list[dict[str, Any]],
     statuses: dict[str, dict[str, Any]],
     out_dir: Path,
-    cpus_per_trial: float,
-    gpus_per_trial: float,
+    resources: dict[str, float],
     max_failures: int,
     verbose: int,
+    progress: Callable[[Mapping[str, Any]], None] | None,
 ) -> None:
     """Run every trial as a Ray Tune grid; record each one's final status and restarts."""
     from ray import tune
+
+    def ended(trial: Trial, status: str) -> None:
+        name = trial.config["trial"]["name"]
+        statuses[name]["status"] = status
+        if progress is not None:
+            done = sum("status" in s for s in statuses.values())
+            progress({"name": name, "status": status, "ended": done, "trials": len(trials)})
 
     class _Recorder(tune.Callback):
         """Final status and restart count of every trial (runs in the driver)."""
@@ -340,17 +361,17 @@ def _fit(
         def on_trial_complete(
             self, iteration: int, trials: list[Trial], trial: Trial, **info: Any
         ) -> None:
-            statuses[trial.config["trial"]["name"]]["status"] = "TERMINATED"
+            ended(trial, "TERMINATED")
 
         def on_trial_error(
             self, iteration: int, trials: list[Trial], trial: Trial, **info: Any
         ) -> None:
-            statuses[trial.config["trial"]["name"]]["status"] = "ERROR"
+            ended(trial, "ERROR")
 
-    trainable = tune.with_resources(train_trial, {"cpu": cpus_per_trial, "gpu": gpus_per_trial})
+    trainable = tune.with_resources(train_trial, resources)
     tuner = tune.Tuner(
         trainable,
-        param_space={"trial": tune.grid_search(trials)},
+        param_space={"trial": tune.grid_search(trials), "quiet": verbose == 0},
         tune_config=tune.TuneConfig(num_samples=1, trial_dirname_creator=_tune_dirname),
         run_config=tune.RunConfig(
             name="tune",
@@ -363,20 +384,33 @@ def _fit(
     )
     # Ctrl-C: a KeyboardInterrupt (one line, exit code 130; a rerun resumes the trials from
     # their own checkpoints), not Tune's graceful stop that returns as if the sweep had ended
-    # and advises Tuner.restore
-    sigint = os.environ.get("TUNE_DISABLE_SIGINT_HANDLER")
-    os.environ["TUNE_DISABLE_SIGINT_HANDLER"] = "1"
-    try:
+    # and advises Tuner.restore. Quiet: no traceback of a failed trial (its error is one line
+    # in trials.csv and the closing warning; Ray keeps the traceback in its error.txt).
+    settings = {"TUNE_DISABLE_SIGINT_HANDLER": "1"}
+    if verbose == 0:  # nor Tune's advice to keep more checkpoints: we keep one on purpose
+        settings["TUNE_PRINT_ALL_TRIAL_ERRORS"] = "0"
+        settings["TUNE_WARN_EXCESSIVE_EXPERIMENT_CHECKPOINT_SYNC_THRESHOLD_S"] = "0"
+    with _environ(settings):
         results = tuner.fit()
-    finally:
-        if sigint is None:
-            del os.environ["TUNE_DISABLE_SIGINT_HANDLER"]
-        else:
-            os.environ["TUNE_DISABLE_SIGINT_HANDLER"] = sigint
     for i in range(len(results)):
         result = results[i]
         if result.error is not None and result.config:
             statuses[result.config["trial"]["name"]]["error"] = _error_line(result.error)
+
+
+@contextmanager
+def _environ(settings: Mapping[str, str]) -> Iterator[None]:
+    """Environment variables set for the duration of the block, then as they were."""
+    saved = {k: os.environ.get(k) for k in settings}
+    os.environ.update(settings)
+    try:
+        yield
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                del os.environ[key]
+            else:
+                os.environ[key] = value
 
 
 def _error_line(error: BaseException) -> str:
@@ -420,6 +454,22 @@ def _trial_row(trial: Mapping[str, Any], status: Mapping[str, Any]) -> dict[str,
         "run_dir": str(run_dir),
         "error": status.get("error", ""),
     }
+
+
+def check_trials_finished(out_dir: str | Path) -> None:
+    """:class:`TrialsFailedError` saying how many trials of the sweep in ``out_dir`` did
+    not finish and where their errors are, when any did not (read from its trials.csv)."""
+    import csv
+
+    path = Path(out_dir) / "trials.csv"
+    with path.open() as f:
+        rows = list(csv.DictReader(f))
+    failed = [r for r in rows if r["status"] != "TERMINATED"]
+    if failed:
+        raise TrialsFailedError(
+            f"{len(failed)} of {len(rows)} trials failed: their errors are in the error column"
+            f" of {path}"
+        )
 
 
 def _stats(values: Sequence[float]) -> tuple[float, float, float, float]:
