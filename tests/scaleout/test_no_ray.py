@@ -45,6 +45,8 @@ def test_grid_points_and_trial_configs():
     # value ("null" is not null, "1" not 1)
     quoted = {"device": '"cuda:0"', "run.name": '"null"', "x": '"1"'}
     assert trial_name(0, quoted) == 'seed=0,device=cuda:0,run.name="null",x="1"'
+    # a path is one folder, not nested ones (nor ../ outside the sweep's)
+    assert trial_name(0, {"x": '"../a/b"', "y": '"50%"'}) == "seed=0,x=..%2Fa%2Fb,y=50%25"
     assert grid_points({}) == [{}]
     with pytest.raises(ValueError):
         grid_points({"batch_size": []})

@@ -55,8 +55,11 @@ class TrialsFailedError(RuntimeError):
 # ---------------------------------------------------------------------- trial points
 def trial_name(seed: int, point: Mapping[str, Any]) -> str:
     """Directory name of a trial: ``seed=0`` then ``,key=value`` per grid key (sorted); a
-    value typed as a JSON string (``device="cpu"``) is named by its plain text (``cpu``)."""
-    return ",".join([f"seed={seed}", *(f"{k}={_plain(point[k])}" for k in sorted(point))])
+    value typed as a JSON string (``device="cpu"``) is named by its plain text (``cpu``).
+    A ``/`` in a value (a path) is written ``%2F`` (and ``%`` ``%25``), so that every trial
+    is one folder of the sweep's, never one nested in another or outside it."""
+    name = ",".join([f"seed={seed}", *(f"{k}={_plain(point[k])}" for k in sorted(point))])
+    return name.replace("%", "%25").replace("/", "%2F")
 
 
 def _plain(value: Any) -> str:
