@@ -25,7 +25,9 @@ _COMMAND_GROUPS = (train, evaluate, robustness, match, deploy, quickstart, scene
 def build_parser() -> ArgumentParser:
     parser = ArgumentParser(
         prog="activevision",
-        description="Learn where a humanoid soccer robot should look (DDQN + PER).",
+        description="Teach a humanoid soccer robot where to look: train head controllers (the"
+        " paper's DDQN + PER, DAgger, SB3), score them against the entropy method and RoboCup"
+        " teams' head control, in episodes and whole matches, and export them to ONNX.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
     for group in _COMMAND_GROUPS:
