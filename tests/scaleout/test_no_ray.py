@@ -86,6 +86,17 @@ def test_aggregate_over_seeds(tmp_path):
     assert rows[0]["ball_loss_duration_mean"] != rows[0]["ball_loss_duration_mean"]  # all NaN
 
 
+def test_a_quoted_grid_value_reads_as_its_folder_name_in_the_tables(tmp_path):
+    # the folder was seed=0,device=cpu while sweep.csv (and sweep.png's labels, trials.csv)
+    # said "cpu" with its quotes
+    run_dir = tmp_path / "seed=0,device=cpu"
+    _metrics(run_dir, [0.5])
+    point = {"device": '"cpu"', "name": '"null"', "lr": 0.001}
+    assert trial_name(0, point) == 'seed=0,device=cpu,lr=0.001,name="null"'
+    rows = aggregate([{"seed": 0, "point": point, "run_dir": str(run_dir)}], tmp_path)
+    assert (rows[0]["device"], rows[0]["name"], rows[0]["lr"]) == ("cpu", '"null"', 0.001)
+
+
 def test_method_names_and_policies():
     assert default_method_names(None, None) == [
         "entropy_jump",

@@ -73,6 +73,12 @@ def _plain(value: Any) -> str:
     return value
 
 
+def _plain_point(point: Mapping[str, Any]) -> dict[str, Any]:
+    """A grid point's values as trials.csv, sweep.csv and sweep.png show them: a JSON string
+    by its plain text, as in the trial's folder name (:func:`_plain`); numbers as they are."""
+    return {k: _plain(v) if isinstance(v, str) else v for k, v in point.items()}
+
+
 _NOT_JSON = object()
 
 
@@ -447,7 +453,7 @@ def _trial_row(trial: Mapping[str, Any], status: Mapping[str, Any]) -> dict[str,
     return {
         "name": trial["name"],
         "seed": trial["seed"],
-        **trial["point"],
+        **_plain_point(trial["point"]),
         "status": status.get("status", "UNKNOWN"),
         "restarts": status["restarts"],
         "sessions": state.get("sessions", 0),
@@ -495,7 +501,7 @@ def aggregate(trials: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[
     keys: dict[tuple, dict[str, Any]] = {}
     for trial in trials:
         point_key = tuple(sorted((k, repr(v)) for k, v in trial["point"].items()))
-        keys[point_key] = dict(trial["point"])
+        keys[point_key] = _plain_point(trial["point"])
         by_epoch = groups.setdefault(point_key, {})
         for metrics_row in _metrics_rows(Path(trial["run_dir"])):
             by_epoch.setdefault(int(float(metrics_row["epoch"])), []).append(metrics_row)
