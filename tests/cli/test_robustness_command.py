@@ -136,6 +136,7 @@ def test_a_method_never_trained_has_no_training_range(method, tmp_path, capsys):
     assert lines[0].split()[-2:] == ["training", "range"]
     for line in lines[2:]:
         assert line.endswith("— (untrained)"), line
+    assert "the env as it is" in lines[2] and "as trained" not in "".join(lines)
     if method != "scan":
         return
     out = tmp_path / "r"
@@ -148,7 +149,9 @@ def test_a_method_never_trained_has_no_training_range(method, tmp_path, capsys):
         assert line[25 + 28 : 25 + 28 + 7].strip() == "—", line  # name, setting, trained
     # the CSV says the same (empty, not True/False), and the figure hatches no bar as
     # "outside the training ranges", its legend naming no training world
-    assert [r["in_training_range"] for r in read_rows(out / "robustness.csv")] == ["", ""]
+    scored = read_rows(out / "robustness.csv")
+    assert [r["in_training_range"] for r in scored] == ["", ""]
+    assert [r["setting"] for r in scored] == ["the env as it is", "robots=1"]  # not "as trained"
     from matplotlib.figure import Figure
 
     labels = []

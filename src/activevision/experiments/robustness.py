@@ -275,7 +275,7 @@ def score_perturbations(
             "name": p.name,
             "factor": p.factor,
             "level": p.level,
-            "setting": p.setting,
+            "setting": _setting(p, trained),
             "in_training_range": within(config, clean) if trained else None,
             "in_robust_range": within(config, robust),
             "n": episodes,
@@ -296,6 +296,16 @@ def score_perturbations(
 def _change(drop_pts: float) -> float:
     """A drop in points as the change vs clean, to 0.1 point (no ``-0.0``)."""
     return round(-drop_pts, 1) + 0.0
+
+
+#: the ``setting`` of the clean row of a method that was not trained
+UNTRAINED_CLEAN = "the env as it is"
+
+
+def _setting(p: Perturbation, trained: bool) -> str:
+    """The row's setting; an untrained method's clean row is the env it is scored in, not
+    "as trained"."""
+    return p.setting if trained or p.name != CLEAN else UNTRAINED_CLEAN
 
 
 #: the ``trained`` / ``training range`` cell of a method that was not trained (scan, random,
@@ -379,7 +389,7 @@ def list_table(
     lines.append("-" * len(lines[0]))
     for p in rows:
         config = p.config(world)
-        line = f"{p.name:<25}{p.factor:<16}{p.level:<9}{p.setting:<28}"
+        line = f"{p.name:<25}{p.factor:<16}{p.level:<9}{_setting(p, blind is None):<28}"
         line += f"{_yes_no(within(config, robust)):<14}"
         if clean is not None:
             line += NO_TRAINING_RANGE if blind is not None else _yes_no(within(config, clean))
