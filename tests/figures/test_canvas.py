@@ -62,10 +62,13 @@ def test_a_path_without_suffix_is_png_and_others_are_refused(tmp_path):
 
 
 @pytest.mark.parametrize("suffix", sorted(FIGURE_FORMATS))
-def test_the_same_figure_is_the_same_bytes_in_every_format(tmp_path, suffix):
+def test_the_same_figure_is_the_same_bytes_in_every_format(tmp_path, suffix, monkeypatch):
     """matplotlib writes the time into PDF, SVG and PostScript, salts SVG ids with a random
     UUID and titles PostScript with the file's name (here a random temporary one) unless
     told otherwise: two writes under other names in other folders must still be equal."""
+    # a shell that sets SOURCE_DATE_EPOCH (reproducible-build tooling) dates PostScript
+    # itself: this test is of the package's own pinning
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
     fig = new_figure(figsize=(2, 1.5))
     ax = fig.add_subplot()
     ax.imshow(np.arange(12).reshape(3, 4))
@@ -92,6 +95,7 @@ def test_postscript_is_dated_without_touching_the_environment(tmp_path, suffix, 
     # The date was pinned by setting SOURCE_DATE_EPOCH for the write: any other thread saw
     # the process's environment change. Now the environment is never written, and a user's
     # own SOURCE_DATE_EPOCH still dates the file.
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)  # not the shell's own
     seen = []
     monkeypatch.setattr(os, "putenv", lambda *a: seen.append(a))
     monkeypatch.setattr(os, "unsetenv", lambda *a: seen.append(a))
