@@ -35,7 +35,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from activevision.training.config import TrainConfig, apply_overrides, load_config
+from activevision.training.config import TrainConfig, apply_overrides, load_config, parse_value
 
 if TYPE_CHECKING:
     from ray.tune.experiment import Trial
@@ -67,8 +67,8 @@ def _plain(value: Any) -> str:
     unless the text means something else unquoted (``"null"``, ``"1"`` keep them)."""
     if not isinstance(value, str):
         return str(value)
-    unquoted = _json(value)
-    if isinstance(unquoted, str) and _json(unquoted) is _NOT_JSON:
+    unquoted = parse_value(value)
+    if isinstance(unquoted, str) and unquoted != value and parse_value(unquoted) == unquoted:
         return unquoted
     return value
 
@@ -77,17 +77,6 @@ def _plain_point(point: Mapping[str, Any]) -> dict[str, Any]:
     """A grid point's values as trials.csv, sweep.csv and sweep.png show them: a JSON string
     by its plain text, as in the trial's folder name (:func:`_plain`); numbers as they are."""
     return {k: _plain(v) if isinstance(v, str) else v for k, v in point.items()}
-
-
-_NOT_JSON = object()
-
-
-def _json(text: str) -> Any:
-    """``text`` parsed as JSON, :data:`_NOT_JSON` when it is no JSON."""
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        return _NOT_JSON
 
 
 def grid_points(grid: Mapping[str, Sequence[Any]]) -> list[dict[str, Any]]:

@@ -548,11 +548,13 @@ def apply_overrides(config: TrainConfig, overrides: Iterable[str]) -> TrainConfi
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
             raise ValueError(f"override {item!r} must look like key=value")
-        changes[key.strip()] = _parse_value(text)
+        changes[key.strip()] = parse_value(text)
     return with_values(config, changes)
 
 
-def _parse_value(text: str) -> Any:
+def parse_value(text: str) -> Any:
+    """A ``--set``/``--grid`` value: its JSON value, or the text itself when it is no JSON
+    (``lr=1e-3`` -> 0.001, ``device="cpu"`` and ``device=cpu`` -> ``"cpu"``)."""
     try:
         return json.loads(text)
     except json.JSONDecodeError:
