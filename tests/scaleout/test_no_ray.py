@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
@@ -12,7 +13,7 @@ import pytest
 from activevision.experiments.methods import make_policy
 from activevision.scaleout import RAY_INSTALL_HINT, aggregate, require_ray
 from activevision.scaleout.compare import default_method_names
-from activevision.scaleout.sweep import grid_points, trial_config, trial_name
+from activevision.scaleout.sweep import UNFINISHED_WARNING, grid_points, trial_config, trial_name
 from activevision.training import TrainConfig
 
 
@@ -192,8 +193,13 @@ def test_sweep_command_with_failed_trials_exits_2_after_its_outputs(tmp_path, mo
         calls.append(kwargs)
         kwargs["progress"]({"name": "seed=0", "status": "TERMINATED", "ended": 1, "trials": 2})
         kwargs["progress"]({"name": "seed=1", "status": "ERROR", "ended": 2, "trials": 2})
-        rows = [{"name": f"seed={s}", "status": st} for s, st in ((0, "TERMINATED"), (1, "ERROR"))]
+        rows = [
+            {"name": f"seed={s}", "status": st, "error": e}
+            for s, st, e in ((0, "TERMINATED", ""), (1, "ERROR", "ValueError: no start"))
+        ]
         write_csv(Path(out_dir) / "trials.csv", rows)
+        # the library's warning (as sweep gives it): the command says it once, as its error
+        warnings.warn(f"{UNFINISHED_WARNING} (trials.csv): seed=1", RuntimeWarning, stacklevel=2)
         return [{"epoch": 1}]
 
     # the module (the package's attribute `sweep` is the function)
@@ -201,7 +207,10 @@ def test_sweep_command_with_failed_trials_exits_2_after_its_outputs(tmp_path, mo
     monkeypatch.setattr(sweep_module, "sweep", fake_sweep)
     out = tmp_path / "s"
     out.mkdir()
-    assert main(["sweep", "--seeds", "0,1", "--out", str(out)]) == 2
+    with warnings.catch_warnings(record=True) as warned:
+        warnings.simplefilter("always")
+        assert main(["sweep", "--seeds", "0,1", "--out", str(out)]) == 2
+    assert not warned  # the warning would be a second line beside the error
     captured = capsys.readouterr()
     assert captured.out.splitlines() == [
         "trial 1/2 finished: seed=0",
@@ -210,8 +219,8 @@ def test_sweep_command_with_failed_trials_exits_2_after_its_outputs(tmp_path, mo
         f"wrote {out}/trials.csv, sweep.csv and sweep.png",
     ]
     assert captured.err.splitlines() == [
-        f"activevision sweep: error: 1 of 2 trials failed: their errors are in the error column"
-        f" of {out / 'trials.csv'}"
+        "activevision sweep: error: 1 of 2 trials failed, the first seed=1 (ValueError: no"
+        f" start): their errors are in the error column of {out / 'trials.csv'}"
     ]
     assert calls[0]["verbose"] == 0
     assert main(["sweep", "--seeds", "0,1", "--out", str(out), "--verbose"]) == 2

@@ -146,7 +146,9 @@ def test_a_failing_trial_is_reported_with_its_error(tmp_path):
     assert trial["status"] == "ERROR"
     assert trial["error"].startswith("ValueError: device 'cuda:99' requested"), trial["error"]
     # what ends `activevision sweep` with exit code 2 after writing the outputs
-    with pytest.raises(TrialsFailedError, match=r"^1 of 1 trials failed: .* error column of"):
+    with pytest.raises(
+        TrialsFailedError, match=r"^1 of 1 trials failed, the first .*: .* error column of"
+    ):
         check_trials_finished(tmp_path)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import shutil
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -158,7 +159,7 @@ def cmd_plot(args: argparse.Namespace) -> None:
 def cmd_sweep(args: argparse.Namespace) -> None:
     """Run a Ray Tune sweep; print a line per trial that ends and where the outputs went.
     Trials that failed end it with an error (exit code 2) after the outputs of the others."""
-    from activevision.scaleout.sweep import check_trials_finished, sweep
+    from activevision.scaleout.sweep import UNFINISHED_WARNING, check_trials_finished, sweep
     from activevision.training import apply_overrides, load_config, preset
 
     def ended(trial: Mapping[str, Any]) -> None:
@@ -167,18 +168,21 @@ def cmd_sweep(args: argparse.Namespace) -> None:
 
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     config = apply_overrides(config, list(args.set or []))
-    rows = sweep(
-        config,
-        args.seeds,
-        dict(args.grid or []),
-        args.out,
-        address=args.address,
-        num_cpus=args.num_cpus,
-        max_failures=args.max_failures,
-        cpus_per_trial=args.cpus_per_trial,
-        verbose=1 if args.verbose else 0,
-        progress=ended,
-    )
+    with warnings.catch_warnings():
+        # the command ends with one error line on failed trials (check_trials_finished)
+        warnings.filterwarnings("ignore", message=UNFINISHED_WARNING)
+        rows = sweep(
+            config,
+            args.seeds,
+            dict(args.grid or []),
+            args.out,
+            address=args.address,
+            num_cpus=args.num_cpus,
+            max_failures=args.max_failures,
+            cpus_per_trial=args.cpus_per_trial,
+            verbose=1 if args.verbose else 0,
+            progress=ended,
+        )
     print(f"{len(rows)} aggregated rows")
     print(f"wrote {args.out}/trials.csv, sweep.csv" + (" and sweep.png" if rows else ""))
     check_trials_finished(args.out)

@@ -48,6 +48,10 @@ CRASH_MARKER = ".scaleout_crashed"
 STATE_FILE = "scaleout.json"
 
 
+#: The start of the warning :func:`sweep` gives when trials did not finish.
+UNFINISHED_WARNING = "sweep trials did not finish"
+
+
 class TrialsFailedError(RuntimeError):
     """Trials of a sweep did not finish (their errors: trials.csv's ``error`` column)."""
 
@@ -247,7 +251,7 @@ def sweep(
     ]
     if failed:
         warnings.warn(
-            f"sweep trials did not finish (trials.csv): {'; '.join(failed)}",
+            f"{UNFINISHED_WARNING} (trials.csv): {'; '.join(failed)}",
             RuntimeWarning,
             stacklevel=2,
         )
@@ -464,9 +468,10 @@ def check_trials_finished(out_dir: str | Path) -> None:
         rows = list(csv.DictReader(f))
     failed = [r for r in rows if r["status"] != "TERMINATED"]
     if failed:
+        first = failed[0]["name"] + (f" ({failed[0]['error']})" if failed[0].get("error") else "")
         raise TrialsFailedError(
-            f"{len(failed)} of {len(rows)} trials failed: their errors are in the error column"
-            f" of {path}"
+            f"{len(failed)} of {len(rows)} trials failed, the first {first}: their errors are"
+            f" in the error column of {path}"
         )
 
 
