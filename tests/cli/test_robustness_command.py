@@ -153,17 +153,25 @@ def test_a_method_never_trained_has_no_training_range(method, tmp_path, capsys):
     assert [r["in_training_range"] for r in scored] == ["", ""]
     assert [r["setting"] for r in scored] == ["the env as it is", "robots=1"]  # not "as trained"
     from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
 
-    labels = []
-    real_legend = Figure.legend
+    labels, hatches = [], []
+    real_legend, real_hatch = Figure.legend, Rectangle.set_hatch
     with pytest.MonkeyPatch.context() as mp:
 
         def legend(fig, *args, **kwargs):
             labels.extend(h.get_label() for h in kwargs["handles"])
             return real_legend(fig, *args, **kwargs)
 
+        def set_hatch(bar, hatch):
+            if hatch:
+                hatches.append(hatch)
+            return real_hatch(bar, hatch)
+
         mp.setattr(Figure, "legend", legend)
+        mp.setattr(Rectangle, "set_hatch", set_hatch)  # the bars (the legend's are Patches)
         plot_robustness(read_rows(out / "robustness.csv"), tmp_path / "again.png")
+    assert hatches == []
     assert not any("this policy's training ranges" in label for label in labels), labels
     assert not any("training world" in label for label in labels), labels
     assert "clean: the env's own world (every change is against it)" in labels

@@ -202,8 +202,11 @@ def test_oracle_reaches_every_goal_whatever_the_look(tmp_path):
         assert row["goal_reached"] == 1.0
         assert row["goal_reached_drop_pts"] == 0.0 and row["success_rate_drop_pts"] == 0.0
         assert 0.0 <= row["goal_reached_low"] < 1.0 == row["goal_reached_high"]  # Wilson
-        assert row["in_training_range"] == (row["name"] == CLEAN)
+        assert row["in_training_range"] is None  # the oracle was never trained
     assert "no drop" in worst_drops(scored)
+    # told it was trained, the rows say whether they lie within its training ranges
+    told = score_perturbations(OraclePolicy(clean), clean, rows[:2], 1, 0, trained=True)
+    assert [r["in_training_range"] for r in told] == [True, False]
     table = format_table(scored)
     assert all(row["name"] in table for row in scored)
     # the figure, also from the CSV's text values

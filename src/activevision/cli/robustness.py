@@ -146,7 +146,6 @@ def cmd_robustness(args: argparse.Namespace) -> None:
             args.episodes,
             args.seed,
             progress=lambda row: print(format_row(row), flush=True),
-            trained=blind is None,
         )
     print(worst_drops(scored))
     write_csv(csv_path, [{"method": method, "error": args.error, **r} for r in scored])

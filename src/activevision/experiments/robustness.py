@@ -253,13 +253,16 @@ def score_perturbations(
     episodes: int,
     seed: int,
     progress: Callable[[dict[str, Any]], None] | None = None,
-    trained: bool = True,
+    trained: bool | None = None,
 ) -> list[dict[str, Any]]:
     """Play ``policy`` on ``episodes`` fixed-seed episodes under each of ``rows`` (its
     ``clean`` row first); one flat dict a row (the CSV's columns), with each metric's
     mean, 95% interval and drop vs ``clean`` in percentage points. ``progress`` is called
-    with each row as it is done. A method that was not ``trained`` has no training range:
-    its rows' ``in_training_range`` is None (empty in the CSV)."""
+    with each row as it is done. A method that was not ``trained`` (default: whether it
+    :func:`sees_image`, as the built-in baselines do not) has no training range: its rows'
+    ``in_training_range`` is None (empty in the CSV)."""
+    if trained is None:
+        trained = sees_image(policy)
     if not rows or rows[0].name != CLEAN:
         raise ValueError("the perturbations must start with 'clean' (the reference)")
     robust = robust_config(clean)
