@@ -142,6 +142,11 @@ def test_a_sweep_is_refused_before_ray_starts(tmp_path):
     (tmp_path / "file").write_text("")
     with pytest.raises(ValueError, match="is a file"):
         specs({}, out_dir=tmp_path / "file")
+    # a trial that sweeps before 2026-12-04 kept in a folder named with the quotes: a rerun
+    # would start it over, unseen, in the plain-named one
+    (out / "trials" / 'seed=0,run.device="cpu"').mkdir(parents=True)
+    with pytest.raises(ValueError, match=r"older folder name: rename it to seed=0,run.device=cpu"):
+        specs({"run.device": ['"cpu"']})
 
 
 def test_an_address_nobody_answers_is_one_line_at_once():

@@ -262,6 +262,18 @@ def sweep(
     return rows
 
 
+def _check_no_older_name(trials_dir: Path, seed: int, point: Mapping[str, Any], name: str) -> None:
+    """ValueError when the trial is in ``trials_dir`` under the name sweeps gave it before
+    2026-12-04 (a quoted grid value with its quotes, ``device="cpu"``): a rerun would start
+    it over in ``name`` instead of resuming it."""
+    older = ",".join([f"seed={seed}", *(f"{k}={point[k]}" for k in sorted(point))])
+    if older != name and "/" not in older and (trials_dir / older).is_dir():
+        raise ValueError(
+            f"{trials_dir / older} holds this trial under its older folder name: rename it to"
+            f" {name} to resume it"
+        )
+
+
 def _trial_specs(
     base_config: TrainConfig,
     seeds: Iterable[int],
@@ -291,6 +303,7 @@ def _trial_specs(
             if same:
                 raise ValueError(f"grid points {same[0]} and {name} are the same configuration")
             check_trial_dir(out_dir / "trials" / name, config)
+            _check_no_older_name(out_dir / "trials", seed, point, name)
             trials.append(
                 {
                     "name": name,
