@@ -223,9 +223,11 @@ def sweep(
         max_failures: restarts of a failed trial (each resumes from its checkpoint).
         cpus_per_trial: CPUs per trial; a config with ``num_threads=0`` gets that many
             torch threads. gpus_per_trial: default 1 when the cluster has GPUs, else 0.
-        verbose: Tune's console verbosity: 0 (default) none, nor Ray's log of each report's
-            checkpoint and each failed trial's traceback (its error is in trials.csv and
-            the closing warning); 1 Tune's status tables, 2 also every result.
+        verbose: Tune's console verbosity: 0 (default) no status tables, nor Ray's log of
+            each report's checkpoint and each failed trial's traceback (its error is in
+            trials.csv and the closing warning); Ray and Tune still print about ten lines
+            (Ray's start, Tune's configuration box and closing hints, a failed trial's error
+            file); 1 Tune's status tables, 2 also every result.
         progress: called in the driver as each trial ends, with ``name``, ``status``
             (``TERMINATED`` or ``ERROR``), ``ended`` (trials ended so far) and ``trials``.
         crash_after_epoch: testing hook, see :func:`train_trial`.
