@@ -405,8 +405,12 @@ def _fit(
     # in trials.csv and the closing warning; Ray keeps the traceback in its error.txt).
     settings = {"TUNE_DISABLE_SIGINT_HANDLER": "1"}
     if verbose == 0:  # nor Tune's advice to keep more checkpoints: we keep one on purpose
-        settings["TUNE_PRINT_ALL_TRIAL_ERRORS"] = "0"
-        settings["TUNE_WARN_EXCESSIVE_EXPERIMENT_CHECKPOINT_SYNC_THRESHOLD_S"] = "0"
+        quiet = {
+            "TUNE_PRINT_ALL_TRIAL_ERRORS": "0",
+            "TUNE_WARN_EXCESSIVE_EXPERIMENT_CHECKPOINT_SYNC_THRESHOLD_S": "0",
+        }
+        # (Tune reads these from the environment only; a user's own setting wins)
+        settings |= {k: v for k, v in quiet.items() if k not in os.environ}
     with _environ(settings):
         results = tuner.fit()
     for i in range(len(results)):
