@@ -181,7 +181,9 @@ def test_sweep_ctrl_c_is_one_line_and_130(tmp_path):
             assert proc.poll() is None and time.monotonic() - started < 120
             time.sleep(0.2)
         proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
+        # Ray's shutdown after Ctrl-C took over 60 s on a 2-core machine busy with a training
+        # run beside the tests (it takes seconds on a quiet one)
+        _, err = proc.communicate(timeout=240)
     finally:
         proc.kill()
     assert proc.returncode == 130, err
