@@ -59,3 +59,21 @@ def test_auxiliary_head_shares_the_features_and_leaves_q_alone():
     assert aux.shape == (3, 2)
     with pytest.raises(ValueError, match="auxiliary head"):
         QNetwork(n_actions=5, image_shape=(60, 80)).forward_with_aux(obs)
+
+
+@pytest.mark.parametrize("frames", [1, 4])
+def test_channels_last_stores_every_convolution_as_module_to_does(frames):
+    # Module.to(memory_format=channels_last) is the reference. A rewrite with .contiguous
+    # left conv1's weight of one input channel (grey frames) in its NCHW strides, which
+    # oneDNN ran 3x slower in training (and to other numbers), unseen from 2026-12-01.
+    network = QNetwork(n_actions=9, stack=frames)
+    reference = QNetwork(n_actions=9, stack=frames)
+    network.to_channels_last()
+    for conv, ref in zip(
+        (network.conv1, network.conv2, network.conv3),
+        (reference.conv1, reference.conv2, reference.conv3),
+        strict=True,
+    ):
+        ref.to(memory_format=torch.channels_last)
+        assert conv.weight.stride() == ref.weight.stride()
+        assert conv.weight.is_contiguous(memory_format=torch.channels_last)

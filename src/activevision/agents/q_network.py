@@ -124,8 +124,11 @@ class QNetwork(nn.Module):
     def to_channels_last(self) -> QNetwork:
         """Store the convolution weights channels-last (NHWC), which oneDNN runs faster."""
         for conv in (self.conv1, self.conv2, self.conv3):
-            # what Module.to(memory_format=...) does: only the 4-D weight changes layout
-            conv.weight.data = conv.weight.data.contiguous(memory_format=torch.channels_last)
+            # what Module.to(memory_format=...) does: only the 4-D weight changes layout.
+            # .to, not .contiguous: a weight of one input channel (conv1, grey frames) counts
+            # as channels-last already for .contiguous and kept its NCHW strides, which sent
+            # training to a path 3x slower (and other numbers) from 2026-12-01 to 12-04
+            conv.weight.data = conv.weight.data.to(memory_format=torch.channels_last)
         return self
 
 
