@@ -22,6 +22,7 @@ import numpy as np
 
 from activevision.envs.config import EnvConfig
 from activevision.envs.observations import Observation
+from activevision.experiments.match_methods import built_by_user, load_strategy, user_errors
 from activevision.experiments.policies import (
     EntropyPolicy,
     HeadPolicy,
@@ -160,7 +161,6 @@ def user_method(spec: str) -> tuple[str, MethodFactory]:
     ``act(obs, info)``). Returns its label (its ``name`` attribute, else ``NAME``) and the
     factory, checked as it builds; ValueError names what is wrong, in one line, and so does
     the policy it builds for an exception in its ``reset`` or ``act``, wherever it plays."""
-    from activevision.experiments.match_methods import built_by_user, load_strategy
 
     label, factory = load_strategy(spec)
     if label in _REGISTRY:
@@ -186,13 +186,9 @@ class _UsersPolicy:
         self.name = label
 
     def reset(self, info: dict, rng: np.random.Generator) -> None:
-        from activevision.experiments.match_methods import user_errors
-
         with user_errors(f"--strategy {self.name}: reset"):
             self.policy.reset(info, rng)
 
     def act(self, obs: Observation, info: dict) -> int | HeadTarget:
-        from activevision.experiments.match_methods import user_errors
-
         with user_errors(f"--strategy {self.name}: act"):
             return self.policy.act(obs, info)
