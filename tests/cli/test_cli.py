@@ -1,6 +1,8 @@
 """The command line as a user runs it: pictures, the main job end to end, clear errors."""
 
 import json
+import subprocess
+import sys
 
 from activevision.cli import main
 
@@ -18,6 +20,18 @@ def test_render_and_viewpoints_write_pictures(tmp_path):
     assert b"<svg" in (tmp_path / "vp.SVG").read_bytes()[:1000]
     assert (tmp_path / "demo.jpg").read_bytes().startswith(b"\xff\xd8\xff")  # JPEG
     assert (tmp_path / "view.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_python_dash_m_runs_the_command():
+    """``python -m activevision`` is the ``activevision`` command: its exit codes and its one
+    line on bad input."""
+    command = [sys.executable, "-m", "activevision"]
+    done = subprocess.run([*command, "--help"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("usage: activevision ")
+    done = subprocess.run([*command, "evaluate", "--episodes", "0"], capture_output=True, text=True)
+    assert done.returncode == 2
+    assert len(done.stderr.strip().splitlines()) == 1 and "--episodes" in done.stderr
 
 
 def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
