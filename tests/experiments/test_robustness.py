@@ -314,3 +314,21 @@ def test_the_figure_says_what_each_panel_and_the_clean_line_measure():
     assert "landmarks" in labels["success_rate"] and "normal" in labels["success_rate"]
     assert "episodes" in labels["goal_reached"] and "Wilson" in labels["goal_reached"]
     assert "training world" in CLEAN_LABEL
+
+
+def test_a_small_figure_has_no_empty_band_under_its_title(tmp_path):
+    # tight_layout leaves room for a suptitle itself: the rect reserved 0.4 inches more, an
+    # empty band as tall as the title between it and the panels
+    import matplotlib.image
+
+    clean = {"name": "clean", "factor": "none", "level": "trained", "setting": "as trained"}
+    for metric in ("success_rate", "goal_reached"):
+        clean |= {metric: 0.8, f"{metric}_low": 0.7, f"{metric}_high": 0.9}
+    dark = clean | {"name": "gain-dark-mild", "factor": "gain", "level": "mild"}
+    rows = [clean | {"in_training_range": True}, dark | {"in_training_range": True}]
+    plot_robustness(rows, tmp_path / "r.png", title="a title")
+    ink = matplotlib.image.imread(tmp_path / "r.png")[..., :3].min(axis=(1, 2)) < 0.9
+    gaps = np.diff(np.flatnonzero(ink))  # between pixel rows with anything drawn
+    # the first gap below the title's text: under 0.4 inches (48 pixel rows at 120 dpi; the
+    # band made it 0.7)
+    assert gaps[np.argmax(gaps > 1)] < 48

@@ -16,7 +16,7 @@ PANELS = (
     (
         "success_rate",
         "success rate: mean share of the goal view's landmarks seen at the end"
-        "\n(%; whiskers: 95% interval, normal approximation)",
+        "\n(%; whiskers: 95% interval, normal approximation; Wilson's where all are 0 or 100)",
     ),
     (
         "goal_reached",
@@ -147,6 +147,7 @@ def plot_robustness(
     )
     if title:
         fig.suptitle(title, fontsize=10)
-    height = fig.get_figheight()  # inches: 0.6 for the legend, 0.4 for the title
-    fig.tight_layout(rect=(0, 0.6 / height, 1, 1 - (0.4 if title else 0.05) / height))
+    # 0.6 inches for the legend below; tight_layout leaves room for the title itself (more
+    # room in the rect left a band as tall as the title under it)
+    fig.tight_layout(rect=(0, 0.6 / fig.get_figheight(), 1, 1))
     save_figure(fig, out_png, dpi=120)
