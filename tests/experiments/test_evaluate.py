@@ -132,7 +132,7 @@ def test_a_share_keeps_its_interval_within_0_and_1_and_one_value_has_none():
 
 
 @pytest.mark.parametrize("bounds", [(0.0, 1.0), (-2.0, 3.0)])
-def test_values_all_at_one_end_of_their_bounds_get_the_wilson_interval_not_zero_width(bounds):
+def test_values_all_equal_within_bounds_get_what_n_values_vouch_for_not_zero_width(bounds):
     # 200 episodes all at success rate 1 gave 100% [100, 100]: a certainty no sample gives.
     # Wilson of 200/200 by hand: low = 1 / (1 + z^2/200) = 0.98115, high 1.
     lo, hi = bounds
@@ -143,8 +143,13 @@ def test_values_all_at_one_end_of_their_bounds_get_the_wilson_interval_not_zero_
     assert bottom.mean == lo and bottom.low == lo
     assert bottom.high == pytest.approx(lo + (hi - lo) * (1 - 1 / (1 + 1.959963984540054**2 / 200)))
     assert summarise_success_rates([1.0] * 200)[0] == pytest.approx(0.98115, abs=1e-5)
-    # values all equal inside the bounds, or without bounds, keep the normal approximation
-    assert mean_interval([0.5] * 10, bounds=(0.0, 1.0)) == Interval(0.5, 0.5, 0.5)
+    # values all equal inside the bounds: none of 10 differs, so at most w = Wilson's upper
+    # end of 0/10 (z^2 / (10 + z^2) = 0.27753) of them do, by at most the distance to a bound
+    w = 1.959963984540054**2 / (10 + 1.959963984540054**2)
+    inside = mean_interval([0.5] * 10, bounds=(-1.0, 1.0))
+    assert inside.mean == 0.5
+    assert (inside.low, inside.high) == pytest.approx((0.5 - 1.5 * w, 0.5 + 0.5 * w))
+    # without bounds nothing limits the spread: the value itself
     assert mean_interval([1.0] * 10) == Interval(1.0, 1.0, 1.0)
 
 

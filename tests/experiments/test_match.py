@@ -184,6 +184,13 @@ def test_paired_differences_by_hand():
     row = paired_rows(differences, "b", 4, 7)[0]
     assert (row["method"], row["baseline"], row["seed"]) == ("a", "b", 7)
     assert row["ball_in_view_diff_low"] == pytest.approx(0.15 - half, rel=1e-5)
+    # neither ever lost: no difference seen in 4 matches is not a certain 0 (it printed
+    # [0.0, 0.0]); at most Wilson's upper end of 0/4 of the matches differ, each by at most 1
+    a.per_match["lost_share"][:] = 0.0
+    b.per_match["lost_share"][:] = 0.0
+    lost = paired_differences([a, b], "b")["a"]["lost_share"]
+    w = 1.959964**2 / (4 + 1.959964**2)
+    assert (lost.mean, lost.low, lost.high) == pytest.approx((0.0, -w, w), rel=1e-5)
     with pytest.raises(ValueError, match="baseline 'c'"):
         paired_differences([a, b], "c")
 

@@ -65,22 +65,24 @@ def mean_interval(
     where the values cannot leave them (a share: (0, 1)). One value has no interval (NaN
     ends: one sample says nothing of the spread).
 
-    Every value at one end of its bounds (an oracle's success rate of 1 in every episode, no
-    match ever lost) has no spread to estimate the error from, and the normal approximation
-    would claim a certain mean (a zero-width interval). There the interval is the Wilson
-    interval of n out of n (or 0 out of n) scaled to the bounds: a variable within bounds
-    spreads at most as far as one that only takes their ends, so this is what the n values
-    can vouch for."""
+    Values all equal (an oracle's success rate of 1 in every episode, no match ever lost,
+    two methods that never differ) have no spread to estimate the error from, and the normal
+    approximation would claim a certain mean (a zero-width interval). With bounds, the
+    interval is then what the n values can vouch for: none of them differs from the value
+    ``c``, so the share of all values that do is below the Wilson upper end ``w`` of 0 out
+    of n, and each lies within the bounds: ``[c - w (c - lo), c + w (hi - c)]``. At an end
+    of the bounds this is the Wilson interval of n out of n (or 0 out of n) scaled to them.
+    Without bounds nothing limits the spread, and the interval stays the value itself."""
     x = np.asarray(values, float)
     if len(x) == 0:
         return Interval(math.nan, math.nan, math.nan)
     if len(x) == 1:
         return Interval(float(x[0]), math.nan, math.nan)
-    if bounds is not None and np.all(x == x[0]) and x[0] in bounds:
+    if bounds is not None and np.all(x == x[0]):
         lo, hi = bounds
-        at_top = x[0] == hi
-        share = wilson_interval(len(x) if at_top else 0, len(x), z)
-        return Interval(float(x[0]), lo + share.low * (hi - lo), lo + share.high * (hi - lo))
+        c = float(x[0])
+        w = wilson_interval(0, len(x), z).high
+        return Interval(c, c - w * (c - lo), c + w * (hi - c))
     half = z * x.std(ddof=1) / math.sqrt(len(x))
     low, high = float(x.mean() - half), float(x.mean() + half)
     if bounds is not None:

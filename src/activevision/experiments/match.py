@@ -392,13 +392,18 @@ def paired_differences(
     results: Sequence[MethodResult], baseline: str
 ) -> dict[str, dict[str, Interval]]:
     """Per method other than ``baseline``: each metric's mean difference ``method -
-    baseline`` over the same matches, with the 95% interval of the per-match differences."""
+    baseline`` over the same matches, with the 95% interval of the per-match differences (a
+    share's differences lie within [-1, 1]: two methods that never differ on it get the
+    interval of no difference seen in that many matches, not a certain 0)."""
     base = next((r for r in results if r.method == baseline), None)
     if base is None:
         raise ValueError(f"the baseline {baseline!r} is not among the methods played")
     return {
         r.method: {
-            name: mean_interval((values - base.per_match[name]).tolist())
+            name: mean_interval(
+                (values - base.per_match[name]).tolist(),
+                bounds=(-1.0, 1.0) if name in SHARES else None,
+            )
             for name, values in r.per_match.items()
         }
         for r in results
