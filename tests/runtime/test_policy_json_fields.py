@@ -9,7 +9,12 @@ import shutil
 import pytest
 
 from activevision.cli import main
-from activevision.runtime import PolicyFileError, PolicyMetadata, pretrained_policy_path
+from activevision.runtime import (
+    PolicyFileError,
+    PolicyMetadata,
+    load_metadata,
+    pretrained_policy_path,
+)
 from activevision.runtime.metadata import METADATA_FILENAME
 
 SHIPPED = json.loads(pretrained_policy_path().with_name(METADATA_FILENAME).read_text())
@@ -114,3 +119,22 @@ def test_a_discrete_policy_is_played_with_its_own_moves(tmp_path, helpers):
     exported = export_onnx(QNetwork(5).eval(), tmp_path / "policy.onnx", metadata)
     config = OnnxPolicy(exported.model_path).env_config()
     assert (config.step_deg, config.action_set) == (5.0, "4way")
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["[" * 100_000 + "]" * 100_000, '{"opset": ' + "9" * 5000 + "}"],
+    ids=["nested too deep", "an integer of 5000 digits"],
+)
+def test_json_the_decoder_cannot_take_is_a_policy_file_error(tmp_path, capsys, text):
+    """json.loads raises RecursionError and a plain ValueError for these, not
+    JSONDecodeError: still one PolicyFileError naming the file, and one line from a command."""
+    model = tmp_path / "policy.onnx"
+    shutil.copy(pretrained_policy_path(), model)
+    (tmp_path / METADATA_FILENAME).write_text(text)
+    with pytest.raises(PolicyFileError, match=r"policy\.json is not valid JSON"):
+        load_metadata(tmp_path / METADATA_FILENAME)
+    argv = ["demo", "--policy", str(model), "--out", str(tmp_path / "demo.png")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err

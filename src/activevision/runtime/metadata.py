@@ -837,6 +837,8 @@ def load_metadata(path: str | os.PathLike[str]) -> PolicyMetadata:
         raise PolicyFileError(f"cannot read policy metadata {path}: {error}") from error
     try:
         values = json.loads(text)
-    except json.JSONDecodeError as error:
+    except (ValueError, RecursionError) as error:
+        # ValueError: JSONDecodeError, or an integer of more digits than Python converts;
+        # RecursionError: arrays or objects nested too deep for the decoder
         raise PolicyFileError(f"policy metadata {path} is not valid JSON: {error}") from error
     return PolicyMetadata.from_dict(values, source=str(path))
