@@ -70,7 +70,9 @@ def read_json(path: str | os.PathLike) -> Any:
     """A JSON file's value; ValueError naming the file if it is not valid JSON."""
     try:
         return json.loads(Path(path).read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+    except (ValueError, RecursionError) as error:
+        # ValueError: JSONDecodeError, UnicodeDecodeError, or an integer of more digits than
+        # Python converts; RecursionError: arrays or objects nested too deep for the decoder
         raise ValueError(f"{path} is not valid JSON: {error}") from None
 
 

@@ -275,6 +275,24 @@ def test_files_that_are_not_text_are_named(run, tmp_path, capsys, one_clear_line
     one_clear_line("metrics.csv")
 
 
+@pytest.mark.parametrize(
+    "text",
+    ["[" * 100_000 + "]" * 100_000, "9" * 5000],
+    ids=["nested too deep", "an integer of 5000 digits"],
+)
+def test_json_the_decoder_cannot_take_is_one_line(tmp_path, capsys, one_clear_line, text):
+    """json.loads raises RecursionError and a plain ValueError for these, not
+    JSONDecodeError: a config file (train --config, export's config.json) and a --set value
+    are still refused on one line naming them, not with a traceback."""
+    (tmp_path / "deep.json").write_text(text)
+    out = str(tmp_path / "x")
+    assert main(["train", "--config", str(tmp_path / "deep.json"), "--out", out]) == 2
+    one_clear_line("deep.json", "not valid JSON")
+    assert main(["train", "--steps", "300", "--out", out, "--set", f"env.step_deg={text}"]) == 2
+    one_clear_line("env.step_deg")
+    assert not (tmp_path / "x").exists()
+
+
 def test_a_run_without_its_log_has_nothing_to_plot(run, capsys, one_clear_line):
     (run / "metrics.csv").unlink()  # checkpoints/ still mark it a run
     assert main(["plot", str(run)]) == 2

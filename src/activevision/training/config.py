@@ -548,7 +548,10 @@ def apply_overrides(config: TrainConfig, overrides: Iterable[str]) -> TrainConfi
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
             raise ValueError(f"override {item!r} must look like key=value")
-        changes[key.strip()] = parse_value(text)
+        try:
+            changes[key.strip()] = parse_value(text)
+        except ValueError as error:
+            raise ValueError(f"override {key.strip()!r}: {error}") from None
     return with_values(config, changes)
 
 
@@ -559,3 +562,6 @@ def parse_value(text: str) -> Any:
         return json.loads(text)
     except json.JSONDecodeError:
         return text
+    except (ValueError, RecursionError) as error:  # too many digits, or nested too deep
+        shown = text if len(text) <= 40 else f"{text[:40]}..."
+        raise ValueError(f"cannot read the value {shown!r}: {error}") from None
