@@ -138,3 +138,24 @@ def test_json_the_decoder_cannot_take_is_a_policy_file_error(tmp_path, capsys, t
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+
+
+def test_a_policy_is_played_with_the_camera_it_was_trained_for(tmp_path, helpers, capsys):
+    """OnnxPolicy.env_config: a policy trained for another camera (README: Training for
+    your own camera) is shown by demo --policy through that camera, not the paper's, its
+    start tilts within the camera's limits; the shipped policy's env stays the paper's."""
+    from activevision.agents.q_network import QNetwork
+    from activevision.envs.config import EnvConfig
+    from activevision.experiments.policies import OnnxPolicy
+    from activevision.export import export_onnx, policy_metadata
+    from activevision.geometry import CameraConfig
+
+    camera = CameraConfig(hfov=1.2217, camera_height=0.62, tilt_min=0.5236, tilt_max=1.0472)
+    metadata = policy_metadata(helpers.eight_way_table(), camera, camera=camera)
+    exported = export_onnx(QNetwork(9).eval(), tmp_path / "policy.onnx", metadata)
+    config = OnnxPolicy(exported.model_path).env_config()
+    assert config.camera == camera
+    assert config.start_tilt_range_deg == pytest.approx((30.0, 60.0), abs=1e-3)
+    assert OnnxPolicy(pretrained_policy_path()).env_config().camera == EnvConfig().camera
+    argv = ["demo", "--policy", str(exported.model_path), "--out", str(tmp_path / "d.png")]
+    assert main(argv) == 0, capsys.readouterr().err

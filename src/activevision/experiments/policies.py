@@ -28,7 +28,7 @@ from activevision.envs.observations import (
 )
 from activevision.envs.robots import RobotsConfig
 from activevision.envs.starts import corrupt_pose
-from activevision.geometry import field_landmarks
+from activevision.geometry import CameraConfig, field_landmarks
 from activevision.geometry.angles import wrap_angle
 from activevision.localisation import LocalisationConfig, ViewpointStatus, best_viewpoint
 from activevision.rendering.appearance import AppearanceConfig
@@ -324,6 +324,27 @@ def with_world(
         ) from error
 
 
+def with_camera(config: EnvConfig, camera: Any, source: str = "policy.json") -> EnvConfig:
+    """``config`` seen through ``camera`` (a policy.json's record, a
+    :class:`activevision.runtime.CameraModel`): the images, head limits and views a policy
+    trained with it expects. A start tilt range outside its tilt limits becomes those limits
+    (policy.json does not record the run's). PolicyFileError names ``source`` where the
+    record is no camera this activevision's env takes."""
+    try:
+        trained = CameraConfig.of(camera)
+    except (TypeError, ValueError) as error:
+        raise PolicyFileError(
+            f"{source}: 'camera' does not fit this activevision: {error}"
+        ) from error
+    if trained == config.camera:
+        return config
+    low, high = math.degrees(trained.tilt_min), math.degrees(trained.tilt_max)
+    start = config.start_tilt_range_deg
+    if not low <= start[0] <= start[1] <= high:
+        start = (low, high)
+    return config.replace(camera=trained, start_tilt_range_deg=start)
+
+
 class OnnxPolicy:
     """An exported policy run by :class:`activevision.runtime.HeadController` (no torch),
     fed the newest camera frame, as on a robot."""
@@ -343,8 +364,10 @@ class OnnxPolicy:
         ``trained_world``: also in the world it was trained in (policy.json's ``world``, its
         appearance ranges and other robots; ``base``'s when the file predates the record).
         A discrete policy moves by its own steps (policy.json's ``step_deg`` and
-        ``action_set``). Evaluation plays the paper's clean world whatever the policy was
-        trained in;
+        ``action_set``), and every policy sees through the camera it was trained with
+        (policy.json's ``camera``; ``base``'s when the file predates the record), its start
+        tilts within that camera's limits. Evaluation plays the paper's clean world whatever
+        the policy was trained in;
         ``activevision robustness`` plays the trained one as its ``clean`` row.
         PolicyFileError if the record does not fit this activevision's configs.
         """
@@ -352,6 +375,8 @@ class OnnxPolicy:
         base = base or EnvConfig()
         if trained_world and meta.world is not None:
             base = with_world(base, meta.world, source=str(self.controller.metadata_path))
+        if meta.camera is not None:
+            base = with_camera(base, meta.camera, source=str(self.controller.metadata_path))
         if not self.controller.continuous and meta.step_deg is not None:
             # a discrete policy's action i is row i of its table: the env moves by the same
             # (policy.json's step_deg and action_set; a bare export_onnx's: base's)
