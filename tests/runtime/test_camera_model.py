@@ -176,6 +176,8 @@ def test_robot_camera_must_be_a_camera(camera_policy):
         CameraModel.from_degrees(160, 120, "70", 0.5, (-90, 90), (5, 65))
     with pytest.raises(ValueError, match=r"hfov_deg must be degrees, at least 5; got 1\.22"):
         CameraModel.from_degrees(160, 120, 1.22, 0.5, (-90, 90), (5, 65))  # radians
+    with pytest.raises(ValueError, match=r"camera_height must be metres, at most 5; got 62"):
+        CameraModel.from_degrees(160, 120, 60.0, 62, (-90, 90), (5, 65))  # centimetres
     with pytest.raises(ValueError, match="tilt_deg must be a finite"):
         CameraModel.from_degrees(160, 120, 60.0, 0.5, (-90, 90), (5, None))
     with pytest.raises(ValueError, match="a \\(min, max\\) pair"):

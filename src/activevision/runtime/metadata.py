@@ -146,6 +146,9 @@ _CAMERA_KEYS = {
 #: The narrowest field of view CameraModel.from_degrees takes (degrees): a humanoid's head
 #: camera sees tens of degrees; a value below this is radians given for degrees.
 MIN_HFOV_DEG = 5.0
+#: The highest camera CameraModel.from_degrees takes (metres): a humanoid's head camera is
+#: within two metres of the ground; a value above this is centimetres given for metres.
+MAX_CAMERA_HEIGHT_M = 5.0
 #: How far a robot's camera may differ from the trained one before HeadController warns.
 CAMERA_TOLERANCES = {
     "hfov": math.radians(1.0),  #: rad
@@ -294,7 +297,9 @@ class CameraModel:
         tilt_deg: tuple[float, float],
     ) -> CameraModel:
         """A camera with its angles in degrees: ``pan_deg`` and ``tilt_deg`` are the
-        ``(min, max)`` head limits (pan positive left, tilt positive down)."""
+        ``(min, max)`` head limits (pan positive left, tilt positive down). ValueError for a
+        field of view below ``MIN_HFOV_DEG`` (radians) or a ``camera_height`` above
+        ``MAX_CAMERA_HEIGHT_M`` (centimetres)."""
 
         def degrees(name: str, value: Any) -> float:
             real = _real(value)
@@ -312,6 +317,12 @@ class CameraModel:
         hfov = degrees("hfov_deg", hfov_deg)
         if hfov < MIN_HFOV_DEG:  # no head camera is that narrow: radians given for degrees
             raise ValueError(f"hfov_deg must be degrees, at least {MIN_HFOV_DEG:g}; got {hfov:g}")
+        metres = _real(camera_height)
+        if metres is not None and metres > MAX_CAMERA_HEIGHT_M:  # no head camera is that high
+            raise ValueError(
+                f"camera_height must be metres, at most {MAX_CAMERA_HEIGHT_M:g}; got {metres:g}"
+                " (centimetres?)"
+            )
         return cls(
             width=width,
             height=height,
