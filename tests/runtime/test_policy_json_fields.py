@@ -54,6 +54,9 @@ def edited(changes: dict) -> dict:
         ({"action_set": REMOVED}, "'action_set'"),
         ({"training_config_sha256": "abc"}, "'training_config_sha256'"),
         ({"action_names": [*SHIPPED["action_names"][:-1], 8]}, "'action_names'"),
+        # the controller keeps this many actions: 10**13 asked for 73 TiB (a MemoryError)
+        ({"action_history": 10**13}, "'action_history' must be an integer in 0..16"),
+        ({"action_history": -1}, "'action_history'"),
     ],
     ids=repr,
 )

@@ -149,6 +149,9 @@ MIN_HFOV_DEG = 5.0
 #: The highest camera CameraModel.from_degrees takes (metres): a humanoid's head camera is
 #: within two metres of the ground; a value above this is centimetres given for metres.
 MAX_CAMERA_HEIGHT_M = 5.0
+#: The most previous actions a policy remembers (EnvConfig.action_history's limit; the
+#: controller keeps that many, so a larger number in a file is refused, not allocated).
+MAX_ACTION_HISTORY = 16
 #: How far a robot's camera may differ from the trained one before HeadController warns.
 CAMERA_TOLERANCES = {
     "hfov": math.radians(1.0),  #: rad
@@ -480,7 +483,7 @@ class PolicyMetadata:
             action_names=read.action_names(table_deg),
             observation=read.observation(),
             vector_keys=read.vector_keys(),
-            action_history=read.count("action_history"),
+            action_history=read.count("action_history", MAX_ACTION_HISTORY),
             vector_input_name=read.vector_input_name(),
             act_by=read.act_by(),
             goal_output_name=read.optional_str("goal_output_name"),
@@ -602,11 +605,11 @@ class _MetadataReader:
             raise self.fail("'goal_views_deg' must be a non-empty list of [pan, tilt] degrees")
         return np.radians(array)
 
-    def count(self, key: str) -> int:
-        """A non-negative integer, 0 when absent."""
+    def count(self, key: str, most: int) -> int:
+        """A non-negative integer up to ``most``, 0 when absent."""
         value = self.values.get(key, 0)
-        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-            raise self.fail(f"{key!r} must be a non-negative integer, got {value!r}")
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= most:
+            raise self.fail(f"{key!r} must be an integer in 0..{most}, got {value!r}")
         return value
 
     def vector_keys(self) -> tuple[str, ...]:
