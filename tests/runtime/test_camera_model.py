@@ -315,6 +315,23 @@ def test_the_retrain_hint_trains_a_neck_at_its_physical_limits():
     assert CameraModel.of(camera).differences(robot) == {}
 
 
+def test_the_retrain_hint_trains_a_neck_that_does_not_pan():
+    """A fixed pan (min = max) is a camera CameraModel takes; training's camera needs a
+    range: the hint gives +-0.5 degrees and says so (its pan_min=0 pan_max=0 was refused)."""
+    pytest.importorskip("torch")
+    from activevision.runtime.controller import camera_mismatch_message
+    from activevision.training import TrainConfig, apply_overrides
+
+    robot = CameraModel.from_degrees(640, 480, 58.0, 0.5, (0, 0), (5, 65))
+    message = camera_mismatch_message(Path("p.onnx"), robot, {"pan_min": "..."}, 160)
+    assert "the robot's neck does not pan (pan_min = pan_max)" in message
+    words = message.split("activevision train ... ")[1].split(" (and")[0].split()
+    camera = apply_overrides(TrainConfig(), [w for w in words if w != "--set"]).env.camera
+    assert math.degrees(camera.pan_min) == pytest.approx(-0.5)
+    assert math.degrees(camera.pan_max) == pytest.approx(0.5)
+    assert math.degrees(camera.tilt_max) == pytest.approx(65)
+
+
 def test_warning_can_be_made_an_error(camera_policy):
     with warnings.catch_warnings():
         warnings.simplefilter("error", CameraMismatchWarning)

@@ -469,8 +469,19 @@ def camera_mismatch_message(
     values: dict[str, float] = {"width": input_width, "height": height}
     values |= {name: getattr(robot, name) for name in ("hfov", "camera_height")}
     values |= {name: _trainable_limit(name, getattr(robot, name)) for name in _HEAD_LIMITS}
+    fixed = [axis for axis in ("pan", "tilt") if values[f"{axis}_min"] == values[f"{axis}_max"]]
+    for axis in fixed:  # training's camera needs min < max: the narrowest range around it
+        middle = values[f"{axis}_min"]
+        values[f"{axis}_min"] = _trainable_limit(axis, middle - FIXED_AXIS_HALF_RANGE)
+        values[f"{axis}_max"] = _trainable_limit(axis, middle + FIXED_AXIS_HALF_RANGE)
     settings = " ".join(f"--set env.camera.{name}={value:.9g}" for name, value in values.items())
     lines = "\n".join(f"  - {line}" for line in differences.values())
+    for axis in fixed:
+        lines += (
+            f"\n  - the robot's neck does not {axis} ({axis}_min = {axis}_max); training needs"
+            f" a range, so the settings below give it"
+            f" +-{math.degrees(FIXED_AXIS_HALF_RANGE):g} degrees"
+        )
     low, high = (math.degrees(getattr(robot, f"tilt_{end}")) for end in ("min", "max"))
     return (
         f"the robot's camera differs from the one {model_path} was trained for:\n{lines}\n"
@@ -484,6 +495,9 @@ def camera_mismatch_message(
     )
 
 
+#: Half the head range (rad) the retrain hint gives an axis the robot's neck cannot move
+#: (its min = max): training's camera needs min < max.
+FIXED_AXIS_HALF_RANGE = math.radians(0.5)
 #: CameraModel's head limit fields
 _HEAD_LIMITS = ("pan_min", "pan_max", "tilt_min", "tilt_max")
 #: How far inside its open range (pan (-pi, pi), tilt (-pi/2, pi/2)) training's
