@@ -11,6 +11,7 @@ import os
 from dataclasses import dataclass
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
 from activevision.figures.scene import view_figure
@@ -61,16 +62,32 @@ def _pick(snapshots: list[Snapshot], columns: int) -> list[Snapshot]:
 
 
 def _outcome(trace: EpisodeTrace) -> str:
+    """The row's label: the steps counted from the trace (an episode of another time limit
+    than 20 said "no success in 20 steps"; one step was "1 steps")."""
+    steps = len(trace.snapshots) - 1
+    counted = f"{steps} step" + ("" if steps == 1 else "s")
     if trace.success:
-        return f"success in {len(trace.snapshots) - 1} steps"
-    return "ball lost" if trace.ball_lost else "no success in 20 steps"
+        return f"success in {counted}"
+    return "ball lost" if trace.ball_lost else f"no success in {counted}"
+
+
+#: the suptitle's top this far below the figure's top edge, in inches: at matplotlib's
+#: default (2% of the height) a figure of 3 or more traces put it over the first row's titles,
+#: as tight_layout reserves only its height and a pad
+_SUPTITLE_INCHES = 0.16
 
 
 def plot_episodes(
     traces: list[EpisodeTrace], out_png: str | os.PathLike[str], columns: int = 6
 ) -> None:
     """For each trace a strip of ``columns`` steps: camera image above the top view."""
-    fig = new_figure(figsize=(2.6 * columns, 4.1 * len(traces)))
+    save_figure(episodes_figure(traces, columns), out_png, dpi=100)
+
+
+def episodes_figure(traces: list[EpisodeTrace], columns: int = 6) -> Figure:
+    """:func:`plot_episodes`'s figure, not yet written."""
+    height = 4.1 * len(traces)
+    fig = new_figure(figsize=(2.6 * columns, height))
     axes = fig.subplots(
         2 * len(traces),
         columns,
@@ -111,9 +128,10 @@ def plot_episodes(
         f" type ({landmark_key()})"
         + ("; grey discs: other robots" if any(_has_robots(t) for t in traces) else ""),
         fontsize=9,
+        y=1 - _SUPTITLE_INCHES / height,
     )
     fig.tight_layout()
-    save_figure(fig, out_png, dpi=100)
+    return fig
 
 
 def animate_episode(trace: EpisodeTrace, out_gif: str | os.PathLike[str], fps: int = 3) -> None:

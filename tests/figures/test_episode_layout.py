@@ -1,0 +1,45 @@
+"""The episode figure (``activevision episode --policies a b c d``) stays readable with any
+number of traces: its colour key over the first row's titles, and its row labels counting
+the steps the trace played."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from activevision.envs import EnvConfig
+from activevision.experiments.episode_figure import trace_episode
+from activevision.experiments.policies import RandomPolicy
+from activevision.figures.episode import episodes_figure
+
+
+@pytest.fixture(scope="module")
+def trace():
+    return trace_episode(RandomPolicy(EnvConfig()), 0)
+
+
+@pytest.mark.parametrize("rows", [1, 2, 4, 6])
+def test_the_colour_key_overlaps_no_title(trace, rows):
+    fig = episodes_figure([trace] * rows)
+    renderer = fig.canvas.get_renderer()
+    fig.draw(renderer)
+    key = fig.get_suptitle()
+    assert key.startswith("red: robot and goal view")
+    key_box = fig._suptitle.get_window_extent(renderer)
+    assert key_box.y1 <= fig.bbox.y1  # not cut at the top either
+    for ax in fig.axes:
+        if ax.get_title():
+            assert not key_box.overlaps(ax.title.get_window_extent(renderer)), ax.get_title()
+
+
+def test_the_row_label_counts_the_trace_s_steps(trace):
+    def label(**changes) -> str:
+        fig = episodes_figure([dataclasses.replace(trace, **changes)], columns=2)
+        return fig.axes[0].get_ylabel()
+
+    assert label(success=True, snapshots=trace.snapshots[:2]) == "success in 1 step"
+    assert label(success=True, snapshots=trace.snapshots[:4]) == "success in 3 steps"
+    short = trace.snapshots[:11]  # an episode of a 10-step limit
+    assert label(success=False, ball_lost=False, snapshots=short) == "no success in 10 steps"
+    assert label(success=False, ball_lost=True) == "ball lost"
