@@ -689,6 +689,25 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         ["plot", "{run}"],
         "metrics.csv",
     ),
+    # a log without a column the figures draw against was a KeyError traceback
+    (
+        "metrics.csv without its epochs",
+        lambda r: (r / "metrics.csv").write_text("step,success_rate\n30,0.5\n"),
+        ["plot", "{run}"],
+        "metrics.csv has no 'epoch' column",
+    ),
+    (
+        "episodes.csv without its episodes",
+        lambda r: (r / "episodes.csv").write_text("step,reward\n20,1\n"),
+        ["plot", "{run}"],
+        "episodes.csv has no 'episode' column",
+    ),
+    (
+        "evaluations.csv of another layout",
+        lambda r: (r / "evaluations.csv").write_text("step,episodes\n30,5\n"),
+        ["plot", "{run}"],
+        "evaluations.csv has no 'success_rate' column",
+    ),
 ]
 
 

@@ -4,10 +4,15 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from activevision.training.config import MATCH_ENV_ID, load_config
 from activevision.training.metrics import read_csv_columns
+
+if TYPE_CHECKING:
+    from activevision.figures.training import Columns, Curve
 
 #: the loss curve's title where it is not DDQN's TD loss
 _LOSS_TITLES = {
@@ -41,11 +46,33 @@ def plot_run(
         elif config.env_id != MATCH_ENV_ID and config.env.action_type == "continuous":
             loss_title = "imitation loss (squared error + goal cross-entropy)"
     match = config is not None and config.match_student
+    curves = MATCH_CURVES if match else CURVES
+    _check_columns(run_dir, {**tables, "validation": validation}, curves)
     return plot_training(
         tables,
         out,
         title=run_dir.resolve().name,  # the folder's name, also for `plot .`
         validation=validation,
         loss_title=loss_title,
-        curves=MATCH_CURVES if match else CURVES,
+        curves=curves,
     )
+
+
+#: the log each curve source is read from
+_LOG_FILES = {"episodes": "episodes.csv", "metrics": "metrics.csv", "validation": "evaluations.csv"}
+
+
+def _check_columns(run_dir: Path, tables: dict[str, Columns], curves: Sequence[Curve]) -> None:
+    """ValueError naming the log and the column where a log with rows lacks one a figure
+    draws against (a log edited by hand or cut short was a KeyError traceback); a missing
+    y column is drawn as "not measured", as in older runs."""
+    needed = {(c.source, c.x) for c in curves}
+    if tables["validation"] and any(c.y == "success_rate" for c in curves):
+        # the greedy validation drawn over the success rate, on the metrics' epoch axis
+        needed |= {("validation", "step"), ("validation", "success_rate"), ("metrics", "step")}
+    for source, column in sorted(needed):
+        if tables[source] and column not in tables[source]:
+            raise ValueError(
+                f"{run_dir / _LOG_FILES[source]} has no {column!r} column: not a training log"
+                " of activevision's"
+            )
