@@ -299,6 +299,14 @@ def test_a_run_without_its_log_has_nothing_to_plot(run, capsys, one_clear_line):
     one_clear_line("has no metrics.csv (its training log): nothing to plot")
 
 
+def test_plot_names_a_plots_folder_that_is_a_file(run, capsys, one_clear_line):
+    shutil.rmtree(run / "plots", ignore_errors=True)
+    (run / "plots").write_text("mine")
+    assert main(["plot", str(run)]) == 2
+    one_clear_line(f"{run / 'plots'} is a file, not a directory")
+    assert (run / "plots").read_text() == "mine"
+
+
 def test_a_run_without_weights_reads_its_newest_checkpoint_or_says_which_file_it_lacks(
     run, capsys, one_clear_line, tmp_path
 ):

@@ -153,6 +153,9 @@ def cmd_plot(args: argparse.Namespace) -> None:
         raise ValueError(f"{args.run} is not a training run (no config.json and metrics.csv)")
     if not (args.run / "metrics.csv").is_file():
         raise ValueError(f"{args.run} has no metrics.csv (its training log): nothing to plot")
+    plots = args.run / "plots"
+    if plots.exists() and not plots.is_dir():  # was "[Errno 17] File exists"
+        raise OutputError(f"{plots} is a file, not a directory: plot writes its figures there")
     print(f"wrote {plot_run(args.run)}")
 
 
