@@ -127,3 +127,19 @@ def test_an_evaluation_is_the_same_bytes_its_latency_apart(trained, tmp_path, ca
     )
     assert not (out / "latency.json").exists()
     assert "wrote" in capsys.readouterr().out
+
+
+def test_the_picture_commands_help_says_what_they_draw_and_where(capsys):
+    """``episode``, ``demo`` and ``plot --help`` had no description, and no picture command
+    said what --out and --seed are (nor that a GIF is written beside the figure)."""
+    for command in ("render", "viewpoints", "episode", "demo", "plot"):
+        assert main([command, "--help"]) == 0
+        text = capsys.readouterr().out
+        description = text.split("\n\n")[1]
+        assert not description.startswith(("options:", "positional")), command
+        for option in ("--seed", "--out"):
+            line = next((row for row in text.splitlines() if row.strip().startswith(option)), "")
+            assert command == "plot" or line.split(maxsplit=2)[2:], (command, option)
+    for command in ("episode", "demo"):
+        assert main([command, "--help"]) == 0
+        assert "GIF is written beside it" in " ".join(capsys.readouterr().out.split())

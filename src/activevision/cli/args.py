@@ -60,6 +60,11 @@ def refused_by(parser: argparse.ArgumentParser, option: str) -> Iterator[None]:
         parser.error(f"{option}: {error}")
 
 
+#: ``--out`` of the picture commands (their ``--help`` said nothing of it)
+FIGURE_HELP = "the figure's file, in the format its suffix names (.png, .pdf, .svg, ...)"
+FIGURE_AND_GIF_HELP = FIGURE_HELP + "; the first policy's GIF is written beside it (.gif)"
+
+
 def figure_file(text: str) -> Path:
     """A figure's file (``--out view.png``): a path that ends in a separator names a folder,
     which ``Path`` would silently make a file of that name (``--out figs/`` wrote a PNG

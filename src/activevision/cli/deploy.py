@@ -6,7 +6,14 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from activevision.cli.args import add_overwrite, add_weights, check_run, figure_file, seed
+from activevision.cli.args import (
+    FIGURE_AND_GIF_HELP,
+    add_overwrite,
+    add_weights,
+    check_run,
+    figure_file,
+    seed,
+)
 from activevision.cli.outputs import check_figure_path, check_outputs, figure_and_gif
 
 
@@ -69,11 +76,15 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--opset", type=_opset, default=17, help="ONNX opset (default 17)")
     add_overwrite(p)
 
-    p = sub.add_parser(
-        "demo", help="episode figure + GIF of the shipped policy (no training needed)"
-    )
+    text = "episode figure + GIF of the shipped policy (no training needed)"
+    p = sub.add_parser("demo", help=text, description=text + ", beside random head moves")
     p.set_defaults(func=cmd_demo)
     p.add_argument("--policy", type=Path, help="an exported policy.onnx (default: the shipped one)")
-    p.add_argument("--seed", type=seed, default=0)
-    p.add_argument("--out", type=figure_file, default=Path("demo/episode.png"))
+    p.add_argument("--seed", type=seed, default=0, help="seed of the episode's start (default 0)")
+    p.add_argument(
+        "--out",
+        type=figure_file,
+        default=Path("demo/episode.png"),
+        help=FIGURE_AND_GIF_HELP + " (default: demo/episode.png)",
+    )
     add_overwrite(p)

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from activevision.cli.args import (
+    FIGURE_AND_GIF_HELP,
     add_overwrite,
     add_weights,
     check_run,
@@ -317,7 +318,7 @@ def cmd_report(args: argparse.Namespace) -> None:
 def _add_common(p: argparse.ArgumentParser, run_help: str) -> None:
     p.add_argument("--run", type=Path, help=run_help)
     add_weights(p)
-    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("--seed", type=seed, default=0, help="seed of the episode starts (default 0)")
 
 
 def _same(policy: HeadPolicy, error: float) -> HeadPolicy:
@@ -385,13 +386,14 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--num-cpus", type=positive_int, help="with --ray: CPUs of the local Ray")
     p.add_argument("--chunk", type=positive_int, default=25, help="with --ray: episodes a task")
 
-    p = sub.add_parser("episode", help="episode figure (and GIF) of two methods from one start")
+    text = "episode figure (and GIF) of two methods from one start"
+    p = sub.add_parser("episode", help=text, description=text)
     p.set_defaults(func=cmd_episode)
     _add_common(p, "a training run (for the learned policy)")
     p.add_argument(
         "--policies", nargs="+", type=method, help="default: learned random (oracle random)"
     )
-    p.add_argument("--out", type=figure_file, required=True)
+    p.add_argument("--out", type=figure_file, required=True, help=FIGURE_AND_GIF_HELP)
     add_overwrite(p)
 
     p = sub.add_parser("report", help="one Markdown page with a run's figures and tables")

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from activevision.cli.args import add_overwrite, choice_list, figure_file, seed
+from activevision.cli.args import FIGURE_HELP, add_overwrite, choice_list, figure_file, seed
 from activevision.cli.outputs import check_figure_path, check_outputs
 
 
@@ -59,12 +59,12 @@ def add_parsers(sub: Any) -> None:
     ]:
         p = sub.add_parser(name, help=text, description=text)
         p.set_defaults(func=func)
-        p.add_argument("--seed", type=seed, default=0)
+        p.add_argument("--seed", type=seed, default=0, help="seed of the start (default 0)")
         p.add_argument(
             "--field",
             type=choice_list(_field_names),
             default="kidsize",
             help="field preset: kidsize | paper2019",
         )
-        p.add_argument("--out", type=figure_file, required=True)
+        p.add_argument("--out", type=figure_file, required=True, help=FIGURE_HELP)
         add_overwrite(p)

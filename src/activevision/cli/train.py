@@ -234,9 +234,10 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--resume", type=Path, metavar="RUN", help="continue runs/NAME")
     add_overwrite(p)
 
-    p = sub.add_parser("plot", help="draw a run's training figures")
+    text = "draw a run's training figures"
+    p = sub.add_parser("plot", help=text, description=text + ": RUN/plots/*.png, redrawn")
     p.set_defaults(func=cmd_plot)
-    p.add_argument("run", type=Path)
+    p.add_argument("run", type=Path, help="a training run's folder")
 
     text = "seed x grid sweep of training runs on Ray Tune (pip install activevision[ray])"
     p = sub.add_parser("sweep", help=text, description=text)
