@@ -171,3 +171,17 @@ def test_a_match_runs_reward_panel_counts_matches():
         draw_curve(ax, curves[0], episodes, {})
         assert ax.get_xlabel() == word
         assert ax.get_legend_handles_labels()[1][0] == word
+
+
+def test_a_short_runs_epoch_axis_counts_whole_epochs():
+    """Two epochs drew ticks at epoch 1.2, 1.4, ...: an epoch is a count."""
+    from activevision.figures.canvas import new_figure
+    from activevision.figures.training import CURVES, draw_curve
+
+    metrics = {"epoch": [1, 2], "step": [300, 600], "success_rate": [0.56, 0.65]}
+    episodes = {"episode": [1, 2, 3], "reward": [1.0, -2.0, 0.0]}
+    for curve, table in ((CURVES[2], metrics), (CURVES[0], episodes)):
+        ax = new_figure().subplots()
+        draw_curve(ax, curve, table, {})
+        ticks = [t for t in ax.get_xticks() if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
+        assert ticks and all(float(t).is_integer() for t in ticks), (curve.x, ticks)

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.ticker import MaxNLocator
 
 from activevision.figures.canvas import new_figure, save_figure
 
@@ -134,6 +135,8 @@ def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> N
         if curve.y == "success_rate" and validation:
             _draw_validation(ax, x, table, validation)
     ax.set_title(curve.title)
+    if curve.x in ("epoch", "episode"):  # counts: a short run's axis read "epoch 1.2"
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel(curve.xlabel or curve.x)
     ax.set_ylabel(curve.ylabel)
     ax.grid(True, alpha=0.3)
