@@ -8,9 +8,12 @@ best of several timed chunks over several rounds (the machine's capability; medi
 printed too, and differ when other processes compete for the cores). ``--factors`` also
 times each appearance factor alone (the time it adds as a share of a clean frame's), and the
 factors of each of the two passes together (the row pass's: lighting, textures, lines, hall,
-mount; the finish pass's: blur, noise, tone curve). Prints a table, then one JSON line.
+mount; the finish pass's: blur, noise, tone curve). ``--floor`` times two of the finish pass's
+factors alone, written here as bare loops (:func:`floor_costs`), against the time the 0.60
+target leaves for all of them. Prints a table, then one JSON line.
 
     python bench/render.py [--seconds 1] [--rounds 3] [--reference-frames 50] [--factors]
+                           [--floor]
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ import time
 
 import numba
 import numpy as np
+from numba import njit
 
 from activevision.cli.args import positive_float, positive_int, seed
 from activevision.geometry.camera import CameraConfig
@@ -146,6 +150,107 @@ def print_factor_costs(shares: dict[str, float]) -> None:
         print(f"  {name}: {shares[name]:+.2f}")
 
 
+@njit(fastmath=True, nogil=True)
+def _noise_and_tone(images, noise, tone, read2, shot) -> None:
+    """Sensor noise and the tone curve and nothing else, as the renderer's finish pass splits
+    them (the arithmetic in one vectorised loop a row, the table reads in a plain one)."""
+    height, width = images.shape[1], images.shape[2]
+    levels = np.empty(width, np.int32)
+    r2, sh = np.float32(read2), np.float32(shot)
+    zero, top, half = np.float32(0.0), np.float32(255.0), np.float32(0.5)
+    for n in range(images.shape[0]):
+        start = (n * 7919) % (noise.shape[0] - height * width)
+        for j in range(height):
+            first = start + j * width
+            for i in range(width):
+                x = np.float32(images[n, j, i])
+                y = x + np.sqrt(r2 + sh * x) * noise[first + i] + half
+                levels[i] = np.int32(zero if y < zero else (top if y > top else y))
+            for i in range(width):
+                images[n, j, i] = tone[levels[i]]
+
+
+@njit(fastmath=True, nogil=True)
+def _blur_rows(image, taps, pad, rows) -> None:
+    """``rows`` = ``image`` blurred along its rows, each row padded once."""
+    height, width = image.shape
+    r = len(taps) // 2
+    for j in range(height):
+        for i in range(width):
+            pad[r + i] = image[j, i]
+        for i in range(r):
+            pad[i] = pad[r]
+            pad[r + width + i] = pad[r + width - 1]
+        for i in range(width):
+            rows[j, i] = taps[0] * pad[i]
+        for k in range(1, len(taps)):
+            for i in range(width):
+                rows[j, i] += taps[k] * pad[i + k]
+
+
+@njit(fastmath=True, nogil=True)
+def _blur(images, taps, rows) -> None:
+    """A separable blur of ``len(taps)`` taps along each axis and nothing else (the defocus
+    at the robust range's widest sigma, 1.2 px, has 7)."""
+    height, width = images.shape[1], images.shape[2]
+    r = len(taps) // 2
+    pad = np.empty(width + 2 * r, np.float32)
+    out = np.empty(width, np.float32)
+    for n in range(images.shape[0]):
+        _blur_rows(images[n], taps, pad, rows)
+        for j in range(height):
+            out[:] = np.float32(0.5)
+            for k in range(len(taps)):
+                source = min(max(j + k - r, 0), height - 1)  # once a row: branches are fine
+                for i in range(width):
+                    out[i] += taps[k] * rows[source, i]
+            for i in range(width):
+                images[n, j, i] = np.uint8(out[i])
+
+
+def floor_costs(pose, pan, tilt, ball, camera: CameraConfig, args) -> dict[str, float]:
+    """The time (one thread, N = 64) two finish-pass factors take alone as bare loops, as a
+    share of what the 0.60 target leaves for every factor and 4 robots together: a clean
+    frame's time x (1 / 0.60 - 1), measured in the same rounds. A share near or above 1 says
+    that factor alone spends the budget of all when computed per pixel as the renderer does;
+    not a proof that no kernel could do it in less (a table per frame instead of the square
+    root, say, which changes the frames' bytes)."""
+    serial = Renderer(camera=camera, parallel=False)
+    images = np.empty((64, camera.height, camera.width), np.uint8)
+    noise = np.random.default_rng(0).standard_normal(1 << 20).astype(np.float32)
+    tone = np.arange(256, dtype=np.uint8)
+    taps = np.array([0.04, 0.11, 0.21, 0.28, 0.21, 0.11, 0.04], np.float32)
+    rows = np.empty((camera.height, camera.width), np.float32)
+    counter = [0]
+
+    def clean() -> None:
+        k = counter[0] = (counter[0] + 64) % (len(pose) - 64)
+        s = slice(k, k + 64)
+        serial.render(pose[s], pan[s], tilt[s], ball[s], out=images)
+
+    calls = {
+        "clean": clean,
+        "noise_and_tone": lambda: _noise_and_tone(images, noise, tone, 9.0, 0.3),
+        "blur": lambda: _blur(images, taps, rows),
+    }
+    for fn in calls.values():
+        fn()  # compile
+    best = dict.fromkeys(calls, np.inf)
+    for _ in range(args.rounds):
+        for name, fn in calls.items():
+            best[name] = min(best[name], time_calls(fn, args.seconds / 3)[0] / 64)
+    budget = best["clean"] * (1 / 0.60 - 1)
+    print(
+        f"bare loops, one thread: a clean frame {best['clean'] * 1e6:.1f} us, so the 0.60 target"
+        f" leaves {budget * 1e6:.1f} us a frame for every factor and 4 robots together;"
+    )
+    shares = {}
+    for name in ("noise_and_tone", "blur"):
+        shares[name] = best[name] / budget
+        print(f"  {name:15s} alone, as bare loops: {best[name] * 1e6:5.1f} us = {shares[name]:.2f}")
+    return shares
+
+
 def randomised_world(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, float]:
     """Single-frame and N=64 batched speed with every appearance factor drawn at its robust
     range (``AppearanceConfig.randomised()``), a 3-degree head move per frame (motion blur)
@@ -229,6 +334,12 @@ def main() -> None:
     parser.add_argument("--seed", type=seed, default=0)
     parser.add_argument(
         "--factors", action="store_true", help="also time each appearance factor alone"
+    )
+    parser.add_argument(
+        "--floor",
+        action="store_true",
+        help="also time noise + tone curve and blur alone as bare loops against the target's"
+        " budget",
     )
     args = parser.parse_args()
 
@@ -321,6 +432,8 @@ def main() -> None:
         shares = factor_costs(renderer, pose, pan, tilt, ball, rng, args)
         print_factor_costs(shares)
         results["factor_extra_share"] = shares
+    if args.floor:
+        results["floor_share_of_budget"] = floor_costs(pose, pan, tilt, ball, camera, args)
 
     m = args.reference_frames
     render_reference(pose[:1], pan[:1], tilt[:1])
