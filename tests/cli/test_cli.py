@@ -1,5 +1,6 @@
 """The command line as a user runs it: pictures, the main job end to end, clear errors."""
 
+import argparse
 import json
 import subprocess
 import sys
@@ -143,3 +144,13 @@ def test_the_picture_commands_help_says_what_they_draw_and_where(capsys):
     for command in ("episode", "demo"):
         assert main([command, "--help"]) == 0
         assert "GIF is written beside it" in " ".join(capsys.readouterr().out.split())
+
+
+def test_every_command_says_what_it_does_in_its_help():
+    """``train``, ``evaluate``, ``compare``, ``report``, ``export`` and ``quickstart --help``
+    went from the usage line straight to the options."""
+    from activevision.cli import build_parser
+
+    (commands,) = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
+    missing = [name for name, parser in commands.choices.items() if not parser.description]
+    assert missing == []

@@ -68,7 +68,13 @@ def cmd_demo(args: argparse.Namespace) -> None:
 
 
 def add_parsers(sub: Any) -> None:
-    p = sub.add_parser("export", help="export a run's policy to ONNX (+ policy.json)")
+    text = "export a run's policy to ONNX (+ policy.json)"
+    p = sub.add_parser(
+        "export",
+        help=text,
+        description=text + ": the model and the file that describes it (inputs, moves, camera,"
+        " training world), what activevision.runtime.HeadController loads on a robot",
+    )
     p.set_defaults(func=cmd_export)
     p.add_argument("run", type=Path)
     p.add_argument("--out", "-o", type=Path, help="default: RUN/policy.onnx")

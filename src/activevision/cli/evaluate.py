@@ -347,7 +347,14 @@ def _add_runs(p: argparse.ArgumentParser) -> None:
 
 def add_parsers(sub: Any) -> None:
     method = choice_list(_method_names)
-    p = sub.add_parser("evaluate", help="score methods on fixed-seed episodes")
+    text = "score methods on fixed-seed episodes"
+    p = sub.add_parser(
+        "evaluate",
+        help=text,
+        description=text + " (the same starts for every method): the paper's success rate, goal"
+        " reached and more, each with its 95% interval; writes evaluation.csv, episodes.csv and"
+        " evaluation.json (and latency.json with a learned policy)",
+    )
     p.set_defaults(func=cmd_evaluate)
     _add_common(p, "a training run: adds the learned policy")
     p.add_argument("--methods", nargs="+", type=method, help=" ".join(_method_names()))
@@ -363,7 +370,14 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--out", type=Path)
     add_overwrite(p)
 
-    p = sub.add_parser("compare", help="success vs localisation error, every method")
+    text = "success vs localisation error, every method"
+    p = sub.add_parser(
+        "compare",
+        help=text,
+        description=text + ": each method on the same episodes at each error level of --errors"
+        " (the believed pose moved e metres and turned e rad); writes compare.csv and"
+        " compare.png, and resumes a compare.csv played on the same episodes",
+    )
     p.set_defaults(func=cmd_compare)
     _add_common(p, "a training run: adds the learned policy")
     p.add_argument(
@@ -396,7 +410,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--out", type=figure_file, required=True, help=FIGURE_AND_GIF_HELP)
     add_overwrite(p)
 
-    p = sub.add_parser("report", help="one Markdown page with a run's figures and tables")
+    text = "one Markdown page with a run's figures and tables"
+    p = sub.add_parser("report", help=text, description=text + " (RUN/report.md)")
     p.set_defaults(func=cmd_report)
     p.add_argument("run", type=Path)
     add_overwrite(p)

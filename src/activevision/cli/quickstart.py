@@ -84,7 +84,13 @@ def summary_line(run_dir: Path) -> str:
 
 
 def add_parsers(sub: Any) -> None:
-    p = sub.add_parser("quickstart", help="short training + evaluation + figures + report")
+    text = "short training + evaluation + figures + report"
+    p = sub.add_parser(
+        "quickstart",
+        help=text,
+        description="the main job (make run): " + text + ", and a short match comparison, all"
+        " in --out",
+    )
     p.set_defaults(func=None)  # run by cli.main, which passes itself
     p.add_argument("--out", type=Path, default=Path("runs/quickstart"))
     p.add_argument("--steps", type=positive_int, default=None, help="default: the preset's")

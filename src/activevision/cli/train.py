@@ -214,7 +214,14 @@ def _add_config_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def add_parsers(sub: Any) -> None:
-    p = sub.add_parser("train", help="train a head controller (DDQN + PER, DAgger, SAC/TD3/PPO)")
+    text = "train a head controller (DDQN + PER, DAgger, SAC/TD3/PPO)"
+    p = sub.add_parser(
+        "train",
+        help=text,
+        description=text + " from a preset, a config file and --set changes; writes"
+        " config.json, the logs, the weights, checkpoints/ and plots/ in --out (--resume RUN"
+        " goes on from its last checkpoint)",
+    )
     p.set_defaults(func=cmd_train, interrupted=_interrupted)
     _add_config_arguments(p)
     p.add_argument(
