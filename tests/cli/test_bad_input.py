@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from activevision.cli import main
+from activevision.cli.args import figure_file
 from activevision.training import load_policy
 
 
@@ -174,6 +175,11 @@ def test_a_figure_named_as_a_folder_is_refused(tmp_path, capsys, command, one_cl
     assert main([command, "--out", f"{folder}/"]) == 2
     one_clear_line("--out", "not a folder", f"{folder}/")
     assert not folder.exists()
+    # a suffix alone is no suffix to Python: --out figs/.png wrote a PNG called .png
+    assert main([command, "--out", f"{tmp_path}/.png"]) == 2
+    one_clear_line("--out", "'.png' is a suffix alone", f"{tmp_path}/view.png")
+    assert not (tmp_path / ".png").exists()
+    assert figure_file(f"{tmp_path}/.hidden.png").name == ".hidden.png"  # a name and a suffix
 
 
 # ------------------------------------------------------------ outputs never overwritten

@@ -68,12 +68,19 @@ FIGURE_AND_GIF_HELP = FIGURE_HELP + "; the first policy's GIF is written beside 
 def figure_file(text: str) -> Path:
     """A figure's file (``--out view.png``): a path that ends in a separator names a folder,
     which ``Path`` would silently make a file of that name (``--out figs/`` wrote a PNG
-    called ``figs``)."""
+    called ``figs``); a name that is a suffix alone (``--out figs/.png``) has no suffix to
+    Python and was written as a PNG called ``.png``."""
     if text.endswith(("/", os.sep)) or not text:
         raise argparse.ArgumentTypeError(
             f"name the figure's file, not a folder: got {text!r} (e.g. {text or './'}view.png)"
         )
-    return Path(text)
+    path = Path(text)
+    if path.name.startswith(".") and path.name.count(".") == 1:  # ".png": no name, no suffix
+        raise argparse.ArgumentTypeError(
+            f"name the figure's file: {path.name!r} is a suffix alone (e.g."
+            f" {path.with_name('view' + path.name)})"
+        )
+    return path
 
 
 def positive_int(text: str) -> int:
