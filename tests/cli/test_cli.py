@@ -154,3 +154,29 @@ def test_every_command_says_what_it_does_in_its_help():
     (commands,) = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
     missing = [name for name, parser in commands.choices.items() if not parser.description]
     assert missing == []
+
+
+def test_demo_names_the_policy_it_shows(tmp_path, monkeypatch):
+    """The demo's rows are named after the policy: "shipped", or an exported policy's run
+    (every ONNX policy was labelled "onnx")."""
+    import shutil
+
+    import activevision.figures.episode as episode_figures
+    from activevision.runtime import pretrained_policy_path
+
+    shown: list[list[str]] = []
+    monkeypatch.setattr(
+        episode_figures,
+        "plot_episodes",
+        lambda traces, out: shown.append([t.policy for t in traces]),
+    )
+    monkeypatch.setattr(episode_figures, "animate_episode", lambda trace, out: None)
+    assert main(["demo", "--out", str(tmp_path / "a.png")]) == 0
+    run = tmp_path / "my_run"
+    run.mkdir()
+    for name in ("policy.onnx", "policy.json"):
+        shutil.copy(pretrained_policy_path().with_name(name), run / name)
+    assert (
+        main(["demo", "--policy", str(run / "policy.onnx"), "--out", str(tmp_path / "b.png")]) == 0
+    )
+    assert shown == [["shipped", "random"], ["my_run", "random"]]

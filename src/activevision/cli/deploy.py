@@ -60,6 +60,13 @@ def cmd_demo(args: argparse.Namespace) -> None:
     check_outputs(named=[args.out, gif], overwrite=args.overwrite)
     check_figure_path(args.out)
     policy = OnnxPolicy(args.policy or pretrained_policy_path())
+    # the figure's row says whose policy it is (the class's name, "onnx", said neither): the
+    # file's name, or its run's folder for an exported policy.onnx
+    if args.policy is None:
+        policy.name = "shipped"
+    else:
+        stem = args.policy.stem
+        policy.name = args.policy.resolve().parent.name if stem == "policy" else stem
     config = policy.env_config()  # the observation the policy takes; an exact prior pose
     traces = [trace_episode(p, args.seed, config) for p in (policy, RandomPolicy(config))]
     plot_episodes(traces, args.out)
