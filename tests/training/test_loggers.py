@@ -18,7 +18,12 @@ from activevision.training.loggers import (
     TensorBoardLogger,
     default_loggers,
 )
-from activevision.training.metrics import EPISODE_FIELDS, EPOCH_FIELDS, TENSORBOARD_TAGS
+from activevision.training.metrics import (
+    EPISODE_FIELDS,
+    EPOCH_FIELDS,
+    TENSORBOARD_TAGS,
+    read_csv_columns,
+)
 from activevision.training.runs import resume, train
 from activevision.training.trainer import Trainer
 from activevision.training.validation import EVALUATION_FIELDS
@@ -251,3 +256,24 @@ def test_a_match_runs_validation_goes_to_its_own_columns_and_tags(tmp_path):
     found = scalars(tmp_path / "tb")
     assert set(found) == {"eval/position_rmse", "eval/ball_in_view", "eval/mean_episodic_return"}
     assert found["eval/position_rmse"] == [(12, pytest.approx(0.08))]
+
+
+@pytest.mark.parametrize(
+    ("text", "needle"),
+    [
+        ("epoch,step\n1,300\n2\n", "line 3 has fewer cells than its header"),
+        ("epoch,step\n1,300,7\n", "line 2 has more cells than its header"),
+        ("epoch,step\n1,300\n2,x\n", "line 3, column 'step': 'x' is not a number"),
+    ],
+)
+def test_a_log_cut_short_or_edited_is_named_by_line(tmp_path, text, needle):
+    # a short row said "float() argument must be a string or a real number, not 'NoneType'"
+    path = tmp_path / "metrics.csv"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=f"^{path}.*{needle}"):
+        read_csv_columns(path)
+    path.write_text("epoch,step\n1,300\n2,\n")
+    assert read_csv_columns(path)["epoch"] == [1.0, 2.0]
+    assert read_csv_columns(path)["step"][0] == 300.0 and math.isnan(
+        read_csv_columns(path)["step"][1]
+    )

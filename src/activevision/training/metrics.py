@@ -196,7 +196,18 @@ def read_csv_columns(path: str | os.PathLike[str]) -> dict[str, list[float]]:
         raise ValueError(f"{path} is not a CSV table: {error}") from None
     if not rows:
         return {}
-    try:
-        return {key: [float(r[key]) if r[key] != "" else math.nan for r in rows] for key in rows[0]}
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"{path} is not a metrics table of numbers: {error}") from None
+    columns: dict[str, list[float]] = {key: [] for key in rows[0]}
+    for line, row in enumerate(rows, start=2):  # the header is line 1
+        if None in row or None in row.values():  # DictReader's marks of a row cut or run on
+            raise ValueError(
+                f"{path} line {line} has {'more' if None in row else 'fewer'} cells than its"
+                " header: not a metrics table"
+            )
+        for key, text in row.items():
+            try:
+                columns[key].append(float(text) if text != "" else math.nan)
+            except ValueError:
+                raise ValueError(
+                    f"{path} line {line}, column {key!r}: {text!r} is not a number"
+                ) from None
+    return columns
