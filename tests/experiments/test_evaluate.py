@@ -209,3 +209,14 @@ def test_the_table_stays_aligned_with_long_method_names():
 def test_evaluation_needs_a_time_limit() -> None:
     with pytest.raises(ValueError, match="time limit, got max_episode_steps=-1"):
         evaluate_policy(RandomPolicy(), episodes=1, env=ActiveVisionEnv(max_episode_steps=-1))
+
+
+def test_the_table_prints_no_minus_zero():
+    # entropy_jump's regret, 0 up to float noise (-1e-17), printed "0.000 [-0.000, 0.000]"
+    from activevision.experiments.evaluate import METRICS, Interval, format_table
+
+    summary = {m: Interval(-1e-17, -2e-17, 0.0) for m in METRICS}
+    row = format_table({"entropy_jump": summary}).splitlines()[2]
+    assert "-0.000" not in row and row.count("0.000 [ 0.000, 0.000]") == len(METRICS)
+    negative = format_table({"a": {m: Interval(-0.5, -0.75, -0.25) for m in METRICS}})
+    assert "-0.500 [-0.750,-0.250]" in negative

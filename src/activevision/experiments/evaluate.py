@@ -222,6 +222,13 @@ def latency_summary(latencies_s: Sequence[float]) -> dict[str, float]:
     return {"p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99))}
 
 
+def _fixed(value: float) -> str:
+    """``value`` to 3 decimals, without the sign of a value that rounds to zero (a regret of
+    -1e-17, float noise, printed "-0.000")."""
+    text = f"{value:.3f}"
+    return text[1:] if text == "-0.000" else text
+
+
 def format_table(rows: dict[str, dict[str, Interval]]) -> str:
     """A plain-text table: one row per method, ``mean [low, high]`` per metric."""
     width = max([14, *(len(method) + 2 for method in rows)])  # long names keep columns aligned
@@ -229,8 +236,8 @@ def format_table(rows: dict[str, dict[str, Interval]]) -> str:
     lines = [header, "-" * len(header)]
     for method, summary in rows.items():
         cells = "".join(
-            f"{summary[m].mean:>10.3f} [{summary[m].low:6.3f},{summary[m].high:6.3f}]"
-            for m in METRICS
+            f"{_fixed(iv.mean):>10} [{_fixed(iv.low):>6},{_fixed(iv.high):>6}]"
+            for iv in (summary[m] for m in METRICS)
         )
         lines.append(f"{method:<{width}}{cells}")
     return "\n".join(lines)
