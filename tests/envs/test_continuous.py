@@ -87,7 +87,17 @@ def test_every_vectorizer_agrees_with_the_native_one(env_id, mode):
 @pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
 @pytest.mark.parametrize(
     "action",
-    [np.array([1.5, 0.0]), np.array([np.nan, 0.0]), np.array([0.1, 0.2, 0.3]), 3, "left", None],
+    [
+        np.array([1.5, 0.0]),
+        np.array([np.nan, 0.0]),
+        np.array([0.1, 0.2, 0.3]),
+        3,
+        "left",
+        None,
+        # NumPy reads these as numbers: the strings parsed, the imaginary part dropped
+        ["0.5", "0.1"],
+        np.array([0.5j, 0.0]),
+    ],
 )
 def test_bad_actions_are_one_clear_error(env_id, action):
     env = gym.make(env_id, **CONTINUOUS).unwrapped

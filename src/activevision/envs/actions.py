@@ -91,9 +91,15 @@ ActionType = Literal["discrete", "continuous"]
 
 def check_continuous_actions(actions: object, shape: tuple[int, ...]) -> np.ndarray:
     """``actions`` as a float64 array of ``shape`` (ending in 2: pan, tilt) with finite
-    values in [-1, 1]; anything else is a ValueError naming the value."""
+    values in [-1, 1]; anything else is a ValueError naming the value. Only real numbers
+    (bool, integer or float arrays) are read: NumPy would otherwise turn strings such as
+    ``"0.5"`` into numbers and drop a complex value's imaginary part, with a warning at
+    most."""
     try:
-        array = np.asarray(actions, dtype=np.float64)
+        array = np.asarray(actions)
+        if array.dtype.kind not in "biuf":  # strings, complex, objects, dates
+            raise TypeError
+        array = array.astype(np.float64, copy=False)
     except (TypeError, ValueError):
         raise ValueError(
             f"invalid action {_shown(actions)}: expects numbers in [-1, 1], shape {shape}"
