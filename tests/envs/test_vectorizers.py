@@ -230,6 +230,26 @@ def test_a_step_before_reset_is_refused_on_every_path(env_id: str, maker: str) -
     env.close()
 
 
+@pytest.mark.parametrize("maker", ["unwrapped", "native vector", "sync"])
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_a_render_before_reset_is_refused_on_every_path(env_id: str, maker: str) -> None:
+    """``render_mode="rgb_array"``: ``render()`` before the first reset is Gymnasium's
+    ResetNeeded, as ``SyncVectorEnv`` (through each env's order check) gives it (the native
+    vector envs and ``.unwrapped`` drew a picture of the zeros the state starts as)."""
+    from gymnasium.error import ResetNeeded
+
+    if maker == "unwrapped":
+        env: Any = gym.make(env_id, render_mode="rgb_array").unwrapped
+    else:
+        mode = "sync" if maker == "sync" else "vector_entry_point"
+        env = gym.make_vec(env_id, num_envs=2, vectorization_mode=mode, render_mode="rgb_array")
+    with pytest.raises(ResetNeeded, match="reset"):
+        env.render()
+    env.reset(seed=1)
+    assert env.render() is not None  # and a reset is all it takes
+    env.close()
+
+
 def resets_rollout(envs: gym.vector.VectorEnv, actions: np.ndarray) -> list[Any]:
     """Steps between every kind of reset a vector env takes: seeded, unseeded (each
     sub-environment goes on drawing from its seeded generator), and partial ones through

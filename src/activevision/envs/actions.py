@@ -38,14 +38,15 @@ def action_table(step_deg: float, action_set: str = "8way") -> np.ndarray:
     return np.asarray(moves[:count], dtype=np.float64)
 
 
-def require_reset(started: np.ndarray, idx: np.ndarray) -> None:
-    """Gymnasium's ResetNeeded unless every slot of ``idx`` was reset: a step before the
-    first reset would play from the zeros the state starts as (an env made by
-    ``gymnasium.make`` refuses it too; the vector envs and ``.unwrapped`` did not)."""
+def require_reset(started: np.ndarray, idx: np.ndarray, what: str = "step") -> None:
+    """Gymnasium's ResetNeeded unless every slot of ``idx`` was reset: a step (or a
+    ``what="render"``) before the first reset would play from (or draw) the zeros the state
+    starts as (an env made by ``gymnasium.make`` refuses it too; the vector envs and
+    ``.unwrapped`` did not)."""
     if not started[idx].all():
         never = np.flatnonzero(~started)
         raise ResetNeeded(
-            f"step before reset: call reset() first (sub-environments never reset: "
+            f"{what} before reset: call reset() first (sub-environments never reset: "
             f"{_shown(never.tolist())})"
         )
 

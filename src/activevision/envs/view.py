@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from activevision.envs.actions import require_reset
 from activevision.envs.simulation import EpisodeBatch
 from activevision.figures.canvas import figure_to_rgb
 from activevision.figures.scene import ViewpointSearch, view_figure
@@ -15,7 +16,8 @@ from activevision.localisation import ViewpointStatus, best_viewpoint, candidate
 
 def episode_panel(sim: EpisodeBatch, i: int, image: np.ndarray) -> np.ndarray:
     """RGB array of slot ``i``: the camera image beside the top view with the goal (red) and
-    current (blue) views."""
+    current (blue) views. ResetNeeded if the slot was never reset (its state is zeros)."""
+    require_reset(sim.started, np.array([i]), "render")
     cfg = sim.cfg
     fig = view_figure(
         cfg.field,
