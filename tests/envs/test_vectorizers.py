@@ -329,6 +329,33 @@ def test_reset_options_the_env_does_not_take_are_refused(env_id: str) -> None:
         native.reset(options={"reset_mask": np.zeros(2, dtype=bool)})
 
 
+@pytest.mark.parametrize(
+    ("seed", "error"),
+    [
+        (1.5, TypeError),
+        ("12", TypeError),
+        ({"a": 1, "b": 2}, TypeError),
+        (object(), TypeError),
+        (np.array([[1, 2]]), TypeError),
+        ([1], ValueError),
+        ((1, 2, 3), ValueError),
+    ],
+)
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_a_bad_seed_is_one_clear_error(env_id: str, seed: Any, error: type) -> None:
+    """The native vector envs' ``reset(seed=...)`` names the seed it cannot take (a float
+    failed with "'float' object is not iterable", a string or a dict was read as a list of
+    its characters or keys) and leaves the env as it was."""
+    native = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+    with pytest.raises(error, match="seed") as raised:
+        native.reset(seed=seed)
+    assert "not iterable" not in str(raised.value)
+    obs, _ = native.reset(seed=[SEED, None])  # a list with None for one, as Sync takes it
+    want, _ = gym.make(env_id).reset(seed=SEED)
+    assert_same_bytes(obs[0], want, "observation")
+    native.close()
+
+
 @pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
 def test_a_first_reset_that_raises_leaves_the_env_usable(env_id: str) -> None:
     """Gymnasium's passive checker failed every later step of an env whose first reset had

@@ -23,17 +23,24 @@ def reseed_generators(
     as ``SyncVectorEnv`` resets its sub-environments: an int ``s`` seeds sub-environment
     ``i`` with ``s + i``; a list gives each its own seed; None (for all, or in the list)
     keeps the generator, so that ``reset(seed=s)`` then ``reset()`` goes on drawing from the
-    seeded streams. Only the sub-environments ``slots`` (default: all) are reset."""
+    seeded streams. Only the sub-environments ``slots`` (default: all) are reset. Any other
+    ``seed`` (a float, a string, a dict) is a TypeError naming it; each seed of a list is
+    checked as Gymnasium checks a single env's."""
     n = len(rngs)
     seeds: list[int | None]
     if seed is None:
         seeds = [None] * n
     elif isinstance(seed, int | np.integer):
         seeds = [int(seed) + i for i in range(n)]
-    else:
+    elif isinstance(seed, list | tuple) or (isinstance(seed, np.ndarray) and seed.ndim == 1):
         seeds = list(seed)
         if len(seeds) != n:
-            raise ValueError(f"expected {n} seeds, got {len(seeds)}")
+            raise ValueError(f"seed: expected {n} seeds, got {len(seeds)}: {seed!r}")
+    else:
+        raise TypeError(
+            f"seed: expects an int, a list of {n} ints (None keeps a sub-environment's"
+            f" generator) or None, got {seed!r}"
+        )
     for i in range(n) if slots is None else slots:
         if seeds[i] is not None:
             rngs[i] = seeding.np_random(seeds[i])[0]
