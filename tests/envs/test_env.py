@@ -96,6 +96,31 @@ def test_invalid_action_is_a_clear_error():
         env.step(9)
 
 
+@pytest.mark.parametrize(
+    ("pan", "tilt", "shown"),
+    [
+        (np.nan, 0.3, "pan expects a finite number (rad), got nan"),
+        (0.1, np.inf, "tilt expects a finite number (rad), got inf"),
+        ("left", 0.3, "'left'"),
+        (None, 0.3, "None"),
+        (np.array([0.1, 0.2]), 0.3, "array([0.1, 0.2])"),
+        (0.1, True, "True"),
+    ],
+)
+def test_a_bad_head_jump_is_a_clear_error_and_leaves_the_head(pan, tilt, shown):
+    """``jump_head`` (the entropy baselines' move) refuses what is not one finite angle
+    before it moves: a NaN head failed every later step ("pan must be finite") until a
+    reset, and strings or None failed deep inside NumPy."""
+    env = ActiveVisionEnv()
+    _, info = env.reset(seed=0)
+    with pytest.raises(ValueError, match="jump_head") as error:
+        env.jump_head(pan, tilt)
+    assert shown in str(error.value), str(error.value)
+    _, _, _, _, after = env.step(0)  # the env goes on, from the head it had
+    np.testing.assert_array_equal(after["head"], info["head"])
+    assert after["step"] == 1
+
+
 def test_invalid_config_is_a_clear_error():
     with pytest.raises(ValueError, match="frame_stack"):
         EnvConfig(frame_stack=0)

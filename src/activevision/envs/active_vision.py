@@ -187,8 +187,10 @@ class ActiveVisionEnv(gym.Env):
     ) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         """Move the head straight to ``(pan, tilt)`` rad in one step (clipped to the limits),
         scored like :meth:`step`. Not part of the Gymnasium API: for baselines that jump the
-        head, such as the paper's entropy-based head control."""
-        return self._after_move(self.sim.move_head(self._slot, np.array([pan]), np.array([tilt])))
+        head, such as the paper's entropy-based head control. Each angle must be one finite
+        number (a NaN head would fail every later step until a reset)."""
+        target = [_head_angle(name, value) for name, value in (("pan", pan), ("tilt", tilt))]
+        return self._after_move(self.sim.move_head(self._slot, *target))
 
     def entropy_regret(self) -> float:
         """Belief entropy after the current view's landmarks minus the goal view's (nats;
@@ -218,3 +220,12 @@ class ActiveVisionEnv(gym.Env):
         from activevision.envs.view import episode_panel  # imports matplotlib: only here
 
         return episode_panel(self.sim, 0, self._frames[-1])
+
+
+def _head_angle(name: str, value: object) -> np.ndarray:
+    """A :meth:`ActiveVisionEnv.jump_head` angle as a (1,) array (of its own dtype, as
+    before); a value that is not one finite real number is a ValueError naming it."""
+    array = np.asarray(value)
+    if array.shape != () or array.dtype.kind not in "iuf" or not np.isfinite(array):
+        raise ValueError(f"jump_head: {name} expects a finite number (rad), got {value!r}")
+    return array.reshape(1)
