@@ -121,6 +121,18 @@ def test_a_bad_head_jump_is_a_clear_error_and_leaves_the_head(pan, tilt, shown):
     assert after["step"] == 1
 
 
+def test_entropy_regret_before_reset_is_refused():
+    """It scored the zeros the state starts as (a regret of 1.67 nats for no episode)."""
+    from gymnasium.error import ResetNeeded
+
+    env = ActiveVisionEnv()
+    with pytest.raises(ResetNeeded, match="entropy_regret before reset"):
+        env.entropy_regret()
+    _, info = env.reset(seed=0)
+    env.jump_head(*info["goal_viewpoint"])
+    assert env.entropy_regret() == pytest.approx(0.0, abs=1e-12)
+
+
 def test_invalid_config_is_a_clear_error():
     with pytest.raises(ValueError, match="frame_stack"):
         EnvConfig(frame_stack=0)

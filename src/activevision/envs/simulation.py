@@ -431,7 +431,9 @@ class EpisodeBatch:
         """Per slot of ``idx``: the entropy (nats) of the start belief updated with the
         landmarks the current view really shows, minus the goal view's entropy (both from
         the believed pose, as Algorithm 1 scores views). 0 at the goal and at any view as
-        informative; what a head pose costs the robot's localisation."""
+        informative; what a head pose costs the robot's localisation. ResetNeeded for a slot
+        never reset (its state is zeros)."""
+        require_reset(self.started, idx, "entropy_regret")
         ukf = self.localisation.ukf
         out = np.empty(len(idx))
         for j, i in enumerate(idx):
