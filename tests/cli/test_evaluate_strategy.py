@@ -128,6 +128,58 @@ def test_compare_names_your_policy_failing_at_a_later_level(tmp_path, capsys):
     assert "IndexError: list index out of range (mine.py, line" in last
 
 
+WRONG = """
+from activevision.experiments.policies import HeadTarget
+
+
+class Wrong:
+    def __init__(self, context):
+        pass
+
+    def reset(self, info, rng):
+        pass
+
+
+class Beyond(Wrong):
+    name = "beyond"
+
+    def act(self, obs, info):
+        return 99  # the table has 9 moves
+
+
+class NanTarget(Wrong):
+    name = "nan_target"
+
+    def act(self, obs, info):
+        return HeadTarget(float("nan"), 0.2)
+
+
+class TextTarget(Wrong):
+    name = "text_target"
+
+    def act(self, obs, info):
+        return HeadTarget("left", 0.2)
+"""
+
+
+@pytest.mark.parametrize(
+    ("name", "needle"),
+    [
+        ("Beyond", "method beyond, step 0: invalid action 99: expects an integer in 0..8"),
+        ("NanTarget", "method nan_target, step 0: invalid action HeadTarget(pan=nan"),
+        ("TextTarget", "method text_target, step 0: invalid action HeadTarget(pan='left'"),
+    ],
+)
+def test_a_policy_acting_wrongly_is_named_on_one_line(tmp_path, name, needle, one_clear_line):
+    """As ``match`` names the strategy and tick of an invalid action: the line names the
+    method and the step (it said "invalid action 99" alone, and a NaN head target "pan
+    must be finite", naming neither the policy nor that it was its action)."""
+    (tmp_path / "wrong.py").write_text(WRONG)
+    argv = ["evaluate", "--methods", "oracle", "--episodes", "1", "--out", str(tmp_path / "e")]
+    assert main([*argv, "--strategy", f"{tmp_path / 'wrong.py'}:{name}"]) == 2
+    one_clear_line(needle)
+
+
 def test_a_policy_of_yours_labelled_learned_is_not_timed_as_the_learned_one(tmp_path):
     """latency.json holds the learned policy's latency: a user's method labelled
     ``learned_...`` is not it (it was timed, and written as the learned policy's)."""
