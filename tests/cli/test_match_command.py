@@ -396,6 +396,21 @@ def test_two_strategies_of_one_name_are_refused(tmp_path, one_clear_line):
     one_clear_line("two strategies are named mirror")
 
 
+@pytest.mark.parametrize("label", ["learned", "oracle_ball", "onnx_policy[mine]"])
+def test_a_strategy_labelled_as_a_built_in_one_is_refused(tmp_path, label, one_clear_line):
+    """As ``evaluate --strategy`` refuses a built-in method's label: a row named
+    ``learned`` or ``oracle_ball`` is read as the built-in's (report.md said "learned: the
+    training run `match --run` named" of the user's own class), played beside it or not."""
+    source = MIRROR.replace('name = "mirror"', f"name = {label!r}")
+    assert label in source
+    (tmp_path / "mine.py").write_text(source)
+    out = tmp_path / "m"
+    argv = [*TINY, "--out", str(out), "--strategy", f"{tmp_path / 'mine.py'}:Mirror"]
+    assert main(argv) == 2
+    one_clear_line(f"its label {label!r} is a built-in strategy's")
+    assert not out.exists()
+
+
 def test_the_ball_can_bounce_off_our_robot(tmp_path, capsys):
     from activevision.cli.match import _match_config
 

@@ -129,6 +129,7 @@ def _strategies(
 
     from activevision.experiments.match import expand_methods, users_code
     from activevision.experiments.match_methods import (
+        MATCH_METHODS,
         default_match_methods,
         load_strategy,
         make_match_policy,
@@ -149,7 +150,17 @@ def _strategies(
     if args.run is not None and "learned" not in methods:
         raise ValueError("--run is played by learned: add it to --methods")
     check_weights(args)
-    strategies = [load_strategy(spec) for spec in dict.fromkeys(args.strategy or ())]
+    strategies = []
+    for spec in dict.fromkeys(args.strategy or ()):
+        label, factory = load_strategy(spec)
+        # a row of that name is read as the built-in's: privileged, a run's, the shipped
+        # policy (report.md says so), whether or not the built-in plays too
+        if label.partition("[")[0] in MATCH_METHODS:
+            raise ValueError(
+                f"--strategy {spec}: its label {label!r} is a built-in strategy's; give NAME"
+                " a name attribute of its own"
+            )
+        strategies.append((label, factory))
     entries = expand_methods(methods, models, margins, args.run, args.weights, strategies)
     for label, method, options in entries:  # loads each run and model once: errors first
         policy = make_match_policy(method, config, options)
