@@ -130,11 +130,13 @@ def run_episode(
             latencies.append(time.perf_counter() - t0)
         try:
             if isinstance(action, HeadTarget):
-                obs, reward, terminated, _, info = env.jump_head(*_target_angles(action))
+                obs, reward, terminated, _, info = env.jump_head(action.pan, action.tilt)
             else:
                 obs, reward, terminated, _, info = env.step(action)
         except ValueError as error:
-            if not str(error).startswith("invalid action"):
+            if isinstance(action, HeadTarget):  # jump_head refuses all but finite numbers
+                error = ValueError(f"invalid action {action!r}: {error}")
+            elif not str(error).startswith("invalid action"):
                 raise
             # as match names the strategy and tick: which of several methods acted wrongly
             raise ValueError(f"method {policy.name}, step {step}: {error}") from None
@@ -157,22 +159,6 @@ def run_episode(
         "oscillating": bool(not info["success"] and swinging(heads)),
         "head_travel": head_travel_deg(heads),
     }
-
-
-def _target_angles(target: HeadTarget) -> tuple[float, float]:
-    """``target``'s pan and tilt as finite floats; anything else (NaN, None, a string, a
-    bool) is a ValueError naming the target (NaN reached the renderer: "pan must be
-    finite", naming neither the method nor the step)."""
-    angles = []
-    for angle in (target.pan, target.tilt):
-        try:
-            value = math.nan if isinstance(angle, (bool, str, bytes)) else float(angle)
-        except (TypeError, ValueError):
-            value = math.nan
-        angles.append(value)
-    if not all(math.isfinite(a) for a in angles):
-        raise ValueError(f"invalid action {target!r}: expects finite pan and tilt (rad)")
-    return angles[0], angles[1]
 
 
 def head_travel_deg(heads: Sequence[np.ndarray]) -> float:
