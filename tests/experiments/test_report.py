@@ -193,3 +193,15 @@ def test_the_latency_is_reported_from_its_own_file_or_an_older_evaluation(tmp_pa
     (plain / "evaluation" / "latency.json").write_text("[]")
     with pytest.raises(ValueError, match=r"latency\.json is damaged"):
         write_report(plain)
+
+
+def test_the_header_says_the_steps_played_where_they_differ_from_those_asked(tmp_path):
+    """A learner plays whole rounds of its vector env: a DAgger run asked for 600 steps
+    played 1,161, and the report said "600 steps"."""
+    run = make_run(tmp_path)
+    text = write_report(run).read_text()
+    assert "on `ActiveVision-v0`, 40000 steps." in text  # no checkpoint: what was asked
+    (run / "checkpoints" / "step_000040000").mkdir(parents=True)
+    assert "on `ActiveVision-v0`, 40000 steps." in write_report(run).read_text()
+    (run / "checkpoints" / "step_000040331").mkdir()
+    assert "40000 steps asked, 40331 played." in write_report(run).read_text()

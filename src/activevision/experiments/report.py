@@ -23,6 +23,7 @@ from pathlib import Path
 
 import activevision
 from activevision.io import read_json, write_text
+from activevision.training.checkpoint import checkpoint_step, list_checkpoints
 from activevision.training.config import MATCH_ENV_ID
 
 
@@ -57,6 +58,17 @@ def _table(rows: list[dict], metrics: list[str]) -> str:
     return "\n".join(lines)
 
 
+def _steps(run: Path, asked: object) -> str:
+    """The steps the run's config asks for and, where its newest checkpoint says otherwise,
+    those it played: a learner plays whole rounds of its vector env (DAgger's quickstart
+    asked for 600 and played 1,161), and a run stopped early played fewer."""
+    checkpoints = list_checkpoints(run)
+    played = checkpoint_step(checkpoints[-1]) if checkpoints else None
+    if played is None or played == asked:
+        return f"{asked} steps"
+    return f"{asked} steps asked, {played} played"
+
+
 def write_report(run_dir: str | Path) -> Path:
     """Write ``run_dir/report.md``: configuration, training curves, evaluation table,
     comparison figure and episode figure (whichever of them the run has)."""
@@ -73,7 +85,7 @@ def write_report(run_dir: str | Path) -> Path:
         "",
         f"activevision {activevision.__version__}, Python {platform.python_version()}, "
         f"training seed {config.get('seed')}, {algo} on `{env_id}`,"
-        f" {config.get('run', {}).get('total_timesteps')} steps"
+        f" {_steps(run, config.get('run', {}).get('total_timesteps'))}"
         + (" (match ticks)" if env_id == MATCH_ENV_ID else "")
         + ".",
         "",

@@ -56,6 +56,11 @@ def checkpoint_name(step: int) -> str:
     return f"{_PREFIX}{step:09d}"
 
 
+def checkpoint_step(checkpoint: str | os.PathLike[str]) -> int:
+    """The environment steps a checkpoint was taken after (:func:`checkpoint_name`'s)."""
+    return int(Path(checkpoint).name.removeprefix(_PREFIX))
+
+
 def list_checkpoints(run_dir: str | os.PathLike[str]) -> list[Path]:
     """Complete checkpoints of a run, oldest first (temporary directories are ignored)."""
     directory = Path(run_dir) / CHECKPOINTS_DIR
