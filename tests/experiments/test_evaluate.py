@@ -220,3 +220,28 @@ def test_the_table_prints_no_minus_zero():
     assert "-0.000" not in row and row.count("0.000 [ 0.000, 0.000]") == len(METRICS)
     negative = format_table({"a": {m: Interval(-0.5, -0.75, -0.25) for m in METRICS}})
     assert "-0.500 [-0.750,-0.250]" in negative
+
+
+def test_durations_and_head_travel_stay_within_what_they_can_be():
+    # episodes of 20 steps: the ball lost at step 15 in one of four, never in the rest, read
+    # 18.75 [15.8, 21.7] (past the time limit); head travel of 0, 0, 0, 40 degrees read a
+    # negative low end
+    from activevision.experiments.evaluate import METRICS, summarise
+
+    episodes = [dict.fromkeys(METRICS, 0.0) for _ in range(4)]
+    for e, lost, travel in zip(episodes, (15, 20, 20, 20), (0.0, 0.0, 0.0, 40.0), strict=True):
+        e |= {"ball_loss_duration": lost, "success_duration": 20, "head_travel": travel}
+    summary = summarise(episodes, time_limit=20)
+    lost = summary["ball_loss_duration"]
+    assert (
+        lost.mean == 18.75
+        and lost.high == 20.0
+        and lost.low == pytest.approx(18.75 - 1.959963984540054 * 2.5 / 2)
+    )
+    assert summary["head_travel"].low == 0.0 and summary["head_travel"].high > 10.0
+    # never a success: 20 in every episode, the time limit, is a bound (Wilson of 4/4)
+    never = summary["success_duration"]
+    w = 1.959963984540054**2 / (4 + 1.959963984540054**2)
+    assert (never.low, never.high) == pytest.approx((20 - 20 * w, 20.0))
+    # without the time limit durations are only at least 0: a value all equal stays itself
+    assert summarise(episodes)["success_duration"] == Interval(20.0, 20.0, 20.0)

@@ -71,8 +71,9 @@ def compare_ray(
     ``weights``: the run's "final" or "best" weights.
     ``address``/``num_cpus``: see :func:`~activevision.scaleout.ray_session.ray_session`.
     """
+    from activevision.envs import ActiveVisionEnv
     from activevision.experiments.compare import check_resumable, done_levels
-    from activevision.experiments.evaluate import summarise, summary_rows
+    from activevision.experiments.evaluate import summarise, summary_rows, time_limit
     from activevision.io import write_csv
     from activevision.scaleout.ray_session import ray_session
 
@@ -86,6 +87,7 @@ def compare_ray(
     done = {(float(r["error"]), r["method"]) for r in rows}
     run = str(run_dir) if run_dir is not None else None
     starts = list(range(0, episodes, chunk))
+    limit = time_limit(ActiveVisionEnv(config))  # the tasks' envs', for the durations' bounds
 
     with ray_session(address, num_cpus) as ray:
         task = ray.remote(num_cpus=1)(evaluate_chunk)
@@ -114,7 +116,7 @@ def compare_ray(
             for name, chunk_refs in refs.items():
                 records = [r for part in _get(ray, chunk_refs) for r in part]
                 rows += summary_rows(
-                    {name: summarise(records)},
+                    {name: summarise(records, limit)},
                     error=e,
                     episodes=episodes,
                     seed=seed,
