@@ -15,6 +15,7 @@ from activevision.envs.robots import RobotsConfig
 from activevision.geometry import CameraConfig, FieldSpec, field_preset
 from activevision.geometry.field import FIELD_PRESETS
 from activevision.rendering.appearance import AppearanceConfig
+from activevision.runtime.metadata import MAX_ACTION_HISTORY
 from activevision.typecheck import check_dataclass_fields, replace_fields
 
 SuccessMode = Literal["tolerance", "landmarks"]
@@ -136,8 +137,8 @@ class EnvConfig:
             raise bad("prior_exact_share", "must lie in [0, 1]")
         if min(self.prior_grid) < 0:
             raise bad("prior_grid", "must be >= 0 (metres, degrees)")
-        if not 0 <= self.action_history <= 16:
-            raise bad("action_history", "must lie in 0..16")
+        if not 0 <= self.action_history <= MAX_ACTION_HISTORY:
+            raise bad("action_history", f"must lie in 0..{MAX_ACTION_HISTORY}")
         if self.observation == "image" and self.action_history:
             raise bad("action_history", "needs a Dict observation (observation='image+head...')")
         if self.observation != "image" and self.frame_stack != 1:

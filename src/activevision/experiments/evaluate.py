@@ -145,11 +145,13 @@ def run_episode(
                 obs, reward, terminated, _, info = env.step(action)
         except ValueError as error:
             if isinstance(action, HeadTarget):  # jump_head refuses all but finite numbers
-                error = ValueError(f"invalid action {action!r}: {error}")
-            elif not str(error).startswith("invalid action"):
+                problem = f"invalid action {action!r}: {error}"
+            elif str(error).startswith("invalid action"):
+                problem = str(error)
+            else:
                 raise
             # as match names the strategy and tick: which of several methods acted wrongly
-            raise ValueError(f"method {policy.name}, step {step}: {error}") from None
+            raise ValueError(f"method {policy.name}, step {step}: {problem}") from None
         total += reward
         heads.append(np.array(info["head"]))
         if terminated:

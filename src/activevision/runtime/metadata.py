@@ -149,7 +149,7 @@ MIN_HFOV_DEG = 5.0
 #: The highest camera CameraModel.from_degrees takes (metres): a humanoid's head camera is
 #: within two metres of the ground; a value above this is centimetres given for metres.
 MAX_CAMERA_HEIGHT_M = 5.0
-#: The most previous actions a policy remembers (EnvConfig.action_history's limit; the
+#: The most previous actions a policy remembers (EnvConfig.action_history's limit too; the
 #: controller keeps that many, so a larger number in a file is refused, not allocated).
 MAX_ACTION_HISTORY = 16
 #: How far a robot's camera may differ from the trained one before HeadController warns.
