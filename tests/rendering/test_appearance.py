@@ -151,8 +151,14 @@ def _box_taps(length: float) -> np.ndarray:
     [
         # defocus sigma 1.2: a Gaussian cut at 3 px (2.5 sigma, at most 3) along both axes
         ("defocus", 1.2, 0.0, np.exp(-0.5 * (np.arange(-3, 4) / 1.2) ** 2), None),
+        # smaller sigmas: 3 and 5 taps
+        ("defocus", 0.3, 0.0, np.exp(-0.5 * (np.arange(-1, 2) / 0.3) ** 2), None),
+        ("defocus", 0.7, 0.0, np.exp(-0.5 * (np.arange(-2, 3) / 0.7) ** 2), None),
         # motion blur: a box as long as 0.5 of the head's 3-degree pan in pixels, along x
         ("motion_blur", 0.5, 3.0, "box", np.ones(1)),
+        # longer boxes along y (the head's tilt): 9 and 13 taps
+        ("motion_blur", 1.0, -3.0, np.ones(1), "box"),
+        ("motion_blur", 1.0, -5.0, np.ones(1), "box"),
     ],
 )
 def test_blur_is_the_separable_filter_of_scipy(
@@ -160,13 +166,15 @@ def test_blur_is_the_separable_filter_of_scipy(
 ):
     """Blur against scipy's correlation of the clean frame (edges repeat the border), taps
     written out here from the documented filters: equal up to the float32 rounding of the
-    kernels (a grey level either way, on a few pixels)."""
+    kernels (a grey level either way, on a few pixels). A negative ``move_deg`` moves the
+    tilt, not the pan. The cases span every tap count the kernels are compiled for."""
     ndimage = pytest.importorskip("scipy.ndimage")
-    if isinstance(taps_x, str):
-        taps_x = _box_taps(value * renderer.camera.focal * np.radians(move_deg))
+    length = value * renderer.camera.focal * np.radians(abs(move_deg))
+    taps_x = _box_taps(length) if isinstance(taps_x, str) else taps_x
     taps_y = taps_x if taps_y is None else taps_y
+    taps_y = _box_taps(length) if isinstance(taps_y, str) else taps_y
     rows = only(name, value)
-    rows[:, LOOK["move_pan"]] = np.radians(move_deg)
+    rows[:, LOOK["move_pan" if move_deg >= 0 else "move_tilt"]] = np.radians(abs(move_deg))
     out = renderer.render(*states, looks=rows).astype(int)
     clean = renderer.render(*states).astype(float)
     ref = ndimage.correlate1d(clean, taps_x / taps_x.sum(), axis=2, mode="nearest")

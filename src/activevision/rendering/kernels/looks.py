@@ -20,9 +20,11 @@ frame's bytes depend on nothing but its own camera and look).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
+from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from activevision.rendering.appearance import LOOK
 from activevision.rendering.kernels.bundles import JIT, JIT_PART, Params
@@ -349,12 +351,41 @@ def _blur_taps(sigma: float, move: float, taps: np.ndarray) -> int:
     return r
 
 
+#: The tap counts the blur kernels are compiled for: a filter of radius ``r`` runs as the
+#: smallest that holds ``2r + 1`` taps, centred and padded with zeros (a zero tap adds 0 x
+#: a pixel, which changes no sum). A count known when compiling unrolls the taps' loop, so
+#: the pixels' loop keeps every sum in a register; over taps of unknown count it loads and
+#: stores the row once a tap, 2x slower.
+TAP_COUNTS = (3, 5, 7, 9, MAX_TAPS)
+
+
+@njit(**JIT_PART)
+def _centred_taps(taps: np.ndarray, r: int) -> np.ndarray:
+    """``taps[:2r + 1]`` as float32, centred in the smallest of :data:`TAP_COUNTS` that
+    holds them, zero around."""
+    n = MAX_TAPS
+    for count in TAP_COUNTS[::-1]:
+        if count >= 2 * r + 1:
+            n = count
+    out = np.zeros(n, dtype=np.float32)
+    first = (n - 1) // 2 - r
+    for k in range(2 * r + 1):
+        out[first + k] = np.float32(taps[k])
+    return out
+
+
 @njit(**JIT)
-def _filter_rows(src: np.ndarray, dst: np.ndarray, taps: np.ndarray, r: int) -> None:
-    """``dst`` (H, W) float32 = ``src`` (H, W) uint8 filtered along each row (axis 1) by
-    ``taps`` of radius ``r``; the edges repeat their border pixels (each row is copied into a
-    padded one, so that every tap is one plain, vectorised loop)."""
+def _filter_rows_by(src: np.ndarray, dst: np.ndarray, taps: Any) -> None:
+    """Rows ``m..m + H`` of ``dst`` (H + 2m, W) float32 = ``src`` (H, W) uint8 filtered
+    along each row (axis 1) by ``taps`` (a tuple: its length is a constant of the compiled
+    kernel), and the ``m`` rows above and below copies of the first and last (the column
+    filter's padding); the row edges repeat their border pixels (each row is copied into a
+    padded one, so that the filter reads every tap from one plain array). The sum runs tap
+    by tap from the first."""
     height, width = src.shape
+    m = (dst.shape[0] - height) // 2
+    n = len(taps)
+    r = n // 2
     pad = np.empty(width + 2 * r, dtype=np.float32)
     for j in range(height):
         for i in range(width):
@@ -362,28 +393,62 @@ def _filter_rows(src: np.ndarray, dst: np.ndarray, taps: np.ndarray, r: int) -> 
         for i in range(r):
             pad[i] = pad[r]
             pad[r + width + i] = pad[r + width - 1]
-        w0 = np.float32(taps[0])
         for i in range(width):
-            dst[j, i] = w0 * pad[i]
-        for k in range(1, 2 * r + 1):
-            w = np.float32(taps[k])
-            for i in range(width):
-                dst[j, i] += w * pad[k + i]
+            acc = taps[0] * pad[i]
+            for k in range(1, n):
+                acc += taps[k] * pad[i + k]
+            dst[m + j, i] = acc
+    for j in range(m):
+        for i in range(width):
+            dst[j, i] = dst[m, i]
+            dst[m + height + j, i] = dst[m + height - 1, i]
 
 
 @njit(**JIT_PART)
-def _blur_column(
-    rows_blurred: np.ndarray, j: int, taps: np.ndarray, r: int, row: np.ndarray
-) -> None:
-    """``row`` = row ``j`` of ``rows_blurred`` (H, W) filtered along the columns by ``taps``
-    of radius ``r`` (the edges repeat their border rows)."""
-    height = rows_blurred.shape[0]
-    row[:] = np.float32(0.0)
-    for k in range(2 * r + 1):
-        w = np.float32(taps[k])
-        source = min(max(j + k - r, 0), height - 1)  # once a row: branches are fine
-        for i in range(row.shape[0]):
-            row[i] += w * rows_blurred[source, i]
+def _filter_column_by(rows: np.ndarray, taps: Any, row: np.ndarray, j: int) -> None:
+    """``row`` (W,) float32 = row ``j`` of the image whose rows ``rows`` (H + n - 1, W)
+    float32 holds padded as :func:`_filter_rows_by` writes them, filtered along the columns
+    by ``taps`` (a tuple of n, as :func:`_filter_rows_by`'s). Row ``j + k`` feeds tap
+    ``k``: plain offsets, no table of source rows (whose loads in the loop would keep it
+    from vectorising)."""
+    n = len(taps)
+    for i in range(row.shape[0]):
+        acc = taps[0] * rows[j, i]
+        for k in range(1, n):
+            acc += taps[k] * rows[j + k, i]
+        row[i] = acc
+
+
+@njit(**JIT_PART)
+def _filter_rows(src: np.ndarray, dst: np.ndarray, taps: np.ndarray) -> None:
+    """:func:`_filter_rows_by` with ``taps`` (n,) float32 of :func:`_centred_taps`."""
+    n = taps.shape[0]
+    if n == 3:
+        _filter_rows_by(src, dst, to_fixed_tuple(taps, 3))
+    elif n == 5:
+        _filter_rows_by(src, dst, to_fixed_tuple(taps, 5))
+    elif n == 7:
+        _filter_rows_by(src, dst, to_fixed_tuple(taps, 7))
+    elif n == 9:
+        _filter_rows_by(src, dst, to_fixed_tuple(taps, 9))
+    else:
+        _filter_rows_by(src, dst, to_fixed_tuple(taps, MAX_TAPS))
+
+
+@njit(**JIT_PART)
+def _filter_column(rows: np.ndarray, taps: np.ndarray, row: np.ndarray, j: int) -> None:
+    """:func:`_filter_column_by` with ``taps`` (n,) float32 of :func:`_centred_taps`."""
+    n = taps.shape[0]
+    if n == 3:
+        _filter_column_by(rows, to_fixed_tuple(taps, 3), row, j)
+    elif n == 5:
+        _filter_column_by(rows, to_fixed_tuple(taps, 5), row, j)
+    elif n == 7:
+        _filter_column_by(rows, to_fixed_tuple(taps, 7), row, j)
+    elif n == 9:
+        _filter_column_by(rows, to_fixed_tuple(taps, 9), row, j)
+    else:
+        _filter_column_by(rows, to_fixed_tuple(taps, MAX_TAPS), row, j)
 
 
 @njit(**JIT_PART)
@@ -448,15 +513,16 @@ def finish_frame(
     start = _cell(int(look[_KEY]), look[_FRAME], 0.0, 6, mask) % (mask + 1 - height * width)
     row = np.empty(width, dtype=np.float32)
     taps = np.empty(MAX_TAPS)
-    rows_blurred = np.empty((height if blurred else 0, width), dtype=np.float32)
-    r = 0
+    rows_blurred = np.empty((0, width), dtype=np.float32)
+    column_taps = np.empty(0, dtype=np.float32)
     if blurred:
-        _filter_rows(img, rows_blurred, taps, _blur_taps(sigma, bx, taps))
-        r = _blur_taps(sigma, by, taps)
+        column_taps = _centred_taps(taps, _blur_taps(sigma, by, taps))
+        rows_blurred = np.empty((height + column_taps.shape[0] - 1, width), dtype=np.float32)
+        _filter_rows(img, rows_blurred, _centred_taps(taps, _blur_taps(sigma, bx, taps)))
     levels = np.empty(width, dtype=np.int32)
     for j in range(height):
         if blurred:
-            _blur_column(rows_blurred, j, taps, r, row)
+            _filter_column(rows_blurred, column_taps, row, j)
         else:
             for i in range(width):
                 row[i] = img[j, i]
