@@ -17,6 +17,7 @@ def test_tiny_match_writes_table_csv_and_figures(tmp_path, capsys):
     assert main([*TINY, "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "ball_track" in printed and "Pareto front" in printed
+    assert "(2.88 s of play)" in printed  # 9 ticks of 0.32 s: not "0.0 min"
     with (out / "match.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert [r["method"] for r in rows] == ["ball_track", "random"]

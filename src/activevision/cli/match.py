@@ -219,11 +219,12 @@ def cmd_match(args: argparse.Namespace) -> None:
     from activevision.figures.match import clip_frames, plot_error_over_time, plot_pareto, save_gif
     from activevision.io import write_csv
 
-    minutes = args.ticks * config.tick_seconds / 60
+    seconds = args.ticks * config.tick_seconds
+    play = f"{seconds / 60:.1f} min" if seconds >= 60 else f"{seconds:.3g} s"
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
     print(
         f"{len(labels)} methods x {args.matches} matches of {args.ticks} ticks"
-        f" ({minutes:.1f} min of play), seeds {args.seed}..{args.seed + args.matches - 1},"
+        f" ({play} of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
         f" walking to {args.walk}{_world_text(args, config)}"
     )
@@ -264,7 +265,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     # whatever the current directory and wherever the run lies
     run_name = None if args.run is None else args.run.resolve().name
     title = (
-        f"{args.matches} matches x {minutes:.1f} min, seed {args.seed},"
+        f"{args.matches} matches x {play}, seed {args.seed},"
         f" {args.action_type} head {args.step_deg:g} deg/tick{_world_text(args, config, run_name)}"
     )
     points = {
