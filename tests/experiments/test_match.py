@@ -103,6 +103,24 @@ def test_rmse_is_the_root_mean_square_of_the_error_curve():
     np.testing.assert_allclose(r.per_match["lost_share"], (r.error_curve > 0.5).mean(0))
 
 
+def test_intervals_stay_within_what_each_metric_can_take():
+    """Two matches far apart: the normal approximation would put an RMSE and head travel
+    below 0 and a share above 1; entropy, which can be negative, is not bounded."""
+    per_match = {
+        "position_rmse": np.array([0.01, 0.9]),
+        "heading_rmse": np.array([0.2, 5.7]),
+        "lost_share": np.array([0.0, 0.9]),
+        "ball_in_view": np.array([0.1, 1.0]),
+        "entropy": np.array([-6.0, 1.0]),
+        "head_travel": np.array([0.0, 9.0]),
+    }
+    summary = MethodResult("a", per_match, np.zeros((1, 2)), MatchClip(), 0.0).summary()
+    for name in ("position_rmse", "heading_rmse", "lost_share", "ball_in_view", "head_travel"):
+        assert summary[name].low == 0.0, name
+    assert summary["ball_in_view"].high == 1.0
+    assert summary["entropy"].low < -6.0  # mean -2.5, half-width 6.86 x 1.96
+
+
 def fake(method: str, rmse: float, ball: float) -> MethodResult:
     per_match = {name: np.zeros(4) for name in MATCH_METRICS}
     per_match["position_rmse"] = np.full(4, rmse)
