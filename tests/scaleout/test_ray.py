@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import signal
 import subprocess
 import sys
@@ -85,6 +86,21 @@ def test_sweep_two_seeds_aggregates(tmp_path, capsys):
     mean = (float(per_seed[0][1]["success_rate"]) + float(per_seed[1][1]["success_rate"])) / 2
     assert float(on_disk[1]["success_rate_mean"]) == pytest.approx(mean)
     assert (tmp_path / "sweep.png").stat().st_size > 0
+
+
+def test_a_dagger_sweep_trains_dagger_trials(tmp_path):
+    """A sweep trains each trial with the trainer its config's algo names (a DAgger preset
+    failed in every trial: the DDQN trainer refused its dict observation)."""
+    sets = ["total_timesteps=256", "epoch_steps=128", "checkpoint_interval=128"]
+    sets += ["dagger.num_envs=8", "progress_bar=false", "tensorboard=false"]
+    config = apply_overrides(preset("quickstart"), sets)
+    assert config.algo == "dagger"
+    rows = sweep(config, [0], {}, tmp_path, max_failures=0, verbose=0)
+    trials = _read(tmp_path / "trials.csv")
+    assert [t["status"] for t in trials] == ["TERMINATED"] and len(rows) == 2
+    run_dir = Path(trials[0]["run_dir"])
+    assert json.loads((run_dir / "config.json").read_text())["algo"] == "dagger"
+    assert [int(r["epoch"]) for r in _read(run_dir / "metrics.csv")] == [1, 2]
 
 
 def test_trial_survives_worker_crash(tmp_path):

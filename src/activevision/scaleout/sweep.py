@@ -1,14 +1,16 @@
 """Seed x grid sweeps of training runs on Ray Tune, with per-epoch aggregation over seeds.
 
-Each trial is one :class:`~activevision.training.Trainer` run in a fixed directory
+Each trial is one training run, of the trainer its config's ``algo`` names
+(:func:`~activevision.training.runs.start_run`), in a fixed directory
 ``out_dir/trials/<name>`` (e.g. ``seed=3,learning_rate=0.001``); a finished trial gets the
 figures of a ``train`` run (``plots/training.png``, :func:`~activevision.training.plot_run`).
-The trainable trains one ``checkpoint_interval`` at a time and then reports each 300-step
-epoch of it to Tune, with a Tune checkpoint that records that directory (not the trainer's
-checkpoint files, which hold the replay buffer and would be copied on every report). When a
-trial's worker dies, Tune restarts it (up to ``max_failures`` times) and the trainable resumes from
-the run directory's newest trainer checkpoint with :meth:`Trainer.resume`, which also drops
-``metrics.csv`` rows written after that checkpoint, so every epoch appears exactly once.
+The trainable trains one ``checkpoint_interval`` at a time and then reports each epoch of it
+to Tune, with a Tune checkpoint that records that directory (not the trainer's checkpoint
+files, which hold the replay buffer and would be copied on every report). When a trial's
+worker dies, Tune restarts it (up to ``max_failures`` times) and the trainable resumes from
+the run directory's newest trainer checkpoint
+(:func:`~activevision.training.runs.reopen_run`), which also drops ``metrics.csv`` rows
+written after that checkpoint, so every epoch appears exactly once.
 Re-running a sweep into the same ``out_dir`` likewise continues (or just re-reads) its trials;
 a trial that had finished keeps its run time and session count.
 
@@ -137,8 +139,9 @@ def train_trial(params: dict[str, Any]) -> None:
     from ray import tune
 
     from activevision.io import write_json
-    from activevision.training import Trainer, plot_run
+    from activevision.training import plot_run
     from activevision.training.checkpoint import list_checkpoints
+    from activevision.training.runs import reopen_run, start_run
 
     if params.get("quiet"):  # not a log line per report: "Checkpoint successfully created"
         logging.getLogger("ray.train").setLevel(logging.WARNING)
@@ -153,7 +156,7 @@ def train_trial(params: dict[str, Any]) -> None:
     prior_sessions = int(state.get("sessions", 0))
     prior_s = float(state.get("elapsed_s", 0.0))
     resumed = bool(list_checkpoints(run_dir))
-    trainer = Trainer.resume(run_dir) if resumed else Trainer(config, run_dir)
+    trainer = reopen_run(run_dir) if resumed else start_run(config, run_dir)
     crash_after = params.get("crash_after_epoch")
 
     def report(row: Mapping[str, float], trained: bool = True) -> None:
