@@ -88,17 +88,28 @@ def test_sweep_two_seeds_aggregates(tmp_path, capsys):
     assert (tmp_path / "sweep.png").stat().st_size > 0
 
 
-def test_a_dagger_sweep_trains_dagger_trials(tmp_path):
-    """A sweep trains each trial with the trainer its config's algo names (a DAgger preset
-    failed in every trial: the DDQN trainer refused its dict observation)."""
+def test_a_dagger_sweep_trains_dagger_trials_and_prints_a_line_a_trial(tmp_path):
+    """From the command line (its own Ray instance): each trial trains with the trainer its
+    config's algo names (a DAgger preset failed in every trial: the DDQN trainer refused its
+    dict observation), and the sweep prints a line per trial and its outputs, not Tune's
+    configuration box, where its results lie, or Ray's INFO lines."""
+    out = tmp_path / "sweep"
     sets = ["total_timesteps=256", "epoch_steps=128", "checkpoint_interval=128"]
     sets += ["dagger.num_envs=8", "progress_bar=false", "tensorboard=false"]
-    config = apply_overrides(preset("quickstart"), sets)
-    assert config.algo == "dagger"
-    rows = sweep(config, [0], {}, tmp_path, max_failures=0, verbose=0)
-    trials = _read(tmp_path / "trials.csv")
-    assert [t["status"] for t in trials] == ["TERMINATED"] and len(rows) == 2
-    run_dir = Path(trials[0]["run_dir"])
+    command = [sys.executable, "-m", "activevision.cli", "sweep", "--seeds", "0", "--preset"]
+    command += ["quickstart", *(a for kv in sets for a in ("--set", kv)), "--out", str(out)]
+    done = subprocess.run(
+        [*command, "--num-cpus", "1"], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    printed = (done.stdout + done.stderr).splitlines()
+    ours = [line for line in printed if "Token authentication" not in line]  # Ray's notice
+    assert ours == [
+        "trial 1/1 finished: seed=0",
+        "2 aggregated rows",
+        f"wrote {out}/trials.csv, sweep.csv and sweep.png",
+    ]
+    run_dir = Path(_read(out / "trials.csv")[0]["run_dir"])
     assert json.loads((run_dir / "config.json").read_text())["algo"] == "dagger"
     assert [int(r["epoch"]) for r in _read(run_dir / "metrics.csv")] == [1, 2]
 

@@ -241,7 +241,10 @@ def sweep(
     out_dir = Path(out_dir).resolve()
     trials = _trial_specs(base_config, seeds, grid, out_dir, cpus_per_trial, crash_after_epoch)
     statuses: dict[str, dict[str, Any]] = {t["name"]: {"restarts": 0} for t in trials}
-    with ray_session(address, num_cpus) as ray:
+    # quiet: no INFO lines of Ray's start ("Started a local Ray instance") or of Tune's
+    # bookkeeping ("Wrote the latest version of all result files")
+    quiet_logs = {"logging_level": logging.WARNING} if verbose == 0 else {}
+    with ray_session(address, num_cpus, **quiet_logs) as ray:
         if gpus_per_trial is None:
             gpus_per_trial = 1.0 if ray.cluster_resources().get("GPU", 0) > 0 else 0.0
         resources = {"cpu": cpus_per_trial, "gpu": gpus_per_trial}
@@ -411,6 +414,9 @@ def _fit(
         quiet = {
             "TUNE_PRINT_ALL_TRIAL_ERRORS": "0",
             "TUNE_WARN_EXCESSIVE_EXPERIMENT_CHECKPOINT_SYNC_THRESHOLD_S": "0",
+            # Tune's console output that honours verbose=0: its newer one prints the
+            # experiment's configuration box and where its results and TensorBoard logs lie
+            "RAY_AIR_NEW_OUTPUT": "0",
         }
         # (Tune reads these from the environment only; a user's own setting wins)
         settings |= {k: v for k, v in quiet.items() if k not in os.environ}
