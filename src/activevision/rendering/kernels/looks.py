@@ -24,11 +24,15 @@ from typing import Any
 
 import numpy as np
 from numba import njit, prange
-from numba.np.unsafe.ndarray import to_fixed_tuple
+from numba.np.unsafe.ndarray import to_fixed_tuple as _to_fixed_tuple
 
 from activevision.rendering.appearance import LOOK
 from activevision.rendering.kernels.bundles import JIT, JIT_PART, Params
 from activevision.rendering.kernels.selects import clamp
+
+#: numba's ``to_fixed_tuple(array, n)``: the first n values as a tuple, n a constant (to mypy
+#: an intrinsic, whose Python signature is its typing function's)
+to_fixed_tuple: Any = _to_fixed_tuple
 
 _GAIN = LOOK["gain"]
 _OFFSET = LOOK["offset"]
