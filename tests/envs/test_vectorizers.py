@@ -473,3 +473,23 @@ def test_a_first_partial_reset_leaves_the_others_awaiting_their_first(env_id: st
         envs.step(np.zeros(2, dtype=np.int64))
     envs.reset(seed=SEED)  # a reset of both is all it takes
     envs.step(np.zeros(2, dtype=np.int64))
+
+
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_the_native_vector_env_names_the_autoreset_modes_it_runs(env_id: str) -> None:
+    """``make_vec(..., autoreset_mode=...)`` in ``vector_entry_point`` mode reached the config
+    and was refused as "unknown keyword autoreset_mode" of EnvConfig; NEXT_STEP (the mode
+    the native envs run), as the enum or its value, is taken, and any other is one line
+    that says which vectorizers run it."""
+    for mode in (gym.vector.AutoresetMode.NEXT_STEP, "NextStep"):
+        envs = gym.make_vec(
+            env_id, num_envs=2, vectorization_mode="vector_entry_point", autoreset_mode=mode
+        )
+        assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
+        envs.close()
+    for mode in (gym.vector.AutoresetMode.SAME_STEP, gym.vector.AutoresetMode.DISABLED, "x"):
+        with pytest.raises(ValueError, match=r"^autoreset_mode: .*'sync' or 'async'") as error:
+            gym.make_vec(
+                env_id, num_envs=2, vectorization_mode="vector_entry_point", autoreset_mode=mode
+            )
+        assert "unknown keyword" not in str(error.value) and repr(mode) in str(error.value)

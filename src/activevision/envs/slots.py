@@ -91,4 +91,19 @@ class SlotVectorEnv(VectorEnv):
         return infos
 
 
-__all__ = ["SlotVectorEnv"]
+def check_autoreset_mode(mode: object) -> None:
+    """ValueError unless ``mode`` (``gymnasium.make_vec(..., autoreset_mode=...)`` in
+    ``vector_entry_point`` mode) is None or ``NEXT_STEP``, the one mode the native vector envs
+    run: without this, the keyword would reach the config and be refused as an unknown
+    field, as if the env had never heard of autoresets."""
+    if mode is None or mode == AutoresetMode.NEXT_STEP or mode == AutoresetMode.NEXT_STEP.value:
+        return
+    raise ValueError(
+        "autoreset_mode: the native vector env (vectorization_mode='vector_entry_point')"
+        " autoresets on the next step only (AutoresetMode.NEXT_STEP); for"
+        f" {[m.value for m in AutoresetMode if m != AutoresetMode.NEXT_STEP]} use"
+        f" vectorization_mode='sync' or 'async', got {mode!r}"
+    )
+
+
+__all__ = ["SlotVectorEnv", "check_autoreset_mode"]

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from gymnasium.vector import AutoresetMode
 
 from activevision.envs.actions import head_action_space
 from activevision.envs.config import EnvConfig, check_count, resolve_config
@@ -16,7 +17,7 @@ from activevision.envs.observations import (
     observation_space,
 )
 from activevision.envs.simulation import EpisodeBatch
-from activevision.envs.slots import SlotVectorEnv
+from activevision.envs.slots import SlotVectorEnv, check_autoreset_mode
 from activevision.envs.time_limit import never, resolve_limit
 from activevision.localisation import LocalisationConfig
 
@@ -29,8 +30,9 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
     ``reset()`` without a seed goes on drawing from each generator, and ``reset(options=
     {"reset_mask": mask})`` resets only the sub-environments of ``mask``, as with
     ``SyncVectorEnv`` (the others' entries in the infos are zeros, their ``_key`` masks False).
-    Autoreset follows Gymnasium's default (``NEXT_STEP``): the step after an episode ends
-    resets that sub-environment and ignores its action. Truncation follows Gymnasium's
+    Autoreset follows Gymnasium's default (``NEXT_STEP``; ``autoreset_mode`` takes no
+    other): the step after an episode ends resets that sub-environment and ignores its
+    action. Truncation follows Gymnasium's
     ``TimeLimit`` (truncated once ``max_episode_steps`` steps are done, even on a step that
     also terminates), as single envs from ``gymnasium.make`` do; ``max_episode_steps=-1`` never
     truncates and ``None`` is the registration's 20, as ``make`` and the sync and async modes
@@ -48,9 +50,11 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         localisation: LocalisationConfig | None = None,
         max_episode_steps: int | None = 20,
         render_mode: str | None = None,
+        autoreset_mode: AutoresetMode | str | None = None,
         **config_overrides: Any,
     ) -> None:
         num_envs = check_count("num_envs", num_envs)
+        check_autoreset_mode(autoreset_mode)
         self.config = config = resolve_config(config, config_overrides)
         # gymnasium.make_vec passes its max_episode_steps as given (20, the registration's,
         # when not given): -1 is no limit, None the registration's 20, as gymnasium.make

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from gymnasium.vector import AutoresetMode
 
 from activevision.envs.actions import head_action_space
 from activevision.envs.config import check_count
@@ -19,7 +20,7 @@ from activevision.envs.match.observations import (
 )
 from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.match.view import match_panel
-from activevision.envs.slots import SlotVectorEnv
+from activevision.envs.slots import SlotVectorEnv, check_autoreset_mode
 from activevision.envs.time_limit import resolve_limit
 
 
@@ -28,7 +29,8 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
     reset with ``seed=s`` is seeded with ``s + i``, so its trajectory equals a single env's
     reset with ``seed=s + i``; ``reset()`` without a seed and ``options={"reset_mask": mask}``
     behave as in ``ActiveVisionVectorEnv``. Autoreset follows Gymnasium's default
-    (``NEXT_STEP``); infos hold the single env's keys as arrays over sub-environments.
+    (``NEXT_STEP``; ``autoreset_mode`` takes no other); infos hold the single env's keys as
+    arrays over sub-environments.
     ``max_episode_steps`` (``gymnasium.make_vec(..., max_episode_steps=n)``, which gives the
     sync and async modes Gymnasium's ``TimeLimit``) truncates a match after ``n`` ticks when
     that comes before ``ticks``, as the ``TimeLimit`` does; ``None`` and ``-1`` (Gymnasium's
@@ -40,9 +42,11 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
         config: MatchConfig | None = None,
         render_mode: str | None = None,
         max_episode_steps: int | None = None,
+        autoreset_mode: AutoresetMode | str | None = None,
         **config_overrides: Any,
     ) -> None:
         num_envs = check_count("num_envs", num_envs)
+        check_autoreset_mode(autoreset_mode)
         self.config = config = resolve_match_config(config, config_overrides)
         # the match truncates itself after config.ticks; a time limit may end it sooner
         # (None or -1: none, as gymnasium.make applies no TimeLimit for either here)
