@@ -131,18 +131,28 @@ def config_from_dict(cls: type[_Config], values: Any, where: str = "") -> _Confi
     where = where or cls.__name__
     if not isinstance(values, Mapping):
         raise ValueError(f"{where}: expects an object of {cls.__name__} fields, got {values!r}")
-    hints = _field_types(cls)
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(values) - known)
     if unknown:
         raise ValueError(f"{where}: unknown key(s) {unknown}; known: {sorted(known)}")
-    kwargs = {}
+    return cls(**nested_configs(cls, values, where))
+
+
+def nested_configs(cls: type, values: Mapping[str, Any], where: str = "") -> dict[str, Any]:
+    """``values`` (keyword arguments of config dataclass ``cls``) with every object given for
+    a field whose type is a dataclass built into that dataclass (:func:`config_from_dict`);
+    other values, and names that are not fields, as they are. Gymnasium's
+    ``EnvSpec.to_json`` writes an env's config keywords as such objects
+    (``dataclasses.asdict``), so ``gymnasium.make(EnvSpec.from_json(...))`` reads them."""
+    where = where or cls.__name__
+    hints = _field_types(cls)
+    known = {f.name for f in dataclasses.fields(cls)}
+    out = dict(values)
     for name, value in values.items():
-        hint = hints[name]
+        hint = hints[name] if name in known else None
         if isinstance(hint, type) and dataclasses.is_dataclass(hint) and isinstance(value, Mapping):
-            value = config_from_dict(hint, value, f"{where}.{name}")
-        kwargs[name] = value
-    return cls(**kwargs)
+            out[name] = config_from_dict(hint, value, f"{where}.{name}")
+    return out
 
 
 def _check(value: Any, hint: Any, finite: bool) -> Any:

@@ -76,3 +76,35 @@ def test_import_activevision_registers_the_env_without_heavy_imports():
         "assert 'torch' not in sys.modules\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
+
+
+def test_a_spec_written_to_json_makes_the_same_env():
+    """Gymnasium's ``EnvSpec.to_json`` (how Minari stores a dataset's env) writes config
+    keywords as JSON objects (``dataclasses.asdict``): ``make(EnvSpec.from_json(...))``
+    refused them ("config: expects EnvConfig or None, got {...}"), and ``to_json`` itself
+    failed on the UKF's noise table ("cannot pickle 'mappingproxy' object") for a match
+    config or a localisation config."""
+    from gymnasium.envs.registration import EnvSpec
+
+    from activevision.envs import EnvConfig
+    from activevision.envs.match.config import MatchConfig, WalkConfig
+    from activevision.envs.robots import RobotsConfig
+    from activevision.localisation import LocalisationConfig
+    from activevision.rendering.appearance import AppearanceConfig
+
+    made = [
+        gym.make("ActiveVision-v0", config=EnvConfig(frame_stack=2), field="paper2019"),
+        gym.make(
+            "ActiveVision-v0",
+            localisation=LocalisationConfig(),
+            appearance=AppearanceConfig.randomised(),
+            robots=RobotsConfig(count=(1, 2)),
+        ),
+        gym.make("ActiveVisionMatch-v0", config=MatchConfig(ticks=5)),
+        gym.make("ActiveVisionMatch-v0", walk=WalkConfig(target="ball"), ticks=5),
+    ]
+    for env in made:
+        assert env.spec is not None
+        twin = gym.make(EnvSpec.from_json(env.spec.to_json()))
+        assert twin.unwrapped.config == env.unwrapped.config
+        assert np.array_equal(twin.reset(seed=3)[0], env.reset(seed=3)[0])

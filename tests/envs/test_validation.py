@@ -23,7 +23,8 @@ BAD_ENV_KWARGS: list[tuple[str, Any, str]] = [
     ("field", 42, "42"),
     ("field", "mars", "'mars'"),
     ("camera", "default", "'default'"),
-    ("camera", {"width": 160}, "{'width': 160}"),
+    # a JSON object of CameraConfig fields is one (EnvSpec.to_json writes configs so)
+    ("camera", {"widht": 160}, "'widht'"),
     ("step_deg", "3", "'3'"),
     ("step_deg", 45.0, "45.0"),
     ("step_deg", NAN, "nan"),

@@ -237,7 +237,8 @@ def test_config_pickles_and_deep_copies_with_its_read_only_noise():
     cfg = UKFConfig(noise=MappingProxyType(noise), initial_std=(0.3, 0.3, 0.2))
     for twin in (pickle.loads(pickle.dumps(cfg)), copy.deepcopy(cfg)):
         assert twin == cfg and twin is not cfg
-        assert isinstance(twin.noise, MappingProxyType)  # still read-only
+        with pytest.raises(TypeError, match="read-only"):  # still read-only
+            twin.noise[LandmarkType.L_CORNER] = RangeBearingNoise(0.1, 0.1, 0.05)
         assert twin.noise[LandmarkType.L_CORNER] == RangeBearingNoise(0.2, 0.1, 0.05)
 
 

@@ -130,6 +130,9 @@ class ActiveVisionEnv(gym.Env):
     ``gymnasium.make("ActiveVision-v0", config=EnvConfig(...), localisation=..., render_mode=...)``
     or any :class:`EnvConfig` field as a keyword (``frame_stack=4``, ``success_mode=...``).
     A wrong type, a value out of range or an unknown keyword raises ``ValueError`` naming it.
+    ``config``, ``localisation`` and the config keywords (``appearance``, ``robots``, ...)
+    may also be JSON objects of their fields, as ``env.spec.to_json()`` writes them:
+    ``gymnasium.make(EnvSpec.from_json(...))`` makes the same env.
     ``max_episode_steps`` of the constructor only sets the infos' "did not happen" value (the
     ``TimeLimit`` wrapper truncates; ``None`` is 20, ``-1`` none, as ``gymnasium.make`` reads
     it): ``TimeLimit(ActiveVisionEnv(max_episode_steps=n), n)`` agrees with itself.

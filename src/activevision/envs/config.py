@@ -16,7 +16,12 @@ from activevision.geometry import CameraConfig, FieldSpec, field_preset
 from activevision.geometry.field import FIELD_PRESETS
 from activevision.rendering.appearance import AppearanceConfig
 from activevision.runtime.metadata import MAX_ACTION_HISTORY
-from activevision.typecheck import check_dataclass_fields, replace_fields
+from activevision.typecheck import (
+    check_dataclass_fields,
+    config_from_dict,
+    nested_configs,
+    replace_fields,
+)
 
 SuccessMode = Literal["tolerance", "landmarks"]
 ActionSet = Literal["8way", "4way"]
@@ -185,14 +190,20 @@ def field_spec(value: object, name: str) -> FieldSpec:
     return value
 
 
-def resolve_config(config: EnvConfig | None, overrides: Mapping[str, Any]) -> EnvConfig:
+def resolve_config(
+    config: EnvConfig | Mapping[str, Any] | None, overrides: Mapping[str, Any]
+) -> EnvConfig:
     """The environments' configuration: ``config`` (default :class:`EnvConfig()`) with the
-    keyword ``overrides`` applied."""
+    keyword ``overrides`` applied. The config and a nested config among the overrides
+    (``appearance``, ``robots``, ``camera``, ``field``) may also come as JSON objects of
+    their fields, as ``EnvSpec.to_json`` writes them (:func:`typecheck.nested_configs`)."""
     if config is None:
         config = EnvConfig()
+    elif isinstance(config, Mapping):
+        config = config_from_dict(EnvConfig, config, "config")
     elif not isinstance(config, EnvConfig):
         raise ValueError(f"config: expects EnvConfig or None, got {config!r}")
-    return config.replace(**overrides) if overrides else config
+    return config.replace(**nested_configs(EnvConfig, overrides)) if overrides else config
 
 
 def check_render_mode(render_mode: str | None, modes: list[str]) -> None:

@@ -8,6 +8,7 @@ its own generator; nothing here touches global random state.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -37,6 +38,7 @@ from activevision.rendering.appearance import (
     neutral_looks,
     tone_curves,
 )
+from activevision.typecheck import config_from_dict
 
 #: ``(reward, terminated, success, ball_lost)``, each (N,): the outcome of one step.
 StepOutcome = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -46,8 +48,13 @@ class EpisodeBatch:
     """State and dynamics of N episodes at once (true pose, belief, head, ball, goal)."""
 
     def __init__(
-        self, cfg: EnvConfig, num_envs: int, localisation: LocalisationConfig | None = None
+        self,
+        cfg: EnvConfig,
+        num_envs: int,
+        localisation: LocalisationConfig | Mapping[str, Any] | None = None,
     ) -> None:
+        if isinstance(localisation, Mapping):  # a JSON object, as EnvSpec.to_json writes it
+            localisation = config_from_dict(LocalisationConfig, localisation, "localisation")
         if localisation is not None and not isinstance(localisation, LocalisationConfig):
             raise ValueError(
                 f"localisation: expects LocalisationConfig or None, got {localisation!r}"

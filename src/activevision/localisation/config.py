@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
-from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -48,8 +47,26 @@ _DEFAULT_NOISE = {
 }
 
 
+class NoiseTable(dict[LandmarkType, RangeBearingNoise]):
+    """:attr:`UKFConfig.noise`: a dict that refuses changes, as the frozen config does. A
+    dict rather than a ``MappingProxyType``: ``dataclasses.asdict`` (which Gymnasium's
+    ``EnvSpec.to_json`` applies to an env's keywords) rebuilds a dict item by item but
+    deep-copies anything else, and a mappingproxy cannot be copied, so ``to_json`` of an env
+    made with a UKF config failed with "cannot pickle 'mappingproxy' object"."""
+
+    def _read_only(self, *args: Any, **kwargs: Any) -> Any:
+        raise TypeError("UKFConfig.noise is read-only; give UKFConfig a new noise instead")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = __ior__ = _read_only
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle and deep-copy as the plain dict of its items (dict's own way would fill the
+        copy through the refused ``__setitem__``)."""
+        return (NoiseTable, (dict(self),))
+
+
 def _default_noise() -> Mapping[LandmarkType, RangeBearingNoise]:
-    return MappingProxyType(dict(_DEFAULT_NOISE))
+    return NoiseTable(_DEFAULT_NOISE)
 
 
 @dataclass(frozen=True)
@@ -92,7 +109,7 @@ class UKFConfig:
             }
         except (TypeError, ValueError) as error:
             raise ValueError(f"UKFConfig.noise: {error}") from None
-        object.__setattr__(self, "noise", MappingProxyType(noise))
+        object.__setattr__(self, "noise", NoiseTable(noise))
         for name in ("odometry_base", "initial_std"):
             try:
                 values = tuple(float(v) for v in getattr(self, name))
@@ -115,9 +132,8 @@ class UKFConfig:
             raise ValueError("UKFConfig odometry_base and initial_std must be positive")
 
     def __reduce__(self) -> tuple[Any, ...]:
-        """Pickle and deep-copy through a plain dict of the noise (a ``MappingProxyType``
-        is neither): configs travel to worker processes, and Gymnasium's env checker
-        deep-copies an env's arguments."""
+        """Pickle and deep-copy through a plain dict of the noise: configs travel to worker
+        processes, and Gymnasium's env checker deep-copies an env's arguments."""
         values = {f.name: getattr(self, f.name) for f in fields(self)}
         values["noise"] = dict(self.noise)
         return (_ukf_config, (values,))
@@ -149,7 +165,7 @@ class UKFConfig:
 
 def _ukf_config(values: dict[str, Any]) -> UKFConfig:
     """A :class:`UKFConfig` from :meth:`UKFConfig.__reduce__`'s values."""
-    return UKFConfig(**{**values, "noise": MappingProxyType(dict(values["noise"]))})
+    return UKFConfig(**{**values, "noise": NoiseTable(values["noise"])})
 
 
 #: The default configuration (a module-level constant so it can be a default argument).

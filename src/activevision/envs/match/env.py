@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import gymnasium as gym
@@ -20,15 +21,22 @@ from activevision.envs.match.observations import (
 from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.match.view import match_panel
 from activevision.envs.reset_options import check_no_options
+from activevision.typecheck import config_from_dict, nested_configs
 
 
-def resolve_match_config(config: MatchConfig | None, overrides: dict[str, Any]) -> MatchConfig:
-    """``config`` (default :class:`MatchConfig()`) with the keyword ``overrides``."""
+def resolve_match_config(
+    config: MatchConfig | Mapping[str, Any] | None, overrides: dict[str, Any]
+) -> MatchConfig:
+    """``config`` (default :class:`MatchConfig()`) with the keyword ``overrides``; the config
+    and nested configs among the overrides may come as JSON objects of their fields, as
+    ``EnvSpec.to_json`` writes them (:func:`typecheck.nested_configs`)."""
     if config is None:
         config = MatchConfig()
+    elif isinstance(config, Mapping):
+        config = config_from_dict(MatchConfig, config, "config")
     elif not isinstance(config, MatchConfig):
         raise ValueError(f"config: expects MatchConfig or None, got {config!r}")
-    return config.replace(**overrides) if overrides else config
+    return config.replace(**nested_configs(MatchConfig, overrides)) if overrides else config
 
 
 class ActiveVisionMatchEnv(gym.Env):
@@ -107,7 +115,10 @@ class ActiveVisionMatchEnv(gym.Env):
     ``gymnasium.make("ActiveVisionMatch-v0", config=MatchConfig(...))`` or any
     :class:`MatchConfig` field as a keyword (``ticks=300``, ``step_deg=6.0``,
     ``observation="image+head+belief"``). ``gymnasium.make_vec(..., vectorization_mode=
-    "vector_entry_point")`` gives the native batched env.
+    "vector_entry_point")`` gives the native batched env. A config, or a config keyword
+    (``walk``, ``tracker``, ...), may also be a JSON object of its fields, as
+    ``env.spec.to_json()`` writes it: ``gymnasium.make(EnvSpec.from_json(...))`` makes the
+    same env.
 
     ## Version History
     * v0: initial release.
