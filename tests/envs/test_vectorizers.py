@@ -493,3 +493,31 @@ def test_the_native_vector_env_names_the_autoreset_modes_it_runs(env_id: str) ->
                 env_id, num_envs=2, vectorization_mode="vector_entry_point", autoreset_mode=mode
             )
         assert "unknown keyword" not in str(error.value) and repr(mode) in str(error.value)
+
+
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_the_native_vector_env_reports_the_seeds_sync_does(env_id: str) -> None:
+    """``np_random_seed`` of the native vector env was ``VectorEnv``'s own: a random 128-bit
+    seed whatever the reset was given; it is each sub-environment's, as ``SyncVectorEnv``
+    reports them, through seeded, unseeded and partial resets, and ``np_random`` the
+    sub-environments' generators."""
+    made = {
+        mode: gym.make_vec(env_id, num_envs=2, vectorization_mode=mode)
+        for mode in ("sync", "vector_entry_point")
+    }
+    resets: list[dict[str, Any]] = [
+        {"seed": 7},
+        {},
+        {"seed": [None, 11]},
+        {"seed": 20, "options": {"reset_mask": np.array([True, False])}},
+    ]
+    for kwargs in resets:
+        for envs in made.values():  # a copy each: SyncVectorEnv pops the reset mask
+            envs.reset(**{key: dict(v) if key == "options" else v for key, v in kwargs.items()})
+        want = made["sync"].np_random_seed
+        assert made["vector_entry_point"].np_random_seed == want, kwargs
+    assert made["vector_entry_point"].np_random_seed == (20, 11)
+    draws = [[g.integers(1 << 30) for g in envs.np_random] for envs in made.values()]
+    assert draws[0] == draws[1]
+    for envs in made.values():
+        envs.close()

@@ -18,14 +18,15 @@ def reseed_generators(
     rngs: list[np.random.Generator],
     seed: int | list[int | None] | None,
     slots: np.ndarray | None = None,
-) -> None:
+) -> list[int | None]:
     """Gymnasium's ``VectorEnv.reset(seed=...)`` for N sub-environment generators, in place,
     as ``SyncVectorEnv`` resets its sub-environments: an int ``s`` seeds sub-environment
     ``i`` with ``s + i``; a list gives each its own seed; None (for all, or in the list)
     keeps the generator, so that ``reset(seed=s)`` then ``reset()`` goes on drawing from the
     seeded streams. Only the sub-environments ``slots`` (default: all) are reset. Any other
     ``seed`` (a float, a string, a dict) is a TypeError naming it; each seed of a list is
-    checked as Gymnasium checks a single env's."""
+    checked as Gymnasium checks a single env's. Returns each sub-environment's seed (None:
+    its generator was kept)."""
     n = len(rngs)
     seeds: list[int | None]
     if seed is None:
@@ -44,3 +45,4 @@ def reseed_generators(
     for i in range(n) if slots is None else slots:
         if seeds[i] is not None:
             rngs[i] = seeding.np_random(seeds[i])[0]
+    return seeds

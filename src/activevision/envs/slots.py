@@ -42,7 +42,9 @@ class SlotVectorEnv(VectorEnv):
         self.single_action_space = action_space
         self.observation_space = batch_space(observation_space, num_envs)
         self.action_space = batch_space(action_space, num_envs)
-        self._rngs = [seeding.np_random()[0] for _ in range(num_envs)]
+        drawn = [seeding.np_random() for _ in range(num_envs)]
+        self._rngs = [rng for rng, _ in drawn]
+        self._seeds = [seed for _, seed in drawn]  # each sub-environment's, as its generator's
         self._frames = np.zeros((num_envs, *frame_shape), dtype=np.uint8)
         self._needs_reset = np.zeros(num_envs, dtype=bool)
         # Gymnasium's "_key" masks: every sub-environment reports every key, every step.
@@ -59,9 +61,25 @@ class SlotVectorEnv(VectorEnv):
         state, their generators and their flags."""
         mask = reset_mask(options, self.num_envs)
         slots = np.flatnonzero(mask)
-        reseed_generators(self._rngs, seed, slots)
+        seeds = reseed_generators(self._rngs, seed, slots)
+        for i in slots:
+            new = seeds[i]
+            if new is not None:
+                self._seeds[i] = new
         self._needs_reset[slots] = False
         return mask
+
+    @property
+    def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
+        """Each sub-environment's seed, as ``SyncVectorEnv`` reports its envs' (``(s, s + 1,
+        ...)`` after ``reset(seed=s)``). ``VectorEnv``'s own was a random seed of a generator
+        no sub-environment draws from, whatever seed the reset was given."""
+        return tuple(self._seeds)
+
+    @property  # type: ignore[misc]
+    def np_random(self) -> tuple[np.random.Generator, ...]:  # type: ignore[override]
+        """Each sub-environment's generator, as ``SyncVectorEnv`` reports its envs'."""
+        return tuple(self._rngs)
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """With ``render_mode="rgb_array"``: each sub-environment's picture, as its single
