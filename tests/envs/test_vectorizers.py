@@ -521,3 +521,26 @@ def test_the_native_vector_env_reports_the_seeds_sync_does(env_id: str) -> None:
     assert draws[0] == draws[1]
     for envs in made.values():
         envs.close()
+
+
+@pytest.mark.parametrize(
+    ("env_id", "observation"),
+    [
+        ("ActiveVision-v0", "image+head+pose+proposal"),
+        ("ActiveVisionMatch-v0", "image+head+belief"),
+    ],
+)
+def test_dict_observations_keep_their_space_order_in_every_mode(env_id: str, observation: str):
+    """A Dict observation's keys come in its space's (sorted) order, the order Sync and
+    Async batch them in: the single and native envs gave them in the order they were built
+    ("image" first), so ``obs.values()`` differed between vectorizers and from the space."""
+    single = gym.make(env_id, observation=observation)
+    obs, _ = single.reset(seed=SEED)
+    assert list(obs) == list(single.observation_space.spaces)
+    assert list(single.step(single.action_space.sample())[0]) == list(obs)
+    for mode in ("sync", "async", "vector_entry_point"):
+        envs = gym.make_vec(env_id, num_envs=2, vectorization_mode=mode, observation=observation)
+        batch, _ = envs.reset(seed=SEED)
+        assert list(batch) == list(obs), mode
+        assert list(envs.step(envs.action_space.sample())[0]) == list(obs), mode
+        envs.close()

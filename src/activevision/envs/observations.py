@@ -145,7 +145,7 @@ class ObservationBuilder:
         obs: dict[str, np.ndarray] = {IMAGE_KEY: frames.copy()}
         for key in self.keys:
             obs[key] = self._vector(key, sim)
-        return obs
+        return in_space_order(obs)
 
     def _vector(self, key: str, sim: EpisodeBatch) -> np.ndarray:
         values: np.ndarray
@@ -166,6 +166,14 @@ class ObservationBuilder:
         # inside the observation space: a prior error over 10 m (localisation_error or
         # prior_error_range) gave a pose_error and a prior pose beyond the Box's bound
         return np.clip(values, -_VECTOR_BOUND, _VECTOR_BOUND).astype(np.float32)
+
+
+def in_space_order(obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """``obs`` with its keys in the order of its ``spaces.Dict`` (sorted: Gymnasium sorts a
+    Dict's keys), the order ``SyncVectorEnv`` and ``AsyncVectorEnv`` batch them in, so that
+    code iterating ``obs.values()`` (a hash, a concatenation) sees every vectorizer's
+    observation, and the space's own order, alike."""
+    return {key: obs[key] for key in sorted(obs)}
 
 
 def single(obs: Observation, i: int = 0) -> Observation:

@@ -20,6 +20,7 @@ from gymnasium import spaces
 
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.simulation import MatchBatch
+from activevision.envs.observations import in_space_order
 from activevision.runtime.metadata import VECTOR_BOUND  # every vector is clipped to +-this
 
 IMAGE_KEY = "image"
@@ -66,7 +67,7 @@ def observe(frames: np.ndarray, sim: MatchBatch) -> Observation:
     obs: dict[str, np.ndarray] = {IMAGE_KEY: frames.copy()}
     for key in keys:
         obs[key] = knowledge_vector(key, known, sim.cfg.tick_seconds)
-    return obs
+    return in_space_order(obs)
 
 
 def knowledge_vector(key: str, info: dict[str, np.ndarray], tick_seconds: float) -> np.ndarray:
