@@ -172,9 +172,12 @@ def _noise_and_tone(images, noise, tone, read2, shot) -> None:
 
 @njit(fastmath=True, nogil=True)
 def _blur_rows(image, taps, pad, rows) -> None:
-    """``rows`` = ``image`` blurred along its rows, each row padded once."""
+    """Rows ``r..r + H`` of ``rows`` = ``image`` blurred along its rows (each row padded
+    once), the ``r`` rows around copies of the border rows (the column pass's padding).
+    ``taps`` is a tuple, as in the renderer: its length a constant, the taps' loop unrolled."""
     height, width = image.shape
-    r = len(taps) // 2
+    n = len(taps)
+    r = n // 2
     for j in range(height):
         for i in range(width):
             pad[r + i] = image[j, i]
@@ -182,30 +185,32 @@ def _blur_rows(image, taps, pad, rows) -> None:
             pad[i] = pad[r]
             pad[r + width + i] = pad[r + width - 1]
         for i in range(width):
-            rows[j, i] = taps[0] * pad[i]
-        for k in range(1, len(taps)):
-            for i in range(width):
-                rows[j, i] += taps[k] * pad[i + k]
+            acc = taps[0] * pad[i]
+            for k in range(1, n):
+                acc += taps[k] * pad[i + k]
+            rows[r + j, i] = acc
+    for j in range(r):
+        for i in range(width):
+            rows[j, i] = rows[r, i]
+            rows[r + height + j, i] = rows[r + height - 1, i]
 
 
 @njit(fastmath=True, nogil=True)
 def _blur(images, taps, rows) -> None:
     """A separable blur of ``len(taps)`` taps along each axis and nothing else (the defocus
-    at the robust range's widest sigma, 1.2 px, has 7)."""
+    at the robust range's widest sigma, 1.2 px, has 7), written as the renderer's kernels
+    are (``rows``: (H + len(taps) - 1, W) float32)."""
     height, width = images.shape[1], images.shape[2]
-    r = len(taps) // 2
-    pad = np.empty(width + 2 * r, np.float32)
-    out = np.empty(width, np.float32)
-    for n in range(images.shape[0]):
-        _blur_rows(images[n], taps, pad, rows)
+    n = len(taps)
+    pad = np.empty(width + n - 1, np.float32)
+    for m in range(images.shape[0]):
+        _blur_rows(images[m], taps, pad, rows)
         for j in range(height):
-            out[:] = np.float32(0.5)
-            for k in range(len(taps)):
-                source = min(max(j + k - r, 0), height - 1)  # once a row: branches are fine
-                for i in range(width):
-                    out[i] += taps[k] * rows[source, i]
             for i in range(width):
-                images[n, j, i] = np.uint8(out[i])
+                acc = taps[0] * rows[j, i]
+                for k in range(1, n):
+                    acc += taps[k] * rows[j + k, i]
+                images[m, j, i] = np.uint8(acc + np.float32(0.5))
 
 
 def floor_costs(pose, pan, tilt, ball, camera: CameraConfig, args) -> dict[str, float]:
@@ -219,8 +224,8 @@ def floor_costs(pose, pan, tilt, ball, camera: CameraConfig, args) -> dict[str, 
     images = np.empty((64, camera.height, camera.width), np.uint8)
     noise = np.random.default_rng(0).standard_normal(1 << 20).astype(np.float32)
     tone = np.arange(256, dtype=np.uint8)
-    taps = np.array([0.04, 0.11, 0.21, 0.28, 0.21, 0.11, 0.04], np.float32)
-    rows = np.empty((camera.height, camera.width), np.float32)
+    taps = tuple(np.float32(t) for t in (0.04, 0.11, 0.21, 0.28, 0.21, 0.11, 0.04))
+    rows = np.empty((camera.height + len(taps) - 1, camera.width), np.float32)
     counter = [0]
 
     def clean() -> None:
