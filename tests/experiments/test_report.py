@@ -205,3 +205,26 @@ def test_the_header_says_the_steps_played_where_they_differ_from_those_asked(tmp
     assert "on `ActiveVision-v0`, 40000 steps." in write_report(run).read_text()
     (run / "checkpoints" / "step_000040331").mkdir()
     assert "40000 steps asked, 40331 played." in write_report(run).read_text()
+
+
+def test_the_evaluation_table_has_no_negative_zero_as_evaluate_prints_none(tmp_path):
+    """An oracle's entropy regret of float noise (mean 2.7e-16 [-7.3e-16, 1.3e-15]) read
+    "0.000 [-0.000, 0.000]" in report.md where evaluate's table prints "0.000 [ 0.000, 0.000]"."""
+    from activevision.experiments.evaluate import METRICS as EVALUATED
+    from activevision.experiments.evaluate import Interval, format_table
+
+    run = make_run(tmp_path)
+    write_evaluation(run, 0.0)
+    path = run / "evaluation" / "evaluation.json"
+    data = json.loads(path.read_text())
+    noise = Interval(2.7e-16, -7.3e-16, 1.3e-15)
+    for row in data["methods"]:
+        row |= {"entropy_regret": noise.mean, "entropy_regret_low": noise.low}
+        row |= {"entropy_regret_high": noise.high}
+    path.write_text(json.dumps(data))
+    report = write_report(run).read_text()
+    line = next(x for x in report.splitlines() if x.startswith("| oracle | 0.000 [0.000, 0.000]"))
+    assert "-0.000" not in report
+    assert line.startswith("| oracle | 0.000 [0.000, 0.000] | 0.500 [0.400, 0.600]")
+    printed = format_table({"oracle": dict.fromkeys(EVALUATED, noise)})
+    assert "-0.000" not in printed  # the same value as evaluate's table shows it

@@ -242,7 +242,7 @@ def latency_summary(latencies_s: Sequence[float]) -> dict[str, float]:
     return {"p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99))}
 
 
-def _fixed(value: float) -> str:
+def fixed(value: float) -> str:
     """``value`` to 3 decimals, without the sign of a value that rounds to zero (a regret of
     -1e-17, float noise, printed "-0.000")."""
     text = f"{value:.3f}"
@@ -256,7 +256,7 @@ def format_table(rows: dict[str, dict[str, Interval]]) -> str:
     lines = [header, "-" * len(header)]
     for method, summary in rows.items():
         cells = "".join(
-            f"{_fixed(iv.mean):>10} [{_fixed(iv.low):>6},{_fixed(iv.high):>6}]"
+            f"{fixed(iv.mean):>10} [{fixed(iv.low):>6},{fixed(iv.high):>6}]"
             for iv in (summary[m] for m in METRICS)
         )
         lines.append(f"{method:<{width}}{cells}")

@@ -47,13 +47,15 @@ def _reading(path: Path) -> Iterator[None]:
 
 
 def _table(rows: list[dict], metrics: list[str]) -> str:
+    """A markdown table of ``mean [low, high]`` per metric, to 3 decimals as ``evaluate``
+    prints them (an oracle's entropy regret of float noise read "[-0.000, 0.000]" here)."""
+    from activevision.experiments.evaluate import fixed
+
     head = "| method | " + " | ".join(metrics) + " |"
     lines = [head, "|" + "---|" * (len(metrics) + 1)]
     for r in rows:
-        cells = [
-            f"{float(r[m]):.3f} [{float(r[m + '_low']):.3f}, {float(r[m + '_high']):.3f}]"
-            for m in metrics
-        ]
+        ends = [[fixed(float(r[m + end])) for end in ("", "_low", "_high")] for m in metrics]
+        cells = [f"{mean} [{low}, {high}]" for mean, low, high in ends]
         lines.append(f"| {r['method']} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
