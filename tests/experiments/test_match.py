@@ -463,3 +463,15 @@ def test_a_user_strategy_that_fails_at_once_fails_before_the_others_play():
     with pytest.raises(ValueError, match="strategy late, tick 7: invalid action"):
         compare_matches(entries, SMALL, 2, seed=3, progress=played.append)
     assert [r.method for r in played] == ["ball_track"]
+
+
+def test_table_cells_never_run_into_each_other():
+    """A share difference of 22 characters ("-43.3% [-65.4%,-21.3%]") followed
+    "+0.0% [-39.0%,39.0%]" with no space between: every cell is now apart from the last."""
+    from activevision.experiments.evaluate import Interval
+
+    wide = dict.fromkeys(MATCH_METRICS, Interval(-0.433, -0.654, -0.213))
+    wide["lost_share"] = Interval(0.0, -0.39, 0.39)
+    line = format_difference("a", wide)
+    assert "+0.0% [-39.0%,39.0%] -43.3% [-65.4%,-21.3%]" in line
+    assert len(line.split()) == 1 + 2 * len(MATCH_METRICS)
