@@ -108,6 +108,16 @@ def test_one_episode_says_its_means_have_no_intervals(tmp_path, capsys):
     assert (written["episodes"], written["weights"]) == (1, "final")  # for the report
 
 
+def test_one_episode_names_the_shares_that_keep_their_intervals(tmp_path, capsys):
+    """It said "rates keep theirs" above a success_rate of "1.000 [nan, nan]": the shares
+    of episodes keep their Wilson intervals, the success rate (a mean) has none."""
+    argv = ["evaluate", "--episodes", "1", "--methods", "oracle", "--out", str(tmp_path / "e")]
+    assert main(argv) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("one episode"))
+    assert "rates keep" not in line
+    assert "(success, regret_within, oscillating) keep their Wilson intervals" in line
+
+
 def test_an_evaluation_is_the_same_bytes_its_latency_apart(trained, tmp_path, capsys):
     """evaluation.json held the learned policy's measured latency (wall clock), so the same
     seed wrote other bytes each time; the latency has a file of its own."""

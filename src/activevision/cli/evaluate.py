@@ -110,6 +110,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     """Fixed-seed evaluation of every method: table, CSV and JSON."""
     from activevision.envs import ActiveVisionEnv
     from activevision.experiments.evaluate import (
+        METRICS,
         evaluate_policy,
         format_table,
         latency_summary,
@@ -164,7 +165,12 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
                 latency = latency_summary(lat)
     print(format_table(summaries))
     if args.episodes == 1:
-        print("one episode: the means' 95% intervals need 2 or more (nan above); rates keep theirs")
+        shares = ", ".join(m for m, kind in METRICS.items() if kind == "proportion")
+        # success_rate is a mean (nan): "rates keep theirs" read as if it kept its interval
+        print(
+            "one episode: the means' 95% intervals need 2 or more (nan above); the shares"
+            f" of episodes ({shares}) keep their Wilson intervals"
+        )
     if latency:
         print(
             f"learned policy per-decision latency (batch 1, CPU): "
