@@ -190,3 +190,13 @@ def test_demo_names_the_policy_it_shows(tmp_path, monkeypatch):
         main(["demo", "--policy", str(run / "policy.onnx"), "--out", str(tmp_path / "b.png")]) == 0
     )
     assert shown == [["shipped", "random"], ["my_run", "random"]]
+
+
+def test_the_steps_where_every_method_solves_are_listed_one_space_apart(tmp_path, capsys):
+    """The line read "(median): oracle 5,  entropy_jump 1": two spaces after each comma."""
+    out = str(tmp_path / "e")
+    argv = ["evaluate", "--episodes", "2", "--methods", "oracle", "entropy_jump", "--out", out]
+    assert main(argv) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("steps to"))
+    assert ",  " not in line
+    assert line.endswith("(median): oracle 8.5, entropy_jump 1")

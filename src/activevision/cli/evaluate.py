@@ -181,7 +181,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     if solved["episodes"]:
         print(
             f"steps to success on the {solved['episodes']} episodes every method solves"
-            " (median):" + ", ".join(f" {name} {solved[name]['median']:g}" for name in summaries)
+            " (median): " + ", ".join(f"{name} {solved[name]['median']:g}" for name in summaries)
         )
     else:
         print("steps to success: no episode is solved by every method, so none to pair")
