@@ -53,7 +53,7 @@ def test_grid_points_and_trial_configs():
         grid_points({"batch_size": []})
 
 
-def _metrics(run_dir: Path, success: list[float]) -> None:
+def _metrics(run_dir: Path, success: list[float], epoch_steps: int = 300) -> None:
     run_dir.mkdir(parents=True)
     with (run_dir / "metrics.csv").open("w", newline="") as f:
         w = csv.writer(f)
@@ -68,7 +68,7 @@ def _metrics(run_dir: Path, success: list[float]) -> None:
             ]
         )
         for i, s in enumerate(success, 1):
-            w.writerow([i, 300 * i, s, 2 * s, 10, "nan"])
+            w.writerow([i, epoch_steps * i, s, 2 * s, 10, "nan"])
 
 
 def test_aggregate_over_seeds(tmp_path):
@@ -85,6 +85,18 @@ def test_aggregate_over_seeds(tmp_path):
     assert rows[1]["episode_reward_mean"] == pytest.approx(1.2)
     assert rows[0]["lr"] == 1
     assert rows[0]["ball_loss_duration_mean"] != rows[0]["ball_loss_duration_mean"]  # all NaN
+
+
+def test_an_epoch_s_step_is_the_mean_of_the_seeds_steps_whatever_their_order(tmp_path):
+    """DAgger plays whole rounds, so its seeds end an epoch at different steps: sweep.csv's
+    step was the first trial's."""
+    trials = []
+    for seed, steps in [(0, 320), (1, 300), (2, 310)]:
+        run_dir = tmp_path / f"seed={seed}"
+        _metrics(run_dir, [0.5, 0.5], epoch_steps=steps)
+        trials.append({"seed": seed, "point": {}, "run_dir": str(run_dir)})
+    for order in (trials, trials[::-1]):
+        assert [r["step"] for r in aggregate(order, tmp_path)] == [310, 620]
 
 
 def test_a_quoted_grid_value_reads_as_its_folder_name_in_the_tables(tmp_path):

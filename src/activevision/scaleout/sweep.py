@@ -517,7 +517,11 @@ def _stats(values: Sequence[float]) -> tuple[float, float, float, float]:
 def aggregate(trials: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[dict[str, Any]]:
     """Per (grid point, epoch) statistics over seeds of :data:`METRICS`, read from every
     trial's ``metrics.csv``; columns: grid keys, epoch, step, seeds, ``<metric>_mean``,
-    ``_std``, ``_min``, ``_max``. Epochs only some seeds reached use those seeds."""
+    ``_std``, ``_min``, ``_max``. Epochs only some seeds reached use those seeds (``seeds``
+    counts them); a seed's NaN (an epoch in which no episode ended) is left out of that
+    metric's statistics. ``step`` is
+    the mean of the seeds' steps at the epoch's end (DAgger plays whole rounds, so its seeds
+    end an epoch at different steps; the first trial's step made it depend on their order)."""
     del out_dir  # the trials carry absolute run directories
     groups: dict[tuple, dict[int, list[dict[str, str]]]] = {}
     keys: dict[tuple, dict[str, Any]] = {}
@@ -534,7 +538,7 @@ def aggregate(trials: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[
             row: dict[str, Any] = {
                 **keys[point_key],
                 "epoch": epoch,
-                "step": int(float(sel[0]["step"])),
+                "step": round(sum(float(r["step"]) for r in sel) / len(sel)),
                 "seeds": len(sel),
             }
             for m in METRICS:
