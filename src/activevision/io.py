@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import json
+import math
 import os
 import tempfile
 from collections.abc import Iterator, Sequence
@@ -55,6 +56,21 @@ def write_text(path: str | os.PathLike, text: str) -> None:
 
 def write_json(path: str | os.PathLike, data: Any) -> None:
     write_text(path, json.dumps(data, indent=2) + "\n")
+
+
+def nan_as_null(data: Any) -> Any:
+    """``data`` (JSON-like: dicts, lists, tuples, scalars) with every float NaN as None, so
+    that it is written as ``null``: Python writes NaN as a bare ``NaN``, which strict JSON
+    readers (jq, JavaScript, most languages' parsers) refuse. For results, where NaN means
+    "no value" (an interval of one episode); a file read back by this package turns the
+    nulls into NaN again where it needs numbers."""
+    if isinstance(data, float) and math.isnan(data):
+        return None
+    if isinstance(data, dict):
+        return {key: nan_as_null(value) for key, value in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [nan_as_null(value) for value in data]
+    return data
 
 
 def write_csv(path: str | os.PathLike, rows: Sequence[dict]) -> None:

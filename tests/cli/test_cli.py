@@ -2,6 +2,7 @@
 
 import argparse
 import json
+import shutil
 import subprocess
 import sys
 
@@ -106,6 +107,30 @@ def test_one_episode_says_its_means_have_no_intervals(tmp_path, capsys):
     assert "nan" in printed
     written = json.loads((tmp_path / "e" / "evaluation.json").read_text())
     assert (written["episodes"], written["weights"]) == (1, "final")  # for the report
+
+
+def _strict_json(text: str) -> object:
+    """JSON as strict readers (jq, JavaScript) take it: no NaN or Infinity."""
+
+    def refuse(token: str) -> None:
+        raise ValueError(f"not strict JSON: {token}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_an_evaluation_json_is_strict_json_its_missing_values_null(trained, tmp_path):
+    """One episode has no interval: evaluation.json held bare NaN, which jq refuses; it
+    writes null, and the report reads it as before (nan in its tables)."""
+    run = tmp_path / "run"
+    shutil.copytree(trained, run)
+    argv = ["evaluate", "--run", str(run), "--episodes", "1", "--methods", "scan"]
+    assert main([*argv, "--overwrite"]) == 0
+    written = _strict_json((run / "evaluation" / "evaluation.json").read_text())
+    assert isinstance(written, dict)
+    row = written["methods"][0]
+    assert row["success_rate_low"] is None and row["success_rate"] is not None
+    assert main(["report", str(run), "--overwrite"]) == 0
+    assert "[nan, nan]" in (run / "report.md").read_text()
 
 
 def test_one_episode_names_the_shares_that_keep_their_intervals(tmp_path, capsys):

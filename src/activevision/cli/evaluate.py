@@ -117,7 +117,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         paired_steps,
         summary_rows,
     )
-    from activevision.io import write_csv, write_json
+    from activevision.io import nan_as_null, write_csv, write_json
 
     check_weights(args)
     check_run(args.run)  # before the outputs inside it
@@ -190,13 +190,15 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     write_csv(files[1], episodes)
     write_json(
         files[2],
-        {
-            "methods": rows,
-            "steps_where_all_solve": solved,
-            "episodes": args.episodes,
-            "seed": args.seed,
-            "weights": args.weights,  # of --run's learned policy: final or best validated
-        },
+        nan_as_null(  # strict JSON: an interval of one episode is null, not NaN
+            {
+                "methods": rows,
+                "steps_where_all_solve": solved,
+                "episodes": args.episodes,
+                "seed": args.seed,
+                "weights": args.weights,  # of --run's learned policy: final or best validated
+            }
+        ),
     )
     written = "evaluation.csv, evaluation.json, episodes.csv"
     if latency:

@@ -143,7 +143,8 @@ def write_report(run_dir: str | Path) -> Path:
 def _evaluation_part(data: dict, latency: dict | None) -> list[str]:
     """The report's evaluation section, from ``evaluation.json``'s ``data`` and the
     learned policy's measured ``latency`` (``latency.json``), if any."""
-    rows = [{k: str(v) for k, v in r.items()} for r in data["methods"]]
+    # null: no value (an interval of one episode), as NaN in files written before 2026-12-05
+    rows = [{k: "nan" if v is None else str(v) for k, v in r.items()} for r in data["methods"]]
     parts = [
         "",
         "## Evaluation",
