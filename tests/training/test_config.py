@@ -221,3 +221,10 @@ def test_the_module_prefixed_env_id_is_the_env_itself():
     assert TrainConfig.from_dict(config.to_dict()) == config
     episodic = TrainConfig(env_id="activevision:ActiveVision-v0")
     assert episodic.env_id == "ActiveVision-v0"
+
+
+def test_num_threads_is_bounded():
+    # 100,000 torch threads was a segmentation fault of the whole process, no error line
+    with pytest.raises(ValueError, match=r"RunConfig\.num_threads: must be in \[0, 1024\]"):
+        TrainConfig().replace(**{"run.num_threads": 100_000})
+    assert TrainConfig().replace(**{"run.num_threads": 1024}).run.num_threads == 1024

@@ -33,6 +33,9 @@ _FRACTION = _range(0.0, 1.0)
 _POSITIVE = _range(0, low_open=True)
 _AT_LEAST_1 = _range(1)
 _AT_LEAST_0 = _range(0)
+#: the most torch threads a run may ask for (RunConfig.num_threads): more than any CPU has
+#: cores; 100,000 was a segmentation fault
+MAX_THREADS = 1024
 
 
 @dataclass(frozen=True)
@@ -104,7 +107,9 @@ class RunConfig:
     #: steps between checkpoints, a multiple of epoch_steps (0: only at the end)
     checkpoint_interval: int = field(default=3000, metadata=_AT_LEAST_0)
     keep_checkpoints: int = field(default=2, metadata=_AT_LEAST_1)  #: newest ones kept
-    num_threads: int = field(default=0, metadata=_AT_LEAST_0)  #: torch threads (0: one a core)
+    #: torch threads (0: one a core); at most MAX_THREADS: PyTorch's OpenMP pool crashes the
+    #: process (a segmentation fault, no error) when it cannot start the threads asked for
+    num_threads: int = field(default=0, metadata=_range(0, MAX_THREADS))
     device: str = "auto"  #: "auto" (cuda if available, else cpu), "cpu", "cuda[:n]", "mps"
     tensorboard: bool = True  #: also write TensorBoard events
     progress_bar: bool = True  #: tqdm bar (only when stderr is a terminal)
