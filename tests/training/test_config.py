@@ -228,3 +228,10 @@ def test_num_threads_is_bounded():
     with pytest.raises(ValueError, match=r"RunConfig\.num_threads: must be in \[0, 1024\]"):
         TrainConfig().replace(**{"run.num_threads": 100_000})
     assert TrainConfig().replace(**{"run.num_threads": 1024}).run.num_threads == 1024
+
+
+def test_ddqn_minibatch_fits_the_replay_buffer():
+    # a buffer smaller than the minibatch never held one: the run trained without an update
+    with pytest.raises(ValueError, match=r"TrainConfig\.learner\.batch_size: .*at most"):
+        TrainConfig().replace(**{"replay.buffer_size": 10})
+    assert TrainConfig().replace(**{"replay.buffer_size": 32}).replay.buffer_size == 32

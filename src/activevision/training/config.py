@@ -301,6 +301,14 @@ class TrainConfig:
             )
         if self.algo == "dagger" and self.env.frame_stack != 1:
             raise ValueError("TrainConfig.algo: 'dagger' takes env.frame_stack=1")
+        if self.algo == "ddqn" and self.learner.batch_size > self.replay.buffer_size:
+            # the learner updates only once the buffer holds a minibatch: a smaller buffer
+            # never does, and the run played to its end without one update (loss nan)
+            raise ValueError(
+                f"TrainConfig.learner.batch_size: DDQN draws its minibatches from the replay"
+                f" buffer, so at most replay.buffer_size ({self.replay.buffer_size}), got"
+                f" {self.learner.batch_size}"
+            )
         if self.algo == "ddqn" and self.env.action_type == "continuous":
             raise ValueError(
                 "TrainConfig.env.action_type: DDQN learns discrete actions; train continuous"
