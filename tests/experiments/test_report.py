@@ -228,3 +228,13 @@ def test_the_evaluation_table_has_no_negative_zero_as_evaluate_prints_none(tmp_p
     assert line.startswith("| oracle | 0.000 [0.000, 0.000] | 0.500 [0.400, 0.600]")
     printed = format_table({"oracle": dict.fromkeys(EVALUATED, noise)})
     assert "-0.000" not in printed  # the same value as evaluate's table shows it
+
+
+def test_a_metrics_log_cut_mid_row_is_refused_naming_it(tmp_path):
+    """A metrics.csv cut in its last row (a disk that filled up, a copy stopped) was reported
+    with that row's last cell cut and the columns after it left out."""
+    run = make_run(tmp_path)
+    text = (run / "metrics.csv").read_text()
+    (run / "metrics.csv").write_text(text[: text.index(",0.25,") + 3])  # epsilon "0."
+    with pytest.raises(ValueError, match=r"metrics\.csv line 2 has fewer cells than its header"):
+        write_report(run)

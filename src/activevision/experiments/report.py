@@ -28,10 +28,20 @@ from activevision.training.config import MATCH_ENV_ID
 
 
 def _csv_rows(path: Path) -> list[dict]:
+    """A log's rows; ValueError naming the file and line where a row has more or fewer cells
+    than the header (a log cut mid-row was reported with its last cell cut: epsilon 0 for
+    0.02, the columns after it left out), as ``activevision plot`` refuses it."""
     if not path.exists():
         return []
     with _reading(path), path.open(encoding="utf-8", newline="") as f:
-        return list(csv.DictReader(f))
+        rows = list(csv.DictReader(f))
+    for line, row in enumerate(rows, start=2):  # the header is line 1
+        if None in row or None in row.values():  # DictReader's marks of a row cut or run on
+            raise ValueError(
+                f"{path} line {line} has {'more' if None in row else 'fewer'} cells than its"
+                " header: it is damaged or not a file activevision wrote"
+            )
+    return rows
 
 
 @contextlib.contextmanager
