@@ -238,3 +238,18 @@ def test_a_metrics_log_cut_mid_row_is_refused_naming_it(tmp_path):
     (run / "metrics.csv").write_text(text[: text.index(",0.25,") + 3])  # epsilon "0."
     with pytest.raises(ValueError, match=r"metrics\.csv line 2 has fewer cells than its header"):
         write_report(run)
+
+
+def test_a_config_edited_after_the_checkpoint_is_refused(tmp_path):
+    """The report shows config.json as the run's configuration: an edited one (a config.json
+    of {} was reported as "training seed None") is refused, as export and evaluate do."""
+    from activevision.training.state import config_digest
+
+    run = make_run(tmp_path)
+    checkpoint = run / "checkpoints" / "step_000040000"
+    checkpoint.mkdir(parents=True)
+    (checkpoint / "state.json").write_text(json.dumps({"config_sha256": config_digest(run)}))
+    write_report(run)  # the file the checkpoint was taken under
+    (run / "config.json").write_text("{}")
+    with pytest.raises(RuntimeError, match=r"config\.json was changed after checkpoint"):
+        write_report(run)

@@ -25,6 +25,13 @@ import activevision
 from activevision.io import read_json, write_text
 from activevision.training.checkpoint import checkpoint_step, list_checkpoints
 from activevision.training.config import MATCH_ENV_ID
+from activevision.training.state import check_run_config_unchanged
+
+#: what reporting a run whose config.json was edited after its checkpoint would do
+DESCRIBING_WOULD = (
+    "the report would show the edited file as the configuration the run was trained with;"
+    " restore the file"
+)
 
 
 def _csv_rows(path: Path) -> list[dict]:
@@ -90,6 +97,10 @@ def write_report(run_dir: str | Path) -> Path:
     config = read_json(run / "config.json")
     if not isinstance(config, dict) or not isinstance(config.get("run", {}), dict):
         raise ValueError(f"{run / 'config.json'} must hold a training run's config object")
+    # the report shows config.json as the run's configuration: one edited after the run's
+    # newest checkpoint is not the one its weights were trained with (a config.json of {}
+    # was reported as "training seed None", "None steps asked")
+    check_run_config_unchanged(run, DESCRIBING_WOULD)
     algo = config.get("algo", "ddqn")
     env_id = config.get("env_id", "ActiveVision-v0")
     parts = [
