@@ -842,3 +842,12 @@ def test_ctrl_c_is_one_line_and_an_interrupted_run_says_how_to_resume(
         one_clear_line("activevision evaluate: interrupted") == "activevision evaluate: interrupted"
     )
     assert not out.exists()  # the folder it made is removed again
+
+
+def test_a_size_this_machine_cannot_hold_is_one_line(tmp_path, tiny_train, one_clear_line):
+    """A replay buffer of 10**15 transitions cannot be allocated: numpy's MemoryError was a
+    traceback; it is one line saying so, and the new run's folder goes."""
+    argv = [*tiny_train, "--set", f"replay.buffer_size={10**15}", "--out", str(tmp_path / "new")]
+    assert main(argv) == 2
+    one_clear_line("out of memory: Unable to allocate")
+    assert not (tmp_path / "new").exists()

@@ -17,7 +17,7 @@ import warnings
 from collections.abc import Callable
 
 from activevision.cli import deploy, evaluate, match, quickstart, robustness, scene, train
-from activevision.cli.args import ArgumentParser, is_refusal
+from activevision.cli.args import ArgumentParser, error_text, is_refusal
 
 _COMMAND_GROUPS = (train, evaluate, robustness, match, deploy, quickstart, scene)
 
@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         # Our own errors and bad input get one clear line; anything else is a bug: traceback.
         if not is_refusal(err):
             raise
-        print(f"activevision {args.command}: error: {err}", file=sys.stderr)
+        print(f"activevision {args.command}: error: {error_text(err)}", file=sys.stderr)
         return 2
     finally:
         warnings.formatwarning = formatwarning

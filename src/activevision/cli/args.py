@@ -38,12 +38,21 @@ def _integer(text: str) -> int:
 
 def is_refusal(error: BaseException) -> bool:
     """Whether ``error`` is bad input or a refused file, told in one line (a ValueError, an
-    OSError, an ImportError, or an error of activevision's own: a run's weights that fail
-    their checksum, a policy file that does not match its metadata...), not a bug, which
-    keeps its traceback."""
-    return isinstance(error, ValueError | OSError | ImportError) or type(
+    OSError, an ImportError, a MemoryError: sizes this machine cannot hold, such as
+    ``--set replay.buffer_size=10000000000``, or an error of activevision's own: a run's
+    weights that fail their checksum, a policy file that does not match its metadata...),
+    not a bug, which keeps its traceback."""
+    return isinstance(error, ValueError | OSError | ImportError | MemoryError) or type(
         error
     ).__module__.startswith("activevision")
+
+
+def error_text(error: BaseException) -> str:
+    """A refusal's line: its message, and what a MemoryError is (numpy's says only "Unable
+    to allocate 74.5 GiB for an array...", Python's nothing)."""
+    if isinstance(error, MemoryError):
+        return f"out of memory: {error}" if str(error) else "out of memory"
+    return str(error)
 
 
 @contextlib.contextmanager
@@ -57,7 +66,7 @@ def refused_by(parser: argparse.ArgumentParser, option: str) -> Iterator[None]:
     except Exception as error:
         if not is_refusal(error):
             raise
-        parser.error(f"{option}: {error}")
+        parser.error(f"{option}: {error_text(error)}")
 
 
 #: ``--out`` of the picture commands (their ``--help`` said nothing of it)
