@@ -851,3 +851,14 @@ def test_a_size_this_machine_cannot_hold_is_one_line(tmp_path, tiny_train, one_c
     assert main(argv) == 2
     one_clear_line("out of memory: Unable to allocate")
     assert not (tmp_path / "new").exists()
+
+
+def test_resuming_a_run_without_checkpoint_says_how_to_start_it_again(run, one_clear_line):
+    """A run killed before its first checkpoint: --resume said only "no checkpoint in
+    RUN/checkpoints"."""
+    shutil.rmtree(run / "checkpoints")
+    assert main(["train", "--resume", str(run)]) == 2
+    one_clear_line("before its first checkpoint", f"--out {run} --overwrite")
+    (run / "checkpoints").write_text("")  # not a folder: not a run that stopped early
+    assert main(["train", "--resume", str(run)]) == 2
+    one_clear_line("checkpoints is not a directory")

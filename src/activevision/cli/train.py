@@ -45,6 +45,11 @@ def cmd_train(args: argparse.Namespace) -> None:
 
 def _resume(args: argparse.Namespace) -> Path | None:
     from activevision.training import reopen_run
+    from activevision.training.checkpoint import (
+        CHECKPOINTS_DIR,
+        CheckpointError,
+        list_checkpoints,
+    )
 
     names = ("config", "preset", "seed", "set", "out", "algo")
     given = [f"--{n}" for n in names if _given(args, n)]
@@ -55,7 +60,22 @@ def _resume(args: argparse.Namespace) -> Path | None:
         )
     if not (args.resume / "config.json").is_file():
         raise ValueError(f"--resume {args.resume}: not a training run (no config.json)")
-    trainer = reopen_run(args.resume)
+    try:
+        trainer = reopen_run(args.resume)
+    except CheckpointError:
+        folder = args.resume / CHECKPOINTS_DIR
+        if folder.exists() and not folder.is_dir():
+            raise CheckpointError(
+                f"{folder} is not a directory: it holds the run's checkpoints"
+            ) from None
+        if list_checkpoints(args.resume):
+            raise
+        # stopped before its first checkpoint (a kill -9, a crash): said "no checkpoint in
+        # RUN/checkpoints", without what to do
+        raise ValueError(
+            f"--resume {args.resume}: the run stopped before its first checkpoint, so there is"
+            f" nothing to continue; start it again with --out {args.resume} --overwrite"
+        ) from None
     try:
         total = trainer.config.run.total_timesteps
         if trainer.step >= total:
