@@ -158,3 +158,14 @@ def test_the_same_weights_and_metadata_are_the_same_bytes(tmp_path):
     loaded, read = ckpt.load_tensors(tmp_path / "0.safetensors")
     assert read == metadata
     assert all(torch.equal(loaded[k], tensors[k]) for k in tensors)
+
+
+def test_weights_writes_a_kill_left_behind_are_removed(tmp_path):
+    """A trainer killed while it wrote policy.safetensors (atomically, through a hidden temp
+    file) left that file in the run for good, one more with each kill; other files stay."""
+    stale = [tmp_path / ".policy.safetensors.a1b2.tmp", tmp_path / ".best_policy.safetensors.x.tmp"]
+    kept = [tmp_path / ".report.md.c3d4.tmp", tmp_path / "policy.safetensors"]
+    for path in stale + kept:
+        path.write_bytes(b"\0" * 100)
+    assert sorted(ckpt.remove_stale_writes(tmp_path)) == sorted(stale)
+    assert not any(p.exists() for p in stale) and all(p.exists() for p in kept)

@@ -45,6 +45,9 @@ MANIFEST = "manifest.json"
 CHECKPOINT_FILES = ("model.safetensors", "optimizer.pt", "replay.npz", "state.json")
 _PREFIX = "step_"
 _CHECKSUM_KEY = "content_sha256"  #: safetensors metadata key of the weights' own checksum
+#: the weights files a trainer writes into its run (training.policy_files), atomically through
+#: a hidden ``.NAME.*.tmp`` file beside each
+_RUN_WEIGHTS = ("policy.safetensors", "best_policy.safetensors")
 
 
 class CheckpointError(RuntimeError):
@@ -112,19 +115,26 @@ def write_checkpoint(
 
 def remove_stale_writes(run_dir: str | os.PathLike[str]) -> list[Path]:
     """Delete the hidden ``.step_*.tmp`` directories that a killed checkpoint write left
-    behind (each as large as the replay buffer); returns what was removed. Call it only
-    while no other process writes checkpoints of this run."""
-    directory = Path(run_dir) / CHECKPOINTS_DIR
-    if not directory.is_dir():
-        return []
-    stale = [
-        p
-        for p in directory.iterdir()
-        if p.is_dir() and p.name.startswith(f".{_PREFIX}") and p.name.endswith(".tmp")
-    ]
+    behind (each as large as the replay buffer), and the run's ``.policy.safetensors.*.tmp``
+    and ``.best_policy.safetensors.*.tmp`` files of a killed weights write (one a kill,
+    never removed before); returns what was removed. Call it only while no other process
+    writes checkpoints of this run (the trainer's files only: a ``report`` or ``export``
+    may be writing its own into the run at the same time)."""
+    run = Path(run_dir)
+    directory = run / CHECKPOINTS_DIR
+    stale = []
+    if directory.is_dir():
+        stale = [
+            p
+            for p in directory.iterdir()
+            if p.is_dir() and p.name.startswith(f".{_PREFIX}") and p.name.endswith(".tmp")
+        ]
     for path in stale:
         shutil.rmtree(path, ignore_errors=True)
-    return stale
+    weights = [p for name in _RUN_WEIGHTS for p in run.glob(f".{name}.*.tmp") if p.is_file()]
+    for path in weights:
+        path.unlink(missing_ok=True)
+    return stale + weights
 
 
 def verify_checkpoint(
