@@ -862,3 +862,22 @@ def test_resuming_a_run_without_checkpoint_says_how_to_start_it_again(run, one_c
     (run / "checkpoints").write_text("")  # not a folder: not a run that stopped early
     assert main(["train", "--resume", str(run)]) == 2
     one_clear_line("checkpoints is not a directory")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["--out", ""],  # after the tiny run's arguments
+        ["train", "--resume", ""],
+        ["evaluate", "--methods", "random", "--episodes", "1", "--out", ""],
+        ["export", ""],
+        ["report", ""],
+    ],
+)
+def test_an_empty_path_is_refused(tmp_path, monkeypatch, tiny_train, argv, one_clear_line):
+    """``Path("")`` is the current folder: ``--out "$RUN"`` with RUN unset trained into the
+    folder the command ran in."""
+    monkeypatch.chdir(tmp_path)
+    assert main(tiny_train + argv if argv[0] == "--out" else argv) == 2
+    one_clear_line("must not be empty")
+    assert list(tmp_path.iterdir()) == []

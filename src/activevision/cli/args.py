@@ -92,6 +92,15 @@ def figure_file(text: str) -> Path:
     return path
 
 
+def path(text: str) -> Path:
+    """A file or folder argument: not empty. ``Path("")`` is the current folder, so ``--out
+    ""`` (a shell variable left unset: ``--out "$RUN"``) trained into whatever folder the
+    command ran in."""
+    if not text:
+        raise argparse.ArgumentTypeError("must not be empty (the current folder is '.')")
+    return Path(text)
+
+
 def positive_int(text: str) -> int:
     """An integer >= 1 (episodes, steps, chunk sizes)."""
     value = _integer(text)

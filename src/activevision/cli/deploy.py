@@ -12,6 +12,7 @@ from activevision.cli.args import (
     add_weights,
     check_run,
     figure_file,
+    path,
     seed,
 )
 from activevision.cli.outputs import check_figure_path, check_outputs, figure_and_gif
@@ -83,8 +84,8 @@ def add_parsers(sub: Any) -> None:
         " training world), what activevision.runtime.HeadController loads on a robot",
     )
     p.set_defaults(func=cmd_export)
-    p.add_argument("run", type=Path)
-    p.add_argument("--out", "-o", type=Path, help="default: RUN/policy.onnx")
+    p.add_argument("run", type=path)
+    p.add_argument("--out", "-o", type=path, help="default: RUN/policy.onnx")
     add_weights(p)
     p.add_argument("--opset", type=_opset, default=17, help="ONNX opset (default 17)")
     add_overwrite(p)
@@ -92,7 +93,7 @@ def add_parsers(sub: Any) -> None:
     text = "episode figure + GIF of the shipped policy (no training needed)"
     p = sub.add_parser("demo", help=text, description=text + ", beside random head moves")
     p.set_defaults(func=cmd_demo)
-    p.add_argument("--policy", type=Path, help="an exported policy.onnx (default: the shipped one)")
+    p.add_argument("--policy", type=path, help="an exported policy.onnx (default: the shipped one)")
     p.add_argument("--seed", type=seed, default=0, help="seed of the episode's start (default 0)")
     p.add_argument(
         "--out",

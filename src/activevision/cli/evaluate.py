@@ -19,6 +19,7 @@ from activevision.cli.args import (
     error_levels,
     figure_file,
     localisation_error,
+    path,
     positive_int,
     seed,
 )
@@ -324,7 +325,7 @@ def cmd_report(args: argparse.Namespace) -> None:
 
 
 def _add_common(p: argparse.ArgumentParser, run_help: str) -> None:
-    p.add_argument("--run", type=Path, help=run_help)
+    p.add_argument("--run", type=path, help=run_help)
     add_weights(p)
     p.add_argument("--seed", type=seed, default=0, help="seed of the episode starts (default 0)")
 
@@ -338,7 +339,7 @@ def _add_runs(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--runs",
         nargs="+",
-        type=Path,
+        type=path,
         metavar="RUN",
         help="more training runs, each scored as method learned:NAME on the same episodes"
         " (e.g. a discrete and a continuous policy side by side)",
@@ -375,7 +376,7 @@ def add_parsers(sub: Any) -> None:
         help="localisation error of the entropy methods' belief and of a learned policy's"
         " prior pose (m and rad)",
     )
-    p.add_argument("--out", type=Path)
+    p.add_argument("--out", type=path)
     add_overwrite(p)
 
     text = "success vs localisation error, every method"
@@ -399,7 +400,7 @@ def add_parsers(sub: Any) -> None:
         "--errors", type=error_levels, default="0:2:0.25", help="start:stop:step or a,b,c"
     )
     p.add_argument("--episodes", type=positive_int, default=100)
-    p.add_argument("--out", type=Path)
+    p.add_argument("--out", type=path)
     p.add_argument(
         "--overwrite", action="store_true", help="start over instead of resuming compare.csv"
     )
@@ -421,5 +422,5 @@ def add_parsers(sub: Any) -> None:
     text = "one Markdown page with a run's figures and tables"
     p = sub.add_parser("report", help=text, description=text + " (RUN/report.md)")
     p.set_defaults(func=cmd_report)
-    p.add_argument("run", type=Path)
+    p.add_argument("run", type=path)
     add_overwrite(p)

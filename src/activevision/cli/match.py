@@ -16,6 +16,7 @@ from activevision.cli.args import (
     choice_list,
     float_in,
     int_in,
+    path,
     positive_int,
     seed,
 )
@@ -367,7 +368,7 @@ def add_parsers(sub: Any) -> None:
     )
     p.add_argument(
         "--model",
-        type=Path,
+        type=path,
         nargs="+",
         help="exported policies (policy.onnx) for onnx_policy (default: the shipped one);"
         " with several, onnx_policy plays each, named onnx_policy[RUN] after its run folder",
@@ -380,7 +381,7 @@ def add_parsers(sub: Any) -> None:
         " MODULE:NAME) returns an object with reset(n, rng) and act(obs, info)"
         " (examples/uncertainty_glance.py)",
     )
-    p.add_argument("--run", type=Path, help="a training run for the learned strategy")
+    p.add_argument("--run", type=path, help="a training run for the learned strategy")
     add_weights(p)
     p.add_argument(
         "--track-margin",
@@ -400,5 +401,5 @@ def add_parsers(sub: Any) -> None:
         help="also print and write (match_paired.csv) every other strategy's difference from"
         " this one, match by match on the same seeds, with 95%% intervals",
     )
-    p.add_argument("--out", type=Path, default=Path("match-results"), help="output directory")
+    p.add_argument("--out", type=path, default=Path("match-results"), help="output directory")
     add_overwrite(p)

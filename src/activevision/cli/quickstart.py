@@ -8,7 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from activevision.cli.args import positive_int, seed
+from activevision.cli.args import path, positive_int, seed
 
 
 def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
@@ -92,7 +92,7 @@ def add_parsers(sub: Any) -> None:
         " in --out",
     )
     p.set_defaults(func=None)  # run by cli.main, which passes itself
-    p.add_argument("--out", type=Path, default=Path("runs/quickstart"))
+    p.add_argument("--out", type=path, default=Path("runs/quickstart"))
     p.add_argument("--steps", type=positive_int, default=None, help="default: the preset's")
     p.add_argument("--episodes", type=positive_int, default=100)
     p.add_argument("--seed", type=seed, default=0)

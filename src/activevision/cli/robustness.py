@@ -15,6 +15,7 @@ from activevision.cli.args import (
     choice_list,
     env_config_of_run,
     localisation_error,
+    path,
     positive_int,
     seed,
 )
@@ -169,7 +170,7 @@ def add_parsers(sub: Any) -> None:
         " robustness.png.",
     )
     p.set_defaults(func=cmd_robustness)
-    p.add_argument("--run", type=Path, help="a training run: scores its learned policy")
+    p.add_argument("--run", type=path, help="a training run: scores its learned policy")
     p.add_argument("--shipped", action="store_true", help="score the policy shipped in the package")
     p.add_argument(
         "--method",
@@ -195,7 +196,7 @@ def add_parsers(sub: Any) -> None:
     )
     p.add_argument(
         "--out",
-        type=Path,
+        type=path,
         help="output directory (default: RUN/robustness, or ./robustness-METHOD)",
     )
     add_overwrite(p)

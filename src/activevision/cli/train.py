@@ -14,6 +14,7 @@ from activevision.cli.args import (
     choice_list,
     grid_item,
     int_in,
+    path,
     positive_float,
     positive_int,
     seed,
@@ -217,7 +218,7 @@ def _sweep_interrupted(args: argparse.Namespace) -> str:
 
 
 def _add_config_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--config", type=Path, help="TrainConfig JSON file (instead of --preset)")
+    p.add_argument("--config", type=path, help="TrainConfig JSON file (instead of --preset)")
     p.add_argument(
         "--preset",
         type=choice_list(_preset_names),
@@ -257,14 +258,14 @@ def add_parsers(sub: Any) -> None:
         help="total environment steps; with --resume: at most this many more",
     )
     p.add_argument("--seed", type=seed)
-    p.add_argument("--out", type=Path, help="run directory, e.g. runs/NAME")
-    p.add_argument("--resume", type=Path, metavar="RUN", help="continue runs/NAME")
+    p.add_argument("--out", type=path, help="run directory, e.g. runs/NAME")
+    p.add_argument("--resume", type=path, metavar="RUN", help="continue runs/NAME")
     add_overwrite(p)
 
     text = "draw a run's training figures"
     p = sub.add_parser("plot", help=text, description=text + ": RUN/plots/*.png, redrawn")
     p.set_defaults(func=cmd_plot)
-    p.add_argument("run", type=Path, help="a training run's folder")
+    p.add_argument("run", type=path, help="a training run's folder")
 
     text = "seed x grid sweep of training runs on Ray Tune (pip install activevision[ray])"
     p = sub.add_parser("sweep", help=text, description=text)
@@ -280,7 +281,7 @@ def add_parsers(sub: Any) -> None:
         help="sweep a config key (repeatable)",
     )
     _add_config_arguments(p)
-    p.add_argument("--out", type=Path, required=True, help="sweep directory, e.g. runs/SWEEP")
+    p.add_argument("--out", type=path, required=True, help="sweep directory, e.g. runs/SWEEP")
     p.add_argument("--address", help="join a Ray cluster: auto | ray://HEAD:10001")
     p.add_argument("--num-cpus", type=positive_int, help="CPUs of the local Ray instance")
     p.add_argument("--cpus-per-trial", type=positive_float, default=1.0)
