@@ -253,3 +253,20 @@ def test_a_config_edited_after_the_checkpoint_is_refused(tmp_path):
     (run / "config.json").write_text("{}")
     with pytest.raises(RuntimeError, match=r"config\.json was changed after checkpoint"):
         write_report(run)
+
+
+def test_plot_refuses_a_config_edited_after_the_checkpoint(tmp_path):
+    """The config picks the figures' curves: a match run whose config.json became {} was
+    drawn as an episodic run, refused as "evaluations.csv has no 'success_rate' column"."""
+    from activevision.training.plots import plot_run
+    from activevision.training.state import config_digest
+
+    run = make_run(tmp_path)
+    episode = {"episode": 1, "step": 20, "reward": 1.0, "length": 20, "success": 1.0}
+    write_rows(run / "episodes.csv", [episode])
+    checkpoint = run / "checkpoints" / "step_000040000"
+    checkpoint.mkdir(parents=True)
+    (checkpoint / "state.json").write_text(json.dumps({"config_sha256": config_digest(run)}))
+    (run / "config.json").write_text("{}")
+    with pytest.raises(RuntimeError, match=r"config\.json was changed after checkpoint"):
+        plot_run(run, tmp_path / "plots")

@@ -10,10 +10,16 @@ from typing import TYPE_CHECKING
 
 from activevision.training.config import MATCH_ENV_ID, load_config
 from activevision.training.metrics import read_csv_columns
+from activevision.training.state import check_run_config_unchanged
 
 if TYPE_CHECKING:
     from activevision.figures.training import Columns, Curve
 
+#: what drawing a run whose config.json was edited after its checkpoint would do
+DRAWING_WOULD = (
+    "the figures would be drawn for the edited file's learner and environment, not those the"
+    " run trained with; restore the file"
+)
 #: the loss curve's title where it is not DDQN's TD loss
 _LOSS_TITLES = {
     "dagger": "imitation loss (cross-entropy)",
@@ -31,6 +37,11 @@ def plot_run(
     from activevision.figures.training import CURVES, MATCH_CURVES, plot_training
 
     run_dir = Path(run_dir)
+    if (run_dir / "config.json").exists():
+        # the config picks the curves and their titles: one edited after the newest
+        # checkpoint drew a match run as an episodic one (a config.json of {} was
+        # "evaluations.csv has no 'success_rate' column", blaming the log)
+        check_run_config_unchanged(run_dir, DRAWING_WOULD)
     tables = {
         "episodes": read_csv_columns(run_dir / "episodes.csv"),
         "metrics": read_csv_columns(run_dir / "metrics.csv"),
