@@ -81,10 +81,14 @@ class BallConfig:
 class OthersConfig:
     """How the other robots (``MatchConfig.robots``) move. Each walks straight to a random
     waypoint on the field at ``speed``, and draws the next when it gets there or when its
-    step would bring it within ``robots.min_spacing`` of another robot or ours (it stands
-    that tick: robots give way). Standing still by default. The ball bounces off every
-    robot's body, keeping ``ball_restitution`` of its speed towards it (a body gives; a
-    robot's legs and torso are not a wall)."""
+    step would bring it within ``robots.min_spacing`` of another robot or ours as they stand
+    at the start of the tick (it stands that tick: robots give way; two stepping towards
+    each other in the same tick can close to ``min_spacing`` less two steps, and our robot
+    gives way to no one). Standing still by default. The ball bounces off every robot's
+    body, keeping ``ball_restitution`` of its speed towards it (a body gives; a robot's legs
+    and torso are not a wall). The overlap is tested where the ball ends its tick, so a
+    ball rolling farther in a tick than the body's contact radius (``robots.radius`` plus
+    the ball's: 0.17 m, about 0.6 m/s at 0.32 s ticks) can pass through a body."""
 
     #: walking speed (m/s); KidSize 0.1-0.3, as ``WalkConfig.speed``
     speed: float = field(default=0.0, metadata=in_range(0.0, 1.0))

@@ -74,8 +74,9 @@ class ActiveVisionMatchEnv(gym.Env):
     the landmarks and the ball behind them (the sight line from the camera passes through
     a robot's body or head: :mod:`activevision.geometry.occlusion`). With
     ``others.speed > 0`` they walk between random waypoints, giving way to each other and
-    to ours (:mod:`activevision.envs.match.others`); standing or walking, the ball bounces
-    off them (step 3, after it rolled).
+    to ours (:mod:`activevision.envs.match.others`; ours gives way to no one); standing or
+    walking, the ball bounces off them (step 3, after it rolled; tested where the ball
+    ends the tick, so a fast ball can pass through a body).
 
     ## Action Space
     ``Discrete(9)``: stay, then the 8 head moves of ``ActiveVision-v0`` (pan positive to the

@@ -25,7 +25,9 @@ def walk_others(
 
     Each robot steps up to ``step`` (m) straight towards its waypoint (``waypoints``
     (N, R, 2)). A robot standing on its waypoint, or whose step would bring it closer than
-    ``spacing`` to another robot or to ours (``own`` (N, 2)) while closing in on it, stands
+    ``spacing`` to another robot (where it stands at the start of the tick: two robots
+    stepping towards each other may both step) or to ours (``own`` (N, 2)) while closing in
+    on it, stands
     this tick and takes a new waypoint, uniform within ``half = (hx, hy)`` of the centre,
     from its ``draws`` (N, R, 2) uniforms: robots give way and turn to elsewhere, so two
     that meet never lock each other."""
@@ -72,7 +74,10 @@ def bounce_ball(
     ``body_radius``) are put back at contact, on the line from the robot's centre, and
     their velocity (N, 2) towards the robot is reflected, keeping ``restitution`` of it
     (a ball moving away, or pushed by a walking robot, keeps its velocity). In place; slots
-    in order, so a ball between two robots ends against the last it met."""
+    in order, so a ball between two robots ends against the last it met. Only where the
+    ball ends its tick is tested: a ball whose roll carried it past a robot's centre is put
+    out on the far side with its velocity kept, and one that crossed a body entirely is
+    untouched (it passed through)."""
     contact = body_radius + ball_radius
     for k in range(robots.shape[1]):
         d = ball - robots[:, k, :2]
