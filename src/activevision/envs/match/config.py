@@ -86,9 +86,10 @@ class OthersConfig:
     each other in the same tick can close to ``min_spacing`` less two steps, and our robot
     gives way to no one). Standing still by default. The ball bounces off every robot's
     body, keeping ``ball_restitution`` of its speed towards it (a body gives; a robot's legs
-    and torso are not a wall). The overlap is tested where the ball ends its tick, so a
-    ball rolling farther in a tick than the body's contact radius (``robots.radius`` plus
-    the ball's: 0.17 m, about 0.6 m/s at 0.32 s ticks) can pass through a body."""
+    and torso are not a wall). The ball's straight path in the tick is tested, so a fast
+    ball stops where it first touched a body rather than passing through it (a ball that
+    bounced off a field line in the same tick is tested along the straight line from where
+    it began to where it ended)."""
 
     #: walking speed (m/s); KidSize 0.1-0.3, as ``WalkConfig.speed``
     speed: float = field(default=0.0, metadata=in_range(0.0, 1.0))

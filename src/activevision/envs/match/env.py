@@ -75,8 +75,8 @@ class ActiveVisionMatchEnv(gym.Env):
     a robot's body or head: :mod:`activevision.geometry.occlusion`). With
     ``others.speed > 0`` they walk between random waypoints, giving way to each other and
     to ours (:mod:`activevision.envs.match.others`; ours gives way to no one); standing or
-    walking, the ball bounces off them (step 3, after it rolled; tested where the ball
-    ends the tick, so a fast ball can pass through a body).
+    walking, the ball bounces off them (step 3, after it rolled; its path in the tick is
+    tested, so a fast ball does not pass through a body).
 
     ## Action Space
     ``Discrete(9)``: stay, then the 8 head moves of ``ActiveVision-v0`` (pan positive to the

@@ -69,26 +69,50 @@ def bounce_ball(
     body_radius: float,
     ball_radius: float,
     restitution: float,
+    start: np.ndarray | None = None,
 ) -> None:
-    """The balls (N, 2) that overlap a robot's body (a vertical cylinder of
-    ``body_radius``) are put back at contact, on the line from the robot's centre, and
-    their velocity (N, 2) towards the robot is reflected, keeping ``restitution`` of it
-    (a ball moving away, or pushed by a walking robot, keeps its velocity). In place; slots
-    in order, so a ball between two robots ends against the last it met. Only where the
-    ball ends its tick is tested: a ball whose roll carried it past a robot's centre is put
-    out on the far side with its velocity kept, and one that crossed a body entirely is
-    untouched (it passed through)."""
+    """The balls (N, 2) that met a robot's body (a vertical cylinder of ``body_radius``) in
+    this tick are put back at contact and their velocity (N, 2) towards the robot is
+    reflected, keeping ``restitution`` of it (a ball moving away, or pushed by a walking
+    robot, keeps its velocity). In place; slots in order, so a ball between two robots ends
+    against the last it met.
+
+    With ``start`` (N, 2), where each ball began the tick, the ball's straight path from
+    there is tested (a swept test): a ball that entered a body on its way stops where it
+    first touched it, even if the roll carried it past the robot's centre or through the
+    body entirely (a ball faster than the contact radius per tick, ~0.6 m/s at 0.32 s ticks,
+    did pass through). A ball that began the tick already touching a body (a robot walked
+    onto it), and every ball without ``start``, is tested where it ends: put back on the
+    line from the robot's centre."""
     contact = body_radius + ball_radius
     for k in range(robots.shape[1]):
-        d = ball - robots[:, k, :2]
+        centre = robots[:, k, :2]
+        used = robots[:, k, 2] > 0
+        d = ball - centre
         distance = np.hypot(d[:, 0], d[:, 1])
-        hit = (robots[:, k, 2] > 0) & (distance < contact)
-        if not hit.any():
-            continue
         # a ball exactly at a robot's centre leaves along +x (any direction would do)
         normal = np.where(
             (distance > 0)[:, None], d / np.maximum(distance, 1e-12)[:, None], [1.0, 0.0]
         )
-        ball[hit] = robots[hit, k, :2] + contact * normal[hit]
+        hit = used & (distance < contact)
+        place = centre + contact * normal
+        if start is not None:
+            # the path start + t (ball - start), t in [0, 1], entering the circle of contact
+            # around the robot: the smaller root of |f + t seg|^2 = contact^2
+            seg = ball - start
+            f = start - centre
+            a = np.einsum("ij,ij->i", seg, seg)
+            half_b = np.einsum("ij,ij->i", f, seg)
+            c = np.einsum("ij,ij->i", f, f) - contact * contact
+            disc = half_b * half_b - a * c
+            t = (-half_b - np.sqrt(np.maximum(disc, 0.0))) / np.maximum(a, 1e-300)
+            entered = used & (c > 0.0) & (a > 0.0) & (disc >= 0.0) & (t >= 0.0) & (t <= 1.0)
+            entry = start + t[:, None] * seg
+            normal = np.where(entered[:, None], (entry - centre) / contact, normal)
+            place = np.where(entered[:, None], entry, place)
+            hit |= entered
+        if not hit.any():
+            continue
+        ball[hit] = place[hit]
         towards = np.minimum(np.einsum("ij,ij->i", velocity, normal), 0.0)
         velocity[hit] -= ((1.0 + restitution) * towards[hit])[:, None] * normal[hit]

@@ -259,6 +259,7 @@ class MatchBatch:
         self._draw(idx)
         uniforms, normals = self._uniforms[idx], self._normals[idx]
         targets = np.ascontiguousarray(np.column_stack([pan, tilt]), dtype=np.float64)
+        start = self.ball[idx]  # where the balls begin the tick: bounces test their path
         odometry = move_kernel(
             idx,
             targets,
@@ -271,9 +272,9 @@ class MatchBatch:
         )
         ball_hidden = np.zeros(len(idx), dtype=bool)
         if self.cfg.ball.bounces_off_own_robot:
-            self._bounce_off_own_robot(idx)
+            self._bounce_off_own_robot(idx, start)
         if self.cfg.robots.max_count:
-            self._move_others(idx, uniforms)
+            self._move_others(idx, uniforms, start)
             self._update_hidden(idx)
             ball_hidden = self._ball_hidden(idx)
         errors = sense_kernel(
@@ -298,9 +299,9 @@ class MatchBatch:
         reward[idx] = self.reward[idx]
         return reward
 
-    def _move_others(self, idx: np.ndarray, uniforms: np.ndarray) -> None:
+    def _move_others(self, idx: np.ndarray, uniforms: np.ndarray, start: np.ndarray) -> None:
         """The other robots of matches ``idx`` walk (when they do), then the balls that
-        meet them bounce off."""
+        met them on their way from ``start`` (N, 2) bounce off."""
         cfg = self.cfg
         robots, ball, velocity = self.robots[idx], self.ball[idx], self.ball_velocity[idx]
         if self._others_walk:
@@ -324,11 +325,13 @@ class MatchBatch:
             cfg.robots.radius,
             cfg.field.ball_radius,
             cfg.others.ball_restitution,
+            start,
         )
         self.ball[idx], self.ball_velocity[idx] = ball, velocity
 
-    def _bounce_off_own_robot(self, idx: np.ndarray) -> None:
-        """The balls of matches ``idx`` that meet our robot's body bounce off it."""
+    def _bounce_off_own_robot(self, idx: np.ndarray, start: np.ndarray) -> None:
+        """The balls of matches ``idx`` that met our robot's body on their way from
+        ``start`` (N, 2) bounce off it."""
         cfg = self.cfg
         ball, velocity = self.ball[idx], self.ball_velocity[idx]
         own = np.zeros((len(idx), 1, 4))
@@ -341,6 +344,7 @@ class MatchBatch:
             cfg.robots.radius,
             cfg.field.ball_radius,
             cfg.others.ball_restitution,
+            start,
         )
         self.ball[idx], self.ball_velocity[idx] = ball, velocity
 
