@@ -11,7 +11,10 @@ Typical use::
 
     sweep(preset("paper"), seeds=range(10), grid={"learning_rate": [5e-4, 1e-3]},
           out_dir="runs/sweep")                       # local Ray, one CPU per trial
-    compare_ray("runs/compare", ["oracle", "random"], [0.0, 1.0], 100, 0, address="auto")
+    compare_ray("runs/compare", ["oracle", "random"], [0.0, 1.0], 100, 0)   # local Ray too
+
+Either joins a running cluster instead with ``address="auto"`` (or ``"ray://head:10001"``);
+without one, ``"auto"`` raises ``ConnectionError``.
 """
 
 from activevision.scaleout.compare import compare_ray
