@@ -2,14 +2,15 @@
 goal reached, steps to success on the episodes every policy solves, and head travel.
 
     python bench/continuous.py --runs runs/dagger_head runs/dagger_head_continuous \\
-        runs/sac_head runs/ppo_head --episodes 1000 --figure docs/figures/continuous.png
+        runs/sac_head runs/ppo_head --episodes 1000 --figure docs/figures/continuous_steps.png
 
 Every run is played as ``activevision evaluate --runs`` plays it (the first run's env, the
-paper's discrete actions; a continuous policy moves by head targets), together with the
-oracle (the 3-degree greedy moves to the true goal). Test episodes are seed 0's, which no
-training or validation used. Ends with one JSON line: per policy the figures, and the
-median steps of the best continuous policy over the best discrete one (the issue's target:
-at most 0.7, at equal or better success rate).
+paper's discrete actions; a continuous policy moves by head targets; a run that observes
+what that env does not give is refused), together with the oracle (the 3-degree greedy
+moves to the true goal). Test episodes are seed 0's, which no training or validation used.
+Ends with one JSON line: per policy the figures, and the median steps of the best continuous
+policy over the best discrete one (the issue's target: at most 0.7, at equal or better
+success rate).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import torch
 
 from activevision.cli.args import positive_int, refused_by, seed
 from activevision.envs import ActiveVisionEnv
+from activevision.envs.observations import observes_within
 from activevision.experiments.evaluate import evaluate_policy, paired_steps
 from activevision.experiments.policies import LearnedPolicy, OraclePolicy
 from activevision.training import load_config
@@ -54,7 +56,14 @@ def main() -> None:
         config = load_config(args.runs[0] / "config.json")
         env_config = config.env.replace(action_type="discrete")
         for run in args.runs:
-            kinds[run.name] = load_config(run / "config.json").env.action_type
+            other = load_config(run / "config.json").env
+            if not observes_within(other, env_config):  # it would fail mid-evaluation
+                parser.error(
+                    f"--runs {run} observes {other.observation!r}, which the first run's env"
+                    f" ({env_config.observation!r}) does not give: compare runs that observe"
+                    " the same inputs"
+                )
+            kinds[run.name] = other.action_type
             policies[run.name] = LearnedPolicy.from_run(run)
     env = ActiveVisionEnv(env_config)
     policies["oracle"] = OraclePolicy(env_config)

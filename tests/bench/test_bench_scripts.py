@@ -117,6 +117,30 @@ def test_a_broken_weights_file_is_one_line(script, args, option, broken_run, tmp
     assert not (tmp_path / "out").exists()
 
 
+def test_continuous_refuses_a_run_its_env_does_not_feed(tmp_path: Path) -> None:
+    """A run that observes what the first run's env does not give (the README's command
+    named an image-alone run after an image + head one) is one line and exit 2: it was a
+    traceback from inside the evaluation."""
+    from activevision.agents.q_network import QNetwork
+    from activevision.training import preset
+    from activevision.training.config import save_config
+    from activevision.training.policy_files import network_metadata, write_policy
+
+    image = tmp_path / "image"
+    image.mkdir()
+    save_config(preset("quickstart_ddqn"), image / "config.json")
+    network = QNetwork(9)
+    write_policy(image, network.state_dict(), network_metadata(network, 0))
+    head = tmp_path / "head"
+    head.mkdir()
+    save_config(preset("dagger_head"), head / "config.json")
+    done = run("continuous.py", "--runs", str(image), str(head), "--episodes", "1")
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr, done.stderr
+    assert lines[-1].startswith(f"continuous.py: error: --runs {head} observes 'image+head'")
+
+
 def test_continuous_writes_no_nan_into_its_json():
     """A median over no episodes (no paired episode, a policy that solves none) is JSON
     null: strict JSON (``allow_nan=False``, other languages' parsers) has no NaN."""

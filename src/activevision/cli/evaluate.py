@@ -62,16 +62,14 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
     """``--runs``: each run's learned policy, as method ``learned:NAME`` (NAME: its
     directory). Each must observe a subset of what the comparison's env gives (``--run``'s,
     or the paper's image); a continuous policy plays the same env, moving by head targets."""
-    from activevision.envs.observations import vector_keys
+    from activevision.envs.observations import observes_within, vector_keys
     from activevision.experiments.policies import LearnedPolicy
 
     policies: dict[str, HeadPolicy] = {}
     for run in args.runs or []:
         other = env_config_of_run(run)
-        given, wanted = vector_keys(env_config), vector_keys(other)
-        if (other.observation == "image") != (env_config.observation == "image") or not set(
-            wanted
-        ) <= set(given):
+        if not observes_within(other, env_config):
+            wanted = vector_keys(other)
             raise ValueError(
                 f"--runs {run} observes {other.observation!r} ({', '.join(wanted) or 'image'}),"
                 f" which the comparison's env ({env_config.observation!r}, from --run, or the"

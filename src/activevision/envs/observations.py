@@ -56,6 +56,14 @@ def vector_keys(cfg: EnvConfig) -> tuple[str, ...]:
     return keys + (("actions",) if cfg.action_history else ())
 
 
+def observes_within(cfg: EnvConfig, given: EnvConfig) -> bool:
+    """Whether a policy trained on ``cfg`` can play in an env of ``given``: both give the
+    bare image, or both a Dict whose vector keys include all of ``cfg``'s."""
+    if (cfg.observation == "image") != (given.observation == "image"):
+        return False
+    return set(vector_keys(cfg)) <= set(vector_keys(given))
+
+
 def vector_sizes(cfg: EnvConfig, n_actions: int) -> dict[str, int]:
     """Length of each vector key."""
     return {
