@@ -7,6 +7,7 @@ import re
 import shlex
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from activevision.cli import build_parser
@@ -104,6 +105,81 @@ def test_the_quick_start_example_prints_the_same_every_run(capsys):
 def test_the_readme_has_its_env_examples():
     # the quick start, the randomised world, the match
     assert len(ENV_EXAMPLES) == 3
+
+
+#: The README's Python examples for a robot: the controller in its loop, the plan it is
+#: given and the camera check; they run here with stand-ins for the robot's parts.
+ROBOT_EXAMPLES = [
+    b for b in fenced_blocks(README.read_text(encoding="utf-8"), ("python",)) if "gym.make" not in b
+]
+
+
+class StandIns:
+    """What the robot examples call on a robot: three camera frames, a neck that moves at
+    once, a localisation, a ball lost once."""
+
+    def __init__(self) -> None:
+        self.ticks, self.pan, self.tilt, self.moves = 0, 0.0, 0.3, 0
+
+    def is_running(self) -> bool:
+        self.ticks += 1
+        return self.ticks <= 3
+
+    def ball_lost(self) -> bool:
+        return self.ticks == 2
+
+    def read(self) -> np.ndarray:
+        return np.random.default_rng(self.ticks).integers(0, 256, (480, 640, 3), np.uint8)
+
+    def joint_angles(self) -> tuple[float, float]:
+        return self.pan, self.tilt
+
+    def move_to(self, pan: float, tilt: float) -> None:
+        self.pan, self.tilt, self.moves = pan, tilt, self.moves + 1
+
+    def wait_until_reached(self) -> None:
+        pass
+
+    def pose(self) -> np.ndarray:
+        return np.array([-1.0, 0.5, 0.3])
+
+    def position_std(self) -> float:
+        return 0.2
+
+
+def test_the_readme_robot_examples_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The loop on the robot, the plan handed to the shipped policy and the camera check run
+    as written (they were only read): with a discrete policy exported to the files they
+    name, the shipped policy for the plan, and stand-ins for the robot."""
+    pytest.importorskip("torch")
+    pytest.importorskip("onnx")
+    pytest.importorskip("onnxruntime")
+    from activevision.agents.q_network import QNetwork
+    from activevision.envs.actions import action_table
+    from activevision.export import export_onnx, policy_metadata
+    from activevision.geometry import CameraConfig
+    from activevision.runtime import CameraMismatchWarning, HeadController, pretrained_policy_path
+
+    loop, plan, camera_check = ROBOT_EXAMPLES
+    monkeypatch.chdir(tmp_path)
+    metadata = policy_metadata(action_table(3.0), CameraConfig(), camera=CameraConfig())
+    exported = export_onnx(QNetwork(9).eval(), tmp_path / "deploy" / "policy.onnx", metadata)
+    robot = StandIns()
+    namespace: dict[str, object] = {"robot": robot, "camera": robot, "neck": robot}
+    exec(compile(loop, str(README), "exec"), namespace)
+    assert robot.moves == 3
+
+    shipped = HeadController(pretrained_policy_path())
+    assert shipped.inputs == ("pose", "pose_error", "proposal")  # as the README says
+    namespace.update(controller=shipped, localisation=robot, ball_xy=np.array([0.5, -0.5]))
+    exec(compile(plan, str(README), "exec"), namespace)
+    assert namespace["command"].action == -1  # type: ignore[attr-defined]  # a continuous move
+
+    for path in (exported.model_path, exported.metadata_path):
+        (tmp_path / path.name).write_bytes(path.read_bytes())
+    with pytest.warns(CameraMismatchWarning) as warned:
+        exec(compile(camera_check, str(README), "exec"), namespace)
+    assert len(warned) == 1  # one warning, listing each difference
 
 
 def heading_anchor(heading: str) -> str:
