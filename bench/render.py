@@ -39,6 +39,7 @@ from activevision.rendering.appearance import (
     draw_looks,
     tone_curves,
 )
+from activevision.rendering.kernels.looks import _filter_column_by, _filter_rows_by
 from activevision.rendering.reference import render_reference
 
 #: The paper's simulator pace: one image per head command of 320 ms.
@@ -171,46 +172,18 @@ def _noise_and_tone(images, noise, tone, read2, shot) -> None:
 
 
 @njit(fastmath=True, nogil=True)
-def _blur_rows(image, taps, pad, rows) -> None:
-    """Rows ``r..r + H`` of ``rows`` = ``image`` blurred along its rows (each row padded
-    once), the ``r`` rows around copies of the border rows (the column pass's padding).
-    ``taps`` is a tuple, as in the renderer: its length a constant, the taps' loop unrolled."""
-    height, width = image.shape
-    n = len(taps)
-    r = n // 2
-    for j in range(height):
-        for i in range(width):
-            pad[r + i] = image[j, i]
-        for i in range(r):
-            pad[i] = pad[r]
-            pad[r + width + i] = pad[r + width - 1]
-        for i in range(width):
-            acc = taps[0] * pad[i]
-            for k in range(1, n):
-                acc += taps[k] * pad[i + k]
-            rows[r + j, i] = acc
-    for j in range(r):
-        for i in range(width):
-            rows[j, i] = rows[r, i]
-            rows[r + height + j, i] = rows[r + height - 1, i]
-
-
-@njit(fastmath=True, nogil=True)
 def _blur(images, taps, rows) -> None:
     """A separable blur of ``len(taps)`` taps along each axis and nothing else (the defocus
-    at the robust range's widest sigma, 1.2 px, has 7), written as the renderer's kernels
-    are (``rows``: (H + len(taps) - 1, W) float32)."""
+    at the robust range's widest sigma, 1.2 px, has 7): the renderer's own blur kernels
+    (``taps`` a tuple, ``rows``: (H + len(taps) - 1, W) float32), rounded to grey levels."""
     height, width = images.shape[1], images.shape[2]
-    n = len(taps)
-    pad = np.empty(width + n - 1, np.float32)
+    row = np.empty(width, np.float32)
     for m in range(images.shape[0]):
-        _blur_rows(images[m], taps, pad, rows)
+        _filter_rows_by(images[m], rows, taps)
         for j in range(height):
+            _filter_column_by(rows, taps, row, j)
             for i in range(width):
-                acc = taps[0] * rows[j, i]
-                for k in range(1, n):
-                    acc += taps[k] * rows[j + k, i]
-                images[m, j, i] = np.uint8(acc + np.float32(0.5))
+                images[m, j, i] = np.uint8(row[i] + np.float32(0.5))
 
 
 def floor_costs(pose, pan, tilt, ball, camera: CameraConfig, args) -> dict[str, float]:
