@@ -91,6 +91,14 @@ def test_compare_plays_your_own_policy_at_every_error_level(tmp_path):
     ]
 
 
+def test_compare_plays_methods_in_the_order_given_each_once(tmp_path):
+    out = tmp_path / "c"
+    argv = ["compare", "--methods", "random", "oracle", "random", "--episodes", "1"]
+    assert main([*argv, "--errors", "0", "--out", str(out)]) == 0
+    with (out / "compare.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["random", "oracle"]
+
+
 @pytest.mark.parametrize(
     ("command", "spec", "needle"),
     [

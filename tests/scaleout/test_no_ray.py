@@ -118,7 +118,9 @@ def test_method_names_and_policies():
         "scan",
         "random",
     ]
-    assert default_method_names("runs/x", ["random", "learned"]) == ["learned", "random"]
+    # the order given, each once; learned only with a run
+    assert default_method_names("runs/x", ["random", "learned", "random"]) == ["random", "learned"]
+    assert default_method_names(None, ["random", "learned"]) == ["random"]
     with pytest.raises(ValueError, match="unknown method"):
         make_policy("nope", 0.0, None)
     with pytest.raises(ValueError, match="run directory"):

@@ -267,7 +267,8 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
         learned = LearnedPolicy.from_run(args.run, weights=args.weights) if args.run else None
         methods = default_methods(env_config, learned)
         if args.methods:
-            methods = {k: v for k, v in methods.items() if k in args.methods}
+            # in the order given, each once
+            methods = {k: methods[k] for k in dict.fromkeys(args.methods) if k in methods}
         for name, policy in _more_runs(args, env_config).items():
             methods[name] = functools.partial(_same, policy)
         users = _user_methods(args, env_config, methods)

@@ -140,7 +140,10 @@ def _get(ray: Any, refs: list[Any]) -> list[Any]:
 
 
 def default_method_names(run_dir: str | Path | None, selected: Sequence[str] | None) -> list[str]:
-    """The methods ``activevision compare`` runs: its default order, filtered by ``selected``
-    (the local CLI ignores the order and unknown names of ``--methods``; so does this)."""
+    """The methods ``activevision compare`` runs: ``selected`` in its order, each once, less
+    those not runnable without a run (``--methods`` as the local CLI reads it); without
+    ``selected``, the default order."""
     names = runnable_methods(compare_method_names(), run_dir)
-    return [m for m in names if not selected or m in selected]
+    if not selected:
+        return names
+    return [m for m in dict.fromkeys(selected) if m in names]
