@@ -56,6 +56,18 @@ def test_robots_closing_in_give_way_and_turn():
     np.testing.assert_allclose(waypoints[0], [[4.5, 0.0], [-4.5, 0.0]])
 
 
+def test_robots_stepping_towards_each_other_in_one_tick_keep_the_spacing():
+    """0.75 m apart, each 0.1 m step ends 0.65 m from where the other stood: checked
+    against where the others stood at the start of the tick, both stepped and ended 0.55 m
+    apart. The second checks its step against where the first now is, and gives way."""
+    robots = _robots((0.0, 0.0), (0.75, 0.0))
+    waypoints = np.array([[[2.0, 0.0], [-2.0, 0.0]]])
+    _walk(robots, waypoints, draws=[[[1.0, 0.5], [0.0, 0.5]]])
+    np.testing.assert_allclose(robots[0, :, :2], [[0.1, 0.0], [0.75, 0.0]])
+    np.testing.assert_allclose(waypoints[0], [[2.0, 0.0], [-4.5, 0.0]])  # the second turns
+    assert np.hypot(*(robots[0, 1, :2] - robots[0, 0, :2])) >= 0.6
+
+
 def test_a_robot_too_close_may_still_walk_away():
     robots = _robots((0.0, 0.0), (0.3, 0.0))
     waypoints = np.array([[[-2.0, 0.0], [0.3, 0.0]]])
@@ -161,11 +173,12 @@ def test_walking_robots_move_at_their_speed_keep_apart_and_stay_on_the_field(wal
     assert (moved > 0).mean() > 0.5  # they walk most of the time
     assert np.abs(xy[..., 0]).max() <= cfg.field.half_length + 1e-9
     assert np.abs(xy[..., 1]).max() <= cfg.field.half_width + 1e-9
-    # pairs check each other's standing positions, so two closing in at once end at most
-    # a step each inside the spacing
+    # each checks its step against where the others are as it steps: no pair ever comes
+    # within the spacing (checked against where the others stood at the start of the tick,
+    # two closing in at once came to 0.517 m of each other here)
     d = xy[:, :, :, None, :] - xy[:, :, None, :, :]
     pair = np.hypot(d[..., 0], d[..., 1]) + np.eye(4) * 99
-    assert pair.min() >= cfg.robots.min_spacing - 2 * step - 1e-9
+    assert pair.min() >= cfg.robots.min_spacing
     height_grey = robots[..., 2:]
     np.testing.assert_array_equal(height_grey, np.broadcast_to(height_grey[:1], height_grey.shape))
 

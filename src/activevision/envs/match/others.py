@@ -1,7 +1,7 @@
 """Other robots in a match (``MatchConfig.robots``, ``MatchConfig.others``): their walk and
-the ball bouncing off them. Pure functions over all matches and robot slots at once (NumPy:
-a handful of robots per match, so the arrays are small and the work is a few vector
-operations per tick, not worth a compiled kernel).
+the ball bouncing off them. Pure functions over all matches at once, looping over the
+robot slots (NumPy: a handful of robots per match, so the arrays are small and the work is
+a few vector operations per slot and tick, not worth a compiled kernel).
 
 A robot is a row ``(x, y, height, grey)`` of the batch's ``robots`` (N, R, 4); height 0
 marks an empty slot (:func:`activevision.envs.robots.draw_robots`), which never moves.
@@ -24,36 +24,40 @@ def walk_others(
     """One tick of the other robots' walks, in place.
 
     Each robot steps up to ``step`` (m) straight towards its waypoint (``waypoints``
-    (N, R, 2)). A robot standing on its waypoint, or whose step would bring it closer than
-    ``spacing`` to another robot (where it stands at the start of the tick: two robots
-    stepping towards each other may both step) or to ours (``own`` (N, 2)) while closing in
-    on it, stands
-    this tick and takes a new waypoint, uniform within ``half = (hx, hy)`` of the centre,
-    from its ``draws`` (N, R, 2) uniforms: robots give way and turn to elsewhere, so two
-    that meet never lock each other."""
+    (N, R, 2)). The robots move one after another, in slot order (vectorised over the
+    matches): each checks its step against where every other robot stands *now* -- those
+    before it in the slot order where they just stepped to, the rest where they stand -- and
+    against ours (``own`` (N, 2), already moved this tick). A robot standing on its
+    waypoint, or whose step would end closer than ``spacing`` to one of them while closing
+    in on it, stands this tick and takes a new waypoint, uniform within ``half = (hx, hy)``
+    of the centre, from its ``draws`` (N, R, 2) uniforms: robots give way and turn to
+    elsewhere, so two that meet never lock each other. So the walk keeps the spacing: every
+    pair that began the tick at least ``spacing`` apart ends it so (a pair already closer
+    may only part)."""
     used = robots[..., 2] > 0
-    xy = robots[..., :2]
-    to = waypoints - xy
-    distance = np.hypot(to[..., 0], to[..., 1])
-    scale = np.divide(
-        np.minimum(distance, step), distance, out=np.zeros_like(distance), where=distance > 0
-    )
-    proposed = xy + to * scale[..., None]
-    # everyone a robot must keep clear of: the other robots (as they stand now) and ours
-    others = np.concatenate([xy, own[:, None, :]], axis=1)  # N, R + 1, 2
-    present = np.concatenate([used, np.ones((len(own), 1), dtype=bool)], axis=1)
-    r = robots.shape[1]
-    self_pair = np.eye(r, r + 1, dtype=bool)[None]
-    keep_clear = present[:, None, :] & ~self_pair  # N, R, R + 1
-    after = _distances(proposed, others)
-    before = _distances(xy, others)
-    blocked = (keep_clear & (after < spacing) & (after < before)).any(axis=2)
-    arrived = distance <= 0.0
-    turn = used & (blocked | arrived)
-    moves = used & ~turn
-    xy[moves] = proposed[moves]
     fresh = np.stack([half[0] * (2 * draws[..., 0] - 1), half[1] * (2 * draws[..., 1] - 1)], -1)
-    waypoints[turn] = fresh[turn]
+    r = robots.shape[1]
+    # everyone a robot must keep clear of: the other robots (as they stand when it steps)
+    # and ours
+    present = np.concatenate([used, np.ones((len(own), 1), dtype=bool)], axis=1)
+    for k in range(r):
+        xy = robots[:, k, :2]
+        to = waypoints[:, k] - xy
+        distance = np.hypot(to[:, 0], to[:, 1])
+        scale = np.divide(
+            np.minimum(distance, step), distance, out=np.zeros_like(distance), where=distance > 0
+        )
+        proposed = xy + to * scale[:, None]
+        others = np.concatenate([robots[..., :2], own[:, None, :]], axis=1)  # N, R + 1, 2
+        keep_clear = present.copy()
+        keep_clear[:, k] = False
+        after = _distances(proposed[:, None], others)[:, 0]
+        before = _distances(xy[:, None], others)[:, 0]
+        blocked = (keep_clear & (after < spacing) & (after < before)).any(axis=1)
+        turn = used[:, k] & (blocked | (distance <= 0.0))
+        moves = used[:, k] & ~turn
+        robots[moves, k, :2] = proposed[moves]
+        waypoints[turn, k] = fresh[turn, k]
 
 
 def _distances(points: np.ndarray, others: np.ndarray) -> np.ndarray:
