@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from activevision.envs.match.config import BallConfig, MatchConfig, OthersConfig, WalkConfig
+from activevision.envs.match.kernels import move_kernel
 from activevision.envs.match.others import bounce_ball, walk_others
 from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.robots import RobotsConfig
@@ -148,14 +149,17 @@ def _config(speed: float, ticks: int = 200) -> MatchConfig:
 
 
 def _play(cfg: MatchConfig, seeds: list[int], ticks: int):
+    """The other robots (T + 1, N, R, 4), the balls and our robot's poses (T + 1, N, 2 | 3)
+    from the start of matches ``seeds`` through ``ticks`` ticks."""
     batch = MatchBatch(cfg, len(seeds))
     batch.reset(np.arange(len(seeds)), [np.random.default_rng(s) for s in seeds])
-    robots, balls = [batch.robots.copy()], [batch.ball.copy()]
+    robots, balls, own = [batch.robots.copy()], [batch.ball.copy()], [batch.pose.copy()]
     for t in range(ticks):
         batch.step(np.full(len(seeds), t % 9))
         robots.append(batch.robots.copy())
         balls.append(batch.ball.copy())
-    return np.stack(robots), np.stack(balls)
+        own.append(batch.pose.copy())
+    return np.stack(robots), np.stack(balls), np.stack(own)
 
 
 @pytest.fixture(scope="module")
@@ -165,7 +169,7 @@ def walking():
 
 
 def test_walking_robots_move_at_their_speed_keep_apart_and_stay_on_the_field(walking):
-    cfg, robots, _ = walking
+    cfg, robots, _, _ = walking
     step = cfg.others.speed * cfg.tick_seconds
     xy = robots[..., :2]
     moved = np.hypot(*np.moveaxis(np.diff(xy, axis=0), -1, 0))
@@ -184,7 +188,7 @@ def test_walking_robots_move_at_their_speed_keep_apart_and_stay_on_the_field(wal
 
 
 def test_the_ball_never_ends_a_tick_inside_a_robot_and_does_meet_them(walking):
-    cfg, robots, balls = walking
+    cfg, robots, balls, _ = walking
     d = balls[:, :, None, :] - robots[..., :2]
     distance = np.hypot(d[..., 0], d[..., 1])
     contact = cfg.robots.radius + cfg.field.ball_radius
@@ -201,12 +205,126 @@ def test_the_ball_never_ends_a_tick_inside_a_robot_and_does_meet_them(walking):
 
 
 def test_standing_robots_stay_put_and_a_match_depends_on_its_seed_only(walking):
-    cfg, robots, balls = walking
-    still, _ = _play(_config(0.0), [3], 50)
+    cfg, robots, balls, own = walking
+    still, _, _ = _play(_config(0.0), [3], 50)
     np.testing.assert_array_equal(still, np.broadcast_to(still[:1], still.shape))
-    alone_robots, alone_balls = _play(cfg, [4], 300)  # match 4 alone, not in a batch of 3
+    alone_robots, alone_balls, alone_own = _play(cfg, [4], 300)  # match 4 alone, not in 3
     np.testing.assert_array_equal(alone_robots[:, 0], robots[:, 1])
     np.testing.assert_array_equal(alone_balls[:, 0], balls[:, 1])
+    np.testing.assert_array_equal(alone_own[:, 0], own[:, 1])
+
+
+def _gaps(robots: np.ndarray, own: np.ndarray) -> np.ndarray:
+    """Centre distances (T, N, R + 1, R + 1) between every two robots of each match, ours
+    (index 0) included; inf for a robot and itself and for empty slots."""
+    xy = np.concatenate([own[..., None, :2], robots[..., :2]], axis=-2)
+    used = np.concatenate([np.ones((*own.shape[:-1], 1), dtype=bool), robots[..., 2] > 0], -1)
+    d = xy[..., :, None, :] - xy[..., None, :, :]
+    gap = np.hypot(d[..., 0], d[..., 1])
+    pair = used[..., :, None] & used[..., None, :] & ~np.eye(xy.shape[-2], dtype=bool)
+    return np.where(pair, gap, np.inf)
+
+
+@pytest.mark.parametrize("target", ["waypoints", "ball"])
+@pytest.mark.parametrize("speed", [0.0, 0.3])
+def test_no_two_robots_ours_included_ever_come_within_the_spacing(speed, target):
+    """Our robot, walking fast (0.3 m/s) to waypoints or onto the ball, among four robots
+    standing or walking fast: at every tick every two robots stand at least ``min_spacing``
+    apart (our robot gave way to no one and walked to 0.04-0.34 m of the others' centres
+    here, into their bodies). It gives way without locking: it walks in most ticks (a tick
+    it gives way in, it turns on the spot)."""
+    cfg = _config(speed).replace(walk=WalkConfig(target=target, speed=0.3))
+    robots, _, own = _play(cfg, [3, 4, 5, 6, 7, 8], 300)
+    gaps = _gaps(robots, own)
+    assert gaps.min() >= cfg.robots.min_spacing
+    assert (gaps[..., 0, :] < cfg.robots.min_spacing + 0.02).any()  # ours did meet them
+    moved = np.hypot(*np.moveaxis(np.diff(own[..., :2], axis=0), -1, 0))
+    assert (moved == 0).any()  # and gave way
+    assert (moved > 0).mean() > 0.9
+
+
+def _facing(
+    other: tuple[float, float],
+    waypoint: tuple[float, float] = (3.0, 0.0),
+    target: str = "waypoints",
+) -> MatchBatch:
+    """A match with our robot at the origin facing +x, its belief exact, walking without a
+    pause to ``waypoint`` (or to the ball there), and one other robot, standing, at
+    ``other``."""
+    cfg = MatchConfig(
+        robots=RobotsConfig(count=(1, 1)),
+        walk=WalkConfig(target=target, pause_ticks=(0, 0)),
+        ball=BallConfig(kick_rate=0.0),
+    )
+    batch = MatchBatch(cfg, 1)
+    batch.reset(np.zeros(1, dtype=np.int64), [np.random.default_rng(0)])
+    batch.pose[0] = batch.mean[0] = (0.0, 0.0, 0.0)
+    batch.waypoint[0] = batch.ball[0] = batch.ball_relative[0] = waypoint
+    batch.ball_velocity[0] = batch.pause[0] = 0
+    batch.robots[0, 0] = (*other, 0.6, 100.0)
+    return batch
+
+
+def _move(batch: MatchBatch) -> np.ndarray:
+    """One tick of our robot's walk (the compiled move step alone): its odometry (3,)."""
+    idx = np.zeros(1, dtype=np.int64)
+    batch._draw(idx)
+    return move_kernel(
+        idx,
+        batch.head[idx].copy(),
+        batch._state,
+        batch._params,
+        batch._model,
+        batch._ball_model,
+        batch._uniforms[idx],
+        batch._normals[idx],
+    )[0]
+
+
+@pytest.mark.parametrize("target", ["waypoints", "ball"])
+def test_our_robot_about_to_walk_into_another_stands_and_its_odometry_says_so(target):
+    """A robot 0.61 m straight ahead, our 6.4 cm step would end within the 0.6 m spacing:
+    our robot does not step (not even the step's drift: it made none), its odometry is
+    zero, and walking to a waypoint beyond that robot it takes a new one from its give-way
+    draws (onto the ball, it waits). A robot behind it, or far ahead, does not stop it;
+    nor does one it parts from."""
+    batch = _facing((0.61, 0.0), target=target)
+    odometry = _move(batch)
+    np.testing.assert_array_equal(odometry, 0.0)
+    np.testing.assert_array_equal(batch.pose[0, :2], 0.0)
+    assert abs(batch.pose[0, 2]) < 0.03  # no turn commanded: the turn's drift alone
+    if target == "waypoints":
+        u = batch._uniforms[0, batch.k + 10 : batch.k + 12]
+        hx, hy = batch._params[6], batch._params[7]
+        np.testing.assert_allclose(batch.waypoint[0], [hx * (2 * u[0] - 1), hy * (2 * u[1] - 1)])
+    else:
+        np.testing.assert_allclose(batch.waypoint[0], [2.6, 0.0])  # the ball less the standoff
+    # the whole tick, as the envs play it (the UKF predicts from that odometry)
+    batch = _facing((0.61, 0.0), target=target)
+    batch.step(np.zeros(1, dtype=np.int64))
+    np.testing.assert_array_equal(batch.pose[0, :2], 0.0)
+    for other in [(-0.61, 0.0), (1.5, 0.0), (-0.1, 0.5)]:
+        batch = _facing(other, target=target)
+        before = np.hypot(*other)
+        odometry = _move(batch)
+        assert 0.05 < odometry[0] <= 0.064 + 1e-12 and odometry[1] == 0.0
+        assert batch.pose[0, 0] > 0.0
+        assert np.hypot(*(batch.pose[0, :2] - other)) >= min(before, 0.6)
+
+
+def test_our_robot_turns_on_the_spot_towards_a_waypoint_clear_of_the_robot_it_gives_way_to():
+    """A robot 0.6 m away 45 degrees to the right, a waypoint 60 degrees to the left: our
+    robot turns towards it (the most it may: 0.16 rad) and walks forward by cos 60 of a
+    step, which closes in on the robot. It turns on the spot instead, with the turn as its
+    odometry, and keeps its waypoint (the way there passes clear of the robot)."""
+    side = 0.6 / np.sqrt(2)
+    waypoint = (1.5, 1.5 * np.sqrt(3))
+    batch = _facing((side, -side), waypoint)
+    odometry = _move(batch)
+    np.testing.assert_allclose(odometry, [0.0, 0.0, 0.16])
+    np.testing.assert_array_equal(batch.pose[0, :2], 0.0)
+    assert abs(batch.pose[0, 2] - 0.16) < 0.03  # the turn and its drift
+    np.testing.assert_array_equal(batch.waypoint[0], waypoint)
 
 
 def _play_own(bounces: bool, seeds: list[int], ticks: int):

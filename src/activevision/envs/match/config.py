@@ -81,10 +81,12 @@ class BallConfig:
 class OthersConfig:
     """How the other robots (``MatchConfig.robots``) move. Each walks straight to a random
     waypoint on the field at ``speed``, and draws the next when it gets there or when its
-    step would bring it within ``robots.min_spacing`` of another robot or ours as they stand
-    at the start of the tick (it stands that tick: robots give way; two stepping towards
-    each other in the same tick can close to ``min_spacing`` less two steps, and our robot
-    gives way to no one). Standing still by default. The ball bounces off every robot's
+    step would bring it within ``robots.min_spacing`` of another robot or ours (it stands
+    that tick: robots give way). They step one after another, each checking where the
+    others are as it steps, after our robot, which gives way to them as well
+    (``envs.match.kernels.move_kernel``: it turns on the spot instead), standing or walking:
+    no two robots, ours included, ever end a tick within ``min_spacing`` of each other.
+    Standing still by default. The ball bounces off every robot's
     body, keeping ``ball_restitution`` of its speed towards it (a body gives; a robot's legs
     and torso are not a wall). The ball's straight path in the tick is tested, so a fast
     ball stops where it first touched a body rather than passing through it (a ball that

@@ -54,7 +54,10 @@ class ActiveVisionMatchEnv(gym.Env):
        the ball (``walk.target="ball"``), planning from its *believed* pose at KidSize speed
        (0.2 m/s, 0.5 rad/s). Its true motion drifts from the commanded step with the UKF's
        odometry model (std proportional to distance walked and angle turned, plus a small
-       slip per tick); the commanded step is its odometry;
+       slip per tick); the commanded step is its odometry. It gives way to the other
+       robots: a step that would end within ``robots.min_spacing`` of one it does not make,
+       but turns on the spot (its odometry the turn alone), giving up a waypoint that lies
+       beyond that robot for a new one;
     3. the ball (:class:`BallConfig`) rolls with constant deceleration, bounces off the
        field lines, and is kicked at random times in random directions. It rolls through
        our own robot unless ``ball.bounces_off_own_robot`` (then it bounces off our body as
@@ -74,8 +77,9 @@ class ActiveVisionMatchEnv(gym.Env):
     the landmarks and the ball behind them (the sight line from the camera passes through
     a robot's body or head: :mod:`activevision.geometry.occlusion`). With
     ``others.speed > 0`` they walk between random waypoints, giving way to each other and
-    to ours (:mod:`activevision.envs.match.others`; ours gives way to no one); standing or
-    walking, the ball bounces off them (step 3, after it rolled; its path in the tick is
+    to ours (:mod:`activevision.envs.match.others`), as ours gives way to them (step 2): no
+    two robots ever end a tick within ``robots.min_spacing``; standing or walking, the ball
+    bounces off them (step 3, after it rolled; its path in the tick is
     tested, so a fast ball does not pass through a body).
 
     ## Action Space

@@ -1,6 +1,6 @@
 """The compiled tick of N matches: :func:`move_kernel` (head, walk, drift, ball) and
 :func:`sense_kernel` (visibility, detection, UKF, ball model, reward). Between the two the
-simulation updates what other robots hide (NumPy), when there are any.
+simulation walks the other robots and updates what they hide (NumPy), when there are any.
 
 The kernels take typed bundles as plain tuples of their fields (``tuple(bundle)``, as the
 localisation kernels do) and rebuild them inside.
@@ -16,6 +16,7 @@ from numba import njit
 
 from activevision.envs.match.detections import detect_one
 from activevision.envs.match.dynamics import (
+    blocking_robot,
     carry,
     drift_stds,
     move_pose,
@@ -57,6 +58,7 @@ class MatchState(NamedTuple):
     declared_lost: np.ndarray  #: (N,) bool, ever this match
     hidden: np.ndarray  #: (N, K) bool, behind other robots
     reward: np.ndarray  #: (N,)
+    robots: np.ndarray  #: (N, R, 4) the other robots (x, y, height, grey); height 0: none
 
 
 class MatchParams(NamedTuple):
@@ -91,6 +93,7 @@ class MatchParams(NamedTuple):
     error_weight: float
     ball_weight: float
     travel_weight: float
+    spacing: float  #: our robot keeps this far (m) from the other robots' centres
 
 
 @njit(cache=True)
@@ -116,6 +119,17 @@ def _next_waypoint(n: int, s: MatchState, p: MatchParams, draws: np.ndarray) -> 
 
 
 @njit(cache=True)
+def _beyond(s: MatchState, n: int, blocker: int) -> bool:
+    """Whether match ``n``'s waypoint lies beyond the other robot ``blocker``: their
+    directions from our robot, in its own frame, less than 90 degrees apart (the waypoint
+    where our robot believes it is, from its belief; the robot where it sees it, where it
+    stands), so that the way there passes that robot."""
+    bx, by = to_robot_frame(s.robots[n, blocker, 0], s.robots[n, blocker, 1], s.pose[n])
+    wx, wy = to_robot_frame(s.waypoint[n, 0], s.waypoint[n, 1], s.mean[n])
+    return bx * wx + by * wy > 0.0
+
+
+@njit(cache=True)
 def move_kernel(
     idx: np.ndarray,
     targets: np.ndarray,
@@ -128,11 +142,22 @@ def move_kernel(
 ) -> np.ndarray:
     """Matches ``idx``: the head to ``targets`` (len(idx), 2) (clipped to its limits), our
     robot's walk and drift, the ball. Returns the odometry (len(idx), 3) (the commanded
-    steps). Row ``j`` of ``uniforms`` / ``normals`` are match ``idx[j]``'s draws (layout:
-    :mod:`activevision.envs.match.simulation`)."""
+    steps; the turn alone where our robot gave way). Row ``j`` of ``uniforms`` / ``normals``
+    are match ``idx[j]``'s draws (layout: :mod:`activevision.envs.match.simulation`).
+
+    Our robot gives way to the other robots (``s.robots``, where they stand: they move
+    after it): a step whose true motion (the commanded step and its drift) would end closer
+    than ``spacing`` to one of them while closing in on it is not made. The robot turns on
+    the spot instead: its position unchanged, its heading turned by the commanded turn and
+    that turn's drift alone, its odometry the turn (its walking engine commanded no step,
+    and it made none). A waypoint beyond that robot (:func:`_beyond`) it gives up for a new
+    one from its give-way draws; one clear of it it keeps, turning on the spot until a step
+    towards it parts from the robot. Walking to the ball, it waits (turning to the ball)
+    for the ball or the robot to move."""
     s, p = MatchState(*state), MatchParams(*params)
     k = s.detected.shape[1]
     odometry = np.zeros((idx.shape[0], 3))
+    moved = np.empty(3)
     for j in range(idx.shape[0]):
         n = idx[j]
         pan = min(max(targets[j, 0], p.pan_min), p.pan_max)
@@ -144,17 +169,30 @@ def move_kernel(
             s.mean[n], s.waypoint[n], s.pause[n] > 0, p.speed, p.turn_rate, p.dt
         )
         s.pause[n] = max(s.pause[n] - 1, 0)
-        odometry[j, 0], odometry[j, 1], odometry[j, 2] = dx, dy, dth
         sx, sy, st = drift_stds(dx, dy, dth, model)
         drift = normals[j, 2 * k : 2 * k + 3]
+        moved[:] = s.pose[n]
         move_pose(
-            s.pose[n],
+            moved,
             dx + sx * drift[0],
             dy + sy * drift[1],
             dth + st * drift[2],
             p.carpet_x,
             p.carpet_y,
         )
+        blocker = blocking_robot(s.pose[n], moved, s.robots[n], p.spacing)
+        if blocker >= 0:
+            # give way: turn on the spot, as commanded, with a pure turn's drift
+            if p.walk_to_ball == 0 and _beyond(s, n, blocker):
+                give_way = uniforms[j, k + 10 : k + 12]
+                s.waypoint[n, 0] = p.waypoint_x * (2 * give_way[0] - 1)
+                s.waypoint[n, 1] = p.waypoint_y * (2 * give_way[1] - 1)
+            dx = dy = 0.0
+            st = drift_stds(0.0, 0.0, dth, model)[2]
+            moved[:] = s.pose[n]
+            move_pose(moved, 0.0, 0.0, dth + st * drift[2], p.carpet_x, p.carpet_y)
+        s.pose[n, :] = moved
+        odometry[j, 0], odometry[j, 1], odometry[j, 2] = dx, dy, dth
         roll_ball(
             s.ball[n],
             s.ball_velocity[n],

@@ -42,9 +42,11 @@ _POINT_TYPES = (
     LandmarkType.PENALTY_MARK,
 )
 #: uniforms drawn per match per tick besides the K miss draws: false detection (4), kick (3),
-#: next waypoint (2) and its pause (1); then, when other robots walk, a next waypoint (2)
-#: for each of them
+#: next waypoint (2) and its pause (1); then, when there are other robots, our robot's next
+#: waypoint should it give way to one (2), and when they walk, a next waypoint (2) for each
+#: of them
 _EXTRA_UNIFORMS = 10
+_GIVE_WAY_UNIFORMS = 2
 #: normals per tick besides the 2 K measurement draws: odometry (3), ball detector (2)
 _EXTRA_NORMALS = 5
 
@@ -90,8 +92,9 @@ class MatchBatch:
         self.hidden = np.zeros((num_envs, k), dtype=bool)
         self.looks = neutral_looks(num_envs)
         self.tone = np.repeat(identity_tone()[None], num_envs, axis=0)
+        give_way_draws = _GIVE_WAY_UNIFORMS if cfg.robots.max_count else 0
         walker_draws = 2 * cfg.robots.max_count if self._others_walk else 0
-        self._uniforms = np.zeros((num_envs, k + _EXTRA_UNIFORMS + walker_draws))
+        self._uniforms = np.zeros((num_envs, k + _EXTRA_UNIFORMS + give_way_draws + walker_draws))
         self._normals = np.zeros((num_envs, 2 * k + _EXTRA_NORMALS))
         self.reward = np.zeros(num_envs)
         self._rngs: list[np.random.Generator] = [np.random.default_rng(0)] * num_envs
@@ -129,6 +132,7 @@ class MatchBatch:
                 self.declared_lost,
                 self.hidden,
                 self.reward,
+                self.robots,
             )
         )
         carpet = field.carpet_half_extent
@@ -163,6 +167,7 @@ class MatchBatch:
                 r.error_weight,
                 r.ball_weight,
                 r.travel_weight,
+                cfg.robots.min_spacing,
             )
         )
         Wm, Wc = merwe_weights(ukf.n, ukf.alpha, ukf.beta, ukf.kappa)
