@@ -25,6 +25,7 @@ from activevision.runtime import (
 
 #: The camera the test policies are recorded as trained with (not the default one).
 TRAINED = CameraConfig(hfov=1.1, camera_height=0.55, tilt_min=math.radians(10.0))
+LIMIT_KEYS = ("pan_min", "pan_max", "tilt_min", "tilt_max")
 
 
 def assert_same_camera(got: CameraModel | None, want) -> None:
@@ -41,6 +42,8 @@ def camera_policy(policy, tmp_path):
     values = json.loads(policy.metadata_path.read_text())
     assert "camera" not in values  # exported without camera=: a file from before the record
     values["camera"] = CameraModel.of(TRAINED).to_json()
+    # export writes the trained camera's range as the head limits too (they must agree)
+    values["head_limits_deg"] = {k: math.degrees(getattr(TRAINED, k)) for k in LIMIT_KEYS}
     model.with_suffix(".json").write_text(json.dumps(values))
     return model
 
@@ -158,6 +161,28 @@ def test_malformed_record_is_a_policy_file_error(camera_policy, record, helpers)
 def test_invalid_value_is_a_policy_file_error(camera_policy, changes, message, helpers):
     record = {**CameraModel.of(TRAINED).to_json(), **changes}
     helpers.assert_record_rejected(camera_policy, "camera", record, f"'camera' .*{message}")
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"tilt_min_deg": 5.0}, "'camera' tilt_min_deg = 5 but 'head_limits_deg' tilt_min = 10"),
+        ({"pan_max_deg": 60.0}, "'camera' pan_max_deg = 60 but 'head_limits_deg' pan_max = 90"),
+        ({"pan_min_deg": -45.0}, "'camera' pan_min_deg = -45 but 'head_limits_deg' pan_min = -90"),
+        ({"tilt_max_deg": 50.0}, "'camera' tilt_max_deg = 50 but 'head_limits_deg' tilt_max = 65"),
+    ],
+)
+def test_camera_range_must_agree_with_the_head_limits(camera_policy, changes, message, helpers):
+    """The recorded camera's pan/tilt range and the head limits are written from the same
+    camera; a file where they disagree is refused, naming both values (it was accepted)."""
+    record = {**CameraModel.of(TRAINED).to_json(), **changes}
+    helpers.assert_record_rejected(camera_policy, "camera", record, message)
+
+
+def test_head_limits_must_agree_with_the_camera_range(camera_policy, helpers):
+    limits = {"pan_min": -90.0, "pan_max": 90.0, "tilt_min": 5.0, "tilt_max": 65.0}
+    message = "'camera' tilt_min_deg = 10 but 'head_limits_deg' tilt_min = 5 degrees"
+    helpers.assert_record_rejected(camera_policy, "head_limits_deg", limits, message)
 
 
 def test_a_record_of_another_resolution_at_the_inputs_aspect_loads(camera_policy):

@@ -40,7 +40,7 @@ its field of view at least ``MIN_HFOV_DEG``. Files written before it existed lac
 trained camera is then unknown and :class:`~activevision.runtime.HeadController` cannot
 compare the robot's with it.
 ``head_limits_deg`` is what the controller clips its commands to; export writes the trained
-camera's pan and tilt range to both.
+camera's pan and tilt range to both, and a file where the two differ is refused.
 
 ``world`` is the world the policy was trained in: the run's ``env.appearance`` (each
 appearance factor's ``[low, high]`` range) and ``env.robots`` (other robots: ``count`` and
@@ -92,6 +92,9 @@ METADATA_FILENAME = "policy.json"
 _HEAD_LIMIT_KEYS = ("pan_min", "pan_max", "tilt_min", "tilt_max")
 #: Physical bounds of the limits (a neck that turns past +-180 deg pan is a typo).
 _HEAD_LIMIT_BOUNDS_DEG = {"pan_min": 180.0, "pan_max": 180.0, "tilt_min": 90.0, "tilt_max": 90.0}
+#: How far (degrees) policy.json's camera record and head_limits_deg may differ: export
+#: writes the same angles to both, so only the rounding of radians to degrees.
+_LIMIT_AGREEMENT_DEG = 1e-6
 #: Largest head move one action may make (the env's step_deg is at most 30).
 MAX_MOVE_DEG = 30.0
 #: Largest continuous head move per decision (the env's max_move_deg is at most 90).
@@ -751,7 +754,22 @@ class _MetadataReader:
             camera = CameraModel(**values)
         except ValueError as error:
             raise self.fail(f"'camera' is invalid: {error}") from error
-        return self.camera_fits_input(camera)
+        return self.camera_matches_head_limits(self.camera_fits_input(camera))
+
+    def camera_matches_head_limits(self, camera: CameraModel) -> CameraModel:
+        """``camera``, or PolicyFileError: its pan and tilt range is not ``head_limits_deg``
+        (export writes the trained camera's range to both; a file where they differ clips
+        the robot's head to limits the policy was not trained with, or was edited by hand)."""
+        limits = self.head_limits()
+        for key in _HEAD_LIMIT_KEYS:
+            recorded, limit = math.degrees(getattr(camera, key)), math.degrees(getattr(limits, key))
+            if abs(recorded - limit) > _LIMIT_AGREEMENT_DEG:
+                raise self.fail(
+                    f"'camera' {key}_deg = {recorded:.6g} but 'head_limits_deg' {key} ="
+                    f" {limit:.6g} degrees: export writes the trained camera's range to both,"
+                    " so the two must agree"
+                )
+        return camera
 
     def camera_fits_input(self, camera: CameraModel) -> CameraModel:
         """``camera``, or PolicyFileError: its aspect ratio is not the policy input's (the
