@@ -844,12 +844,37 @@ def test_ctrl_c_is_one_line_and_an_interrupted_run_says_how_to_resume(
     assert not out.exists()  # the folder it made is removed again
 
 
-def test_a_size_this_machine_cannot_hold_is_one_line(tmp_path, tiny_train, one_clear_line):
-    """A replay buffer of 10**15 transitions cannot be allocated: numpy's MemoryError was a
+def test_a_size_this_machine_cannot_hold_is_one_line(
+    tmp_path, monkeypatch, tiny_train, one_clear_line
+):
+    """A size the config takes but this machine cannot hold: numpy's MemoryError was a
     traceback; it is one line saying so, and the new run's folder goes."""
-    argv = [*tiny_train, "--set", f"replay.buffer_size={10**15}", "--out", str(tmp_path / "new")]
+
+    def out_of_memory(*args, **kwargs):
+        raise MemoryError("Unable to allocate 7.28 TiB for an array with shape (10**12,)")
+
+    monkeypatch.setattr("activevision.training.train", out_of_memory)
+    argv = [*tiny_train, "--out", str(tmp_path / "new")]
     assert main(argv) == 2
     one_clear_line("out of memory: Unable to allocate")
+    assert not (tmp_path / "new").exists()
+
+
+@pytest.mark.parametrize(
+    ("setting", "named"),
+    [
+        ("replay.buffer_size", "ReplayConfig.buffer_size: must be in [1, 100000000]"),
+        ("env.camera.width", "CameraConfig.width must be at most 8192 px"),
+        ("learner.batch_size", "LearnerConfig.batch_size: must be in [1, 65536]"),
+    ],
+)
+def test_a_huge_size_names_its_key_and_limit(tmp_path, tiny_train, one_clear_line, setting, named):
+    """``--set replay.buffer_size=10**15`` (or an image, a minibatch of that size) ended in
+    numpy's "Maximum allowed dimension exceeded" or a MemoryError naming no key: it is one
+    line naming the key and its limit, before any work."""
+    argv = [*tiny_train, "--set", f"{setting}={10**15}", "--out", str(tmp_path / "new")]
+    assert main(argv) == 2
+    one_clear_line(named, f"got {10**15}")
     assert not (tmp_path / "new").exists()
 
 

@@ -230,6 +230,50 @@ def test_num_threads_is_bounded():
     assert TrainConfig().replace(**{"run.num_threads": 1024}).run.num_threads == 1024
 
 
+@pytest.mark.parametrize(
+    ("key", "message"),
+    [
+        ("env.camera.width", r"CameraConfig\.width must be at most 8192 px"),
+        ("env.camera.height", r"CameraConfig\.height must be at most 8192 px"),
+        ("match.camera.width", r"CameraConfig\.width must be at most 8192 px"),
+        ("env.frame_stack", r"EnvConfig\.frame_stack: must be an integer in \[1, 64\]"),
+        ("learner.batch_size", r"LearnerConfig\.batch_size: must be in \[1, 65536\]"),
+        ("learner.n_step", r"LearnerConfig\.n_step: must be in \[1, 1000\]"),
+        ("learner.augment_shift", r"LearnerConfig\.augment_shift: must be in \[0, 64\]"),
+        ("replay.buffer_size", r"ReplayConfig\.buffer_size: must be in \[1, 100000000\]"),
+        ("dagger.num_envs", r"DaggerConfig\.num_envs: must be in \[1, 4096\]"),
+        ("dagger.dataset_size", r"DaggerConfig\.dataset_size: must be in \[1, 100000000\]"),
+        ("sb3.num_envs", r"Sb3Config\.num_envs: must be in \[1, 4096\]"),
+        ("sb3.n_steps", r"Sb3Config\.n_steps: must be in \[1, 100000\]"),
+        ("sb3.critic_hidden", r"Sb3Config\.critic_hidden: must be in \[1, 8192\]"),
+    ],
+)
+def test_sizes_are_bounded_naming_the_key_and_the_limit(key, message):
+    """``--set env.camera.width=10**12`` (or a buffer, batch... of that size) ended in numpy's
+    "Maximum allowed dimension exceeded", a MemoryError or torch's allocation traceback,
+    naming no key; the config refuses it, naming the field and its limit."""
+    base = preset("match_ddqn") if key.startswith("match.") else TrainConfig()
+    with pytest.raises(ValueError, match=message + r".*got 1000000000000"):
+        apply_overrides(base, [f"{key}={10**12}"])
+
+
+def test_sizes_at_their_limits_are_taken():
+    config = apply_overrides(
+        TrainConfig(),
+        [
+            "env.camera.width=8192",
+            "env.camera.height=6144",
+            "env.frame_stack=64",
+            "learner.batch_size=65536",
+            "replay.buffer_size=100000000",
+            "dagger.num_envs=4096",
+            "sb3.critic_hidden=8192",
+        ],
+    )
+    assert (config.env.camera.width, config.env.camera.height) == (8192, 6144)
+    assert config.replay.buffer_size == 100_000_000 and config.learner.batch_size == 65_536
+
+
 def test_ddqn_minibatch_fits_the_replay_buffer():
     # a buffer smaller than the minibatch never held one: the run trained without an update
     with pytest.raises(ValueError, match=r"TrainConfig\.learner\.batch_size: .*at most"):

@@ -38,10 +38,10 @@ def _integer(text: str) -> int:
 
 def is_refusal(error: BaseException) -> bool:
     """Whether ``error`` is bad input or a refused file, told in one line (a ValueError, an
-    OSError, an ImportError, a MemoryError: sizes this machine cannot hold, such as
-    ``--set replay.buffer_size=10000000000``, or an error of activevision's own: a run's
-    weights that fail their checksum, a policy file that does not match its metadata...),
-    not a bug, which keeps its traceback."""
+    OSError, an ImportError, a MemoryError: sizes within the config's bounds that this
+    machine cannot hold, such as images of 8192 x 8192 px, or an error of activevision's
+    own: a run's weights that fail their checksum, a policy file that does not match its
+    metadata...), not a bug, which keeps its traceback."""
     return isinstance(error, ValueError | OSError | ImportError | MemoryError) or type(
         error
     ).__module__.startswith("activevision")

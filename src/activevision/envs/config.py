@@ -29,6 +29,9 @@ ActionSet = Literal["8way", "4way"]
 #: ``Dict`` that adds what a robot knows of itself.
 ObservationKind = Literal["image", "image+head", "image+head+pose", "image+head+pose+proposal"]
 OBSERVATION_KINDS: tuple[str, ...] = typing.get_args(ObservationKind)
+#: The most images an observation stacks (P: 1; Atari's DQN: 4): a larger number (a typo,
+#: 10**12) is refused naming the field, not a MemoryError allocating the stack.
+MAX_FRAME_STACK = 64
 
 
 @dataclass(frozen=True)
@@ -90,8 +93,8 @@ class EnvConfig:
             return ValueError(f"EnvConfig.{name}: {why}, got {getattr(self, name)!r}")
 
         self._check_actions(bad)
-        if self.frame_stack < 1:
-            raise bad("frame_stack", "must be a positive integer")
+        if not 1 <= self.frame_stack <= MAX_FRAME_STACK:
+            raise bad("frame_stack", f"must be an integer in [1, {MAX_FRAME_STACK}]")
         if not self.success_tolerance_deg > 0:
             raise bad("success_tolerance_deg", "must be positive")
         if not self.reward_resolution_deg >= 0:

@@ -25,6 +25,11 @@ import numpy.typing as npt
 
 from activevision.typecheck import check_dataclass_fields
 
+#: The widest and tallest image a CameraConfig takes (px): an 8K sensor, far beyond the
+#: 160 x 120 the policies see; a larger size (a typo, 10**12) is refused naming the field,
+#: not a numpy "Maximum allowed dimension exceeded" or MemoryError when rendering.
+MAX_IMAGE_SIDE = 8192
+
 
 @dataclass(frozen=True)
 class CameraConfig:
@@ -45,6 +50,10 @@ class CameraConfig:
             value = getattr(self, name)
             if not isinstance(value, int | np.integer) or value <= 0:
                 raise ValueError(f"CameraConfig.{name} must be a positive integer, got {value!r}")
+            if value > MAX_IMAGE_SIDE:
+                raise ValueError(
+                    f"CameraConfig.{name} must be at most {MAX_IMAGE_SIDE} px, got {value!r}"
+                )
         if not 0 < self.hfov < math.pi:
             raise ValueError(f"CameraConfig.hfov must lie in (0, pi) rad, got {self.hfov!r}")
         if not self.camera_height > 0:

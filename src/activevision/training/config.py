@@ -36,6 +36,16 @@ _AT_LEAST_0 = _range(0)
 #: the most torch threads a run may ask for (RunConfig.num_threads): more than any CPU has
 #: cores; 100,000 was a segmentation fault
 MAX_THREADS = 1024
+#: Upper bounds of the sizes a run allocates arrays or layers by: far beyond any run of this
+#: package (presets: 256, 1,000,000, 64, 256), yet small enough that a typo (10**12) is
+#: refused naming its key, not a numpy "Maximum allowed dimension exceeded" or MemoryError.
+MAX_BATCH_SIZE = 65_536  #: LearnerConfig.batch_size: images per minibatch
+MAX_N_STEP = 1000  #: LearnerConfig.n_step: rewards per target, gathered per minibatch row
+MAX_AUGMENT_SHIFT = 64  #: LearnerConfig.augment_shift: px each image is padded by
+MAX_BUFFER_SIZE = 100_000_000  #: ReplayConfig.buffer_size, DaggerConfig.dataset_size
+MAX_NUM_ENVS = 4096  #: DaggerConfig.num_envs, Sb3Config.num_envs: environments at once
+MAX_ROLLOUT_STEPS = 100_000  #: Sb3Config.n_steps: PPO's rollout per env
+MAX_HIDDEN = 8192  #: Sb3Config.critic_hidden: width of (hidden x hidden) layers
 
 
 @dataclass(frozen=True)
@@ -45,8 +55,8 @@ class LearnerConfig:
     learning_rate: float = field(default=5e-4, metadata=_POSITIVE)  #: Adam, constant (P)
     gamma: float = field(default=0.99, metadata=_FRACTION)  #: discount (P)
     #: rewards summed per target: 1 the paper's one-step DDQN, 3 Rainbow's (README: no better)
-    n_step: int = field(default=1, metadata=_AT_LEAST_1)
-    batch_size: int = field(default=32, metadata=_AT_LEAST_1)  #: minibatch (P)
+    n_step: int = field(default=1, metadata=_range(1, MAX_N_STEP))
+    batch_size: int = field(default=32, metadata=_range(1, MAX_BATCH_SIZE))  #: minibatch (P)
     learning_starts: int = field(default=1000, metadata=_AT_LEAST_0)  #: steps before updates (SB2)
     train_freq: int = field(default=1, metadata=_AT_LEAST_1)  #: env steps per update round (SB2)
     gradient_steps: int = field(default=1, metadata=_AT_LEAST_1)  #: updates per round (SB2)
@@ -55,7 +65,7 @@ class LearnerConfig:
     max_grad_norm: float = field(default=10.0, metadata=_POSITIVE)  #: per-tensor clip (SB2)
     dueling: bool = False  #: dueling Q head (not in the paper)
     #: DrQ random shift of replay images by up to this many pixels (0: none, the paper)
-    augment_shift: int = field(default=0, metadata=_AT_LEAST_0)
+    augment_shift: int = field(default=0, metadata=_range(0, MAX_AUGMENT_SHIFT))
     #: weight of an auxiliary head regressing the goal view's (pan, tilt) offset from the
     #: image (MSE, rad; 0: none, the paper). Training only: the policy acts on the image.
     aux_goal_weight: float = field(default=0.0, metadata=_AT_LEAST_0)
@@ -81,7 +91,8 @@ class ExplorationConfig:
 class ReplayConfig:
     """Prioritised experience replay (Schaul et al. 2016)."""
 
-    buffer_size: int = field(default=1_000_000, metadata=_AT_LEAST_1)  #: transitions (P)
+    #: transitions (P)
+    buffer_size: int = field(default=1_000_000, metadata=_range(1, MAX_BUFFER_SIZE))
     alpha: float = field(default=0.6, metadata=_FRACTION)  #: prioritisation exponent (P)
     #: initial importance-sampling exponent, annealed to 1 over the run (P; SB2)
     beta0: float = field(default=0.4, metadata=_FRACTION)
@@ -135,7 +146,8 @@ class DaggerConfig:
     The student's optimiser takes ``learner.learning_rate``, ``learner.batch_size`` and
     ``learner.max_grad_norm``."""
 
-    num_envs: int = field(default=64, metadata=_AT_LEAST_1)  #: episodes rolled out at once (T)
+    #: episodes rolled out at once (T)
+    num_envs: int = field(default=64, metadata=_range(1, MAX_NUM_ENVS))
     #: probability that the teacher's action is executed at the start (1: behaviour cloning
     #: first), decayed linearly to 0 over ``teacher_fraction`` of the run (Ross et al.) (T)
     teacher_initial: float = field(default=1.0, metadata=_FRACTION)
@@ -144,7 +156,7 @@ class DaggerConfig:
     updates_per_rollout: int = field(default=16, metadata=_AT_LEAST_1)
     #: labelled states kept (oldest dropped); states, not images: images are rendered for
     #: each minibatch, so a million states take ~200 MB
-    dataset_size: int = field(default=1_000_000, metadata=_AT_LEAST_1)
+    dataset_size: int = field(default=1_000_000, metadata=_range(1, MAX_BUFFER_SIZE))
     downsample: int = field(default=2, metadata=_range(1, 4))  #: image average-pool factor (T)
     #: weight of the goal-view classification head (40 classes; 0: none) (T)
     goal_class_weight: float = field(default=0.5, metadata=_AT_LEAST_0)
@@ -204,11 +216,12 @@ class Sb3Config:
     "S": SB3's default; "T": tuned here."""
 
     #: environments stepped together (SB3 DummyVecEnv; PPO collects n_steps from each) (T)
-    num_envs: int = field(default=4, metadata=_AT_LEAST_1)
+    num_envs: int = field(default=4, metadata=_range(1, MAX_NUM_ENVS))
     tau: float = field(default=0.005, metadata=_FRACTION)  #: SAC/TD3 target update rate (S)
     #: TD3: std of the Gaussian exploration noise on the action (fraction of the range) (S)
     action_noise: float = field(default=0.1, metadata=_AT_LEAST_0)
-    n_steps: int = field(default=256, metadata=_AT_LEAST_1)  #: PPO rollout per env (T)
+    #: PPO rollout per env (T)
+    n_steps: int = field(default=256, metadata=_range(1, MAX_ROLLOUT_STEPS))
     n_epochs: int = field(default=4, metadata=_AT_LEAST_1)  #: PPO epochs per rollout (T)
     gae_lambda: float = field(default=0.95, metadata=_FRACTION)  #: PPO (S)
     clip_range: float = field(default=0.2, metadata=_POSITIVE)  #: PPO (S)
@@ -216,7 +229,7 @@ class Sb3Config:
     #: image average-pool factor of the shared CNN (the DAgger student's trunk) (T)
     downsample: int = field(default=2, metadata=_range(1, 4))
     #: hidden layer of the critic (and PPO's value head) after the CNN trunk (S: 256, 256)
-    critic_hidden: int = field(default=256, metadata=_AT_LEAST_1)
+    critic_hidden: int = field(default=256, metadata=_range(1, MAX_HIDDEN))
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
