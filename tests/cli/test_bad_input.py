@@ -100,6 +100,15 @@ BAD_ARGUMENTS = [
         "redraw_look",
     ),
     (["train", "--set", "ticks=1", "--out", "{tmp}/x"], "give its full path, match.ticks"),
+    # a key the run's algo never reads: it was stored in config.json and ignored
+    (
+        ["train", "--set", "dagger.num_envs=8", "--out", "{tmp}/x"],
+        "'dagger.num_envs' is never read by an algo='ddqn' run",
+    ),
+    (
+        ["train", "--preset", "quickstart", "--set", "learner.gamma=0.9", "--out", "{tmp}/x"],
+        "'learner.gamma' is never read by an algo='dagger' run",
+    ),
     (["train", "--config", "{tmp}/none.json", "--out", "{tmp}/x"], "none.json"),
     (["train", "--resume", "{tmp}/missing"], "missing: not a training run (no config.json)"),
     (["train", "--resume", "{run}", "--set", "learning_rate=1e-3"], "--set"),

@@ -23,27 +23,22 @@ TINY = [
     "--set",
     "num_threads=1",
     "--set",
-    "replay.buffer_size=500",
-    "--set",
-    "learning_starts=20",
-    "--set",
     "batch_size=8",
-    "--set",
-    "sb3.num_envs=2",
-    "--set",
-    "sb3.n_steps=20",
-    "--set",
-    "dagger.num_envs=8",
-    "--set",
-    "dagger.updates_per_rollout=1",
 ]
+#: what each learner reads on top (a key its algo never reads is refused)
+SB3_TINY = [
+    *TINY,
+    *("--set", "replay.buffer_size=500", "--set", "learning_starts=20"),
+    *("--set", "sb3.num_envs=2", "--set", "sb3.n_steps=20"),
+]
+DAGGER_TINY = [*TINY, "--set", "dagger.num_envs=8", "--set", "dagger.updates_per_rollout=1"]
 
 
 @pytest.fixture(scope="module")
 def continuous_run(tmp_path_factory):
     """A tiny continuous DAgger run on the paper's image (the discrete ``trained`` run's)."""
     run = tmp_path_factory.mktemp("runs") / "cont"
-    args = ["train", "--algo", "dagger", "--set", "env.action_history=0", *TINY]
+    args = ["train", "--algo", "dagger", "--set", "env.action_history=0", *DAGGER_TINY]
     assert main([*args, "--steps", "80", "--out", str(run)]) == 0
     return run
 
@@ -51,7 +46,7 @@ def continuous_run(tmp_path_factory):
 @pytest.mark.parametrize("algo", ["sac", "td3", "ppo"])
 def test_sb3_learners_train_resume_and_export(algo, tmp_path, capsys):
     run = tmp_path / algo
-    base = ["train", "--algo", algo, *TINY, "--set", "env.observation=image+head"]
+    base = ["train", "--algo", algo, *SB3_TINY, "--set", "env.observation=image+head"]
     assert main([*base, "--steps", "80", "--out", str(run)]) == 0
     config = json.loads((run / "config.json").read_text())
     assert config["algo"] == algo and config["env"]["action_type"] == "continuous"
@@ -90,7 +85,7 @@ def test_evaluate_and_compare_score_discrete_and_continuous_side_by_side(
 
 def test_runs_observing_what_the_env_does_not_give_are_refused(trained, tmp_path, one_clear_line):
     run = tmp_path / "head"
-    args = ["train", "--algo", "dagger", "--set", "env.observation=image+head", *TINY]
+    args = ["train", "--algo", "dagger", "--set", "env.observation=image+head", *DAGGER_TINY]
     assert main([*args, "--set", "env.action_history=0", "--steps", "40", "--out", str(run)]) == 0
     evaluate = ["evaluate", "--run", str(trained), "--runs", str(run), "--episodes", "2"]
     assert main([*evaluate, "--out", str(tmp_path / "e")]) == 2

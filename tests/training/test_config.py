@@ -252,7 +252,8 @@ def test_sizes_are_bounded_naming_the_key_and_the_limit(key, message):
     """``--set env.camera.width=10**12`` (or a buffer, batch... of that size) ended in numpy's
     "Maximum allowed dimension exceeded", a MemoryError or torch's allocation traceback,
     naming no key; the config refuses it, naming the field and its limit."""
-    base = preset("match_ddqn") if key.startswith("match.") else TrainConfig()
+    bases = {"match": "match_ddqn", "dagger": "quickstart", "sb3": "ppo_head"}
+    base = preset(bases.get(key.split(".")[0], "paper"))  # a run that reads the key
     with pytest.raises(ValueError, match=message + r".*got 1000000000000"):
         apply_overrides(base, [f"{key}={10**12}"])
 
@@ -266,12 +267,65 @@ def test_sizes_at_their_limits_are_taken():
             "env.frame_stack=64",
             "learner.batch_size=65536",
             "replay.buffer_size=100000000",
-            "dagger.num_envs=4096",
-            "sb3.critic_hidden=8192",
         ],
     )
     assert (config.env.camera.width, config.env.camera.height) == (8192, 6144)
     assert config.replay.buffer_size == 100_000_000 and config.learner.batch_size == 65_536
+    dagger = apply_overrides(preset("quickstart"), ["dagger.num_envs=4096"])
+    assert dagger.dagger.num_envs == 4096
+    assert apply_overrides(preset("ppo_head"), ["sb3.critic_hidden=8192"]).sb3.critic_hidden == 8192
+
+
+@pytest.mark.parametrize(
+    ("base", "setting", "message"),
+    [
+        (
+            "paper",
+            "dagger.num_envs=8",
+            r"'dagger\.num_envs' is never read by an algo='ddqn' run: only DAgger runs",
+        ),
+        (  # a unique leaf name: the key as given and its path
+            "paper",
+            "updates_per_rollout=2",
+            r"'updates_per_rollout' \(dagger\.updates_per_rollout\) is never read by an"
+            r" algo='ddqn' run",
+        ),
+        ("match_ddqn", "dagger.track_margin_deg=3", r"algo='ddqn' run: only DAgger"),
+        ("sac_head", "dagger.switch_margin=1", r"algo='sac' run: only DAgger runs"),
+        ("paper", "sb3.tau=0.01", r"'sb3\.tau' is never read by an algo='ddqn' run"),
+        ("quickstart", "sb3.n_steps=32", r"algo='dagger' run: only Stable-Baselines3's"),
+        ("quickstart", "learner.gamma=0.9", r"'learner\.gamma' is never read by an algo='dagger'"),
+        ("quickstart", "learning_starts=10", r"\(learner\.learning_starts\) is never read by"),
+        ("quickstart", "learner.dueling=true", r"algo='dagger' run: DAgger's student takes only"),
+        ("quickstart", "exploration.final=0.1", r"'exploration\.final' is never read by"),
+        ("quickstart", "replay.buffer_size=500", r"'replay\.buffer_size' is never read by"),
+        ("quickstart", "per_alpha=0.5", r"'per_alpha' \(replay\.alpha\) is never read by"),
+    ],
+)
+def test_a_key_the_runs_algo_never_reads_is_refused(base, setting, message):
+    """``--set dagger.num_envs=8`` on a DDQN run (or a DDQN key on a DAgger run) was stored in
+    config.json and silently ignored."""
+    with pytest.raises(ValueError, match=message):
+        apply_overrides(preset(base), [setting])
+
+
+def test_keys_the_runs_algo_reads_and_the_presets_own_are_taken():
+    # the algo set in the same overrides counts, in whatever order
+    config = apply_overrides(preset("paper"), ["dagger.num_envs=8", "algo=dagger"])
+    assert (config.algo, config.dagger.num_envs) == ("dagger", 8)
+    config = apply_overrides(preset("paper"), ["algo=ppo", "sb3.n_steps=32"])
+    assert config.sb3.n_steps == 32
+    # DAgger's student takes the optimiser's values; run.* is everyone's
+    dagger = apply_overrides(
+        preset("quickstart"),
+        ["learning_rate=1e-3", "batch_size=16", "max_grad_norm=1", "run.eval_episodes=5"],
+    )
+    assert (dagger.learner.learning_rate, dagger.learner.batch_size) == (1e-3, 16)
+    # a DAgger preset carries its dagger section on a DDQN run: not the user's, not refused
+    switched = apply_overrides(preset("dagger_image"), ["algo=ddqn"])
+    assert switched.algo == "ddqn" and switched.dagger == preset("dagger_image").dagger
+    # a config file holds every section: loading it is not setting them
+    assert TrainConfig.from_dict(preset("quickstart").to_dict()) == preset("quickstart")
 
 
 def test_ddqn_minibatch_fits_the_replay_buffer():

@@ -439,12 +439,14 @@ def _nested_paths(path: str, hint: Any) -> list[str]:
 
 def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
     """``config`` with values set by key (see :func:`field_paths`); ValueError names an
-    unknown key or a bad value."""
+    unknown key, a bad value, or a key the resulting run's ``algo`` never reads (``dagger.*``
+    on a DDQN run...: it would sit in config.json, unused)."""
     paths = field_paths()
     nested = config_to_dict(config)
     env_id = next(
         (v for k, v in changes.items() if paths.get(k.strip()) == "env_id"), config.env_id
     )
+    algo = next((v for k, v in changes.items() if paths.get(k.strip()) == "algo"), config.algo)
     for key, value in changes.items():
         path = paths.get(key.strip()) or _env_alias(key.strip())
         if path is None:
@@ -476,12 +478,46 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
                 f"{key.strip()!r} sets {path}, the episodic env's field; this run trains on"
                 f" {MATCH_ENV_ID}: {instead}"
             )
+        unread = _unread_by(algo, path)
+        if unread:
+            # the run would store it in config.json and never use it: refused, as match.*
+            named = repr(path) if key.strip() == path else f"{key.strip()!r} ({path})"
+            raise ValueError(f"{named} is never read by an algo={algo!r} run: {unread}")
         *parents, leaf = path.split(".")
         target = nested
         for part in parents:
             target = target[part]
         target[leaf] = value
     return config_from_dict(TrainConfig, nested)
+
+
+#: What DAgger's student takes of ``learner`` (``DaggerConfig``'s docstring); the rest of
+#: ``learner``, ``exploration`` and ``replay`` configure DDQN (and SB3's) learners only.
+_DAGGER_LEARNER_KEYS = ("learner.learning_rate", "learner.batch_size", "learner.max_grad_norm")
+
+
+def _unread_by(algo: object, path: str) -> str:
+    """Why a run of ``algo`` never reads the config value at dotted ``path`` ("" when it
+    does): ``dagger.*`` is DAgger's, ``sb3.*`` Stable-Baselines3's, and a DAgger run reads
+    of ``learner`` only its optimiser's values and nothing of ``exploration`` or ``replay``."""
+    section = path.split(".")[0]
+    if algo not in typing.get_args(Algorithm):
+        return ""  # the algo's own check names it
+    if section == "dagger" and algo != "dagger":
+        return (
+            "only DAgger runs read dagger.* (--algo dagger, or a DAgger preset such as quickstart)"
+        )
+    if section == "sb3" and algo not in SB3_ALGORITHMS:
+        return f"only Stable-Baselines3's read sb3.* (--algo {', '.join(SB3_ALGORITHMS)})"
+    if algo == "dagger" and section in ("learner", "exploration", "replay"):
+        if path == "learner" or path in _DAGGER_LEARNER_KEYS:  # the whole object: its fields
+            return ""
+        return (
+            "DAgger's student takes only learner.learning_rate, learner.batch_size and"
+            " learner.max_grad_norm (the rest configures DDQN's learner, its exploration and"
+            " its replay buffer)"
+        )
+    return ""
 
 
 def _env_alias(key: str) -> str | None:
