@@ -853,6 +853,41 @@ def test_ctrl_c_is_one_line_and_an_interrupted_run_says_how_to_resume(
     assert not out.exists()  # the folder it made is removed again
 
 
+def test_sigterm_stops_train_as_ctrl_c_does(tmp_path, tiny_train):
+    """``kill`` (SIGTERM) of a training run ended it with exit code 143 and nothing said: it
+    stops as Ctrl-C does, with one line saying so and how to resume, and the shell's 143."""
+    import os
+    import signal
+    import time
+
+    from activevision.training.checkpoint import list_checkpoints
+
+    run = tmp_path / "run"
+    argv = list(tiny_train)
+    argv[argv.index("--steps") + 1] = "1000000"  # far beyond the test: still running
+    command = [sys.executable, "-m", "activevision", *argv, "--out", str(run)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not list_checkpoints(run) and process.poll() is None:
+            assert time.monotonic() < deadline, "the run wrote no checkpoint in 120 s"
+            time.sleep(0.2)
+        assert process.poll() is None, process.communicate()
+        process.send_signal(signal.SIGTERM)  # the run has started and checkpointed
+        out, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.kill(process.pid, signal.SIGKILL)
+            process.wait()
+    assert process.returncode == 143, err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert "Traceback" not in out + err
+    assert len(lines) == 1, err
+    assert lines[0].startswith("activevision train: stopped by SIGTERM; ")
+    assert f"`activevision train --resume {run}` continues from its last checkpoint" in lines[0]
+    assert list_checkpoints(run)  # what the line offers to resume from is there
+
+
 def test_a_size_this_machine_cannot_hold_is_one_line(
     tmp_path, monkeypatch, tiny_train, one_clear_line
 ):

@@ -11,10 +11,14 @@ Agg canvas and never choose one."""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import sys
+import threading
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from types import FrameType
 
 from activevision.cli import deploy, evaluate, match, quickstart, robustness, scene, train
 from activevision.cli.args import ArgumentParser, error_text, is_refusal
@@ -35,9 +39,35 @@ def build_parser() -> ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a job scheduler's stop), raised in the main thread as Ctrl-C's
+    KeyboardInterrupt is: a command stops as on Ctrl-C (its clean-up, its one line), with
+    the shell's exit status for SIGTERM (128 + 15) instead of 130."""
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """While the block runs, SIGTERM raises :class:`Terminated` (once: a second SIGTERM
+    ends the process at once, as it did before). Outside the main thread, where Python
+    cannot set signal handlers, nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def terminate(signum: int, frame: FrameType | None) -> None:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        raise Terminated
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one command; returns the exit code (0 done, 2 bad input, a refused file or a failure
-    such as a sweep's failed trials, 130 interrupted)."""
+    such as a sweep's failed trials, 130 interrupted by Ctrl-C, 143 stopped by SIGTERM)."""
     # Headless by default; an environment variable, so --help needs no matplotlib import.
     os.environ.setdefault("MPLBACKEND", "Agg")
     try:
@@ -48,13 +78,17 @@ def main(argv: list[str] | None = None) -> int:
     formatwarning = warnings.formatwarning
     warnings.formatwarning = _one_line_warning(args.command)
     try:
-        if args.command == "quickstart":
-            return quickstart.run_quickstart(args, main)
-        args.func(args)
-    except KeyboardInterrupt:
-        # Ctrl-C: one line, with what to do next where the command knows, and the shell's
-        # exit status for SIGINT (128 + 2)
+        with _sigterm_as_interrupt():
+            if args.command == "quickstart":
+                return quickstart.run_quickstart(args, main)
+            args.func(args)
+    except KeyboardInterrupt as interrupt:
+        # Ctrl-C or SIGTERM: one line, with what to do next where the command knows, and the
+        # shell's exit status for SIGINT (128 + 2) or SIGTERM (128 + 15)
         note = args.interrupted(args) if getattr(args, "interrupted", None) else ""
+        if isinstance(interrupt, Terminated):
+            print(f"activevision {args.command}: stopped by SIGTERM{note}", file=sys.stderr)
+            return 143
         print(f"activevision {args.command}: interrupted{note}", file=sys.stderr)
         return 130
     except Exception as err:
