@@ -142,6 +142,21 @@ def test_run_layout_resume_and_export(tmp_path, monkeypatch):
     assert any(r["head_travel"] % 3 > 1e-3 for r in torch_records)
 
 
+def test_a_run_shorter_than_an_epoch_logs_a_metrics_row(tmp_path):
+    """A run of fewer steps than epoch_steps left metrics.csv with its header alone."""
+    changes = {"run.epoch_steps": 1000, "run.eval_interval": 0, "run.checkpoint_interval": 0}
+    trainer = Sb3Trainer(tiny("ppo", steps=64, **changes), tmp_path)
+    try:
+        rows = trainer.train()
+    finally:
+        trainer.close()
+    with (tmp_path / "metrics.csv").open() as f:
+        logged = list(csv.DictReader(f))
+    assert len(rows) == len(logged) == 1
+    assert (int(logged[0]["epoch"]), int(logged[0]["step"])) == (1, 64)
+    assert np.isfinite(float(logged[0]["loss"]))  # the rollout's update is in it
+
+
 def test_a_changed_config_refuses_to_resume(tmp_path):
     trainer = Sb3Trainer(tiny("ppo", steps=64, **{"run.checkpoint_interval": 0}), tmp_path)
     trainer.train()

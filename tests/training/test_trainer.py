@@ -83,6 +83,28 @@ def test_gradient_steps_and_train_freq_set_the_update_count(tmp_path, fake_env_f
         tiny_config(gradient_steps=0)
 
 
+def test_a_run_ending_between_epochs_logs_its_last_steps(tmp_path, fake_env_factory):
+    """A run shorter than epoch_steps left metrics.csv with its header alone, and a run
+    ending mid-epoch dropped its last steps: each gets a row, numbered as its epoch."""
+    short = train(tiny_config(total_timesteps=45), tmp_path / "short", fake_env_factory)
+    rows = read_rows(tmp_path / "short" / "metrics.csv")
+    assert (
+        [(r["epoch"], r["step"]) for r in rows]
+        == [("1", "45")]
+        == [(str(e["epoch"]), str(e["step"])) for e in short]
+    )
+    assert int(rows[0]["episodes"]) > 0 and float(rows[0]["updates"]) == 45 - 20
+    config = tiny_config(total_timesteps=150, checkpoint_interval=0)
+    train(config, tmp_path / "long", fake_env_factory)
+    rows = read_rows(tmp_path / "long" / "metrics.csv")
+    assert [(r["epoch"], r["step"]) for r in rows] == [("1", "60"), ("2", "120"), ("3", "150")]
+    # a call that stops before total_timesteps is no end of the run: no row until the end
+    trainer = Trainer(tiny_config(total_timesteps=45), tmp_path / "parts", fake_env_factory)
+    assert trainer.train(steps=30) == []
+    assert [e["step"] for e in trainer.train()] == [45]
+    trainer.close()
+
+
 def comparable(rows):
     return [{k: v for k, v in row.items() if k not in TIMING_FIELDS} for row in rows]
 

@@ -22,11 +22,12 @@ states take ~200 MB and a checkpoint stores them whole.
 
 A run directory looks like a DDQN run's: ``config.json``, ``metrics.csv`` (one row per round
 that crosses an ``epoch_steps`` boundary, numbered ``step // epoch_steps``: a round longer
-than ``epoch_steps`` skips numbers; ``loss`` is the imitation loss, ``epsilon`` the
-teacher's share ``beta``), ``episodes.csv``, ``evaluations.csv`` and ``best_policy`` (with
-``eval_interval``), TensorBoard, ``policy.safetensors`` and ``checkpoints/``. Rounds start
-fresh episodes, so a checkpoint taken between rounds holds everything: resuming continues
-exactly where the run stopped.
+than ``epoch_steps`` skips numbers; and one for the rounds after the last boundary when the
+run ends between two, numbered as the epoch they lie in; ``loss`` is the imitation loss,
+``epsilon`` the teacher's share ``beta``), ``episodes.csv``, ``evaluations.csv`` and
+``best_policy`` (with ``eval_interval``), TensorBoard, ``policy.safetensors`` and
+``checkpoints/``. Rounds start fresh episodes, so a checkpoint taken between rounds holds
+everything: resuming continues exactly where the run stopped.
 """
 
 from __future__ import annotations
@@ -241,13 +242,16 @@ class ImitationRun(StudentRun):
             run.total_timesteps if steps is None else min(self.step + steps, run.total_timesteps)
         )
         rows: list[dict[str, float]] = []
+        logged_last_round = True  # nothing played since the last row
+        rate = 0.0
         while self.step < target:
             before, t0 = self.step, time.perf_counter()
             self._rollout()
             for _ in range(self.config.dagger.updates_per_rollout):
                 self.epoch_log.losses.append(self._update())
             rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
-            if self.step // run.epoch_steps > before // run.epoch_steps:
+            logged_last_round = self.step // run.epoch_steps > before // run.epoch_steps
+            if logged_last_round:
                 # epsilon: the teacher's share in the round just played
                 rows.append(self.finish_epoch(self._round_share, rate))
             if run.eval_interval and self.step // run.eval_interval > before // run.eval_interval:
@@ -255,6 +259,10 @@ class ImitationRun(StudentRun):
             interval = run.checkpoint_interval
             if interval and self.step // interval > before // interval and self.step < target:
                 self.save_checkpoint()
+        if self.step >= run.total_timesteps and not logged_last_round:
+            # the run ends between two boundaries: its last rounds get their row (a run
+            # shorter than epoch_steps left metrics.csv empty)
+            rows.append(self.finish_epoch(self._round_share, rate, final=True))
         self.save_checkpoint()
         self.logger.flush()
         return rows

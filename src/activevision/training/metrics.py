@@ -87,6 +87,12 @@ def nan_mean(values: Sequence[float]) -> float:
     return sum(finite) / len(finite) if finite else math.nan
 
 
+def epoch_number(step: int, epoch_steps: int, final: bool = False) -> int:
+    """A ``metrics.csv`` row's epoch: the boundaries passed (``step // epoch_steps``), or for
+    the ``final`` row of a run that ends between two boundaries the epoch it ends in."""
+    return -(-step // epoch_steps) if final else step // epoch_steps
+
+
 @dataclass
 class EpochAccumulator:
     """Episodes and losses collected since the current epoch began (checkpointable)."""

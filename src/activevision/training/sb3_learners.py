@@ -163,6 +163,11 @@ class Sb3Trainer(StudentRun):
                 reset_num_timesteps=False,
                 progress_bar=False,
             )
+            if self.step >= total and callback.epoch_start[0] < self.step:
+                # the run ends between two epoch_steps boundaries: its last steps get their
+                # row (a run shorter than epoch_steps left metrics.csv empty)
+                self.record_updates()
+                callback.rows.append(self.finish_epoch(0.0, callback.rate(), final=True))
         self.save_checkpoint()  # after the last update (a mid-run one may hold this step)
         self.logger.flush()
         return callback.rows
@@ -252,6 +257,11 @@ class _RunCallback(BaseCallback):
         self.epoch_start = (trainer.step, time.perf_counter())
         self.checkpoint_due = False
 
+    def rate(self) -> float:
+        """Environment steps per second since the current epoch began."""
+        start_step, start_time = self.epoch_start
+        return (self.trainer.step - start_step) / max(time.perf_counter() - start_time, 1e-9)
+
     def _on_rollout_start(self) -> None:
         self.trainer.record_updates()
 
@@ -271,9 +281,7 @@ class _RunCallback(BaseCallback):
         self.returns[dones], self.lengths[dones] = 0.0, 0
         step, before = trainer.step, trainer.step - len(rewards)
         if step // run.epoch_steps > before // run.epoch_steps:
-            start_step, start_time = self.epoch_start
-            rate = (step - start_step) / max(time.perf_counter() - start_time, 1e-9)
-            self.rows.append(trainer.finish_epoch(0.0, rate))
+            self.rows.append(trainer.finish_epoch(0.0, self.rate()))
             self.epoch_start = (step, time.perf_counter())
         if run.eval_interval and step // run.eval_interval > before // run.eval_interval:
             trainer.validate()

@@ -21,7 +21,7 @@ from activevision.training import checkpoint as ckpt
 from activevision.training import state as run_state
 from activevision.training.config import TrainConfig, load_config, save_config
 from activevision.training.loggers import Logger, LoggerGroup, LogPosition, default_loggers
-from activevision.training.metrics import EpochAccumulator, episode_record
+from activevision.training.metrics import EpochAccumulator, episode_record, epoch_number
 from activevision.training.policy_files import BestWeights, write_policy
 from activevision.training.run_lock import RunLock
 from activevision.training.validation import (
@@ -76,9 +76,13 @@ class StudentRun:
         self.epoch_log.episodes.append(record)
         self.episode += 1
 
-    def finish_epoch(self, epsilon: float, steps_per_s: float) -> dict[str, float]:
-        """Log the epoch's ``metrics.csv`` row and start the next epoch."""
-        epoch = self.step // self.config.run.epoch_steps
+    def finish_epoch(
+        self, epsilon: float, steps_per_s: float, final: bool = False
+    ) -> dict[str, float]:
+        """Log the epoch's ``metrics.csv`` row and start the next epoch. ``final``: the row
+        of the run's last steps, which ended between two ``epoch_steps`` boundaries,
+        numbered as the epoch they lie in (``ceil(step / epoch_steps)``)."""
+        epoch = epoch_number(self.step, self.config.run.epoch_steps, final)
         row = self.epoch_log.summary(epoch, self.step, epsilon, 0.0, steps_per_s)
         self.logger.record_epoch(row, self.step)
         self._epochs_logged += 1

@@ -40,7 +40,12 @@ from activevision.training.config import TrainConfig, load_config, save_config
 from activevision.training.cpu import configure_torch_cpu, training_device
 from activevision.training.environment import EnvFactory, chw_shape, discrete_actions, make_env
 from activevision.training.loggers import Logger, LoggerGroup, default_loggers
-from activevision.training.metrics import EpochAccumulator, RunLogError, episode_record
+from activevision.training.metrics import (
+    EpochAccumulator,
+    RunLogError,
+    episode_record,
+    epoch_number,
+)
 from activevision.training.policy_files import BestWeights, network_metadata, write_policy
 from activevision.training.progress import postfix, progress_bar
 from activevision.training.run_lock import RunLock
@@ -170,6 +175,13 @@ class Trainer:
                     epoch_start = (self.step, time.perf_counter())  # keep it out of steps/s
                 if run.checkpoint_interval and self.step % run.checkpoint_interval == 0:
                     self.save_checkpoint()
+            if self.step >= run.total_timesteps and self.step > start_step:
+                if self.step % run.epoch_steps:
+                    # the run ends between two epoch_steps boundaries: its last steps get
+                    # their row (a run shorter than epoch_steps left metrics.csv empty)
+                    seconds = time.perf_counter() - epoch_start[1]
+                    rate = (self.step - epoch_start[0]) / max(seconds, 1e-9)
+                    epochs.append(self._finish_epoch(rate, final=True))
             saved_last_step = run.checkpoint_interval and self.step % run.checkpoint_interval == 0
             if self.step > start_step and not saved_last_step:
                 self.save_checkpoint()
@@ -250,8 +262,8 @@ class Trainer:
     def _aux(self, info: dict[str, Any]) -> np.ndarray | None:
         return None if self.aux_target is None else aux_vector(self.aux_target, info)
 
-    def _finish_epoch(self, steps_per_s: float) -> dict[str, float]:
-        epoch = self.step // self.config.run.epoch_steps
+    def _finish_epoch(self, steps_per_s: float, final: bool = False) -> dict[str, float]:
+        epoch = epoch_number(self.step, self.config.run.epoch_steps, final)
         row = self.epoch_log.summary(epoch, self.step, self.epsilon, self.beta, steps_per_s)
         self.logger.record_epoch(row, self.step)
         self._epochs_logged += 1
