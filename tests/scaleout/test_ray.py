@@ -194,9 +194,14 @@ def test_compare_ray_raises_a_tasks_own_error():
     assert type(caught.value) is CheckpointError
 
 
-def test_sweep_ctrl_c_is_one_line_and_130(tmp_path):
-    """Ctrl-C ends a sweep as it ends any command (one line, exit code 130), not with Tune's
-    graceful stop that returned 0 as if done and advised Tuner.restore."""
+@pytest.mark.parametrize(
+    ("signum", "code", "said"),
+    [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "stopped by SIGTERM")],
+)
+def test_sweep_ctrl_c_or_sigterm_is_one_line_and_its_code(tmp_path, signum, code, said):
+    """Ctrl-C (or SIGTERM) ends a sweep as it ends any command (one line, exit code 130 or
+    143), not with Tune's graceful stop that returned 0 as if done and advised
+    Tuner.restore."""
     out = tmp_path / "sweep"
     sets = [a for kv in TINY for a in ("--set", kv.replace("600", "100000"))]
     command = [sys.executable, "-m", "activevision.cli", "sweep", "--seeds", "0"]
@@ -215,11 +220,11 @@ def test_sweep_ctrl_c_is_one_line_and_130(tmp_path):
         while not (out / "trials" / "seed=0" / "config.json").exists():  # the trial trains
             assert proc.poll() is None and time.monotonic() - started < 120
             time.sleep(0.2)
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(signum)
         _, err = proc.communicate(timeout=60)
     finally:
         proc.kill()
-    assert proc.returncode == 130, err
+    assert proc.returncode == code, err
     assert err.splitlines()[-1] == (
-        f"activevision sweep: interrupted; the same command again resumes its trials in {out}"
+        f"activevision sweep: {said}; the same command again resumes its trials in {out}"
     )

@@ -45,22 +45,31 @@ class Terminated(KeyboardInterrupt):
     the shell's exit status for SIGTERM (128 + 15) instead of 130."""
 
 
+class _Sigterm:
+    """Whether SIGTERM arrived: code that catches the :class:`Terminated` and raises a
+    KeyboardInterrupt of its own (Ray's ``ray.get`` does) would otherwise hide it."""
+
+    received = False
+
+
 @contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
+def _sigterm_as_interrupt() -> Iterator[_Sigterm]:
     """While the block runs, SIGTERM raises :class:`Terminated` (once: a second SIGTERM
     ends the process at once, as it did before). Outside the main thread, where Python
     cannot set signal handlers, nothing changes."""
+    sigterm = _Sigterm()
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield sigterm
         return
 
     def terminate(signum: int, frame: FrameType | None) -> None:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        sigterm.received = True
         raise Terminated
 
     previous = signal.signal(signal.SIGTERM, terminate)
     try:
-        yield
+        yield sigterm
     finally:
         signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
 
@@ -77,8 +86,9 @@ def main(argv: list[str] | None = None) -> int:
     # warnings on one line each, like errors (not Python's "file:line: Category" and source)
     formatwarning = warnings.formatwarning
     warnings.formatwarning = _one_line_warning(args.command)
+    sigterm = _Sigterm()
     try:
-        with _sigterm_as_interrupt():
+        with _sigterm_as_interrupt() as sigterm:
             if args.command == "quickstart":
                 return quickstart.run_quickstart(args, main)
             args.func(args)
@@ -86,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
         # Ctrl-C or SIGTERM: one line, with what to do next where the command knows, and the
         # shell's exit status for SIGINT (128 + 2) or SIGTERM (128 + 15)
         note = args.interrupted(args) if getattr(args, "interrupted", None) else ""
-        if isinstance(interrupt, Terminated):
+        if isinstance(interrupt, Terminated) or sigterm.received:
             print(f"activevision {args.command}: stopped by SIGTERM{note}", file=sys.stderr)
             return 143
         print(f"activevision {args.command}: interrupted{note}", file=sys.stderr)

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import contextlib
+import signal
 import socket
+import threading
 from collections.abc import Iterator
 from types import ModuleType
 from typing import Any
@@ -33,7 +35,8 @@ def ray_session(
     If Ray is already initialised in this process it is used as is and left running.
     Otherwise ``address=None`` starts a local instance (``num_cpus`` CPUs, default all,
     no dashboard) and ``address="auto"`` or ``"ray://host:10001"`` connects to an existing
-    cluster; whatever this call started or connected is shut down on exit.
+    cluster; whatever this call started or connected is shut down on exit. The caller's
+    SIGTERM handler is kept: ``ray.init`` sets its own, which exits with status 1.
     """
     ray = require_ray()
     if ray.is_initialized():
@@ -42,13 +45,17 @@ def ray_session(
     if address is not None:
         check_reachable(address)
     init_kwargs.setdefault("include_dashboard", False)
+    if address is not None and num_cpus is not None:
+        raise ValueError("num_cpus applies to a local Ray instance, not to --address")
+    main_thread = threading.current_thread() is threading.main_thread()
+    sigterm = signal.getsignal(signal.SIGTERM) if main_thread else None
     if address is None:
         ray.init(num_cpus=num_cpus, **init_kwargs)
     else:
-        if num_cpus is not None:
-            raise ValueError("num_cpus applies to a local Ray instance, not to --address")
         init_kwargs.pop("include_dashboard")  # a cluster's dashboard is the cluster's business
         ray.init(address=address, **init_kwargs)
+    if main_thread:
+        signal.signal(signal.SIGTERM, sigterm)
     try:
         yield ray
     finally:
