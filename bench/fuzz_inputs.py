@@ -143,6 +143,7 @@ def _field_hostiles(hint: typing.Any) -> list[str]:
 def fuzz_config_keys(rng: random.Random, tally: Tally) -> None:
     """``--set KEY=V`` for every TrainConfig field and every env keyword, library path."""
     from activevision.training.config import SECTIONS, TrainConfig, apply_overrides
+    from activevision.training.presets import preset
 
     hints = typing.get_type_hints(TrainConfig)
     targets: list[tuple[str, typing.Any]] = [
@@ -152,10 +153,12 @@ def fuzz_config_keys(rng: random.Random, tally: Tally) -> None:
         for f, hint in typing.get_type_hints(hints[section]).items():
             targets.append((f"{section}.{f}", hint))
     # each key on a run that reads it (a key the run's algo never reads is refused before
-    # its value is looked at): dagger.* on a DAgger run, sb3.* on a PPO run
+    # its value is looked at): dagger.* on a DAgger run, sb3.* on a PPO run (tau on SAC,
+    # action_noise on TD3)
     bases = {"dagger": TrainConfig(algo="dagger"), "sb3": TrainConfig(algo="ppo")}
+    bases |= {"sb3.tau": preset("sac_head"), "sb3.action_noise": preset("td3_head")}
     for key, hint in targets:
-        base = bases.get(key.split(".")[0], TrainConfig())
+        base = bases.get(key, bases.get(key.split(".")[0], TrainConfig()))
         for text in _field_hostiles(hint):
             expect_error(
                 tally,

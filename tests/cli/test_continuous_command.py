@@ -26,11 +26,14 @@ TINY = [
     "batch_size=8",
 ]
 #: what each learner reads on top (a key its algo never reads is refused)
-SB3_TINY = [
-    *TINY,
-    *("--set", "replay.buffer_size=500", "--set", "learning_starts=20"),
-    *("--set", "sb3.num_envs=2", "--set", "sb3.n_steps=20"),
-]
+SB3_TINY = {
+    algo: [*TINY, "--set", "sb3.num_envs=2", *own]
+    for algo, own in {
+        "sac": ("--set", "replay.buffer_size=500", "--set", "learning_starts=20"),
+        "td3": ("--set", "replay.buffer_size=500", "--set", "learning_starts=20"),
+        "ppo": ("--set", "sb3.n_steps=20"),
+    }.items()
+}
 DAGGER_TINY = [*TINY, "--set", "dagger.num_envs=8", "--set", "dagger.updates_per_rollout=1"]
 
 
@@ -46,7 +49,7 @@ def continuous_run(tmp_path_factory):
 @pytest.mark.parametrize("algo", ["sac", "td3", "ppo"])
 def test_sb3_learners_train_resume_and_export(algo, tmp_path, capsys):
     run = tmp_path / algo
-    base = ["train", "--algo", algo, *SB3_TINY, "--set", "env.observation=image+head"]
+    base = ["train", "--algo", algo, *SB3_TINY[algo], "--set", "env.observation=image+head"]
     assert main([*base, "--steps", "80", "--out", str(run)]) == 0
     config = json.loads((run / "config.json").read_text())
     assert config["algo"] == algo and config["env"]["action_type"] == "continuous"

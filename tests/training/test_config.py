@@ -300,6 +300,35 @@ def test_sizes_at_their_limits_are_taken():
         ("quickstart", "exploration.final=0.1", r"'exploration\.final' is never read by"),
         ("quickstart", "replay.buffer_size=500", r"'replay\.buffer_size' is never read by"),
         ("quickstart", "per_alpha=0.5", r"'per_alpha' \(replay\.alpha\) is never read by"),
+        # SB3's learners: what training.sb3_learners passes each, nothing else
+        (
+            "ppo_head",
+            "replay.buffer_size=500",
+            r"'replay\.buffer_size' is never read by an algo='ppo' run: PPO takes nothing of"
+            r" replay\.\* \(it learns from its rollouts",
+        ),
+        ("ppo_head", "learning_starts=10", r"algo='ppo' run: PPO takes of learner\.\* only"),
+        ("ppo_head", "gradient_steps=2", r"'gradient_steps' \(learner\.gradient_steps\)"),
+        ("ppo_head", "sb3.tau=0.01", r"'sb3\.tau' is never read by an algo='ppo' run"),
+        ("ppo_head", "sb3.action_noise=0.2", r"algo='ppo' run: PPO takes of sb3\.\* only"),
+        ("sac_head", "max_grad_norm=1", r"algo='sac' run: SAC takes of learner\.\* only"),
+        ("sac_head", "sb3.n_steps=32", r"'sb3\.n_steps' is never read by an algo='sac' run"),
+        ("sac_head", "sb3.action_noise=0.2", r"algo='sac' run: SAC takes of sb3\.\* only"),
+        ("td3_head", "sb3.clip_range=0.1", r"'sb3\.clip_range' is never read by an algo='td3'"),
+        ("sac_head", "replay.alpha=0.5", r"SAC takes of replay\.\* only buffer_size"),
+        ("td3_head", "per_beta0=0.5", r"'per_beta0' \(replay\.beta0\) is never read by"),
+        ("sac_head", "n_step=3", r"'n_step' \(learner\.n_step\) is never read by an algo='sac'"),
+        ("td3_head", "target_update_interval=5", r"algo='td3' run: TD3 takes of learner"),
+        ("ppo_head", "learner.dueling=true", r"'learner\.dueling' is never read by"),
+        ("sac_head", "augment_shift=4", r"\(learner\.augment_shift\) is never read by"),
+        ("ppo_head", "aux_goal_weight=1", r"\(learner\.aux_goal_weight\) is never read by"),
+        (
+            "td3_head",
+            "exploration.final=0.1",
+            r"'exploration\.final' is never read by an algo='td3' run: TD3 takes nothing of"
+            r" exploration\.\*",
+        ),
+        ("ppo_head", "exploration_fraction=0.5", r"\(exploration\.fraction\) is never read by"),
     ],
 )
 def test_a_key_the_runs_algo_never_reads_is_refused(base, setting, message):
@@ -324,6 +353,17 @@ def test_keys_the_runs_algo_reads_and_the_presets_own_are_taken():
     # a DAgger preset carries its dagger section on a DDQN run: not the user's, not refused
     switched = apply_overrides(preset("dagger_image"), ["algo=ddqn"])
     assert switched.algo == "ddqn" and switched.dagger == preset("dagger_image").dagger
+    # each SB3 learner takes what training.sb3_learners passes it
+    sac = apply_overrides(
+        preset("sac_head"),
+        ["learning_starts=10", "train_freq=2", "gradient_steps=2", "buffer_size=500", "tau=0.1"],
+    )
+    assert (sac.learner.gradient_steps, sac.replay.buffer_size, sac.sb3.tau) == (2, 500, 0.1)
+    assert apply_overrides(preset("td3_head"), ["action_noise=0.3"]).sb3.action_noise == 0.3
+    ppo = apply_overrides(preset("ppo_head"), ["max_grad_norm=1", "gamma=0.9", "ent_coef=0.01"])
+    assert (ppo.learner.max_grad_norm, ppo.learner.gamma, ppo.sb3.ent_coef) == (1, 0.9, 0.01)
+    # a preset's own values on another algo are not refused (sac_head's buffer on PPO)
+    assert apply_overrides(preset("sac_head"), ["algo=ppo"]).replay.buffer_size == 50_000
     # a config file holds every section: loading it is not setting them
     assert TrainConfig.from_dict(preset("quickstart").to_dict()) == preset("quickstart")
 

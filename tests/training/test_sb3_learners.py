@@ -29,6 +29,13 @@ from activevision.training.sb3_learners import Sb3Trainer, build_model, make_vec
 
 
 def tiny(algo: str, observation: str = "image+head", steps: int = 400, **extra) -> TrainConfig:
+    # what the algo reads (a key it never reads is refused): PPO's rollout, SAC's and TD3's
+    # replay
+    own = (
+        {"sb3.n_steps": 32}
+        if algo == "ppo"
+        else {"replay.buffer_size": 1000, "learner.learning_starts": 50}
+    )
     return TrainConfig().replace(
         **{
             "algo": algo,
@@ -40,11 +47,9 @@ def tiny(algo: str, observation: str = "image+head", steps: int = 400, **extra) 
             "run.eval_episodes": 6,
             "run.checkpoint_interval": 200,
             "run.tensorboard": False,
-            "replay.buffer_size": 1000,
-            "learner.learning_starts": 50,
             "learner.batch_size": 16,
-            "sb3.n_steps": 32,
             "sb3.num_envs": 2,
+            **own,
             **extra,
         }
     )

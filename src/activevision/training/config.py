@@ -210,10 +210,11 @@ class DaggerConfig:
 @dataclass(frozen=True)
 class Sb3Config:
     """Stable-Baselines3's learners (``algo`` "sac", "td3", "ppo"): what ``learner`` and
-    ``replay`` do not set. They take ``learner.learning_rate``, ``gamma``, ``batch_size``,
-    ``learning_starts``, ``train_freq``, ``gradient_steps`` and ``max_grad_norm`` (PPO) and
-    ``replay.buffer_size`` (SAC, TD3; SB3's uniform replay: it has no prioritised one).
-    "S": SB3's default; "T": tuned here."""
+    ``replay`` do not set. They take ``learner.learning_rate``, ``gamma`` and
+    ``batch_size``; PPO ``max_grad_norm``; SAC and TD3 ``learning_starts``, ``train_freq``,
+    ``gradient_steps`` and ``replay.buffer_size`` (SB3's uniform replay: it has no
+    prioritised one); nothing else of ``learner``, ``replay`` or ``exploration`` (a
+    ``--set`` of it is refused). "S": SB3's default; "T": tuned here."""
 
     #: environments stepped together (SB3 DummyVecEnv; PPO collects n_steps from each) (T)
     num_envs: int = field(default=4, metadata=_range(1, MAX_NUM_ENVS))
@@ -494,13 +495,64 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
 #: What DAgger's student takes of ``learner`` (``DaggerConfig``'s docstring); the rest of
 #: ``learner``, ``exploration`` and ``replay`` configure DDQN (and SB3's) learners only.
 _DAGGER_LEARNER_KEYS = ("learner.learning_rate", "learner.batch_size", "learner.max_grad_norm")
+#: What each Stable-Baselines3 learner takes of ``learner``, ``replay`` and ``sb3``
+#: (``training.sb3_learners._algorithm``, and ``make_vec_env``'s ``sb3.num_envs``); none
+#: takes anything of ``exploration`` (DDQN's epsilon-greedy), nor the prioritised replay's
+#: ``replay.alpha``, ``beta0`` and ``eps`` (SB3's replay is uniform).
+_SB3_KEYS: dict[str, dict[str, tuple[str, ...]]] = {
+    "sac": {
+        "learner": (
+            "learning_rate",
+            "gamma",
+            "batch_size",
+            "learning_starts",
+            "train_freq",
+            "gradient_steps",
+        ),
+        "replay": ("buffer_size",),
+        "sb3": ("num_envs", "tau", "downsample", "critic_hidden"),
+    },
+    "td3": {
+        "learner": (
+            "learning_rate",
+            "gamma",
+            "batch_size",
+            "learning_starts",
+            "train_freq",
+            "gradient_steps",
+        ),
+        "replay": ("buffer_size",),
+        "sb3": ("num_envs", "tau", "action_noise", "downsample", "critic_hidden"),
+    },
+    "ppo": {
+        "learner": ("learning_rate", "gamma", "batch_size", "max_grad_norm"),
+        "replay": (),  # on-policy: it learns from its rollouts
+        "sb3": (
+            "num_envs",
+            "n_steps",
+            "n_epochs",
+            "gae_lambda",
+            "clip_range",
+            "ent_coef",
+            "downsample",
+            "critic_hidden",
+        ),
+    },
+}
+#: Why an SB3 learner takes nothing (or only some) of a section
+_SB3_WHY = {
+    "exploration": " (DDQN's epsilon-greedy; SB3's learners explore by their own policies)",
+    "replay": " (SB3's replay is uniform, not prioritised)",
+    "ppo.replay": " (it learns from its rollouts: no replay buffer)",
+}
 
 
 def _unread_by(algo: object, path: str) -> str:
     """Why a run of ``algo`` never reads the config value at dotted ``path`` ("" when it
-    does): ``dagger.*`` is DAgger's, ``sb3.*`` Stable-Baselines3's, and a DAgger run reads
-    of ``learner`` only its optimiser's values and nothing of ``exploration`` or ``replay``."""
-    section = path.split(".")[0]
+    does): ``dagger.*`` is DAgger's, ``sb3.*`` Stable-Baselines3's, a DAgger run reads of
+    ``learner`` only its optimiser's values and nothing of ``exploration`` or ``replay``,
+    and each SB3 learner reads what ``training.sb3_learners`` passes it (:data:`_SB3_KEYS`)."""
+    section, _, leaf = path.partition(".")
     if algo not in typing.get_args(Algorithm):
         return ""  # the algo's own check names it
     if section == "dagger" and algo != "dagger":
@@ -517,6 +569,15 @@ def _unread_by(algo: object, path: str) -> str:
             " learner.max_grad_norm (the rest configures DDQN's learner, its exploration and"
             " its replay buffer)"
         )
+    if algo in _SB3_KEYS and section in ("learner", "exploration", "replay", "sb3"):
+        keys = _SB3_KEYS[str(algo)].get(section, ())
+        if leaf in keys:
+            return ""
+        name, why = str(algo).upper(), _SB3_WHY.get(f"{algo}.{section}", _SB3_WHY.get(section, ""))
+        if not keys:
+            return f"{name} takes nothing of {section}.*{why}"
+        listed = ", ".join(keys[:-1]) + f" and {keys[-1]}" if len(keys) > 1 else keys[0]
+        return f"{name} takes of {section}.* only {listed}{why}"
     return ""
 
 
