@@ -153,10 +153,13 @@ def fuzz_config_keys(rng: random.Random, tally: Tally) -> None:
         for f, hint in typing.get_type_hints(hints[section]).items():
             targets.append((f"{section}.{f}", hint))
     # each key on a run that reads it (a key the run's algo never reads is refused before
-    # its value is looked at): dagger.* on a DAgger run, sb3.* on a PPO run (tau on SAC,
-    # action_noise on TD3)
+    # its value is looked at): dagger.* on a DAgger run (its match teacher's on the match),
+    # sb3.* on a PPO run (tau on SAC, action_noise on TD3)
     bases = {"dagger": TrainConfig(algo="dagger"), "sb3": TrainConfig(algo="ppo")}
-    bases |= {"sb3.tau": preset("sac_head"), "sb3.action_noise": preset("td3_head")}
+    match_dagger, sac, td3 = preset("match_dagger"), preset("sac_head"), preset("td3_head")
+    for name in ("match_teacher", "glance_track_margin_deg", "track_margin_deg"):
+        bases[f"dagger.{name}"] = match_dagger
+    bases |= {"sb3.tau": sac, "sb3.action_noise": td3}
     for key, hint in targets:
         base = bases.get(key, bases.get(key.split(".")[0], TrainConfig()))
         for text in _field_hostiles(hint):

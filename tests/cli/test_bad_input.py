@@ -113,6 +113,18 @@ BAD_ARGUMENTS = [
         ["train", "--preset", "ppo_head", "--set", "buffer_size=500", "--out", "{tmp}/x"],
         "'buffer_size' (replay.buffer_size) is never read by an algo='ppo' run",
     ),
+    (
+        [
+            "train",
+            "--preset",
+            "quickstart",
+            "--set",
+            "match_teacher=glance_track",
+            "--out",
+            "{tmp}/x",
+        ],
+        "'match_teacher' (dagger.match_teacher) is never read by an algo='dagger' run",
+    ),
     (["train", "--config", "{tmp}/none.json", "--out", "{tmp}/x"], "none.json"),
     (["train", "--resume", "{tmp}/missing"], "missing: not a training run (no config.json)"),
     (["train", "--resume", "{run}", "--set", "learning_rate=1e-3"], "--set"),

@@ -329,6 +329,24 @@ def test_sizes_at_their_limits_are_taken():
             r" exploration\.\*",
         ),
         ("ppo_head", "exploration_fraction=0.5", r"\(exploration\.fraction\) is never read by"),
+        # the match student's teacher on the episodes, the episodic student's keys on the match
+        (
+            "quickstart",
+            "dagger.match_teacher=glance_track",
+            r"'dagger\.match_teacher' is never read by an algo='dagger' run: only the match"
+            r" student reads it",
+        ),
+        ("quickstart", "track_margin_deg=3", r"\(dagger\.track_margin_deg\) is never read by"),
+        ("dagger_image", "dagger.glance_track_margin_deg=20", r"only the match student reads"),
+        (
+            "match_dagger",
+            "dagger.switch_margin=1",
+            r"'dagger\.switch_margin' is never read by an algo='dagger' run: this run trains the"
+            r" match student",
+        ),
+        ("match_dagger", "goal_class_weight=0.5", r"\(dagger\.goal_class_weight\) is never"),
+        ("match_dagger", "dagger.redraw_look=false", r"this run trains the match student"),
+        ("match_dagger_glance", "redraw_prior=false", r"this run trains the match student"),
     ],
 )
 def test_a_key_the_runs_algo_never_reads_is_refused(base, setting, message):
@@ -362,6 +380,28 @@ def test_keys_the_runs_algo_reads_and_the_presets_own_are_taken():
     assert apply_overrides(preset("td3_head"), ["action_noise=0.3"]).sb3.action_noise == 0.3
     ppo = apply_overrides(preset("ppo_head"), ["max_grad_norm=1", "gamma=0.9", "ent_coef=0.01"])
     assert (ppo.learner.max_grad_norm, ppo.learner.gamma, ppo.sb3.ent_coef) == (1, 0.9, 0.01)
+    # the match student takes its teacher's keys, and act_by / goal_frame (which it checks)
+    match = apply_overrides(
+        preset("match_dagger"),
+        ["dagger.match_teacher=glance_track", "glance_track_margin_deg=20", "act_by=action"],
+    )
+    assert (match.dagger.match_teacher, match.dagger.glance_track_margin_deg) == (
+        "glance_track",
+        20,
+    )
+    assert apply_overrides(preset("match_dagger"), ["track_margin_deg=3"]).dagger.track_margin_deg
+    # the env set in the same overrides counts: a switch to the match from an episodic config
+    switched = apply_overrides(
+        preset("paper"),
+        [
+            "dagger.track_margin_deg=3",
+            "algo=dagger",
+            "env_id=ActiveVisionMatch-v0",
+            "dagger.act_by=action",
+            "match.observation=image+head+belief",
+        ],
+    )
+    assert switched.match_student and switched.dagger.track_margin_deg == 3
     # a preset's own values on another algo are not refused (sac_head's buffer on PPO)
     assert apply_overrides(preset("sac_head"), ["algo=ppo"]).replay.buffer_size == 50_000
     # a config file holds every section: loading it is not setting them

@@ -479,7 +479,7 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
                 f"{key.strip()!r} sets {path}, the episodic env's field; this run trains on"
                 f" {MATCH_ENV_ID}: {instead}"
             )
-        unread = _unread_by(algo, path)
+        unread = _unread_by(algo, path, on_match)
         if unread:
             # the run would store it in config.json and never use it: refused, as match.*
             named = repr(path) if key.strip() == path else f"{key.strip()!r} ({path})"
@@ -545,19 +545,40 @@ _SB3_WHY = {
     "replay": " (SB3's replay is uniform, not prioritised)",
     "ppo.replay": " (it learns from its rollouts: no replay buffer)",
 }
+#: ``dagger`` keys that only the match student (DAgger on ActiveVisionMatch-v0,
+#: ``training.match_dagger``) reads: its teacher, the match planner
+_MATCH_DAGGER_KEYS = ("match_teacher", "glance_track_margin_deg", "track_margin_deg")
+#: ``dagger`` keys that only DAgger on the episodes (``training.dagger.DaggerTrainer``)
+#: reads: the goal head and the goal evidence it acts by, and the minibatches' redrawn
+#: priors and looks. (``act_by`` and ``goal_frame`` a match run reads too: it must keep them
+#: at "action" and "body", which a switch to the match from an episodic config needs to set.)
+_EPISODIC_DAGGER_KEYS = ("goal_class_weight", "switch_margin", "redraw_prior", "redraw_look")
 
 
-def _unread_by(algo: object, path: str) -> str:
-    """Why a run of ``algo`` never reads the config value at dotted ``path`` ("" when it
-    does): ``dagger.*`` is DAgger's, ``sb3.*`` Stable-Baselines3's, a DAgger run reads of
-    ``learner`` only its optimiser's values and nothing of ``exploration`` or ``replay``,
-    and each SB3 learner reads what ``training.sb3_learners`` passes it (:data:`_SB3_KEYS`)."""
+def _unread_by(algo: object, path: str, on_match: bool = False) -> str:
+    """Why a run of ``algo`` (on the match env if ``on_match``) never reads the config value
+    at dotted ``path`` ("" when it does): ``dagger.*`` is DAgger's (the match teacher's keys
+    the match student's only, the goal head's and the redrawn minibatches' the episodic
+    student's only), ``sb3.*`` Stable-Baselines3's, a DAgger run reads of ``learner`` only
+    its optimiser's values and nothing of ``exploration`` or ``replay``, and each SB3
+    learner reads what ``training.sb3_learners`` passes it (:data:`_SB3_KEYS`)."""
     section, _, leaf = path.partition(".")
     if algo not in typing.get_args(Algorithm):
         return ""  # the algo's own check names it
     if section == "dagger" and algo != "dagger":
         return (
             "only DAgger runs read dagger.* (--algo dagger, or a DAgger preset such as quickstart)"
+        )
+    if section == "dagger" and on_match and leaf in _EPISODIC_DAGGER_KEYS:
+        return (
+            f"this run trains the match student ({MATCH_ENV_ID}), and only DAgger on"
+            " ActiveVision-v0 reads it (the match student has no goal head, nor episodes'"
+            " priors and looks to draw again)"
+        )
+    if section == "dagger" and not on_match and leaf in _MATCH_DAGGER_KEYS:
+        return (
+            f"only the match student reads it (its teacher; DAgger on {MATCH_ENV_ID}, e.g."
+            " --preset match_dagger), and this run trains on ActiveVision-v0"
         )
     if section == "sb3" and algo not in SB3_ALGORITHMS:
         return f"only Stable-Baselines3's read sb3.* (--algo {', '.join(SB3_ALGORITHMS)})"
