@@ -57,6 +57,17 @@ def edited(changes: dict) -> dict:
         # the controller keeps this many actions: 10**13 asked for 73 TiB (a MemoryError)
         ({"action_history": 10**13}, "'action_history' must be an integer in 0..16"),
         ({"action_history": -1}, "'action_history'"),
+        # sizes no export writes (a config's camera is at most 8192 px a side, its
+        # frame_stack at most 64): refused, not handed to a reader that allocates by them
+        ({"image_width": 10**12, "camera": REMOVED}, "'image_width' must be at most 8192"),
+        ({"image_height": 8193, "camera": REMOVED}, "'image_height' must be at most 8192"),
+        ({"stack": 65}, "'stack' must be at most 64, got 65"),
+        ({"stack": 10**12}, "'stack' must be at most 64"),
+        (
+            {"camera": {**SHIPPED["camera"], "width_px": 10**12}},
+            "'camera' width_px must be at most 8192 px, got 1000000000000",
+        ),
+        ({"camera": {**SHIPPED["camera"], "height_px": 8193}}, "'camera' height_px must be at"),
     ],
     ids=repr,
 )
@@ -93,6 +104,19 @@ def test_the_shipped_policy_and_older_files_load():
         )
     }
     assert PolicyMetadata.from_dict(image_only).observation == "image"
+
+
+def test_sizes_at_a_configs_bounds_load_and_the_bounds_are_the_configs():
+    from activevision.envs.config import MAX_FRAME_STACK
+    from activevision.geometry.camera import MAX_IMAGE_SIDE
+    from activevision.runtime import metadata
+
+    assert (metadata.MAX_IMAGE_SIDE, metadata.MAX_STACK) == (MAX_IMAGE_SIDE, MAX_FRAME_STACK)
+    camera = {**SHIPPED["camera"], "width_px": 8192, "height_px": 6144}
+    meta = PolicyMetadata.from_dict(
+        edited({"image_width": 8192, "image_height": 6144, "stack": 64, "camera": camera})
+    )
+    assert meta.input_shape == (64, 6144, 8192) and meta.camera.width == 8192
 
 
 def test_a_command_names_the_file_and_the_key_on_one_line(tmp_path, capsys):

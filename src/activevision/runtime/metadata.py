@@ -51,8 +51,10 @@ the configs from it. Files written before it existed lack it (None: unknown).
 
 Every key a reader acts on must be present and of its type, else :class:`PolicyFileError`
 names the file and the key: ``opset``, ``input_name``, ``input_dtype`` (``"uint8"``),
-``output_name``, ``n_actions``, the frame size, the action table and names, the head limits
-and ``model_sha256`` (every export has written them), and ``vector_input_name`` and
+``output_name``, ``n_actions``, the frame size and stack (at most ``MAX_IMAGE_SIDE`` px a
+side and ``MAX_STACK`` frames, a training config's bounds; the ``camera`` record's size
+too), the action table and names, the head limits and ``model_sha256`` (every export has
+written them), and ``vector_input_name`` and
 ``observation`` where ``vector_keys`` lists inputs. Keys older files lack keep a default:
 ``observation`` ``"image"`` and no ``vector_keys`` (files from before vector inputs),
 ``camera`` and ``world`` None, ``action_type`` ``"discrete"``, ``act_by`` ``"action"``.
@@ -152,6 +154,12 @@ MIN_HFOV_DEG = 5.0
 #: The highest camera CameraModel.from_degrees takes (metres): a humanoid's head camera is
 #: within two metres of the ground; a value above this is centimetres given for metres.
 MAX_CAMERA_HEIGHT_M = 5.0
+#: The widest and highest input image a policy may take (px): geometry.camera.MAX_IMAGE_SIDE,
+#: the bound of a training config's camera (the runtime imports no geometry). A larger
+#: ``image_width``, ``image_height`` or ``camera`` record was written by no export.
+MAX_IMAGE_SIDE = 8192
+#: The most frames a policy may stack: envs.config.MAX_FRAME_STACK, a config's bound.
+MAX_STACK = 64
 #: The most previous actions a policy remembers (EnvConfig.action_history's limit too; the
 #: controller keeps that many, so a larger number in a file is refused, not allocated).
 MAX_ACTION_HISTORY = 16
@@ -471,9 +479,9 @@ class PolicyMetadata:
         read.check_informational()
         table_deg = read.action_table_deg()
         return cls(
-            image_height=read.positive_int("image_height"),
-            image_width=read.positive_int("image_width"),
-            stack=read.positive_int("stack"),
+            image_height=read.size("image_height", MAX_IMAGE_SIDE),
+            image_width=read.size("image_width", MAX_IMAGE_SIDE),
+            stack=read.size("stack", MAX_STACK),
             action_table=np.radians(table_deg),
             head_limits=read.head_limits(),
             input_name=read.name("input_name"),
@@ -547,6 +555,14 @@ class _MetadataReader:
         value = self.values.get(key)
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise self.fail(f"{key!r} must be a positive integer, got {value!r}")
+        return value
+
+    def size(self, key: str, most: int) -> int:
+        """A positive integer up to ``most``: a frame size or stack, which the controller
+        allocates its buffers by (a training config's bound: larger was exported by none)."""
+        value = self.positive_int(key)
+        if value > most:
+            raise self.fail(f"{key!r} must be at most {most}, got {value!r}")
         return value
 
     def act_by(self) -> str:
@@ -739,6 +755,11 @@ class _MetadataReader:
         values: dict[str, Any] = {}
         for key, name in _CAMERA_KEYS.items():
             value = record[key]
+            big = isinstance(value, int) and not isinstance(value, bool) and value > MAX_IMAGE_SIDE
+            if key.endswith("_px") and big:  # as a config's camera (an export's is no larger)
+                raise self.fail(
+                    f"'camera' {key} must be at most {MAX_IMAGE_SIDE} px, got {value!r}"
+                )
             if key.endswith("_deg"):
                 degrees = _real(value)
                 if degrees is None:
@@ -774,7 +795,8 @@ class _MetadataReader:
     def camera_fits_input(self, camera: CameraModel) -> CameraModel:
         """``camera``, or PolicyFileError: its aspect ratio is not the policy input's (the
         network sees the trained camera's image, so the two are the same shape)."""
-        width, height = self.positive_int("image_width"), self.positive_int("image_height")
+        width = self.size("image_width", MAX_IMAGE_SIDE)
+        height = self.size("image_height", MAX_IMAGE_SIDE)
         if abs(camera.aspect / (width / height) - 1) > CAMERA_TOLERANCES["aspect"]:
             raise self.fail(
                 f"'camera' is {camera.width}x{camera.height} px (aspect {camera.aspect:.3f}) but"
