@@ -26,6 +26,13 @@ def run(trained, tmp_path) -> Path:
 
 # (argv with {run} and {tmp} placeholders, what the error line must name)
 BAD_ARGUMENTS = [
+    # the matches are played together in one vector env (at most 65,536 sub-environments):
+    # refused as --matches, not by the env naming its num_envs
+    (["match", "--matches", str(10**12), "--out", "{tmp}/m"], "must be an integer from 1 to 65536"),
+    (
+        ["quickstart", "--matches", "65537", "--out", "{tmp}/q"],
+        "must be an integer from 1 to 65536",
+    ),
     (["evaluate", "--episodes", "0"], "--episodes"),
     (["evaluate", "--episodes", "-3"], "'-3'"),
     (["evaluate", "--episodes", "many"], "'many'"),
@@ -141,6 +148,14 @@ BAD_ARGUMENTS = [
     (["report", "{tmp}"], "not a training run"),
     (["nope"], "invalid choice"),
 ]
+
+
+def test_the_matches_bound_is_the_vector_envs():
+    from activevision.cli.args import MAX_MATCHES
+    from activevision.envs.config import MAX_VECTOR_ENVS
+
+    assert MAX_MATCHES == MAX_VECTOR_ENVS
+
 
 #: a run that is a file: named as the run, not as an --out nobody typed
 RUN_IS_A_FILE = [

@@ -312,6 +312,24 @@ def test_bad_config_is_one_clear_error(kwargs, match):
 
 
 @pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        # numpy's MemoryError allocating 10**12 matches, naming no argument
+        (
+            {"num_envs": 10**12},
+            r"num_envs: expects a positive integer up to 65536, got 1000000000000",
+        ),
+        ({"num_envs": 2, "max_episode_steps": 2**70}, r"max_episode_steps: .*at most 2\*\*63 - 1"),
+    ],
+)
+def test_sizes_past_any_batch_are_one_clear_error(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        ActiveVisionMatchVectorEnv(**kwargs)
+    with pytest.raises(ValueError, match=match):
+        gym.make_vec("ActiveVisionMatch-v0", vectorization_mode="vector_entry_point", **kwargs)
+
+
+@pytest.mark.parametrize(
     ("make", "match"),
     [
         (lambda: WalkConfig(pause_ticks=(5, 1)), "pause_ticks"),

@@ -170,6 +170,11 @@ def float_in(low: float, high: float, unit: str = "") -> Callable[[str], float]:
     return _bounded(_finite, low, high, f"must lie in [{low:g}, {high:g}] {unit}".rstrip())
 
 
+#: The most matches one command plays: they are played together, one native vector env of
+#: that many sub-environments (envs.config.MAX_VECTOR_ENVS; the parser imports no envs)
+MAX_MATCHES = 65_536
+
+
 def int_in(low: int, high: int) -> Callable[[str], int]:
     """An argument type: an integer in ``[low, high]``."""
     return _bounded(_integer, low, high, f"must be an integer from {low} to {high}")

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from activevision.cli.args import (
+    MAX_MATCHES,
     add_overwrite,
     add_weights,
     check_weights,
@@ -314,7 +315,7 @@ def add_parsers(sub: Any) -> None:
         metavar="NAME",
         help="strategies to play (default: all; learned with --run): " + " ".join(_method_names()),
     )
-    p.add_argument("--matches", type=positive_int, default=50)
+    p.add_argument("--matches", type=int_in(1, MAX_MATCHES), default=50)
     p.add_argument("--ticks", type=positive_int, default=600, help="ticks per match (0.32 s each)")
     p.add_argument("--seed", type=seed, default=0, help="match i plays seed SEED + i")
     p.add_argument(

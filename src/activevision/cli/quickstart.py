@@ -8,7 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from activevision.cli.args import path, positive_int, seed
+from activevision.cli.args import MAX_MATCHES, int_in, path, positive_int, seed
 
 
 def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
@@ -96,7 +96,9 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--steps", type=positive_int, default=None, help="default: the preset's")
     p.add_argument("--episodes", type=positive_int, default=100)
     p.add_argument("--seed", type=seed, default=0)
-    p.add_argument("--matches", type=positive_int, default=16, help="of the match comparison")
+    p.add_argument(
+        "--matches", type=int_in(1, MAX_MATCHES), default=16, help="of the match comparison"
+    )
     p.add_argument(
         "--match-ticks", type=positive_int, default=300, help="ticks per match (0.32 s each)"
     )

@@ -32,6 +32,11 @@ OBSERVATION_KINDS: tuple[str, ...] = typing.get_args(ObservationKind)
 #: The most images an observation stacks (P: 1; Atari's DQN: 4): a larger number (a typo,
 #: 10**12) is refused naming the field, not a MemoryError allocating the stack.
 MAX_FRAME_STACK = 64
+#: The most sub-environments a native vector env (``num_envs``) steps together: far beyond
+#: any batch of this package (DAgger's 64 episodes, a match comparison's 50 matches), yet
+#: small enough that a typo (10**12) is refused naming ``num_envs``, not numpy's MemoryError
+#: allocating the batch's arrays.
+MAX_VECTOR_ENVS = 65_536
 
 
 @dataclass(frozen=True)
@@ -215,9 +220,11 @@ def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
         raise ValueError(f"render_mode: expects one of {modes} or None, got {render_mode!r}")
 
 
-def check_count(name: str, value: object) -> int:
-    """``value`` as a positive int (``max_episode_steps``, ``num_envs``); bools, floats and
-    the rest are a ValueError naming ``name``."""
+def check_count(name: str, value: object, most: int | None = None) -> int:
+    """``value`` as a positive int up to ``most`` (``num_envs``); bools, floats, numbers
+    past ``most`` and the rest are a ValueError naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
         raise ValueError(f"{name}: expects a positive integer, got {value!r}")
+    if most is not None and int(value) > most:
+        raise ValueError(f"{name}: expects a positive integer up to {most}, got {value!r}")
     return int(value)

@@ -14,21 +14,26 @@ import numbers
 
 #: ``max_episode_steps=-1``: Gymnasium's "no TimeLimit wrapper"
 NO_LIMIT = -1
+#: The longest time limit: the step counters it is compared with are int64 (a larger one,
+#: 2**70, was an OverflowError at the first step, not a ValueError naming it)
+MAX_LIMIT = 2**63 - 1
 
 
 def resolve_limit(value: object, default: int | None) -> int | None:
     """``max_episode_steps`` as ``gymnasium.make`` reads it: a positive int is the limit,
     ``-1`` no limit (``None``), ``None`` the registration's ``default``. Anything else (0,
-    -2, a bool, a float, a string) is a ValueError naming ``max_episode_steps``."""
+    -2, past ``MAX_LIMIT``, a bool, a float, a string) is a ValueError naming
+    ``max_episode_steps``."""
     if value is None:
         return default
     if isinstance(value, numbers.Integral) and not isinstance(value, bool):
         if int(value) == NO_LIMIT:
             return None
-        if int(value) >= 1:
+        if 1 <= int(value) <= MAX_LIMIT:
             return int(value)
     raise ValueError(
-        f"max_episode_steps: expects a positive integer, -1 (no time limit) or None, got {value!r}"
+        "max_episode_steps: expects a positive integer (at most 2**63 - 1), -1 (no time"
+        f" limit) or None, got {value!r}"
     )
 
 

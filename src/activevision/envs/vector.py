@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from activevision.envs.actions import head_action_space
-from activevision.envs.config import EnvConfig, check_count, resolve_config
+from activevision.envs.config import MAX_VECTOR_ENVS, EnvConfig, check_count, resolve_config
 from activevision.envs.observations import (
     Observation,
     ObservationBuilder,
@@ -53,7 +53,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         autoreset_mode: AutoresetMode | str | None = None,
         **config_overrides: Any,
     ) -> None:
-        num_envs = check_count("num_envs", num_envs)
+        num_envs = check_count("num_envs", num_envs, MAX_VECTOR_ENVS)
         check_autoreset_mode(autoreset_mode)
         self.config = config = resolve_config(config, config_overrides)
         # gymnasium.make_vec passes its max_episode_steps as given (20, the registration's,

@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from activevision.envs.actions import head_action_space
-from activevision.envs.config import check_count
+from activevision.envs.config import MAX_VECTOR_ENVS, check_count
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.env import resolve_match_config
 from activevision.envs.match.observations import (
@@ -45,7 +45,7 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
         autoreset_mode: AutoresetMode | str | None = None,
         **config_overrides: Any,
     ) -> None:
-        num_envs = check_count("num_envs", num_envs)
+        num_envs = check_count("num_envs", num_envs, MAX_VECTOR_ENVS)
         check_autoreset_mode(autoreset_mode)
         self.config = config = resolve_match_config(config, config_overrides)
         # the match truncates itself after config.ticks; a time limit may end it sooner
