@@ -408,6 +408,17 @@ def test_keys_the_runs_algo_reads_and_the_presets_own_are_taken():
     assert TrainConfig.from_dict(preset("quickstart").to_dict()) == preset("quickstart")
 
 
+def test_a_match_students_validation_fits_one_vector_env():
+    """Its validation plays run.eval_episodes matches in one vector env (at most 65,536):
+    more was refused at the first validation, mid-run."""
+    with pytest.raises(ValueError, match=r"run\.eval_episodes: .*at most 65536, got 65537"):
+        apply_overrides(preset("match_dagger"), ["eval_episodes=65537"])
+    assert apply_overrides(preset("match_dagger"), ["eval_episodes=65536"])
+    # without validation, or on the episodes (their own batch, not the vector env), any count
+    assert apply_overrides(preset("match_dagger"), ["eval_episodes=65537", "eval_interval=0"])
+    assert apply_overrides(preset("quickstart"), ["eval_episodes=65537"])
+
+
 def test_ddqn_minibatch_fits_the_replay_buffer():
     # a buffer smaller than the minibatch never held one: the run trained without an update
     with pytest.raises(ValueError, match=r"TrainConfig\.learner\.batch_size: .*at most"):

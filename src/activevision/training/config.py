@@ -21,7 +21,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from activevision.envs.config import EnvConfig
+from activevision.envs.config import MAX_VECTOR_ENVS, EnvConfig
 from activevision.envs.match.config import MatchConfig
 from activevision.io import read_json, write_text
 from activevision.registration import MATCH_ENV_ID
@@ -356,6 +356,13 @@ class TrainConfig:
             raise ValueError(
                 "TrainConfig.dagger.goal_frame: a match student has no goal view to name in"
                 " the camera's frame ('body')"
+            )
+        if self.run.eval_interval and self.run.eval_episodes > MAX_VECTOR_ENVS:
+            # else refused by the vector env at the first validation, mid-run
+            raise ValueError(
+                f"TrainConfig.run.eval_episodes: a match student's validation plays its matches"
+                f" together in one vector env, at most {MAX_VECTOR_ENVS}, got"
+                f" {self.run.eval_episodes}"
             )
 
     def _check_sb3(self) -> None:
