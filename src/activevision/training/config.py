@@ -590,7 +590,7 @@ def _unread_by(algo: object, path: str, on_match: bool = False) -> str:
     if section == "sb3" and algo not in SB3_ALGORITHMS:
         return f"only Stable-Baselines3's read sb3.* (--algo {', '.join(SB3_ALGORITHMS)})"
     if algo == "dagger" and section in ("learner", "exploration", "replay"):
-        if path == "learner" or path in _DAGGER_LEARNER_KEYS:  # the whole object: its fields
+        if path in _DAGGER_LEARNER_KEYS:
             return ""
         return (
             "DAgger's student takes only learner.learning_rate, learner.batch_size and"
