@@ -31,6 +31,10 @@ RANDOMISED = EnvConfig(
 
 def _feed(sha, *arrays) -> None:
     for a in arrays:
+        if isinstance(a, dict):  # a Dict observation: its arrays in key order
+            for key in sorted(a):
+                _feed(sha, a[key])
+            continue
         a = np.ascontiguousarray(a)
         sha.update(str(a.dtype).encode() + str(a.shape).encode() + a.tobytes())
 
@@ -41,8 +45,9 @@ def _info_bytes(sha, info: dict) -> None:
             _feed(sha, np.asarray(info[key]))
 
 
-def single_digest(steps: int = 300, **kwargs) -> str:
-    env = gym.make("ActiveVision-v0", **kwargs)
+def single_digest(steps: int = 300, env_id: str = "ActiveVision-v0", **kwargs) -> str:
+    """One env over ``steps`` steps, reset with a new seed at each episode's end."""
+    env = gym.make(env_id, **kwargs)
     rng = np.random.default_rng(7)
     sha = hashlib.sha256()
     obs, info = env.reset(seed=11)
@@ -60,10 +65,11 @@ def single_digest(steps: int = 300, **kwargs) -> str:
     return sha.hexdigest()
 
 
-def vector_digest(steps: int = 200, num_envs: int = 8, **kwargs) -> str:
-    env = gym.make_vec(
-        "ActiveVision-v0", num_envs=num_envs, vectorization_mode="vector_entry_point", **kwargs
-    )
+def vector_digest(
+    steps: int = 200, num_envs: int = 8, env_id: str = "ActiveVision-v0", **kwargs
+) -> str:
+    """The native vector env over ``steps`` steps (autoresets included)."""
+    env = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **kwargs)
     rng = np.random.default_rng(3)
     sha = hashlib.sha256()
     obs, info = env.reset(seed=5)

@@ -506,28 +506,22 @@ _DAGGER_LEARNER_KEYS = ("learner.learning_rate", "learner.batch_size", "learner.
 #: (``training.sb3_learners._algorithm``, and ``make_vec_env``'s ``sb3.num_envs``); none
 #: takes anything of ``exploration`` (DDQN's epsilon-greedy), nor the prioritised replay's
 #: ``replay.alpha``, ``beta0`` and ``eps`` (SB3's replay is uniform).
+_OFF_POLICY_LEARNER_KEYS = (
+    "learning_rate",
+    "gamma",
+    "batch_size",
+    "learning_starts",
+    "train_freq",
+    "gradient_steps",
+)  # SAC's and TD3's
 _SB3_KEYS: dict[str, dict[str, tuple[str, ...]]] = {
     "sac": {
-        "learner": (
-            "learning_rate",
-            "gamma",
-            "batch_size",
-            "learning_starts",
-            "train_freq",
-            "gradient_steps",
-        ),
+        "learner": _OFF_POLICY_LEARNER_KEYS,
         "replay": ("buffer_size",),
         "sb3": ("num_envs", "tau", "downsample", "critic_hidden"),
     },
     "td3": {
-        "learner": (
-            "learning_rate",
-            "gamma",
-            "batch_size",
-            "learning_starts",
-            "train_freq",
-            "gradient_steps",
-        ),
+        "learner": _OFF_POLICY_LEARNER_KEYS,
         "replay": ("buffer_size",),
         "sb3": ("num_envs", "tau", "action_noise", "downsample", "critic_hidden"),
     },
