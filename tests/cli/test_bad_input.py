@@ -8,6 +8,7 @@ import json
 import shutil
 import subprocess
 import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -917,6 +918,75 @@ def test_sigterm_stops_train_as_ctrl_c_does(tmp_path, tiny_train):
     assert lines[0].startswith("activevision train: stopped by SIGTERM; ")
     assert f"`activevision train --resume {run}` continues from its last checkpoint" in lines[0]
     assert list_checkpoints(run)  # what the line offers to resume from is there
+
+
+_NUMBA_LOOP = """
+import math, signal, sys
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from activevision.cli import _sigterm_as_interrupt
+
+
+class Out(NamedTuple):
+    total: np.ndarray
+
+
+@njit
+def slow(n):
+    total = np.zeros(1)
+    for i in range(n):
+        total[0] += math.sin(i)
+    return Out(total)
+
+
+slow(10)
+print("ready", flush=True)
+totals = []
+try:
+    with _sigterm_as_interrupt():
+        while True:
+            totals.append(slow(20_000_000).total[0])
+except KeyboardInterrupt as stop:
+    print(type(stop).__name__, flush=True)
+"""
+
+
+@pytest.mark.parametrize("signum", ["SIGTERM", "SIGINT"])
+def test_an_interrupt_in_a_compiled_function_stops_without_a_crash(tmp_path, signum):
+    """SIGTERM or Ctrl-C while a numba-compiled function ran (every tick of the match's
+    entropy_track and glance_track: the viewpoint search) was a segmentation fault about
+    every other time (exit code 139, the output folder left): the interrupt was raised in
+    the Python code numba calls to box the function's result. It waits until that is done."""
+    import os
+    import signal
+
+    script = tmp_path / "loop.py"
+    script.write_text(_NUMBA_LOOP)
+    process = subprocess.Popen(
+        [sys.executable, str(script)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        assert process.stdout is not None
+        assert process.stdout.readline() == "ready\n", process.communicate()
+        for _ in range(3):  # each lands in the loop's compiled calls
+            time.sleep(0.3)
+            process.send_signal(getattr(signal, signum))
+            if process.poll() is not None:
+                break
+        out, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.kill(process.pid, signal.SIGKILL)
+            process.wait()
+    assert process.returncode == 0, err
+    assert out.split() == ["Terminated" if signum == "SIGTERM" else "KeyboardInterrupt"], err
 
 
 def test_a_size_this_machine_cannot_hold_is_one_line(

@@ -19,6 +19,7 @@ import threading
 import warnings
 from collections.abc import Callable, Iterator
 from types import FrameType
+from typing import Any
 
 from activevision.cli import deploy, evaluate, match, quickstart, robustness, scene, train
 from activevision.cli.args import ArgumentParser, error_text, is_refusal
@@ -52,11 +53,58 @@ class _Sigterm:
     received = False
 
 
+def _unsafe_to_raise(frame: FrameType | None) -> bool:
+    """Whether an exception raised in ``frame`` would crash the process: the Python code a
+    numba-compiled function calls while it boxes its result (``_numba_unpickle`` of a type,
+    a namedtuple's ``__new__``) is not expected to raise, and a KeyboardInterrupt raised
+    there was a segmentation fault (a namedtuple result: the viewpoint search, every tick
+    of a match's entropy_track and glance_track) or a SystemError. (A namedtuple or a
+    dataclass that Python code makes, its ``__new__`` or ``__init__`` compiled from
+    ``<string>`` as well, just waits until it returns.)"""
+    depth = 0
+    while frame is not None and depth < 8:
+        code = frame.f_code
+        if code.co_name == "_numba_unpickle" and "numba" in code.co_filename:
+            return True
+        if depth == 0 and code.co_filename == "<string>":
+            return True
+        frame, depth = frame.f_back, depth + 1
+    return False
+
+
+class _RaiseWhenSafe:
+    """A profile function (``sys.setprofile``) that raises ``error`` at the first call or
+    return in code where that is safe (:func:`_unsafe_to_raise`), then gives the profile
+    back to ``previous``."""
+
+    def __init__(self, error: BaseException, previous: Any) -> None:
+        self.error, self.previous = error, previous
+
+    def __call__(self, frame: FrameType, event: str, arg: object) -> None:
+        if _unsafe_to_raise(frame):
+            return
+        sys.setprofile(self.previous)
+        raise self.error
+
+
+def _raise_when_safe(error: BaseException, frame: FrameType | None) -> None:
+    """Raise ``error`` from a signal handler's ``frame``, or where that would crash the
+    process (:func:`_unsafe_to_raise`) at the first call or return in safe code after it."""
+    waiting = sys.getprofile()
+    if isinstance(waiting, _RaiseWhenSafe):  # an earlier interrupt waits: this one instead
+        sys.setprofile(waiting.previous)
+    if not _unsafe_to_raise(frame):
+        raise error
+    sys.setprofile(_RaiseWhenSafe(error, sys.getprofile()))
+
+
 @contextlib.contextmanager
 def _sigterm_as_interrupt() -> Iterator[_Sigterm]:
     """While the block runs, SIGTERM raises :class:`Terminated` (once: a second SIGTERM
-    ends the process at once, as it did before). Outside the main thread, where Python
-    cannot set signal handlers, nothing changes."""
+    ends the process at once, as it did before), and Ctrl-C its KeyboardInterrupt (where
+    SIGINT has Python's default handler), each where raising it cannot crash the process
+    (:func:`_raise_when_safe`). Outside the main thread, where Python cannot set signal
+    handlers, nothing changes."""
     sigterm = _Sigterm()
     if threading.current_thread() is not threading.main_thread():
         yield sigterm
@@ -65,13 +113,24 @@ def _sigterm_as_interrupt() -> Iterator[_Sigterm]:
     def terminate(signum: int, frame: FrameType | None) -> None:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         sigterm.received = True
-        raise Terminated
+        _raise_when_safe(Terminated(), frame)
+
+    def interrupt(signum: int, frame: FrameType | None) -> None:
+        _raise_when_safe(KeyboardInterrupt(), frame)
 
     previous = signal.signal(signal.SIGTERM, terminate)
+    previous_int = signal.getsignal(signal.SIGINT)
+    if previous_int is signal.default_int_handler:  # not where SIGINT is ignored
+        signal.signal(signal.SIGINT, interrupt)
     try:
         yield sigterm
     finally:
         signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+        if previous_int is signal.default_int_handler:
+            signal.signal(signal.SIGINT, previous_int)
+        waiting = sys.getprofile()
+        if isinstance(waiting, _RaiseWhenSafe):  # never raised: the block ended first
+            sys.setprofile(waiting.previous)
 
 
 def main(argv: list[str] | None = None) -> int:
