@@ -244,3 +244,31 @@ def test_sweep_command_with_failed_trials_exits_2_after_its_outputs(tmp_path, mo
     assert calls[0]["verbose"] == 0
     assert main(["sweep", "--seeds", "0,1", "--out", str(out), "--verbose"]) == 2
     assert calls[1]["verbose"] == 1
+
+
+def test_a_failed_ray_init_gives_the_sigterm_handler_back(monkeypatch):
+    """ray.init sets its own SIGTERM handler (exit status 1) before it connects: one that
+    failed (a cluster it could not join) left it in place of the caller's."""
+    import importlib
+    import signal
+    import types
+
+    session = importlib.import_module("activevision.scaleout.ray_session")
+
+    def init(**kwargs):
+        signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(signum))
+        raise ConnectionError("could not join the cluster")
+
+    fake = types.SimpleNamespace(is_initialized=lambda: False, init=init, shutdown=lambda: None)
+    monkeypatch.setattr(session, "require_ray", lambda: fake)
+
+    def ours(signum, frame):
+        raise KeyboardInterrupt
+
+    before = signal.signal(signal.SIGTERM, ours)
+    try:
+        with pytest.raises(ConnectionError), session.ray_session(address="auto"):
+            pass
+        assert signal.getsignal(signal.SIGTERM) is ours
+    finally:
+        signal.signal(signal.SIGTERM, before)

@@ -49,13 +49,15 @@ def ray_session(
         raise ValueError("num_cpus applies to a local Ray instance, not to --address")
     main_thread = threading.current_thread() is threading.main_thread()
     sigterm = signal.getsignal(signal.SIGTERM) if main_thread else None
-    if address is None:
-        ray.init(num_cpus=num_cpus, **init_kwargs)
-    else:
-        init_kwargs.pop("include_dashboard")  # a cluster's dashboard is the cluster's business
-        ray.init(address=address, **init_kwargs)
-    if main_thread:
-        signal.signal(signal.SIGTERM, sigterm)
+    try:
+        if address is None:
+            ray.init(num_cpus=num_cpus, **init_kwargs)
+        else:
+            init_kwargs.pop("include_dashboard")  # the cluster's dashboard is its own business
+            ray.init(address=address, **init_kwargs)
+    finally:  # also where ray.init fails after it set its handler (a cluster it cannot join)
+        if main_thread:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL if sigterm is None else sigterm)
     try:
         yield ray
     finally:
