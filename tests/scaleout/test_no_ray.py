@@ -53,6 +53,24 @@ def test_grid_points_and_trial_configs():
         grid_points({"batch_size": []})
 
 
+@pytest.mark.parametrize(
+    ("base", "point", "algo"),
+    [
+        ("sac_head", {"action_noise": "0.2", "algo": "td3"}, "td3"),
+        ("paper", {"act_by": '"goal"', "algo": "dagger"}, "dagger"),
+    ],
+)
+def test_a_grid_point_sets_its_keys_together(base, point, algo):
+    """A grid over algo with a key of that algo (sorted before "algo") was refused: the
+    point's keys were set one by one, the key checked against the base config's algo."""
+    from activevision.training import preset
+
+    config = trial_config(preset(base), 3, point)
+    assert (config.algo, config.seed) == (algo, 3)
+    with pytest.raises(ValueError, match="never read by an algo='sac' run"):
+        trial_config(preset(base), 3, {**point, "algo": "sac"})
+
+
 def _metrics(run_dir: Path, success: list[float], epoch_steps: int = 300) -> None:
     run_dir.mkdir(parents=True)
     with (run_dir / "metrics.csv").open("w", newline="") as f:

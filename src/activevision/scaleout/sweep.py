@@ -37,7 +37,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from activevision.training.config import TrainConfig, apply_overrides, load_config, parse_value
+from activevision.training.config import TrainConfig, load_config, parse_value, with_values
 
 if TYPE_CHECKING:
     from ray.tune.experiment import Trial
@@ -98,14 +98,18 @@ def grid_points(grid: Mapping[str, Sequence[Any]]) -> list[dict[str, Any]]:
 
 def trial_config(base: TrainConfig, seed: int, point: Mapping[str, Any]) -> TrainConfig:
     """``base`` with ``seed`` and the grid point applied (string values are parsed like
-    ``--set key=value``, other values used as is); validated."""
-    config = base.replace(seed=int(seed))
+    ``--set key=value``, other values used as is); validated. The point's keys are set
+    together, as one ``--set`` list's: a grid over ``algo`` with keys only some algo reads
+    is checked against each trial's algo, whatever the keys' order."""
+    changes: dict[str, Any] = {"seed": int(seed)}
     for key, value in point.items():
         if isinstance(value, str):
-            config = apply_overrides(config, [f"{key}={value}"])
-        else:
-            config = config.replace(**{key: value})
-    return config
+            try:
+                value = parse_value(value)
+            except ValueError as error:
+                raise ValueError(f"override {key.strip()!r}: {error}") from None
+        changes[key] = value
+    return with_values(base, changes)
 
 
 # ---------------------------------------------------------------------- the trainable
