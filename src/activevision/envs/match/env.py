@@ -57,7 +57,8 @@ class ActiveVisionMatchEnv(gym.Env):
        slip per tick); the commanded step is its odometry. It gives way to the other
        robots: a step that would end within ``robots.min_spacing`` of one it does not make,
        but turns on the spot (its odometry the turn alone), giving up a waypoint that lies
-       beyond that robot for a new one;
+       beyond that robot for a new one (walking to the ball, with the ball beyond it, it
+       walks to such a waypoint for a detour of 20 ticks, then to the ball again);
     3. the ball (:class:`BallConfig`) rolls with constant deceleration, bounces off the
        field lines, and is kicked at random times in random directions. It rolls through
        our own robot unless ``ball.bounces_off_own_robot`` (then it bounces off our body as

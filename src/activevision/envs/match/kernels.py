@@ -59,6 +59,7 @@ class MatchState(NamedTuple):
     hidden: np.ndarray  #: (N, K) bool, behind other robots
     reward: np.ndarray  #: (N,)
     robots: np.ndarray  #: (N, R, 4) the other robots (x, y, height, grey); height 0: none
+    detour: np.ndarray  #: (N,) int64 ticks left walking to a detour waypoint, not the ball
 
 
 class MatchParams(NamedTuple):
@@ -96,16 +97,26 @@ class MatchParams(NamedTuple):
     spacing: float  #: our robot keeps this far (m) from the other robots' centres
 
 
+#: ticks (6.4 s) a robot walking to the ball walks to a detour waypoint instead after it
+#: gave way to a robot that stands between it and the ball
+DETOUR_TICKS = 20
+
+
 @njit(cache=True)
 def _next_waypoint(n: int, s: MatchState, p: MatchParams, draws: np.ndarray) -> None:
     """A robot at its waypoint (by its belief) pauses, then walks to the next: a random one,
     or (``walk_to_ball``) the ball's believed position less ``ball_standoff``, re-planned
-    every tick."""
+    every tick, but while on a detour (``s.detour``) the detour waypoint until it reaches it
+    or the detour's ticks run out."""
     mean, wp = s.mean[n], s.waypoint[n]
     reached = math.hypot(wp[0] - mean[0], wp[1] - mean[1]) < p.reach and s.pause[n] == 0
     if reached:
         width = p.pause_high - p.pause_low + 1
         s.pause[n] = int(p.pause_low + math.floor(draws[2] * width))
+    if p.walk_to_ball > 0 and s.detour[n] > 0 and not reached:
+        s.detour[n] -= 1
+        return
+    s.detour[n] = 0
     if p.walk_to_ball > 0:
         c, si = math.cos(mean[2]), math.sin(mean[2])
         rx, ry = s.ball_relative[n, 0], s.ball_relative[n, 1]
@@ -152,8 +163,11 @@ def move_kernel(
     that turn's drift alone, its odometry the turn (its walking engine commanded no step,
     and it made none). A waypoint beyond that robot (:func:`_beyond`) it gives up for a new
     one from its give-way draws; one clear of it it keeps, turning on the spot until a step
-    towards it parts from the robot. Walking to the ball, it waits (turning to the ball)
-    for the ball or the robot to move."""
+    towards it parts from the robot. Walking to the ball, with the ball beyond that robot,
+    it takes such a waypoint as a detour, walked to for :data:`DETOUR_TICKS` ticks (or until
+    reached) before it turns to the ball again: it waited, turning to the ball, for the ball
+    or the robot to move, for the rest of the match where neither did (a standing robot, a
+    ball at rest behind it or out of view)."""
     s, p = MatchState(*state), MatchParams(*params)
     k = s.detected.shape[1]
     odometry = np.zeros((idx.shape[0], 3))
@@ -183,10 +197,12 @@ def move_kernel(
         blocker = blocking_robot(s.pose[n], moved, s.robots[n], p.spacing)
         if blocker >= 0:
             # give way: turn on the spot, as commanded, with a pure turn's drift
-            if p.walk_to_ball == 0 and _beyond(s, n, blocker):
+            if _beyond(s, n, blocker):
                 give_way = uniforms[j, k + 10 : k + 12]
                 s.waypoint[n, 0] = p.waypoint_x * (2 * give_way[0] - 1)
                 s.waypoint[n, 1] = p.waypoint_y * (2 * give_way[1] - 1)
+                if p.walk_to_ball > 0:
+                    s.detour[n] = DETOUR_TICKS
             dx = dy = 0.0
             st = drift_stds(0.0, 0.0, dth, model)[2]
             moved[:] = s.pose[n]

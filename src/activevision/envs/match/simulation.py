@@ -87,6 +87,8 @@ class MatchBatch:
         self.declared_lost = np.zeros(num_envs, dtype=bool)
         self.robots = np.zeros((num_envs, cfg.robots.max_count, 4))
         self.robot_waypoints = np.zeros((num_envs, cfg.robots.max_count, 2))
+        #: ticks left on a detour from the walk to the ball (kernels.move_kernel)
+        self.detour = np.zeros(num_envs, dtype=np.int64)
         #: whether the other robots walk (then they draw their waypoints every tick)
         self._others_walk = cfg.robots.max_count > 0 and cfg.others.speed > 0
         self.hidden = np.zeros((num_envs, k), dtype=bool)
@@ -133,6 +135,7 @@ class MatchBatch:
                 self.hidden,
                 self.reward,
                 self.robots,
+                self.detour,
             )
         )
         carpet = field.carpet_half_extent
@@ -225,6 +228,7 @@ class MatchBatch:
         self.ball_velocity[idx] = 0.0
         self.last_move[idx] = 0.0
         self.pause[idx] = 0
+        self.detour[idx] = 0
         self.tick[idx] = 0
         self.accepted[idx] = 0
         self.gated[idx] = 0
