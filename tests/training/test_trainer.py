@@ -131,6 +131,26 @@ def test_resume_gives_exactly_the_uninterrupted_result(tmp_path, fake_env_factor
         assert torch.equal(a[key], b[key]), key
 
 
+def test_a_run_resumed_after_its_last_boundary_ends_with_the_same_final_row(
+    tmp_path, fake_env_factory
+):
+    """Checkpointed at step 130, after the last epoch boundary (120) and before the end
+    (150), and resumed: the final row (epoch 3, the steps 120-150) is the uninterrupted
+    run's, its episodes and losses from both sessions."""
+    config = tiny_config(total_timesteps=150, checkpoint_interval=0)
+    straight, interrupted = tmp_path / "straight", tmp_path / "interrupted"
+    train(config, straight, fake_env_factory)
+    first = Trainer(config, interrupted, fake_env_factory)
+    assert [e["step"] for e in first.train(steps=130)] == [60, 120]  # checkpoint at 130
+    for _ in range(7):  # progress after the checkpoint, lost in a "crash"
+        first._env_step()
+    first.close()
+    resume(interrupted, fake_env_factory)
+    for name in ("metrics.csv", "episodes.csv"):
+        assert comparable(read_rows(straight / name)) == comparable(read_rows(interrupted / name))
+    assert [r["epoch"] for r in read_rows(interrupted / "metrics.csv")] == ["1", "2", "3"]
+
+
 def test_corrupt_checkpoint_is_a_clear_error(tmp_path, fake_env_factory):
     trainer = Trainer(tiny_config(), tmp_path, fake_env_factory)
     trainer.train(steps=60)
