@@ -888,7 +888,6 @@ def test_ctrl_c_is_one_line_and_an_interrupted_run_says_how_to_resume(
 def test_sigterm_stops_train_as_ctrl_c_does(tmp_path, tiny_train):
     """``kill`` (SIGTERM) of a training run ended it with exit code 143 and nothing said: it
     stops as Ctrl-C does, with one line saying so and how to resume, and the shell's 143."""
-    import os
     import signal
     import time
 
@@ -908,9 +907,8 @@ def test_sigterm_stops_train_as_ctrl_c_does(tmp_path, tiny_train):
         process.send_signal(signal.SIGTERM)  # the run has started and checkpointed
         out, err = process.communicate(timeout=60)
     finally:
-        if process.poll() is None:
-            os.kill(process.pid, signal.SIGKILL)
-            process.wait()
+        process.kill()  # a no-op once it has exited
+        process.wait()
     assert process.returncode == 143, err
     lines = [line for line in err.splitlines() if line.strip()]
     assert "Traceback" not in out + err
@@ -960,7 +958,6 @@ def test_an_interrupt_in_a_compiled_function_stops_without_a_crash(tmp_path, sig
     entropy_track and glance_track: the viewpoint search) was a segmentation fault about
     every other time (exit code 139, the output folder left): the interrupt was raised in
     the Python code numba calls to box the function's result. It waits until that is done."""
-    import os
     import signal
 
     script = tmp_path / "loop.py"
@@ -982,9 +979,8 @@ def test_an_interrupt_in_a_compiled_function_stops_without_a_crash(tmp_path, sig
                 break
         out, err = process.communicate(timeout=60)
     finally:
-        if process.poll() is None:
-            os.kill(process.pid, signal.SIGKILL)
-            process.wait()
+        process.kill()  # a no-op once it has exited
+        process.wait()
     assert process.returncode == 0, err
     assert out.split() == ["Terminated" if signum == "SIGTERM" else "KeyboardInterrupt"], err
 

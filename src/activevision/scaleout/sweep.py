@@ -37,7 +37,13 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from activevision.training.config import TrainConfig, load_config, parse_value, with_values
+from activevision.training.config import (
+    TrainConfig,
+    load_config,
+    override_value,
+    parse_value,
+    with_values,
+)
 
 if TYPE_CHECKING:
     from ray.tune.experiment import Trial
@@ -103,12 +109,7 @@ def trial_config(base: TrainConfig, seed: int, point: Mapping[str, Any]) -> Trai
     is checked against each trial's algo, whatever the keys' order."""
     changes: dict[str, Any] = {"seed": int(seed)}
     for key, value in point.items():
-        if isinstance(value, str):
-            try:
-                value = parse_value(value)
-            except ValueError as error:
-                raise ValueError(f"override {key.strip()!r}: {error}") from None
-        changes[key] = value
+        changes[key] = override_value(key, value) if isinstance(value, str) else value
     return with_values(base, changes)
 
 

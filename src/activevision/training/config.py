@@ -693,11 +693,16 @@ def apply_overrides(config: TrainConfig, overrides: Iterable[str]) -> TrainConfi
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
             raise ValueError(f"override {item!r} must look like key=value")
-        try:
-            changes[key.strip()] = parse_value(text)
-        except ValueError as error:
-            raise ValueError(f"override {key.strip()!r}: {error}") from None
+        changes[key.strip()] = override_value(key, text)
     return with_values(config, changes)
+
+
+def override_value(key: str, text: str) -> Any:
+    """:func:`parse_value` of ``key``'s value, a ValueError naming ``key``."""
+    try:
+        return parse_value(text)
+    except ValueError as error:
+        raise ValueError(f"override {key.strip()!r}: {error}") from None
 
 
 def parse_value(text: str) -> Any:
