@@ -89,7 +89,9 @@ def compare_ray(
     starts = list(range(0, episodes, chunk))
     limit = time_limit(ActiveVisionEnv(config))  # the tasks' envs', for the durations' bounds
 
-    with ray_session(address, num_cpus) as ray:
+    # no worker's output: a chunk's error reaches ray.get as an exception, and an idle worker
+    # that Ray's shutdown stops with SIGTERM may print a traceback ("SystemExit: 1")
+    with ray_session(address, num_cpus, log_to_driver=False) as ray:
         task = ray.remote(num_cpus=1)(evaluate_chunk)
         config_ref = ray.put(config)
         pending: list[tuple[int, float, dict[str, list[Any]]]] = []

@@ -247,8 +247,12 @@ def sweep(
     trials = _trial_specs(base_config, seeds, grid, out_dir, cpus_per_trial, crash_after_epoch)
     statuses: dict[str, dict[str, Any]] = {t["name"]: {"restarts": 0} for t in trials}
     # quiet: no INFO lines of Ray's start ("Started a local Ray instance") or of Tune's
-    # bookkeeping ("Wrote the latest version of all result files")
-    quiet_logs = {"logging_level": logging.WARNING} if verbose == 0 else {}
+    # bookkeeping ("Wrote the latest version of all result files"), and no worker's output:
+    # a trial's error reaches trials.csv through Tune, and an idle worker that Ray's shutdown
+    # stops with SIGTERM may print a traceback ("Exception ignored in: ... SystemExit: 1")
+    quiet_logs: dict[str, Any] = (
+        {"logging_level": logging.WARNING, "log_to_driver": False} if verbose == 0 else {}
+    )
     with ray_session(address, num_cpus, **quiet_logs) as ray:
         if gpus_per_trial is None:
             gpus_per_trial = 1.0 if ray.cluster_resources().get("GPU", 0) > 0 else 0.0
