@@ -13,7 +13,13 @@ import pytest
 from activevision.experiments.methods import make_policy
 from activevision.scaleout import RAY_INSTALL_HINT, aggregate, require_ray
 from activevision.scaleout.compare import default_method_names
-from activevision.scaleout.sweep import UNFINISHED_WARNING, grid_points, trial_config, trial_name
+from activevision.scaleout.sweep import (
+    UNFINISHED_WARNING,
+    base_config,
+    grid_points,
+    trial_config,
+    trial_name,
+)
 from activevision.training import TrainConfig
 
 
@@ -69,6 +75,32 @@ def test_a_grid_point_sets_its_keys_together(base, point, algo):
     assert (config.algo, config.seed) == (algo, 3)
     with pytest.raises(ValueError, match="never read by an algo='sac' run"):
         trial_config(preset(base), 3, {**point, "algo": "sac"})
+
+
+def test_a_set_key_is_checked_against_each_grid_algo_and_env():
+    """``sweep --preset sac_head --set sb3.action_noise=0.2 --grid algo=td3`` was refused:
+    the --set key was checked against the preset's algo (SAC), which no trial runs. It is
+    checked against each trial's algo (and env) where the grid varies them."""
+    from activevision.training import preset
+
+    sets = {"sb3.tau": 0.01, "env.action_type": "continuous", "replay.buffer_size": 50_000}
+    config = base_config(preset("paper"), sets, {"algo": ["sac", "td3"]})
+    trials = [trial_config(config, 0, p) for p in grid_points({"algo": ["sac", "td3"]})]
+    assert [(t.algo, t.sb3.tau) for t in trials] == [("sac", 0.01), ("td3", 0.01)]
+    config = base_config(preset("sac_head"), {"sb3.action_noise": 0.2}, {"algo": ["td3"]})
+    assert trial_config(config, 0, {"algo": "td3"}).sb3.action_noise == 0.2
+    # read by TD3 only: the SAC trial would store it unread
+    with pytest.raises(ValueError, match="never read by an algo='sac' run"):
+        base_config(preset("sac_head"), {"sb3.action_noise": 0.2}, {"algo": ["sac", "td3"]})
+    # no grid over algo: the base config's algo decides, as --set on train
+    with pytest.raises(ValueError, match="never read by an algo='sac' run"):
+        base_config(preset("sac_head"), {"sb3.action_noise": 0.2}, {"learning_rate": ["1e-3"]})
+    # a grid over the env: a match key holds where every trial plays the match
+    match_grid = {"env_id": ['"ActiveVisionMatch-v0"'], "algo": ['"dagger"']}
+    sets = {"match.ticks": 300, "match.observation": "image+head+belief", "act_by": "action"}
+    assert base_config(preset("paper"), sets, match_grid).match.ticks == 300
+    with pytest.raises(ValueError, match="sets the match env's config"):
+        base_config(preset("paper"), sets, {"algo": ['"dagger"']})
 
 
 def _metrics(run_dir: Path, success: list[float], epoch_steps: int = 300) -> None:

@@ -183,22 +183,29 @@ def cmd_plot(args: argparse.Namespace) -> None:
 def cmd_sweep(args: argparse.Namespace) -> None:
     """Run a Ray Tune sweep; print a line per trial that ends and where the outputs went.
     Trials that failed end it with an error (exit code 2) after the outputs of the others."""
-    from activevision.scaleout.sweep import UNFINISHED_WARNING, check_trials_finished, sweep
-    from activevision.training import apply_overrides, load_config, preset
+    from activevision.scaleout.sweep import (
+        UNFINISHED_WARNING,
+        base_config,
+        check_trials_finished,
+        sweep,
+    )
+    from activevision.training import load_config, preset
+    from activevision.training.config import parse_overrides
 
     def ended(trial: Mapping[str, Any]) -> None:
         status = "finished" if trial["status"] == "TERMINATED" else "failed"
         print(f"trial {trial['ended']}/{trial['trials']} {status}: {trial['name']}", flush=True)
 
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
-    config = apply_overrides(config, list(args.set or []))
+    grid = dict(args.grid or [])
+    config = base_config(config, parse_overrides(args.set or []), grid)
     with warnings.catch_warnings():
         # the command ends with one error line on failed trials (check_trials_finished)
         warnings.filterwarnings("ignore", message=UNFINISHED_WARNING)
         rows = sweep(
             config,
             args.seeds,
-            dict(args.grid or []),
+            grid,
             args.out,
             address=args.address,
             num_cpus=args.num_cpus,

@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 
 from activevision.training.config import (
     TrainConfig,
+    field_paths,
     load_config,
     override_value,
     parse_value,
@@ -107,10 +108,27 @@ def trial_config(base: TrainConfig, seed: int, point: Mapping[str, Any]) -> Trai
     ``--set key=value``, other values used as is); validated. The point's keys are set
     together, as one ``--set`` list's: a grid over ``algo`` with keys only some algo reads
     is checked against each trial's algo, whatever the keys' order."""
-    changes: dict[str, Any] = {"seed": int(seed)}
-    for key, value in point.items():
-        changes[key] = override_value(key, value) if isinstance(value, str) else value
-    return with_values(base, changes)
+    return with_values(base, {"seed": int(seed), **_point_values(point)})
+
+
+def _point_values(point: Mapping[str, Any]) -> dict[str, Any]:
+    """A grid point's values, its text values parsed as ``--set``'s."""
+    return {k: override_value(k, v) if isinstance(v, str) else v for k, v in point.items()}
+
+
+def base_config(
+    config: TrainConfig, overrides: Mapping[str, Any], grid: Mapping[str, Sequence[Any]] | None
+) -> TrainConfig:
+    """``config`` with ``overrides`` (a ``--set`` list's values) applied: the sweep's
+    ``base_config``. Every key must be read by the trials' runs; where the grid varies
+    ``algo`` or ``env_id``, by each of them (``--set sb3.tau=0.01 --grid algo=sac,td3``
+    holds, though the preset's algo never reads ``sb3.*``)."""
+    paths = field_paths()
+    deciding = {k: v for k, v in (grid or {}).items() if paths.get(k.strip()) in ("algo", "env_id")}
+    if not deciding:
+        return with_values(config, overrides)
+    bases = [with_values(config, {**overrides, **_point_values(p)}) for p in grid_points(deciding)]
+    return bases[0]  # each trial sets its own algo and env: any point's base serves
 
 
 # ---------------------------------------------------------------------- the trainable

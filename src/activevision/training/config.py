@@ -447,8 +447,8 @@ def _nested_paths(path: str, hint: Any) -> list[str]:
 
 def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
     """``config`` with values set by key (see :func:`field_paths`); ValueError names an
-    unknown key, a bad value, or a key the resulting run's ``algo`` never reads (``dagger.*``
-    on a DDQN run...: it would sit in config.json, unused)."""
+    unknown key, a bad value, or a key the resulting run's ``algo`` and env never read
+    (``dagger.*`` on a DDQN run...: it would sit in config.json, unused)."""
     paths = field_paths()
     nested = config_to_dict(config)
     env_id = next(
@@ -467,36 +467,38 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
                     f" {', '.join(twins)}"
                 )
             raise ValueError(f"unknown TrainConfig key {key!r}")
-        on_match = str(env_id).removeprefix("activevision:") == MATCH_ENV_ID
-        if path.startswith("match.") and not on_match:
-            # only a run on the match env reads its config: refused, not stored unread
-            raise ValueError(
-                f"{key.strip()!r} sets the match env's config, which this run never reads: it"
-                f" trains on {env_id}, not {MATCH_ENV_ID} (set env_id={MATCH_ENV_ID}, or use a"
-                " match preset such as match_dagger)"
-            )
-        if on_match and path.startswith("env."):
-            # the episodic env's field (a short name or its full path): a match run never
-            # reads it
-            twin = "match." + path.removeprefix("env.")
-            instead = (
-                f"set {twin} (full path)" if twin in paths else "the match has no such setting"
-            )
-            raise ValueError(
-                f"{key.strip()!r} sets {path}, the episodic env's field; this run trains on"
-                f" {MATCH_ENV_ID}: {instead}"
-            )
-        unread = _unread_by(algo, path, on_match)
-        if unread:
-            # the run would store it in config.json and never use it: refused, as match.*
-            named = repr(path) if key.strip() == path else f"{key.strip()!r} ({path})"
-            raise ValueError(f"{named} is never read by an algo={algo!r} run: {unread}")
+        _refuse_unread(key.strip(), path, algo, env_id, paths)
         *parents, leaf = path.split(".")
         target = nested
         for part in parents:
             target = target[part]
         target[leaf] = value
     return config_from_dict(TrainConfig, nested)
+
+
+def _refuse_unread(
+    key: str, path: str, algo: object, env_id: object, paths: Mapping[str, str]
+) -> None:
+    """ValueError where a run of ``algo`` on ``env_id`` never reads ``key`` (at ``path``):
+    the run would store it in config.json and never use it."""
+    on_match = str(env_id).removeprefix("activevision:") == MATCH_ENV_ID
+    if path.startswith("match.") and not on_match:
+        raise ValueError(
+            f"{key!r} sets the match env's config, which this run never reads: it trains on"
+            f" {env_id}, not {MATCH_ENV_ID} (set env_id={MATCH_ENV_ID}, or use a match preset"
+            " such as match_dagger)"
+        )
+    if on_match and path.startswith("env."):  # the episodic env's field, short name or full
+        twin = "match." + path.removeprefix("env.")
+        instead = f"set {twin} (full path)" if twin in paths else "the match has no such setting"
+        raise ValueError(
+            f"{key!r} sets {path}, the episodic env's field; this run trains on"
+            f" {MATCH_ENV_ID}: {instead}"
+        )
+    unread = _unread_by(algo, path, on_match)
+    if unread:
+        named = repr(path) if key == path else f"{key!r} ({path})"
+        raise ValueError(f"{named} is never read by an algo={algo!r} run: {unread}")
 
 
 #: What DAgger's student takes of ``learner`` (``DaggerConfig``'s docstring); the rest of
@@ -688,13 +690,18 @@ def apply_overrides(config: TrainConfig, overrides: Iterable[str]) -> TrainConfi
     Values are parsed as JSON where they can be (``true``, ``3``, ``[1, 2]``), else taken as
     strings.
     """
+    return with_values(config, parse_overrides(overrides))
+
+
+def parse_overrides(overrides: Iterable[str]) -> dict[str, Any]:
+    """``key=value`` strings as a mapping of each key to its parsed value (later wins)."""
     changes: dict[str, Any] = {}
     for item in overrides:
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
             raise ValueError(f"override {item!r} must look like key=value")
         changes[key.strip()] = override_value(key, text)
-    return with_values(config, changes)
+    return changes
 
 
 def override_value(key: str, text: str) -> Any:
