@@ -356,6 +356,53 @@ def test_a_key_the_runs_algo_never_reads_is_refused(base, setting, message):
         apply_overrides(preset(base), [setting])
 
 
+@pytest.mark.parametrize(
+    ("base", "settings", "message"),
+    [
+        (
+            "match_dagger",
+            ["glance_track_margin_deg=20"],
+            r"'glance_track_margin_deg' \(dagger\.glance_track_margin_deg\) is never read by"
+            r" this run: only the glance_track teacher reads it .* teacher is entropy_track",
+        ),
+        (
+            "match_dagger_glance",
+            ["dagger.track_margin_deg=3"],
+            r"only the entropy_track teacher reads it .* teacher is glance_track",
+        ),
+        # the other setting counts as the run ends up, whatever the order of the overrides
+        (
+            "match_dagger",
+            [
+                "dagger.glance_track_margin_deg=20",
+                "match_teacher=glance_track",
+                "match_teacher=entropy_track",
+            ],
+            r"only the glance_track teacher reads it",
+        ),
+        (
+            "dagger_prior",
+            ["dagger.switch_margin=1", "dagger.act_by=action"],
+            r"'dagger\.switch_margin' is never read by this run: only a student acting by its"
+            r" goal head reads it",
+        ),
+    ],
+)
+def test_a_key_another_setting_leaves_unread_is_refused(base, settings, message):
+    """A match teacher's margin on a run with the other teacher, or the goal evidence's
+    hysteresis on a student acting by its action head, was stored unread in config.json."""
+    with pytest.raises(ValueError, match=message):
+        apply_overrides(preset(base), settings)
+    # the setting that reads it, in the same overrides, takes it
+    readers = {
+        "match_dagger": ["match_teacher=glance_track"],
+        "match_dagger_glance": ["match_teacher=entropy_track"],
+        "dagger_prior": ["dagger.act_by=goal"],
+    }
+    config = apply_overrides(preset(base), [*settings, *readers[base]])
+    assert config.algo == "dagger"
+
+
 def test_keys_the_runs_algo_reads_and_the_presets_own_are_taken():
     # the algo set in the same overrides counts, in whatever order
     config = apply_overrides(preset("paper"), ["dagger.num_envs=8", "algo=dagger"])

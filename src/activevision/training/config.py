@@ -473,7 +473,14 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
         for part in parents:
             target = target[part]
         target[leaf] = value
-    return config_from_dict(TrainConfig, nested)
+    result = config_from_dict(TrainConfig, nested)
+    for key in changes:
+        path = paths.get(key.strip()) or _env_alias(key.strip()) or ""
+        unread = _unread_given(result, path)
+        if unread:
+            named = repr(path) if key.strip() == path else f"{key.strip()!r} ({path})"
+            raise ValueError(f"{named} is never read by this run: {unread}")
+    return result
 
 
 def _refuse_unread(
@@ -602,6 +609,31 @@ def _unread_by(algo: object, path: str, on_match: bool = False) -> str:
             return f"{name} takes nothing of {section}.*{why}"
         listed = ", ".join(keys[:-1]) + f" and {keys[-1]}" if len(keys) > 1 else keys[0]
         return f"{name} takes of {section}.* only {listed}{why}"
+    return ""
+
+
+def _unread_given(config: TrainConfig, path: str) -> str:
+    """Why ``config``'s run never reads the value at ``path`` because of another of its
+    values ("" when it does): a DAgger key that one match teacher, or one way of acting,
+    reads and the run's does not (``_unread_by`` has the algo's and the env's)."""
+    dag = config.dagger
+    if config.algo != "dagger":
+        return ""
+    if path == "dagger.switch_margin" and dag.act_by != "goal":
+        return (
+            "only a student acting by its goal head reads it (the goal evidence's hysteresis,"
+            " dagger.act_by=goal); this one acts by its action head"
+        )
+    teacher_margins = {
+        "dagger.glance_track_margin_deg": "glance_track",
+        "dagger.track_margin_deg": "entropy_track",
+    }
+    teacher = teacher_margins.get(path)
+    if teacher is not None and dag.match_teacher != teacher:
+        return (
+            f"only the {teacher} teacher reads it (dagger.match_teacher={teacher}); this run's"
+            f" teacher is {dag.match_teacher}"
+        )
     return ""
 
 
