@@ -885,6 +885,58 @@ def test_ctrl_c_is_one_line_and_an_interrupted_run_says_how_to_resume(
     assert not out.exists()  # the folder it made is removed again
 
 
+@pytest.mark.parametrize(
+    ("argv", "last_writer", "outputs"),
+    [
+        (
+            ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "random"],
+            "activevision.figures.match.save_gif",
+            ["match.csv", "match_pareto.png", "match_error.png"],
+        ),
+        (
+            ["robustness", "--method", "random", "--episodes", "1", "--perturbations", "clean"],
+            "activevision.figures.robustness.plot_robustness",
+            ["robustness.csv"],
+        ),
+        (
+            ["evaluate", "--methods", "random", "--episodes", "2"],
+            "activevision.io.write_json",
+            ["evaluation.csv", "episodes.csv"],
+        ),
+    ],
+)
+def test_an_interrupt_while_writing_outputs_leaves_none_of_them(
+    tmp_path, monkeypatch, one_clear_line, argv, last_writer, outputs
+):
+    """Ctrl-C while ``match`` wrote its figures left match.csv and two figures without the
+    GIF (robustness: its CSV without the figure), a set that looked finished. An interrupted
+    command leaves none of its outputs, as one stopped while it played."""
+    import importlib
+
+    module_name, _, name = last_writer.rpartition(".")
+    module = importlib.import_module(module_name)
+    written = getattr(module, name)
+    seen: list[str] = []
+
+    def write_then_interrupt(*args, **kwargs):
+        # what was written before this writer is there when the interrupt comes
+        seen.extend(sorted(p.name for p in out.iterdir()))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(module, name, write_then_interrupt)
+    out = tmp_path / "new" / "out"
+    assert main([*argv, "--out", str(out)]) == 130
+    one_clear_line("interrupted")
+    assert set(outputs) <= set(seen), seen
+    assert not (tmp_path / "new").exists()  # its outputs and the folders it made are gone
+    # with --overwrite, the older set goes too: not a mix of two runs' files
+    monkeypatch.setattr(module, name, written)
+    assert main([*argv, "--out", str(out)]) == 0
+    monkeypatch.setattr(module, name, write_then_interrupt)
+    assert main([*argv, "--out", str(out), "--overwrite"]) == 130
+    assert not out.exists() or not [p for p in out.iterdir() if p.name in outputs]
+
+
 def test_sigterm_stops_train_as_ctrl_c_does(tmp_path, tiny_train):
     """``kill`` (SIGTERM) of a training run ended it with exit code 143 and nothing said: it
     stops as Ctrl-C does, with one line saying so and how to resume, and the shell's 143."""

@@ -185,26 +185,27 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     else:
         print("steps to success: no episode is solved by every method, so none to pair")
     rows = summary_rows(summaries, episodes=args.episodes, seed=args.seed, error=args.error)
-    write_csv(files[0], rows)
-    write_csv(files[1], episodes)
-    write_json(
-        files[2],
-        nan_as_null(  # strict JSON: an interval of one episode is null, not NaN
-            {
-                "methods": rows,
-                "steps_where_all_solve": solved,
-                "episodes": args.episodes,
-                "seed": args.seed,
-                "weights": args.weights,  # of --run's learned policy: final or best validated
-            }
-        ),
-    )
-    written = "evaluation.csv, evaluation.json, episodes.csv"
-    if latency:
-        write_json(latency_path, {"policy": "learned", "batch": 1, "device": "cpu"} | latency)
-        written += ", latency.json"
-    elif latency_path.exists():
-        latency_path.unlink()  # --overwrite: an earlier evaluation's, not this one's
+    with removed_on_failure(made, [*files, latency_path]):  # all of its outputs, or none
+        write_csv(files[0], rows)
+        write_csv(files[1], episodes)
+        write_json(
+            files[2],
+            nan_as_null(  # strict JSON: an interval of one episode is null, not NaN
+                {
+                    "methods": rows,
+                    "steps_where_all_solve": solved,
+                    "episodes": args.episodes,
+                    "seed": args.seed,
+                    "weights": args.weights,  # of --run's learned policy: final or best validated
+                }
+            ),
+        )
+        written = "evaluation.csv, evaluation.json, episodes.csv"
+        if latency:
+            write_json(latency_path, {"policy": "learned", "batch": 1, "device": "cpu"} | latency)
+            written += ", latency.json"
+        elif latency_path.exists():
+            latency_path.unlink()  # --overwrite: an earlier evaluation's, not this one's
     print(f"wrote {out}/{written}")
 
 

@@ -251,49 +251,53 @@ def cmd_match(args: argparse.Namespace) -> None:
         print(
             f"privileged references (read the simulator's truth): {', '.join(sorted(references))}"
         )
-    csv_path, pareto_path, error_path, clip_path = files
-    write_csv(csv_path, csv_rows(results, args.matches, args.seed, config))
-    if args.baseline is None and args.overwrite and paired_path.exists():
-        paired_path.unlink()  # --overwrite (match.csv was there): not this run's pairs
-    if args.baseline is not None:
-        differences = paired_differences(results, args.baseline)
-        print(f"paired differences from {args.baseline}, match by match (mean [95% interval]):")
-        print(table_header(width))
-        for method, metrics in differences.items():
-            print(format_difference(method, metrics, width))
-        write_csv(paired_path, paired_rows(differences, args.baseline, args.matches, args.seed))
-        files.append(paired_path)
-    # the run by its folder's name, not by the path given: the figures are the same bytes
-    # whatever the current directory and wherever the run lies
-    run_name = None if args.run is None else args.run.resolve().name
-    title = (
-        f"{args.matches} matches x {play}, seed {args.seed},"
-        f" {args.action_type} head {args.step_deg:g} deg/tick{_world_text(args, config, run_name)}"
-    )
-    points = {
-        r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()} for r in results
-    }
-    plot_pareto(points, front, pareto_path, title, references)
-    plot_error_over_time(
-        {r.method: r.error_curve for r in results}, config.tick_seconds, error_path, title
-    )
-    clip = next(r for r in results if r.method == clip_method).clip
-    frames = clip_frames(
-        np.array(clip.pose),
-        np.array(clip.mean),
-        np.array(clip.cov),
-        np.array(clip.head),
-        np.array(clip.ball),
-        np.array(clip.ball_in_view),
-        config.field,
-        config.camera,
-        f"{clip_method}, match seed {args.seed}",
-        config.tick_seconds,
-        every=max(1, args.ticks // 150),
-        robots=np.array(clip.robots),
-        robot_radius=config.robots.radius,
-    )
-    save_gif(frames, clip_path, fps=10)
+    with removed_on_failure(made, files):  # all of its outputs, or none
+        csv_path, pareto_path, error_path, clip_path = files
+        write_csv(csv_path, csv_rows(results, args.matches, args.seed, config))
+        if args.baseline is None and args.overwrite and paired_path.exists():
+            paired_path.unlink()  # --overwrite (match.csv was there): not this run's pairs
+        if args.baseline is not None:
+            differences = paired_differences(results, args.baseline)
+            print(f"paired differences from {args.baseline}, match by match (mean [95% interval]):")
+            print(table_header(width))
+            for method, metrics in differences.items():
+                print(format_difference(method, metrics, width))
+            pairs = paired_rows(differences, args.baseline, args.matches, args.seed)
+            write_csv(paired_path, pairs)
+            files.append(paired_path)
+        # the run by its folder's name, not by the path given: the figures are the same bytes
+        # whatever the current directory and wherever the run lies
+        run_name = None if args.run is None else args.run.resolve().name
+        world = _world_text(args, config, run_name)
+        title = (
+            f"{args.matches} matches x {play}, seed {args.seed},"
+            f" {args.action_type} head {args.step_deg:g} deg/tick{world}"
+        )
+        points = {
+            r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()}
+            for r in results
+        }
+        plot_pareto(points, front, pareto_path, title, references)
+        plot_error_over_time(
+            {r.method: r.error_curve for r in results}, config.tick_seconds, error_path, title
+        )
+        clip = next(r for r in results if r.method == clip_method).clip
+        frames = clip_frames(
+            np.array(clip.pose),
+            np.array(clip.mean),
+            np.array(clip.cov),
+            np.array(clip.head),
+            np.array(clip.ball),
+            np.array(clip.ball_in_view),
+            config.field,
+            config.camera,
+            f"{clip_method}, match seed {args.seed}",
+            config.tick_seconds,
+            every=max(1, args.ticks // 150),
+            robots=np.array(clip.robots),
+            robot_radius=config.robots.radius,
+        )
+        save_gif(frames, clip_path, fps=10)
     print(f"wrote {', '.join(str(f) for f in files)}")
 
 

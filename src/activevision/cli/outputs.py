@@ -18,7 +18,7 @@ Rules (what a user of a research tool expects, and what keeps a run loadable):
 from __future__ import annotations
 
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -132,12 +132,16 @@ def make_output_folder(folder: Path, name: str | None = None) -> list[Path]:
 
 
 @contextmanager
-def removed_on_failure(made: list[Path]) -> Iterator[None]:
-    """Remove the folders ``made`` (:func:`make_output_folder`) again when the block fails:
-    a failed or interrupted command leaves no empty folder behind."""
+def removed_on_failure(made: list[Path], outputs: Sequence[Path] = ()) -> Iterator[None]:
+    """When the block fails, remove the command's ``outputs`` (read when it fails: a list may
+    grow) and the folders ``made`` (:func:`make_output_folder`) again: a failed or
+    interrupted command leaves neither an empty folder nor a part of its set of outputs
+    (a CSV without its figures). Under ``--overwrite`` the older set goes with it."""
     try:
         yield
     except BaseException:
+        for output in outputs:
+            output.unlink(missing_ok=True)
         _remove_empty(made)
         raise
 

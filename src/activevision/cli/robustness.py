@@ -149,15 +149,16 @@ def cmd_robustness(args: argparse.Namespace) -> None:
             progress=lambda row: print(format_row(row), flush=True),
         )
     print(worst_drops(scored))
-    write_csv(csv_path, [{"method": method, "error": args.error, **r} for r in scored])
-    # the run by its folder's name, not the path given: the same figure from any directory
-    named = f"{method} ({args.run.resolve().name})" if args.run else method
-    plot_robustness(
-        scored,
-        png_path,
-        title=f"{named}: {args.episodes} episode{'s' * (args.episodes != 1)} a row,"
-        f" seed {args.seed}, localisation error {args.error:g}",
-    )
+    with removed_on_failure(made, [csv_path, png_path]):  # both, or neither
+        write_csv(csv_path, [{"method": method, "error": args.error, **r} for r in scored])
+        # the run by its folder's name, not the path given: the same figure from any directory
+        named = f"{method} ({args.run.resolve().name})" if args.run else method
+        plot_robustness(
+            scored,
+            png_path,
+            title=f"{named}: {args.episodes} episode{'s' * (args.episodes != 1)} a row,"
+            f" seed {args.seed}, localisation error {args.error:g}",
+        )
     print(f"wrote {csv_path} and {png_path}")
 
 
