@@ -478,8 +478,7 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
         path = paths.get(key.strip()) or _env_alias(key.strip()) or ""
         unread = _unread_given(result, path)
         if unread:
-            named = repr(path) if key.strip() == path else f"{key.strip()!r} ({path})"
-            raise ValueError(f"{named} is never read by this run: {unread}")
+            raise ValueError(f"{_named(key.strip(), path)} is never read by this run: {unread}")
     return result
 
 
@@ -504,8 +503,12 @@ def _refuse_unread(
         )
     unread = _unread_by(algo, path, on_match)
     if unread:
-        named = repr(path) if key == path else f"{key!r} ({path})"
-        raise ValueError(f"{named} is never read by an algo={algo!r} run: {unread}")
+        raise ValueError(f"{_named(key, path)} is never read by an algo={algo!r} run: {unread}")
+
+
+def _named(key: str, path: str) -> str:
+    """A key as given, with its full path where it was a short name."""
+    return repr(path) if key == path else f"{key!r} ({path})"
 
 
 #: What DAgger's student takes of ``learner`` (``DaggerConfig``'s docstring); the rest of
