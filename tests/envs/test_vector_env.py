@@ -79,3 +79,23 @@ def test_environments_leave_torch_thread_count_alone():
     )
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["1", "1"]
+
+
+def test_refused_seed_list_leaves_every_generator_as_it_was():
+    """A seed list Gymnasium refuses part-way (-1 after 5) changes no generator: the next
+    unseeded reset draws what it would have drawn without the refused call."""
+    kept, refused = ActiveVisionVectorEnv(num_envs=2), ActiveVisionVectorEnv(num_envs=2)
+    kept.reset(seed=0)
+    refused.reset(seed=0)
+    with pytest.raises(gym.error.Error, match="-1"):
+        refused.reset(seed=[5, -1])
+    assert np.array_equal(kept.reset()[0], refused.reset()[0])
+    assert refused.np_random_seed == (0, 1)
+
+
+def test_seed_array_of_numpy_integers_seeds_like_a_list_of_ints():
+    from_array, from_list = ActiveVisionVectorEnv(num_envs=2), ActiveVisionVectorEnv(num_envs=2)
+    obs, _ = from_array.reset(seed=np.array([3, 8]))
+    assert np.array_equal(obs, from_list.reset(seed=[3, 8])[0])
+    assert from_array.np_random_seed == (3, 8)
+    assert all(type(s) is int for s in from_array.np_random_seed)

@@ -24,9 +24,10 @@ def reseed_generators(
     ``i`` with ``s + i``; a list gives each its own seed; None (for all, or in the list)
     keeps the generator, so that ``reset(seed=s)`` then ``reset()`` goes on drawing from the
     seeded streams. Only the sub-environments ``slots`` (default: all) are reset. Any other
-    ``seed`` (a float, a string, a dict) is a TypeError naming it; each seed of a list is
-    checked as Gymnasium checks a single env's. Returns each sub-environment's seed (None:
-    its generator was kept)."""
+    ``seed`` (a float, a string, a dict) is a TypeError naming it; each seed of a list (a
+    NumPy integer read as its int) is checked as Gymnasium checks a single env's, every one
+    before any generator changes, so a refused seed leaves every generator as it was.
+    Returns each sub-environment's seed (None: its generator was kept)."""
     n = len(rngs)
     seeds: list[int | None]
     if seed is None:
@@ -34,7 +35,8 @@ def reseed_generators(
     elif isinstance(seed, int | np.integer):
         seeds = [int(seed) + i for i in range(n)]
     elif isinstance(seed, list | tuple) or (isinstance(seed, np.ndarray) and seed.ndim == 1):
-        seeds = list(seed)
+        # a NumPy array's (or list's) np.int64 as its int: Gymnasium takes Python ints only
+        seeds = [int(s) if isinstance(s, np.integer) else s for s in seed]
         if len(seeds) != n:
             raise ValueError(f"seed: expected {n} seeds, got {len(seeds)}: {seed!r}")
     else:
@@ -42,7 +44,13 @@ def reseed_generators(
             f"seed: expects an int, a list of {n} ints (None keeps a sub-environment's"
             f" generator) or None, got {seed!r}"
         )
-    for i in range(n) if slots is None else slots:
-        if seeds[i] is not None:
-            rngs[i] = seeding.np_random(seeds[i])[0]
+    # every new generator first (Gymnasium refuses a negative seed, a float, ...), so that a
+    # refused seed of the list leaves the generators before it unchanged too
+    drawn = {
+        int(i): seeding.np_random(seeds[i])[0]
+        for i in (range(n) if slots is None else slots)
+        if seeds[i] is not None
+    }
+    for i, rng in drawn.items():
+        rngs[i] = rng
     return seeds
