@@ -1,5 +1,7 @@
 """The pose UKF: FilterPy reference, covariance health, heading wrap, information."""
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -259,3 +261,35 @@ def test_config_read_back_from_json_is_the_same_config():
         UKFConfig(odometry_base=0.1)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match=r"UKFConfig\.noise"):
         UKFConfig(noise={"0": {"range": 1.0}})  # type: ignore[dict-item]
+
+
+@pytest.mark.parametrize(
+    ("changes", "shown"),
+    [
+        ({"beta": float("nan")}, "UKFConfig.beta: expects float with finite values"),
+        ({"beta": "2"}, "UKFConfig.beta: expects float, got '2'"),
+        ({"alpha": True}, "UKFConfig.alpha: expects float, got True"),
+        ({"kappa": float("inf")}, "UKFConfig.kappa: expects float with finite values"),
+        ({"alpha": 1e200}, "alpha^2 (n + kappa) finite"),
+        ({"odometry_rotation_fraction": -0.1}, "odometry_rotation_fraction: must be >= 0.0"),
+        ({"initial_std": (True, 0.5, 0.3)}, "initial_std: expects 3 numbers"),
+        ({"initial_std": ("0.5", 0.5, 0.3)}, "initial_std: expects 3 numbers"),
+        ({"noise": [1, 2]}, "UKFConfig.noise: expects a mapping"),
+    ],
+)
+def test_config_refuses_bad_values_naming_them(changes, shown):
+    """Each was taken (a NaN or infinite parameter failing the first goal search as a
+    covariance "not positive definite", a string or True kept as given) or an
+    AttributeError / OverflowError of the check itself."""
+    with pytest.raises(ValueError, match=re.escape(shown)):
+        UKFConfig(**changes)
+
+
+def test_sensor_noise_refuses_non_finite_and_non_numbers():
+    from activevision.localisation.config import RangeBearingNoise
+
+    with pytest.raises(ValueError, match=r"range_base: expects float with finite"):
+        RangeBearingNoise(float("inf"), 0.1, 0.05)
+    with pytest.raises(ValueError, match=r"RangeBearingNoise\.bearing: expects float, got 'x'"):
+        RangeBearingNoise(0.05, 0.1, "x")  # type: ignore[arg-type]
+    assert RangeBearingNoise(1, 0, 1) == RangeBearingNoise(1.0, 0.0, 1.0)

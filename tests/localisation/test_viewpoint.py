@@ -1,6 +1,7 @@
 """Algorithm 1: the best viewpoint."""
 
 import math
+import re
 
 import numba
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 
 from activevision.localisation import (
     DEFAULT_UKF,
+    LocalisationConfig,
     ViewpointGrid,
     ViewpointStatus,
     best_viewpoint,
@@ -34,6 +36,29 @@ def test_default_grid_is_the_papers():
     assert np.allclose(grid.pan_values, -grid.pan_values[::-1])  # symmetric about 0
     with pytest.raises(ValueError):
         ViewpointGrid(n_pan=0)
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "shown"),
+    [
+        ("pan_min", "a", "ViewpointGrid.pan_min: expects float, got 'a'"),
+        ("tilt_max", float("nan"), "ViewpointGrid.tilt_max: expects float with finite values"),
+        ("n_pan", True, "ViewpointGrid.n_pan: expects int, got True"),
+        ("n_tilt", 2.0, "ViewpointGrid.n_tilt: expects int, got 2.0"),
+    ],
+)
+def test_grid_refuses_bad_values_naming_them(key, value, shown):
+    """A string angle was a TypeError of a comparison, NaN a refusal without its value, and
+    True a grid of one pan."""
+    with pytest.raises(ValueError, match=re.escape(shown)):
+        ViewpointGrid(**{key: value})
+
+
+@pytest.mark.parametrize(("key", "value"), [("grid", "x"), ("ukf", {"alpha": 1.0})])
+def test_localisation_config_refuses_parts_of_another_type(key, value):
+    """A grid or UKF of another type failed later, deep in the env's constructor or reset."""
+    with pytest.raises(ValueError, match=rf"LocalisationConfig\.{key}: expects"):
+        LocalisationConfig(**{key: value})
 
 
 def test_fast_path_equals_loop(landmarks, cam, random_start):

@@ -4,6 +4,7 @@ the belief the environment starts each episode with."""
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -12,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from activevision.geometry.field import LandmarkType
+from activevision.typecheck import check_dataclass_fields, in_range
 
 
 @dataclass(frozen=True)
@@ -25,6 +27,9 @@ class RangeBearingNoise:
     bearing: float  #: rad
 
     def __post_init__(self) -> None:
+        # types first (finite numbers): an infinite std passed the check below and failed
+        # the first goal search as a "not positive definite" covariance
+        check_dataclass_fields(self)
         if not (self.range_base > 0 and self.range_fraction >= 0 and self.bearing > 0):
             raise ValueError(f"RangeBearingNoise needs positive stds, got {self!r}")
 
@@ -89,8 +94,10 @@ class UKFConfig:
     #: sensor noise per landmark type (see the module comment for the reasoning)
     noise: Mapping[LandmarkType, RangeBearingNoise] = field(default_factory=_default_noise)
     odometry_base: tuple[float, float, float] = (0.005, 0.005, 0.01)  #: per-step std (m, m, rad)
-    odometry_translation_fraction: float = 0.1  #: xy std per metre travelled
-    odometry_rotation_fraction: float = 0.1  #: theta std per radian turned
+    #: xy std per metre travelled
+    odometry_translation_fraction: float = field(default=0.1, metadata=in_range(0.0))
+    #: theta std per radian turned
+    odometry_rotation_fraction: float = field(default=0.1, metadata=in_range(0.0))
     #: std of the belief at an episode start (m, m, rad). The paper does not give it; half a
     #: metre and 17 deg is a robot that has walked a while since its last good fix: uncertain
     #: enough that the choice of landmarks matters, small enough that the sigma points stay
@@ -100,6 +107,11 @@ class UKFConfig:
     def __post_init__(self) -> None:
         # as read back from JSON (a run's config.json): type ids as keys, noise as objects,
         # lists for tuples; stored in one canonical form so that equal configs compare equal
+        if not isinstance(self.noise, Mapping):
+            raise ValueError(
+                "UKFConfig.noise: expects a mapping of landmark types to RangeBearingNoise,"
+                f" got {self.noise!r}"
+            )
         try:
             noise = {
                 LandmarkType(int(kind)): value
@@ -111,19 +123,28 @@ class UKFConfig:
             raise ValueError(f"UKFConfig.noise: {error}") from None
         object.__setattr__(self, "noise", NoiseTable(noise))
         for name in ("odometry_base", "initial_std"):
-            try:
-                values = tuple(float(v) for v in getattr(self, name))
-            except (TypeError, ValueError):
-                values = ()
-            if len(values) != 3:
+            given = getattr(self, name)
+            values = tuple(given) if isinstance(given, tuple | list | np.ndarray) else ()
+            # real numbers only: float() took True and "0.5" too
+            if len(values) != 3 or not all(_is_real(v) for v in values):
                 raise ValueError(
                     f"UKFConfig.{name}: expects 3 numbers (m, m, rad), got {getattr(self, name)!r}"
                 )
-            object.__setattr__(self, name, values)
+            object.__setattr__(self, name, tuple(float(v) for v in values))
+        # alpha, beta, kappa and the odometry fractions: finite numbers (a string, True or
+        # NaN passed, to fail the first goal search as a covariance "not positive definite")
+        check_dataclass_fields(self)
         if not self.alpha > 0:
             raise ValueError(f"UKFConfig.alpha must be positive, got {self.alpha!r}")
-        if not self.lambda_ + 3 > 0:
-            raise ValueError("UKFConfig needs alpha^2 (n + kappa) > 0 for n = 3")
+        try:
+            spread = self.lambda_ + 3
+        except OverflowError:  # alpha**2 past the largest float
+            spread = math.inf
+        if not 0 < spread < math.inf:
+            raise ValueError(
+                "UKFConfig needs alpha^2 (n + kappa) finite and > 0 for n = 3, got"
+                f" alpha={self.alpha!r}, kappa={self.kappa!r}"
+            )
         missing = [t.name for t in LandmarkType if t not in self.noise]
         if missing:
             raise ValueError(f"UKFConfig.noise lacks landmark types {missing}")
@@ -161,6 +182,11 @@ class UKFConfig:
             np.array([r.range_fraction for r in rows], dtype=np.float64),
             np.array([r.bearing for r in rows], dtype=np.float64),
         )
+
+
+def _is_real(value: object) -> bool:
+    """Whether ``value`` is a real number (NumPy's included), not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
 
 
 def _ukf_config(values: dict[str, Any]) -> UKFConfig:

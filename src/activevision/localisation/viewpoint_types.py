@@ -12,6 +12,7 @@ import numpy as np
 
 from activevision.geometry.camera import CameraConfig
 from activevision.localisation.config import DEFAULT_UKF, UKFConfig
+from activevision.typecheck import check_dataclass_fields
 
 
 @dataclass(frozen=True)
@@ -33,12 +34,19 @@ class ViewpointGrid:
     n_tilt: int = 4  #: paper
 
     def __post_init__(self) -> None:
+        # types first (finite angles, integer counts): a string angle was a TypeError of the
+        # comparison below, a NaN one refused without its value, True taken for 1
+        check_dataclass_fields(self)
         for name in ("n_pan", "n_tilt"):
             value = getattr(self, name)
-            if not isinstance(value, int | np.integer) or value < 1:
+            if value < 1:
                 raise ValueError(f"ViewpointGrid.{name} must be a positive integer, got {value!r}")
         if not (self.pan_min <= self.pan_max and self.tilt_min <= self.tilt_max):
-            raise ValueError("ViewpointGrid needs pan_min <= pan_max and tilt_min <= tilt_max")
+            raise ValueError(
+                "ViewpointGrid needs pan_min <= pan_max and tilt_min <= tilt_max, got pan"
+                f" ({self.pan_min!r}, {self.pan_max!r}),"
+                f" tilt ({self.tilt_min!r}, {self.tilt_max!r})"
+            )
 
     def __len__(self) -> int:
         return self.n_pan * self.n_tilt
@@ -199,6 +207,10 @@ class LocalisationConfig:
 
     grid: ViewpointGrid = DEFAULT_GRID  #: 10 x 4 candidates (paper)
     ukf: UKFConfig = DEFAULT_UKF  #: sensor model and start belief
+
+    def __post_init__(self) -> None:
+        # a grid or UKF of another type failed deep in the env's constructor or first reset
+        check_dataclass_fields(self)
 
     @classmethod
     def for_camera(cls, camera: CameraConfig, ukf: UKFConfig = DEFAULT_UKF) -> LocalisationConfig:
