@@ -15,6 +15,7 @@ import torch
 
 from activevision.runtime import HeadCommand, HeadController, PolicyFileError
 from activevision.runtime import pretrained as pretrained_module
+from activevision.runtime.controller import MAX_THREADS
 
 _D = 3 * math.sqrt(2) / 2
 #: The exported 9-action table in degrees (stay, 4 axis moves, 4 diagonals).
@@ -146,6 +147,11 @@ def test_bad_arguments(policy):
         controller.act(frame, 0.0, "0.3")
     with pytest.raises(ValueError, match="num_threads"):
         HeadController(policy.model_path, num_threads=0)
+    # 100,000 hung starting threads; 2**40 was a PolicyFileError calling the model invalid
+    for threads in (MAX_THREADS + 1, 2**40, 2.0):
+        with pytest.raises(ValueError, match=rf"num_threads must be .* up to {MAX_THREADS}"):
+            HeadController(policy.model_path, num_threads=threads)  # type: ignore[arg-type]
+    assert HeadController(policy.model_path, num_threads=np.int64(1)).act(frame, 0.0, 0.3)
     with pytest.raises(ValueError, match="color_order"):
         HeadController(policy.model_path, color_order="rgba")
 

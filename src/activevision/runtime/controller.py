@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import numbers
 import os
 import sys
 import warnings
@@ -62,15 +63,34 @@ def robot_session_options(num_threads: int = 1) -> Any:  # onnxruntime.SessionOp
     """
     import onnxruntime as ort
 
-    if num_threads < 1:
-        raise ValueError(f"num_threads must be >= 1, got {num_threads}")
+    threads = _thread_count(num_threads)
     options = ort.SessionOptions()
-    options.intra_op_num_threads = int(num_threads)
+    options.intra_op_num_threads = threads
     options.inter_op_num_threads = 1
     options.add_session_config_entry("session.intra_op.allow_spinning", "0")
     options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
     options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
     return options
+
+
+#: The most onnxruntime threads a controller may ask for: more than any CPU has cores (as
+#: training's ``MAX_THREADS``). 100,000 hung the constructor starting threads, and 2**40 was
+#: a PolicyFileError calling the model invalid.
+MAX_THREADS = 1024
+
+
+def _thread_count(num_threads: object) -> int:
+    """``num_threads`` as an int in ``1..MAX_THREADS`` (NumPy integers too); a bool, a float,
+    a string or a number out of range is a ValueError naming it."""
+    if (
+        isinstance(num_threads, bool | np.bool_)
+        or not isinstance(num_threads, numbers.Integral)
+        or not 1 <= int(num_threads) <= MAX_THREADS
+    ):
+        raise ValueError(
+            f"num_threads must be a positive integer up to {MAX_THREADS}, got {num_threads!r}"
+        )
+    return int(num_threads)
 
 
 class HeadController:
@@ -86,8 +106,8 @@ class HeadController:
     Args:
         model_path: the exported ``policy.onnx`` (or the folder holding it); its metadata
             is read from the ``.json`` file of the same name beside it.
-        num_threads: onnxruntime intra-op threads (1 suits a small robot CPU; see
-            :func:`robot_session_options` for all session settings).
+        num_threads: onnxruntime intra-op threads, 1 to :data:`MAX_THREADS` (1 suits a
+            small robot CPU; see :func:`robot_session_options` for all session settings).
         color_order: channel order of 3-channel frames, ``"rgb"`` or ``"bgr"`` (OpenCV).
         verify_checksum: check the model file against the SHA-256 in the metadata, so a
             model and a metadata file from different exports are caught at load time.
@@ -120,8 +140,7 @@ class HeadController:
     ) -> None:
         luma_weights(color_order)  # validates color_order
         self.robot_camera = None if camera is None else CameraModel.of(camera)
-        if isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 1:
-            raise ValueError(f"num_threads must be a positive integer, got {num_threads!r}")
+        num_threads = _thread_count(num_threads)
         self.color_order: ColorOrder = color_order
         self.model_path = Path(model_path)
         if self.model_path.is_dir():  # a run or export folder: its policy.onnx
