@@ -252,3 +252,42 @@ def test_indefinite_belief_raises(landmarks, cam):
         best_viewpoint(np.zeros(3), np.diag([0.1, -0.1, 0.1]), [1.0, 0.0], landmarks, cam)
     with pytest.raises(ValueError, match="symmetric"):
         best_viewpoint(np.zeros(3), [[1, 0.5, 0], [0, 1, 0], [0, 0, 1]], [1.0, 0.0], landmarks, cam)
+
+
+@pytest.mark.parametrize(
+    ("mean", "ball", "shown"),
+    [
+        ([math.nan, 0.0, 0.0], [1.0, 0.0], r"belief means must be finite, got \[nan, 0\.0, 0\.0\]"),
+        ([0.0, 0.0, math.nan], [1.0, 0.0], r"belief means must be finite"),
+        ([0.0, 0.0, 0.0], [math.inf, 0.0], r"balls must be finite, got \[inf, 0\.0\]"),
+    ],
+)
+def test_search_refuses_non_finite_poses_and_balls(landmarks, cam, mean, ball, shown):
+    """A NaN pose or ball was read as "no view shows the ball" (a robot then told its policy
+    there was no proposal), a NaN heading as a covariance not positive definite."""
+    with pytest.raises(ValueError, match=shown):
+        best_viewpoint(mean, COV0, ball, landmarks, cam)
+
+
+def test_search_names_the_argument_of_a_bad_shape_or_type(landmarks, cam):
+    with pytest.raises(ValueError, match=r"belief_mean must be 3 numbers, shape \(3,\)"):
+        best_viewpoint([0.0, 0.0], COV0, [1.0, 0.0], landmarks, cam)
+    with pytest.raises(ValueError, match=r"belief_cov must be 9 numbers"):
+        best_viewpoint(np.zeros(3), np.eye(2), [1.0, 0.0], landmarks, cam)
+    with pytest.raises(ValueError, match=r"ball_xy must be numbers, got 'x'"):
+        best_viewpoint(np.zeros(3), COV0, "x", landmarks, cam)
+    with pytest.raises(ValueError, match=r"ball_radius must be a number >= 0"):
+        best_viewpoint(np.zeros(3), COV0, [1.0, 0.0], landmarks, cam, ball_radius=-0.07)
+    with pytest.raises(ValueError, match=r"grid expects ViewpointGrid, got 'x'"):
+        best_viewpoint(np.zeros(3), COV0, [1.0, 0.0], landmarks, cam, grid="x")  # type: ignore[arg-type]
+    # (N, 2) poses: the kernel read each heading past its row, a silently wrong search
+    with pytest.raises(ValueError, match=r"poses, shape \(3,\) or \(N, 3\), got shape \(2, 2\)"):
+        best_viewpoints(np.zeros((2, 2)), COV0, [1.0, 0.0], landmarks, cam)
+    with pytest.raises(ValueError, match=r"balls must have shape \(2, 2\) or \(2,\)"):
+        best_viewpoints(np.zeros((2, 3)), COV0, np.ones((3, 2)), landmarks, cam)
+
+
+def test_search_of_no_beliefs_is_an_empty_batch(landmarks, cam):
+    """Zero starts was numpy's "zero-size array to reduction operation maximum"."""
+    batch = best_viewpoints(np.zeros((0, 3)), COV0, [1.0, 0.0], landmarks, cam)
+    assert batch.ok.shape == (0,) and batch.entropies.shape == (0, len(DEFAULT_GRID))

@@ -20,6 +20,7 @@ compiled with numba (:mod:`activevision.localisation.kernels`) and agree with it
 
 from __future__ import annotations
 
+import math
 from typing import Any, cast
 
 import numpy as np
@@ -133,14 +134,34 @@ def _search(
     hidden: ArrayLike | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Validate and run the compiled search: ``(entropies, ball_visible, visible, post)``."""
-    means = np.ascontiguousarray(np.atleast_2d(means), dtype=np.float64)
+    _check_setting("cam", cam, CameraConfig)
+    _check_setting("grid", grid, ViewpointGrid)
+    _check_setting("ukf", ukf, UKFConfig)
+    radius = _float_array("ball_radius", ball_radius)
+    if radius.shape != () or not (np.isfinite(radius) and radius >= 0):
+        raise ValueError(
+            f"best viewpoint search: ball_radius must be a number >= 0 (m), got {ball_radius!r}"
+        )
+    means = np.ascontiguousarray(np.atleast_2d(_float_array("means", means)))
+    if means.ndim != 2 or means.shape[1] != 3:
+        # a kernel reads three numbers a pose: (N, 2) poses read past each row
+        raise ValueError(
+            "best viewpoint search: belief means must be (x, y, theta) poses, shape (3,) or"
+            f" (N, 3), got shape {means.shape}"
+        )
     n = len(means)
     hidden_arr = None
     if hidden is not None:
-        hidden_arr = np.ascontiguousarray(np.broadcast_to(hidden, (n, len(landmarks))), dtype=bool)
-    covs = np.ascontiguousarray(np.broadcast_to(covs, (n, 3, 3)), dtype=np.float64)
-    balls = np.ascontiguousarray(np.broadcast_to(balls, (n, 2)), dtype=np.float64)
-    if np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
+        hidden_arr = np.ascontiguousarray(_broadcast("hidden", hidden, (n, len(landmarks)), bool))
+    covs = np.ascontiguousarray(_broadcast("covs", covs, (n, 3, 3)))
+    balls = np.ascontiguousarray(_broadcast("balls", balls, (n, 2)))
+    for name, values in (("belief means", means), ("balls", balls)):
+        if not np.isfinite(values).all():
+            # a NaN x or ball read as "no view shows the ball", a NaN heading as a covariance
+            # not positive definite
+            bad = values[~np.isfinite(values).all(axis=1)][0]
+            raise ValueError(f"best viewpoint search: {name} must be finite, got {bad.tolist()}")
+    if n and np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
         raise ValueError("best viewpoint search: belief covariances must be symmetric")
     args = search_args(
         means, covs, balls, landmarks, cam, grid, ukf, ball_radius, ball_views_only, hidden_arr
@@ -158,6 +179,39 @@ def _search(
             f"is not positive definite; prior covariance:\n{covs[s]}"
         )
     return H, ball_vis, visible, post
+
+
+def _check_setting(name: str, value: object, kind: type) -> None:
+    """ValueError unless ``value`` (a search's ``cam``, ``grid`` or ``ukf``) is a ``kind``."""
+    if not isinstance(value, kind):
+        raise ValueError(f"best viewpoint search: {name} expects {kind.__name__}, got {value!r}")
+
+
+def _float_array(name: str, value: object, dtype: type = np.float64) -> np.ndarray:
+    """``value`` as an array of ``dtype``; what NumPy cannot convert (a string, a ragged
+    list, None) is a ValueError naming ``name``."""
+    try:
+        array = np.asarray(value)
+        if array.dtype.kind not in "biuf":  # strings, None, objects: float() would guess
+            raise TypeError
+        return array.astype(dtype, copy=False)
+    except (TypeError, ValueError):
+        raise ValueError(f"best viewpoint search: {name} must be numbers, got {value!r}") from None
+
+
+def _broadcast(
+    name: str, value: object, shape: tuple[int, ...], dtype: type = np.float64
+) -> np.ndarray:
+    """``value`` broadcast to ``shape`` (one shared row, or one a start); ValueError naming
+    ``name`` and both shapes where it does not fit."""
+    array = _float_array(name, value, dtype)
+    try:
+        return np.broadcast_to(array, shape)
+    except ValueError:
+        raise ValueError(
+            f"best viewpoint search: {name} must have shape {shape} or {shape[1:]} (shared),"
+            f" got shape {array.shape}"
+        ) from None
 
 
 def best_viewpoints(
@@ -231,9 +285,9 @@ def best_viewpoint(
     """Algorithm 1: the goal viewpoint for the belief ``N(belief_mean, belief_cov)`` and the
     ball at ``ball_xy`` (compiled; :func:`best_viewpoint_loop` is the reference)."""
     H, ball_vis, visible, post = _search(
-        np.asarray(belief_mean, dtype=np.float64).reshape(1, 3),
-        np.asarray(belief_cov, dtype=np.float64).reshape(1, 3, 3),
-        np.asarray(ball_xy, dtype=np.float64).reshape(1, 2),
+        _one("belief_mean", belief_mean, (3,)),
+        _one("belief_cov", belief_cov, (3, 3)),
+        _one("ball_xy", ball_xy, (2,)),
         landmarks,
         cam,
         grid,
@@ -241,6 +295,19 @@ def best_viewpoint(
         ball_radius,
     )
     return search_result(H[0], ball_vis[0], visible[0], post[0], grid)
+
+
+def _one(name: str, value: ArrayLike, shape: tuple[int, ...]) -> np.ndarray:
+    """:func:`best_viewpoint`'s ``value`` as a batch of one, shape ``(1, *shape)``: as many
+    numbers as ``shape`` holds, or a ValueError naming ``name`` (not numpy's "cannot
+    reshape")."""
+    array = _float_array(name, value)
+    if array.size != math.prod(shape):
+        raise ValueError(
+            f"best_viewpoint: {name} must be {math.prod(shape)} numbers, shape {shape}, got"
+            f" shape {array.shape}"
+        )
+    return array.reshape(1, *shape)
 
 
 def best_viewpoint_loop(
