@@ -471,3 +471,19 @@ def test_ddqn_minibatch_fits_the_replay_buffer():
     with pytest.raises(ValueError, match=r"TrainConfig\.learner\.batch_size: .*at most"):
         TrainConfig().replace(**{"replay.buffer_size": 10})
     assert TrainConfig().replace(**{"replay.buffer_size": 32}).replay.buffer_size == 32
+
+
+@pytest.mark.parametrize("env_id", ["activevision:", "  "])
+def test_an_env_id_that_names_no_env_is_refused(env_id):
+    """ "activevision:" passed the empty check before its prefix was dropped, leaving ""."""
+    with pytest.raises(
+        ValueError, match=rf"TrainConfig\.env_id: must not be empty, got {env_id!r}"
+    ):
+        TrainConfig(env_id=env_id)
+
+
+@pytest.mark.parametrize("values", [None, 5, [["seed", 1]]])
+def test_from_dict_of_a_non_object_names_it(values):
+    """A config.json holding null or a list was a TypeError of the legacy-key check."""
+    with pytest.raises(ValueError, match=r"expects an object of TrainConfig fields"):
+        TrainConfig.from_dict(values)  # type: ignore[arg-type]

@@ -274,11 +274,12 @@ class TrainConfig:
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
-        if not self.env_id:
-            raise ValueError("TrainConfig.env_id: must not be empty")
         # Gymnasium's "module:id" names the same env; this package registers its envs on
         # import, so the bare id is the one every check below and later compares
-        object.__setattr__(self, "env_id", self.env_id.removeprefix("activevision:"))
+        given = self.env_id
+        object.__setattr__(self, "env_id", given.removeprefix("activevision:"))
+        if not self.env_id.strip():  # "activevision:" or blanks name no env either
+            raise ValueError(f"TrainConfig.env_id: must not be empty, got {given!r}")
         if self.algo == "dagger" and self.env_id not in ("ActiveVision-v0", MATCH_ENV_ID):
             raise ValueError(
                 f"TrainConfig.algo: 'dagger' trains on ActiveVision-v0 (the oracle teaches) or"
@@ -392,7 +393,12 @@ class TrainConfig:
     def from_dict(cls, values: Mapping[str, Any]) -> TrainConfig:
         """Build from :meth:`to_dict`'s output, or from the flat format of activevision 0.1;
         unknown keys or bad values raise ValueError naming the key."""
-        if any(key in _LEGACY_KEYS or key == "env_kwargs" for key in values):
+        # not a mapping (a config.json holding a list or null): config_from_dict's message,
+        # not a TypeError of the legacy check
+        legacy = isinstance(values, Mapping) and any(
+            key in _LEGACY_KEYS or key == "env_kwargs" for key in values
+        )
+        if legacy:
             values = _from_legacy(values)
         return config_from_dict(cls, values)
 
