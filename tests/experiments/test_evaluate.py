@@ -245,3 +245,55 @@ def test_durations_and_head_travel_stay_within_what_they_can_be():
     assert (never.low, never.high) == pytest.approx((20 - 20 * w, 20.0))
     # without the time limit durations are only at least 0: a value all equal stays itself
     assert summarise(episodes)["success_duration"] == Interval(20.0, 20.0, 20.0)
+
+
+def test_intervals_refuse_counts_and_values_they_cannot_hold():
+    # 7 of 5 was a "math domain error", 1 of -1 a proportion of -1, a NaN count [0, 1]
+    for successes, n in ((7, 5), (-1, 3), (1, -1), (math.nan, 3)):
+        with pytest.raises(ValueError, match=r"wilson_interval: (successes|n) expects"):
+            wilson_interval(successes, n)
+    # values of 2 within (0, 1) read 2.0 [0.88, 1.44]: an interval without its mean
+    with pytest.raises(ValueError, match=r"outside the bounds \(0, 1\): 2.0"):
+        mean_interval([2.0, 2.0, 2.0], bounds=(0, 1))
+    with pytest.raises(ValueError, match="low <= high"):
+        mean_interval([0.2, 0.5], bounds=(1.0, 0.0))
+    # a table was one sample of its 6 cells with n its 3 rows
+    with pytest.raises(ValueError, match=r"a 1-D sequence, got shape \(3, 2\)"):
+        mean_interval([[1, 2], [3, 4], [5, 6]])
+    # NaN is no value, not one outside: it still makes a NaN interval
+    assert math.isnan(mean_interval([0.2, math.nan], bounds=(0, 1)).mean)
+
+
+def test_summarise_names_the_metric_of_an_episode_value_it_cannot_count():
+    from activevision.experiments.evaluate import METRICS, summarise
+
+    episodes = [dict.fromkeys(METRICS, 0.0) for _ in range(3)]
+    # a NaN success was "cannot convert float NaN to integer"; 2 counted two successes
+    for odd in (math.nan, 2, "True"):
+        with pytest.raises(ValueError, match="success: expects True or False per episode"):
+            summarise([*episodes, {**episodes[0], "success": odd}])
+    with pytest.raises(ValueError, match=r"success_duration: .*outside the bounds \(0.0, 20.0\)"):
+        summarise([*episodes, {**episodes[0], "success_duration": 25}], time_limit=20)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"episodes": -3}, "episodes: expects a positive integer, got -3"),
+        ({"episodes": 0}, "episodes: expects a positive integer, got 0"),
+        ({"episodes": 2.0}, "episodes: expects a positive integer, got 2.0"),
+        ({"episodes": 1, "seed": -1}, "seed: expects an integer >= 0, got -1"),
+        ({"episodes": 1, "seed": 1.5}, "seed: expects an integer >= 0, got 1.5"),
+    ],
+)
+def test_evaluate_policy_refuses_a_count_or_seed_it_cannot_play(kwargs, message):
+    # -3 episodes played none and returned NaN intervals; seed -1 was Gymnasium's refusal
+    # of seed -1000003
+    with pytest.raises(ValueError, match=message):
+        evaluate_policy(RandomPolicy(), **kwargs)
+
+
+def test_evaluate_policy_takes_a_numpy_seed_as_its_int():
+    records, _, _ = evaluate_policy(Recorder(), episodes=2, seed=np.int64(3))
+    assert [r["seed"] for r in records] == [episode_seed(3, 0), episode_seed(3, 1)]
+    assert all(type(r["seed"]) is int for r in records)

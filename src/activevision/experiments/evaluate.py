@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -11,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
+from activevision.envs.config import check_count
 from activevision.envs.seeding import episode_seed
 from activevision.experiments.policies import HeadPolicy, HeadTarget
 
@@ -50,7 +52,13 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> Interval:
     """Wilson score interval of a binomial proportion (good also near 0 and 1). It holds the
     proportion itself: at 0 or 1 of ``n`` the end that is exactly 0 or 1 in theory comes out
     a rounding error past the proportion (0/3: low 5.6e-17; 10/10: high 1 - 1.1e-16), which
-    broke every whisker drawn from the pair (matplotlib refuses negative error bars)."""
+    broke every whisker drawn from the pair (matplotlib refuses negative error bars).
+    ValueError unless ``n >= 0`` and ``0 <= successes <= n`` (7 of 5 was a "math domain
+    error", 1 of -1 a proportion of -1)."""
+    if not n >= 0:
+        raise ValueError(f"wilson_interval: n expects a count (>= 0), got {n!r}")
+    if not 0 <= successes <= n:
+        raise ValueError(f"wilson_interval: successes expects 0 to n ({n}), got {successes!r}")
     if n == 0:
         return Interval(math.nan, math.nan, math.nan)
     p = successes / n
@@ -74,8 +82,23 @@ def mean_interval(
     ``c``, so the share of all values that do is below the Wilson upper end ``w`` of 0 out
     of n, and each lies within the bounds: ``[c - w (c - lo), c + w (hi - c)]``. At an end
     of the bounds this is the Wilson interval of n out of n (or 0 out of n) scaled to them.
-    Without bounds nothing limits the spread, and the interval stays the value itself."""
+    Without bounds nothing limits the spread, and the interval stays the value itself.
+
+    ValueError if ``values`` is not one sequence of numbers (a table of them was read as
+    one sample of every cell, n its rows), if ``bounds`` is not ``(low, high)`` with low <=
+    high, or a value lies outside them (the cut interval left the mean outside it: values
+    of 2 within (0, 1) read 2.0 [0.88, 1.44])."""
     x = np.asarray(values, float)
+    if x.ndim != 1:
+        raise ValueError(f"mean_interval: values expects a 1-D sequence, got shape {x.shape}")
+    if bounds is not None:
+        if not bounds[0] <= bounds[1]:
+            raise ValueError(f"mean_interval: bounds expects (low, high), low <= high: {bounds}")
+        outside = x[(x < bounds[0]) | (x > bounds[1])]
+        if len(outside):
+            raise ValueError(
+                f"mean_interval: a value lies outside the bounds {bounds}: {float(outside[0])}"
+            )
     if len(x) == 0:
         return Interval(math.nan, math.nan, math.nan)
     if len(x) == 1:
@@ -106,9 +129,15 @@ def summarise(episodes: Sequence[dict], time_limit: int | None = None) -> dict[s
     for name, kind in METRICS.items():
         values = [e[name] for e in episodes]
         if kind == "proportion":
+            odd = [v for v in values if v not in (0, 1)]
+            if odd:  # a NaN was "cannot convert float NaN to integer", a 2 two successes
+                raise ValueError(f"{name}: expects True or False per episode, got {odd[0]!r}")
             out[name] = wilson_interval(int(sum(values)), len(values))
         else:
-            out[name] = mean_interval(values, bounds=bounds.get(name))
+            try:
+                out[name] = mean_interval(values, bounds=bounds.get(name))
+            except ValueError as error:  # which metric
+                raise ValueError(f"{name}: {error}") from None
     return out
 
 
@@ -202,7 +231,15 @@ def evaluate_policy(
     Returns:
         ``(records, summary, latencies_s)``: one dict per episode, the :func:`summarise`
         intervals, and per-decision latencies (empty unless ``measure_latency``).
+
+    ValueError unless ``episodes`` is a positive integer (-3 played none and returned NaN
+    intervals) and ``seed`` an integer >= 0 (-1 was Gymnasium's refusal of episode 0's
+    seed, -1000003).
     """
+    episodes = check_count("episodes", episodes)
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise ValueError(f"seed: expects an integer >= 0, got {seed!r}")
+    seed = int(seed)  # a NumPy integer's episode seeds would overflow, and Gymnasium wants ints
     env = env or ActiveVisionEnv(config or EnvConfig())
     latencies: list[float] | None = [] if measure_latency else None
     records = [
