@@ -37,3 +37,17 @@ def test_a_write_that_cannot_start_names_the_file_asked_for(tmp_path):
         write_text(target, "x")
     assert f"cannot write {target}" in str(caught.value)
     assert ".tmp" not in str(caught.value)
+
+
+def test_a_write_over_a_folder_names_it_before_the_work_and_leaves_no_temporary(tmp_path):
+    # it was refused by the rename at the end: "Is a directory: '.out.x1y2.tmp' -> 'out'"
+    from activevision.io import atomic_path
+
+    (tmp_path / "out").mkdir()
+    entered = []
+    with pytest.raises(IsADirectoryError) as caught, atomic_path(tmp_path / "out"):
+        entered.append(True)
+    assert str(caught.value).endswith(f"cannot write {tmp_path / 'out'}: it is a directory")
+    assert not entered and os.listdir(tmp_path) == ["out"]
+    with pytest.raises(IsADirectoryError, match="it is a directory"):
+        write_text(tmp_path / "out", "x")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import errno
 import json
 import math
 import os
@@ -29,6 +30,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` to write; when the block succeeds it is
     flushed and renamed over ``path``, when it fails it is removed."""
     path = Path(path)
+    if path.is_dir():  # refused before the block's work; the rename named the temporary
+        raise IsADirectoryError(errno.EISDIR, f"cannot write {path}: it is a directory")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
