@@ -51,3 +51,20 @@ def test_a_write_over_a_folder_names_it_before_the_work_and_leaves_no_temporary(
     assert not entered and os.listdir(tmp_path) == ["out"]
     with pytest.raises(IsADirectoryError, match="it is a directory"):
         write_text(tmp_path / "out", "x")
+
+
+def test_read_csv_names_the_line_of_a_row_cut_short_or_run_on_and_a_file_not_text(tmp_path):
+    from activevision.io import read_csv
+
+    path = tmp_path / "a.csv"
+    path.write_text("x,y\n1,2\n3\n")
+    with pytest.raises(ValueError, match=r"a\.csv line 3 has fewer cells than its header"):
+        read_csv(path)
+    path.write_text("x,y\n1,2,3\n")
+    with pytest.raises(ValueError, match=r"a\.csv line 2 has more cells than its header"):
+        read_csv(path)
+    path.write_bytes(b"\xff\xfex,y\n")
+    with pytest.raises(ValueError, match=r"a\.csv is damaged .*UnicodeDecodeError"):
+        read_csv(path)
+    path.write_text("x,y\n1,2\n")
+    assert read_csv(path) == [{"x": "1", "y": "2"}]

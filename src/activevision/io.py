@@ -85,6 +85,27 @@ def write_csv(path: str | os.PathLike, rows: Sequence[dict]) -> None:
             writer.writerows(rows)
 
 
+def read_csv(path: str | os.PathLike) -> list[dict[str, str]]:
+    """A CSV file's rows as dicts keyed by its header; ValueError naming the file and line
+    where a row has more or fewer cells than the header (a file cut mid-row: DictReader
+    fills the missing cells with None, which were read on as values) or the file is not
+    CSV text."""
+    try:
+        with Path(path).open(encoding="utf-8", newline="") as f:
+            rows = list(csv.DictReader(f))
+    except (UnicodeDecodeError, csv.Error) as error:  # binary, a NUL, a field past the limit
+        raise ValueError(
+            f"{path} is damaged or not a file activevision wrote ({type(error).__name__}: {error})"
+        ) from None
+    for line, row in enumerate(rows, start=2):  # the header is line 1
+        if None in row or None in row.values():  # DictReader's marks of a row cut or run on
+            raise ValueError(
+                f"{path} line {line} has {'more' if None in row else 'fewer'} cells than its"
+                " header: it is damaged or not a file activevision wrote"
+            )
+    return rows
+
+
 def read_json(path: str | os.PathLike) -> Any:
     """A JSON file's value; ValueError naming the file if it is not valid JSON."""
     try:

@@ -297,3 +297,46 @@ def test_evaluate_policy_takes_a_numpy_seed_as_its_int():
     records, _, _ = evaluate_policy(Recorder(), episodes=2, seed=np.int64(3))
     assert [r["seed"] for r in records] == [episode_seed(3, 0), episode_seed(3, 1)]
     assert all(type(r["seed"]) is int for r in records)
+
+
+def test_compare_refuses_to_resume_from_a_row_cut_short(tmp_path):
+    # the cut row's method was taken as played and written back with its numbers empty,
+    # which plot_compare then failed on ("float() argument must be ... not 'NoneType'")
+    methods = {"oracle": lambda e: OraclePolicy(), "random": lambda e: RandomPolicy()}
+    compare(tmp_path, methods, errors=[0.0], episodes=3, progress=False)
+    path = tmp_path / "compare.csv"
+    lines = path.read_text().splitlines()
+    cut = lines[2][: lines[2].index(",random,") + len(",random,") + 3]
+    path.write_text("\n".join([*lines[:2], cut]) + "\n")
+    with pytest.raises(ValueError, match=r"compare\.csv line 3 has fewer cells than its header"):
+        compare(tmp_path, methods, errors=[0.0], episodes=3, progress=False)
+    assert path.read_text().splitlines()[2] == cut  # left as it was
+
+
+def test_plot_compare_names_a_csv_it_cannot_draw(tmp_path):
+    from activevision.io import write_csv
+
+    def row(method, error, value):
+        cells = {"method": method, "error": error}
+        for m in ("success_rate", "success", "regret_within"):
+            cells |= {m: value, f"{m}_low": value, f"{m}_high": value}
+        return cells
+
+    path, png = tmp_path / "compare.csv", tmp_path / "compare.png"
+    write_csv(path, [row("a", 0.0, 0.5), row("a", 1.0, 0.4)])
+    # a header alone drew three blank panels
+    path.write_text(path.read_text().splitlines()[0] + "\n")
+    with pytest.raises(ValueError, match=r"compare\.csv holds no levels to draw"):
+        plot_compare(path, png)
+    # none of the metrics asked: matplotlib's "Number of columns must be a positive integer"
+    write_csv(path, [row("a", 0.0, 0.5), row("a", 1.0, 0.4)])
+    with pytest.raises(ValueError, match="has none of the columns nope, other"):
+        plot_compare(path, png, metrics=["nope", "other"])
+    # one name is one panel, not a search for the columns of its letters
+    plot_compare(path, png, metrics="success")
+    assert png.exists()
+    # an empty cell was "could not convert string to float: ''", naming no file
+    write_csv(path, [row("a", 0.0, 0.5), row("a", 1.0, "")])
+    with pytest.raises(ValueError, match=r"compare\.csv line 3: success_rate is not a number: ''"):
+        plot_compare(path, png)
+    assert not list(tmp_path.glob(".*.tmp"))

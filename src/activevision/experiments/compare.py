@@ -12,7 +12,6 @@ shows.
 
 from __future__ import annotations
 
-import csv
 import functools
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -23,7 +22,7 @@ from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.experiments.evaluate import evaluate_policy, summary_rows
 from activevision.experiments.methods import compare_method_names, make_policy
 from activevision.experiments.policies import HeadPolicy
-from activevision.io import write_csv
+from activevision.io import read_csv, write_csv
 
 DEFAULT_ERRORS = tuple(np.round(np.arange(0.0, 2.01, 0.25), 2))
 
@@ -57,10 +56,9 @@ def config_at_error(config: EnvConfig, error: float) -> EnvConfig:
 
 
 def done_levels(csv_path: Path) -> list[dict]:
-    if not csv_path.exists():
-        return []
-    with csv_path.open() as f:
-        return list(csv.DictReader(f))
+    """The rows of ``compare.csv`` already played; ValueError naming the line of a row cut
+    short (its method was taken as played and written back with its numbers empty)."""
+    return read_csv(csv_path) if csv_path.exists() else []
 
 
 def check_resumable(

@@ -22,7 +22,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import activevision
-from activevision.io import read_json, write_text
+from activevision.io import read_csv, read_json, write_text
 from activevision.training.checkpoint import checkpoint_step, list_checkpoints
 from activevision.training.config import MATCH_ENV_ID
 from activevision.training.state import check_run_config_unchanged
@@ -38,17 +38,7 @@ def _csv_rows(path: Path) -> list[dict]:
     """A log's rows; ValueError naming the file and line where a row has more or fewer cells
     than the header (a log cut mid-row was reported with its last cell cut: epsilon 0 for
     0.02, the columns after it left out), as ``activevision plot`` refuses it."""
-    if not path.exists():
-        return []
-    with _reading(path), path.open(encoding="utf-8", newline="") as f:
-        rows = list(csv.DictReader(f))
-    for line, row in enumerate(rows, start=2):  # the header is line 1
-        if None in row or None in row.values():  # DictReader's marks of a row cut or run on
-            raise ValueError(
-                f"{path} line {line} has {'more' if None in row else 'fewer'} cells than its"
-                " header: it is damaged or not a file activevision wrote"
-            )
-    return rows
+    return read_csv(path) if path.exists() else []
 
 
 @contextlib.contextmanager

@@ -3,12 +3,11 @@ one curve per method with its 95% band, read from ``compare.csv``."""
 
 from __future__ import annotations
 
-import csv
 import os
 from collections.abc import Sequence
-from pathlib import Path
 
 from activevision.figures.canvas import new_figure, save_figure
+from activevision.io import read_csv
 
 #: y-axis labels (the CSV's column names say less to a reader)
 Y_LABELS = {
@@ -31,10 +30,31 @@ def plot_compare(
     metrics: Sequence[str] = ("success_rate", "success", "regret_within"),
 ) -> None:
     """Success vs localisation error, one curve per method with its 95% band: a panel per
-    ``metrics`` column of ``csv_path`` (with its ``_low`` / ``_high`` bounds)."""
-    with Path(csv_path).open() as f:
-        rows = list(csv.DictReader(f))
-    metrics = [m for m in metrics if not rows or m in rows[0]]  # older CSVs lack regret
+    ``metrics`` column of ``csv_path`` (with its ``_low`` / ``_high`` bounds) that the CSV
+    has. ValueError naming the file where it has no rows, a row is cut short or a cell is
+    not a number, or it has none of ``metrics`` (blank panels, or matplotlib's "Number of
+    columns must be a positive integer")."""
+    rows = read_csv(csv_path)
+    if not rows:
+        raise ValueError(f"{csv_path} holds no levels to draw")
+    if isinstance(metrics, str):  # one name, not its letters
+        metrics = [metrics]
+    asked = list(metrics)
+    # older CSVs lack regret
+    metrics = [m for m in asked if {"error", "method", m, f"{m}_low", f"{m}_high"} <= set(rows[0])]
+    if not metrics:
+        raise ValueError(
+            f"{csv_path} has none of the columns {', '.join(asked)} (each with its _low and"
+            " _high) beside error and method"
+        )
+    for line, row in enumerate(rows, start=2):
+        for column in ("error", *(f"{m}{end}" for m in metrics for end in ("", "_low", "_high"))):
+            try:
+                float(row[column])
+            except ValueError:
+                raise ValueError(
+                    f"{csv_path} line {line}: {column} is not a number: {row[column]!r}"
+                ) from None
     fig = new_figure(figsize=(5.5 * len(metrics), 4))
     axes = fig.subplots(1, len(metrics), squeeze=False)
     for ax, metric in zip(axes[0], metrics, strict=False):
