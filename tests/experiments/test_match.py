@@ -475,3 +475,13 @@ def test_table_cells_never_run_into_each_other():
     line = format_difference("a", wide)
     assert "+0.0% [-39.0%,39.0%] -43.3% [-65.4%,-21.3%]" in line
     assert len(line.split()) == 1 + 2 * len(MATCH_METRICS)
+
+
+def test_compare_matches_refuses_two_entries_of_one_label_before_playing():
+    # entries built by hand (not by expand_methods) were both played under one name: the
+    # paired table and the figures, keyed by it, kept one of them
+    played = []
+    entries = [("a", "ball_track", StrategyOptions()), ("a", "random", StrategyOptions())]
+    with pytest.raises(ValueError, match="two strategies are named a: rename one"):
+        compare_matches(entries, SMALL, 2, seed=3, progress=played.append)
+    assert played == []

@@ -196,11 +196,17 @@ def expand_methods(
             entries.append((name, name, StrategyOptions(run=run, weights=weights)))
     for label, factory in strategies:
         entries.append((label, USER_STRATEGY, StrategyOptions(factory=factory)))
+    check_labels(entries)
+    return entries
+
+
+def check_labels(entries: Sequence[tuple[str, str, StrategyOptions]]) -> None:
+    """ValueError if two results would share a label (the CSV, the tables and the figures
+    tell results apart by it)."""
     labels = [label for label, _, _ in entries]
     twice = sorted({label for label in labels if labels.count(label) > 1})
     if twice:
         raise ValueError(f"two strategies are named {', '.join(twice)}: rename one")
-    return entries
 
 
 #: Ticks a user's strategy plays as a trial before any strategy's matches (compare_matches).
@@ -217,7 +223,9 @@ def compare_matches(
     """:func:`play_matches` for each ``(label, method, options)`` of
     :func:`expand_methods`, on the same seeds. The user's strategies first play
     :data:`TRIAL_TICKS` ticks of the same matches: one that fails fails before the others
-    have played (which can take minutes), not after."""
+    have played (which can take minutes), not after. ValueError if two entries share a
+    label (both were played, and the figures drew one of them)."""
+    check_labels(entries)
     trial = config.replace(ticks=min(config.ticks, TRIAL_TICKS))
     for label, name, options in entries:
         if name == USER_STRATEGY:
