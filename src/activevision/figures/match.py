@@ -42,7 +42,14 @@ def plot_pareto(
     """Position RMSE (y, lower is better) against the share of ticks with the ball in view
     (x, higher is better), with 95% whiskers; the Pareto front joined by a line, privileged
     ``references`` drawn as crosses. Beside it the same, zoomed on the front and the
-    references (where the strategies that matter lie close together)."""
+    references (where the strategies that matter lie close together; on every point where
+    there are neither). ValueError where there is no point, or ``front`` names a method
+    that has none (a KeyError, and no front was "max() arg is an empty sequence")."""
+    if not points:
+        raise ValueError("plot_pareto: no points to draw")
+    unknown = [name for name in front if name not in points]
+    if unknown:
+        raise ValueError(f"plot_pareto: the front's {', '.join(unknown)} has no point")
     fig = new_figure(figsize=(12.0, 5.0), layout="constrained")
     whole, zoom = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     # tab20 for many strategies: the default cycle repeats its colours after ten
@@ -71,12 +78,16 @@ def plot_pareto(
         ax.set_ylabel("position RMSE (m)  <-  better")
         ax.grid(alpha=0.3)
     near = [points[n] for n in (*front, *references) if n in points]
+    zoom.set_title(
+        "zoomed on the front and the references" if near else "zoomed on every method",
+        fontsize=9,
+    )
+    near = near or list(points.values())
     xs = [100 * v for p in near for v in p["ball_in_view"]]
     ys = [v for p in near for v in p["position_rmse"]]
     pad_x, pad_y = max(1.0, 0.1 * (max(xs) - min(xs))), max(1e-3, 0.1 * (max(ys) - min(ys)))
     zoom.set_xlim(min(xs) - pad_x, max(xs) + pad_x)
     zoom.set_ylim(min(ys) - pad_y, max(ys) + pad_y)
-    zoom.set_title("zoomed on the front and the references", fontsize=9)
     whole.set_title(title, fontsize=9)
     whole.legend(fontsize=7)
     save_figure(fig, path, dpi=120)
@@ -95,11 +106,22 @@ def plot_error_over_time(
     title: str,
 ) -> None:
     """Mean position error over matches at each tick (``curves``: method -> (ticks, M)),
-    with a 95% band."""
+    with a 95% band. ValueError where there is no curve or one is not a (ticks, M) array
+    (a blank figure, numpy's AxisError of a (ticks,) array)."""
+    if not curves:
+        raise ValueError("plot_error_over_time: no curves to draw")
+    for name, errors in curves.items():
+        shape = np.shape(errors)
+        if len(shape) != 2 or 0 in shape:
+            raise ValueError(
+                f"plot_error_over_time: {name}'s errors expect an array of (ticks, matches),"
+                f" got shape {shape}"
+            )
     fig = new_figure(figsize=(7.5, 4.0), layout="constrained")
     ax = fig.add_subplot()
     # the default cycle's ten colours would repeat beyond ten methods
     for (name, errors), colour in zip(curves.items(), _colours(len(curves)), strict=True):
+        errors = np.asarray(errors, dtype=float)
         t = np.arange(1, len(errors) + 1) * tick_seconds
         mean = errors.mean(axis=1)
         half = (

@@ -1,0 +1,53 @@
+"""The match figures (``activevision.figures.match``) refuse what they cannot draw with one
+line naming it, not an error from deep in Python, numpy or matplotlib."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from activevision.figures.match import plot_error_over_time, plot_pareto
+
+POINT = {"ball_in_view": (0.5, 0.4, 0.6), "position_rmse": (0.1, 0.05, 0.15)}
+
+
+def test_plot_pareto_names_what_it_cannot_draw(tmp_path):
+    png = tmp_path / "pareto.png"
+    with pytest.raises(ValueError, match="plot_pareto: no points to draw"):
+        plot_pareto({}, [], png, "t")  # was "max() arg is an empty sequence"
+    with pytest.raises(ValueError, match="the front's zz has no point"):
+        plot_pareto({"a": POINT}, ["a", "zz"], png, "t")  # was KeyError: 'zz'
+    assert not png.exists()
+
+
+def test_plot_pareto_without_a_front_zooms_on_every_method(monkeypatch):
+    # no front and no references: the zoom's limits were the max() of nothing
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    plot_pareto({"a": POINT, "b": {**POINT, "ball_in_view": (0.3, 0.2, 0.4)}}, [], "x", "t")
+    zoom = drawn[0].axes[1]
+    assert zoom.get_title() == "zoomed on every method"
+    low, high = zoom.get_xlim()
+    assert low < 20 and high > 60  # every whisker of both methods, in percent
+
+
+@pytest.mark.parametrize(
+    ("curves", "message"),
+    [
+        ({}, "no curves to draw"),  # a blank figure
+        ({"a": np.zeros(10)}, r"a's errors expect .*got shape \(10,\)"),  # numpy's AxisError
+        ({"a": np.zeros((0, 3))}, r"got shape \(0, 3\)"),  # a blank figure
+    ],
+)
+def test_plot_error_over_time_names_what_it_cannot_draw(tmp_path, curves, message):
+    with pytest.raises(ValueError, match=message):
+        plot_error_over_time(curves, 0.1, tmp_path / "error.png", "t")
+    assert not (tmp_path / "error.png").exists()
+
+
+def test_plot_error_over_time_takes_nested_lists(tmp_path):
+    # a list of lists was "'list' object has no attribute 'mean'"
+    plot_error_over_time({"a": [[0.1, 0.2], [0.3, 0.1]]}, 0.1, tmp_path / "error.png", "t")
+    assert (tmp_path / "error.png").stat().st_size > 5_000
