@@ -332,3 +332,10 @@ def test_a_small_figure_has_no_empty_band_under_its_title(tmp_path):
     # the first gap below the title's text: under 0.4 inches (48 pixel rows at 120 dpi; the
     # band made it 0.7)
     assert gaps[np.argmax(gaps > 1)] < 48
+
+
+def test_the_figure_of_no_rows_is_refused(tmp_path):
+    # it drew two empty panels under the legend
+    with pytest.raises(ValueError, match="plot_robustness: no rows to draw"):
+        plot_robustness([], tmp_path / "r.png")
+    assert not (tmp_path / "r.png").exists()

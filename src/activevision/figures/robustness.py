@@ -69,10 +69,13 @@ def plot_robustness(
     ``<metric>`` with whiskers to ``<metric>_low`` / ``<metric>_high`` (proportions, drawn
     in percent) and its value beside; the row named ``clean`` as a dashed line; rows whose
     ``in_training_range`` is false hatched (none for a method that was not trained: None,
-    or empty as read from the CSV); a thin rule between factors."""
+    or empty as read from the CSV); a thin rule between factors. ValueError where there are
+    no rows (it drew two empty panels)."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
+    if not rows:
+        raise ValueError("plot_robustness: no rows to draw")
     n = len(rows)
     y = np.arange(n)
     colours = [_colour(r) for r in rows]
