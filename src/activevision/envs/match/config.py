@@ -84,7 +84,8 @@ class OthersConfig:
     step would bring it within ``robots.min_spacing`` of another robot or ours (it stands
     that tick: robots give way). They step one after another, each checking where the
     others are as it steps, after our robot, which gives way to them as well
-    (``envs.match.kernels.move_kernel``: it turns on the spot instead), standing or walking:
+    (``envs.match.kernels.move_kernel``: it sidesteps round them, or turns on the spot),
+    standing or walking:
     no two robots, ours included, ever end a tick within ``min_spacing`` of each other.
     Standing still by default. The ball bounces off every robot's
     body, keeping ``ball_restitution`` of its speed towards it (a body gives; a robot's legs

@@ -115,6 +115,36 @@ def roll_ball(
             velocity[axis] = -velocity[axis]
 
 
+#: a sidestep round a robot also parts from it by this share of the step: the drift of a
+#: step (a quarter of it, plus slip) would bring a bare sidestep closer every other tick
+SIDESTEP_OUTWARD = 0.5
+#: the least share of its step that a sidestep keeps across the way to the robot: less
+#: (the robot about straight ahead) is no sidestep, and the robot gives way instead
+MIN_SIDESTEP = 0.25
+
+
+@njit(cache=True)
+def sidestep(
+    pose: np.ndarray, robot_x: float, robot_y: float, dx: float, dy: float
+) -> tuple[float, float]:
+    """The sidestep round the robot at ``(robot_x, robot_y)`` that a walking engine makes
+    of the robot-frame step ``(dx, dy)`` of a robot at ``pose`` (3,): the step's part
+    across the way to that robot, and a part away from it of :data:`SIDESTEP_OUTWARD` of
+    the step, instead of its part towards it. ``(0, 0)`` where the part across is less
+    than :data:`MIN_SIDESTEP` of the step (or there is no step)."""
+    bx, by = to_robot_frame(robot_x, robot_y, pose)
+    distance, length = math.hypot(bx, by), math.hypot(dx, dy)
+    if distance == 0.0 or length == 0.0:
+        return 0.0, 0.0
+    ux, uy = bx / distance, by / distance
+    closing = dx * ux + dy * uy
+    across_x, across_y = dx - closing * ux, dy - closing * uy
+    if math.hypot(across_x, across_y) < MIN_SIDESTEP * length:
+        return 0.0, 0.0
+    away = SIDESTEP_OUTWARD * length
+    return across_x - away * ux, across_y - away * uy
+
+
 @njit(cache=True)
 def to_robot_frame(px: float, py: float, pose: np.ndarray) -> tuple[float, float]:
     """The world point ``(px, py)`` in the frame of ``pose`` (3,)."""

@@ -21,6 +21,7 @@ from activevision.envs.match.dynamics import (
     drift_stds,
     move_pose,
     roll_ball,
+    sidestep,
     to_robot_frame,
     walk_step,
 )
@@ -141,6 +142,25 @@ def _beyond(s: MatchState, n: int, blocker: int) -> bool:
 
 
 @njit(cache=True)
+def _walk(
+    moved: np.ndarray,
+    pose: np.ndarray,
+    step: tuple[float, float, float],
+    drift: np.ndarray,
+    model: tuple[float, float, float, float, float],
+    p: MatchParams,
+) -> None:
+    """``moved`` (3,): ``pose`` after the commanded robot-frame ``step`` and its drift
+    (``drift``: the tick's three standard normals), stopped at the carpet's edge."""
+    dx, dy, dth = step
+    sx, sy, st = drift_stds(dx, dy, dth, model)
+    moved[:] = pose
+    move_pose(
+        moved, dx + sx * drift[0], dy + sy * drift[1], dth + st * drift[2], p.carpet_x, p.carpet_y
+    )
+
+
+@njit(cache=True)
 def move_kernel(
     idx: np.ndarray,
     targets: np.ndarray,
@@ -153,21 +173,27 @@ def move_kernel(
 ) -> np.ndarray:
     """Matches ``idx``: the head to ``targets`` (len(idx), 2) (clipped to its limits), our
     robot's walk and drift, the ball. Returns the odometry (len(idx), 3) (the commanded
-    steps; the turn alone where our robot gave way). Row ``j`` of ``uniforms`` / ``normals``
-    are match ``idx[j]``'s draws (layout: :mod:`activevision.envs.match.simulation`).
+    steps; the sidestep, or the turn alone, where our robot gave way). Row ``j`` of
+    ``uniforms`` / ``normals`` are match ``idx[j]``'s draws (layout:
+    :mod:`activevision.envs.match.simulation`).
 
     Our robot gives way to the other robots (``s.robots``, where they stand: they move
     after it): a step whose true motion (the commanded step and its drift) would end closer
-    than ``spacing`` to one of them while closing in on it is not made. The robot turns on
-    the spot instead: its position unchanged, its heading turned by the commanded turn and
+    than ``spacing`` to one of them while closing in on it is not made. The robot
+    sidesteps round that robot instead (:func:`~activevision.envs.match.dynamics.sidestep`,
+    with the same drift draws), its odometry the sidestep: it turned on the spot, and
+    among standing robots stood so for up to 533 of a match's 600 ticks. Where the step
+    leaves no sidestep (that robot about straight ahead) or the sidestep is blocked too, it
+    turns on the spot: its position unchanged, its heading turned by the commanded turn and
     that turn's drift alone, its odometry the turn (its walking engine commanded no step,
-    and it made none). A waypoint beyond that robot (:func:`_beyond`) it gives up for a new
-    one from its give-way draws; one clear of it it keeps, turning on the spot until a step
-    towards it parts from the robot. Walking to the ball, with the ball beyond that robot,
-    it takes such a waypoint as a detour, walked to for :data:`DETOUR_TICKS` ticks (or until
-    reached) before it turns to the ball again: it waited, turning to the ball, for the ball
-    or the robot to move, for the rest of the match where neither did (a standing robot, a
-    ball at rest behind it or out of view)."""
+    and it made none). A waypoint beyond that robot (:func:`_beyond`), or any where its
+    sidestep was blocked too (wedged between robots: keeping it, it stood up to 188
+    ticks), it gives up for a new one from its give-way draws; one clear of it it keeps,
+    turning on the spot until a step towards it parts from the robot. Walking to the ball,
+    with the ball beyond that robot, it takes such a waypoint as a detour, walked to for
+    :data:`DETOUR_TICKS` ticks (or until reached) before it turns to the ball again: it
+    waited, turning to the ball, for the ball or the robot to move, for the rest of the
+    match where neither did (a standing robot, a ball at rest behind it or out of view)."""
     s, p = MatchState(*state), MatchParams(*params)
     k = s.detected.shape[1]
     odometry = np.zeros((idx.shape[0], 3))
@@ -183,21 +209,25 @@ def move_kernel(
             s.mean[n], s.waypoint[n], s.pause[n] > 0, p.speed, p.turn_rate, p.dt
         )
         s.pause[n] = max(s.pause[n] - 1, 0)
-        sx, sy, st = drift_stds(dx, dy, dth, model)
         drift = normals[j, 2 * k : 2 * k + 3]
-        moved[:] = s.pose[n]
-        move_pose(
-            moved,
-            dx + sx * drift[0],
-            dy + sy * drift[1],
-            dth + st * drift[2],
-            p.carpet_x,
-            p.carpet_y,
-        )
+        _walk(moved, s.pose[n], (dx, dy, dth), drift, model, p)
         blocker = blocking_robot(s.pose[n], moved, s.robots[n], p.spacing)
+        can_sidestep = False
         if blocker >= 0:
-            # give way: turn on the spot, as commanded, with a pure turn's drift
-            if _beyond(s, n, blocker):
+            # go round it, where the step leaves a sidestep
+            rx, ry = s.robots[n, blocker, 0], s.robots[n, blocker, 1]
+            side_x, side_y = sidestep(s.pose[n], rx, ry, dx, dy)
+            can_sidestep = side_x != 0.0 or side_y != 0.0
+            if can_sidestep:
+                _walk(moved, s.pose[n], (side_x, side_y, dth), drift, model, p)
+                blocker = blocking_robot(s.pose[n], moved, s.robots[n], p.spacing)
+                if blocker < 0:
+                    dx, dy = side_x, side_y
+        if blocker >= 0:
+            # give way: turn on the spot, as commanded, with a pure turn's drift; a robot
+            # whose sidestep is blocked too stands wedged between robots, and takes a new
+            # waypoint as one beyond them (it stood up to 188 ticks of 600 turning to its own)
+            if can_sidestep or _beyond(s, n, blocker):
                 give_way = uniforms[j, k + 10 : k + 12]
                 s.waypoint[n, 0] = p.waypoint_x * (2 * give_way[0] - 1)
                 s.waypoint[n, 1] = p.waypoint_y * (2 * give_way[1] - 1)
