@@ -544,3 +544,18 @@ def test_dict_observations_keep_their_space_order_in_every_mode(env_id: str, obs
         assert list(batch) == list(obs), mode
         assert list(envs.step(envs.action_space.sample())[0]) == list(obs), mode
         envs.close()
+
+
+@pytest.mark.parametrize("env_id", ["ActiveVision-v0", "ActiveVisionMatch-v0"])
+def test_a_single_env_takes_a_numpy_integer_seed_as_the_vector_envs_do(env_id: str) -> None:
+    """``reset(seed=np.int64(s))`` is ``reset(seed=s)`` in a single env too (Gymnasium
+    refused it, "must be a python integer", where the native vector envs take it), and
+    other seeds are still Gymnasium's to refuse."""
+    env = gym.make(env_id)
+    obs, _ = env.reset(seed=np.int64(SEED))
+    want, _ = gym.make(env_id).reset(seed=SEED)
+    assert_same_bytes(obs, want, "observation")
+    assert env.unwrapped.np_random_seed == SEED and type(env.unwrapped.np_random_seed) is int
+    for bad in (1.5, "12", np.float64(3.0)):
+        with pytest.raises(gym.error.Error, match="[Ss]eed"):
+            env.reset(seed=bad)

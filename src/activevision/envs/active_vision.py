@@ -22,6 +22,7 @@ from activevision.envs.observations import (
     single,
 )
 from activevision.envs.reset_options import check_no_options
+from activevision.envs.seeding import single_env_seed
 from activevision.envs.simulation import EpisodeBatch, StepOutcome
 from activevision.envs.time_limit import never, resolve_limit
 from activevision.localisation import LocalisationConfig
@@ -171,7 +172,7 @@ class ActiveVisionEnv(gym.Env):
         self, *, seed: int | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
         check_no_options(options)
-        super().reset(seed=seed)
+        super().reset(seed=single_env_seed(seed))
         self.sim.reset(self._slot, [self.np_random])
         self._observations.start(self._slot)
         frame = self.sim.render(self._slot)[0]

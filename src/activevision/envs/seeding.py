@@ -14,6 +14,13 @@ def episode_seed(base_seed: int, episode: int) -> int:
     return base_seed * 1_000_003 + episode
 
 
+def single_env_seed(seed: int | None) -> int | None:
+    """A single env's ``reset(seed=...)`` as Gymnasium checks it, a NumPy integer read as its
+    int: Gymnasium refuses ``np.int64(7)`` ("must be a python integer"), which the native
+    vector envs take (seeds drawn with NumPy are NumPy integers)."""
+    return int(seed) if isinstance(seed, np.integer) else seed
+
+
 def reseed_generators(
     rngs: list[np.random.Generator],
     seed: int | list[int | None] | None,

@@ -21,6 +21,7 @@ from activevision.envs.match.observations import (
 from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.match.view import match_panel
 from activevision.envs.reset_options import check_no_options
+from activevision.envs.seeding import single_env_seed
 from activevision.typecheck import config_from_dict, nested_configs
 
 
@@ -156,7 +157,7 @@ class ActiveVisionMatchEnv(gym.Env):
         self, *, seed: int | None = None, options: dict | None = None
     ) -> tuple[Observation, dict[str, Any]]:
         check_no_options(options)
-        super().reset(seed=seed)
+        super().reset(seed=single_env_seed(seed))
         self.sim.reset(self._slot, [self.np_random])
         return self._observe(), self._info()
 
