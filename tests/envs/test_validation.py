@@ -51,6 +51,7 @@ BAD_ENV_KWARGS: list[tuple[str, Any, str]] = [
     ("ball_distance_range", (0.0, 3.0), "(0.0, 3.0)"),
     ("max_start_draws", 0, "0"),
     ("max_start_draws", 10.5, "10.5"),
+    ("max_start_draws", 10**9, "up to 1,000,000, got 1000000000"),
     ("config", "paper", "'paper'"),
     ("localisation", "ukf", "'ukf'"),
     ("colour", "red", "'red'"),  # unknown keyword

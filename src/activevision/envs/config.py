@@ -37,6 +37,9 @@ MAX_FRAME_STACK = 64
 #: small enough that a typo (10**12) is refused naming ``num_envs``, not numpy's MemoryError
 #: allocating the batch's arrays.
 MAX_VECTOR_ENVS = 65_536
+#: The most rejection-sampling draws for one episode start (``max_start_draws``): the
+#: default 1,000 finds a start in a few; a million take seconds where no start exists.
+MAX_START_DRAWS = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -67,7 +70,7 @@ class EnvConfig:
     robot_y_range: tuple[float, float] = (-1.5, 1.5)  #: start pose (R)
     start_tilt_range_deg: tuple[float, float] = (5.0, 25.0)  #: start head tilt (R); pan: full
     ball_distance_range: tuple[float, float] = (1.0, 3.0)  #: ball 1-3 m from the robot (R)
-    max_start_draws: int = 1000  #: rejection-sampling guard for episode starts
+    max_start_draws: int = 1000  #: rejection-sampling guard for episode starts (ours)
     #: the observation: "image" (P) or a Dict adding the head angles, the robot's prior pose
     #: and the entropy method's proposal from it (not in P; ``envs.observations``)
     observation: ObservationKind = "image"
@@ -129,8 +132,10 @@ class EnvConfig:
             )
         if not self.ball_distance_range[0] > 0:
             raise bad("ball_distance_range", "must be positive")
-        if self.max_start_draws < 1:
-            raise bad("max_start_draws", "must be a positive integer")
+        # an upper bound: a start no draw can satisfy (a ball range the camera never sees)
+        # spun for hours through 10**9 draws before naming the range
+        if not 1 <= self.max_start_draws <= MAX_START_DRAWS:
+            raise bad("max_start_draws", f"must be a positive integer up to {MAX_START_DRAWS:,}")
         self._check_observation(bad)
 
     def _check_actions(self, bad: typing.Callable[[str, str], ValueError]) -> None:
