@@ -34,8 +34,11 @@ def test_default_grid_is_the_papers():
     assert grid.pans[grid.index(3, 2)] == grid.pan_values[3]
     assert grid.tilts[grid.index(3, 2)] == grid.tilt_values[2]
     assert np.allclose(grid.pan_values, -grid.pan_values[::-1])  # symmetric about 0
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="n_pan must be a positive integer"):
         ViewpointGrid(n_pan=0)
+    with pytest.raises(ValueError, match=r"n_tilt must be .* up to 20,000, got 1000000000"):
+        ViewpointGrid(n_tilt=10**9)
+    assert len(ViewpointGrid(n_pan=20_000, n_tilt=1)) == 20_000
 
 
 @pytest.mark.parametrize(

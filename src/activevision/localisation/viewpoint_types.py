@@ -14,6 +14,10 @@ from activevision.geometry.camera import CameraConfig
 from activevision.localisation.config import DEFAULT_UKF, UKFConfig
 from activevision.typecheck import check_dataclass_fields
 
+#: the most angles on one axis of a :class:`ViewpointGrid` (0.01 degrees apart over 180:
+#: finer than any head's encoder)
+MAX_GRID_COUNT = 20_000
+
 
 @dataclass(frozen=True)
 class ViewpointGrid:
@@ -39,8 +43,12 @@ class ViewpointGrid:
         check_dataclass_fields(self)
         for name in ("n_pan", "n_tilt"):
             value = getattr(self, name)
-            if value < 1:
-                raise ValueError(f"ViewpointGrid.{name} must be a positive integer, got {value!r}")
+            if not 1 <= value <= MAX_GRID_COUNT:
+                # n_pan=10**9 was a MemoryError (or minutes of swapping) on first use, unnamed
+                raise ValueError(
+                    f"ViewpointGrid.{name} must be a positive integer up to {MAX_GRID_COUNT:,},"
+                    f" got {value!r}"
+                )
         if not (self.pan_min <= self.pan_max and self.tilt_min <= self.tilt_max):
             raise ValueError(
                 "ViewpointGrid needs pan_min <= pan_max and tilt_min <= tilt_max, got pan"
