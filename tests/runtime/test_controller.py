@@ -154,6 +154,9 @@ def test_bad_arguments(policy):
     assert HeadController(policy.model_path, num_threads=np.int64(1)).act(frame, 0.0, 0.3)
     with pytest.raises(ValueError, match="color_order"):
         HeadController(policy.model_path, color_order="rgba")
+    for path in (None, 3, b"policy.onnx"):
+        with pytest.raises(PolicyFileError, match=r"model_path: expects the path .* got"):
+            HeadController(path)  # type: ignore[arg-type]
 
 
 @pytest.fixture

@@ -142,6 +142,12 @@ class HeadController:
         self.robot_camera = None if camera is None else CameraModel.of(camera)
         num_threads = _thread_count(num_threads)
         self.color_order: ColorOrder = color_order
+        if not isinstance(model_path, str | os.PathLike):
+            # Path(None) is "expected str, bytes or os.PathLike object, not NoneType"
+            raise PolicyFileError(
+                "model_path: expects the path of a policy.onnx or of a run or export folder,"
+                f" got {model_path!r}"
+            )
         self.model_path = Path(model_path)
         if self.model_path.is_dir():  # a run or export folder: its policy.onnx
             self.model_path = self.model_path / "policy.onnx"
