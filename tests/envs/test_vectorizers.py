@@ -557,5 +557,5 @@ def test_a_single_env_takes_a_numpy_integer_seed_as_the_vector_envs_do(env_id: s
     assert_same_bytes(obs, want, "observation")
     assert env.unwrapped.np_random_seed == SEED and type(env.unwrapped.np_random_seed) is int
     for bad in (1.5, "12", np.float64(3.0)):
-        with pytest.raises(gym.error.Error, match="[Ss]eed"):
+        with pytest.raises(gym.error.Error, match=r"[Ss]eed"):
             env.reset(seed=bad)
