@@ -257,6 +257,16 @@ def test_indefinite_belief_raises(landmarks, cam):
         best_viewpoint(np.zeros(3), [[1, 0.5, 0], [0, 1, 0], [0, 0, 1]], [1.0, 0.0], landmarks, cam)
 
 
+@pytest.mark.filterwarnings("error")  # NumPy's 'invalid value' (inf - inf) came first
+@pytest.mark.parametrize("variance", [math.inf, math.nan])
+def test_a_non_finite_covariance_is_named(landmarks, cam, variance):
+    cov = np.diag([0.1, variance, 0.1])
+    with pytest.raises(ValueError, match="belief covariances must be finite"):
+        best_viewpoint(np.zeros(3), cov, [1.0, 0.0], landmarks, cam)
+    with pytest.raises(ValueError, match="belief covariances must be finite"):
+        best_viewpoints(np.zeros((2, 3)), np.stack([COV0, cov]), [1.0, 0.0], landmarks, cam)
+
+
 @pytest.mark.parametrize(
     ("mean", "ball", "shown"),
     [

@@ -161,6 +161,13 @@ def _search(
             # not positive definite
             bad = values[~np.isfinite(values).all(axis=1)][0]
             raise ValueError(f"best viewpoint search: {name} must be finite, got {bad.tolist()}")
+    if not np.isfinite(covs).all():
+        # an infinite variance was NumPy's 'invalid value' warning (inf - inf), then a
+        # covariance 'not positive definite'
+        s = int(np.argwhere(~np.isfinite(covs))[0, 0])
+        raise ValueError(
+            f"best viewpoint search: belief covariances must be finite, got:\n{covs[s]}"
+        )
     if n and np.abs(covs - covs.transpose(0, 2, 1)).max() > 1e-12:
         raise ValueError("best viewpoint search: belief covariances must be symmetric")
     args = search_args(
