@@ -35,6 +35,9 @@ BAD_ARGUMENTS = [
         "must be an integer from 1 to 65536",
     ),
     (["evaluate", "--episodes", "0"], "--episodes"),
+    # past one seed's episode set (--seed 0's would replay --seed 1's): ran, unrefused
+    (["evaluate", "--episodes", str(10**12)], "must be an integer from 1 to 1000003"),
+    (["robustness", "--episodes", "1000004"], "must be an integer from 1 to 1000003"),
     (["evaluate", "--episodes", "-3"], "'-3'"),
     (["evaluate", "--episodes", "many"], "'many'"),
     (["evaluate", "--error", "-1"], "'-1'"),
@@ -149,6 +152,14 @@ BAD_ARGUMENTS = [
     (["report", "{tmp}"], "not a training run"),
     (["nope"], "invalid choice"),
 ]
+
+
+def test_the_episodes_bound_is_one_seeds_episode_set():
+    from activevision.cli.args import MAX_EPISODES
+    from activevision.envs.seeding import EPISODES_PER_SEED, episode_seed
+
+    assert MAX_EPISODES == EPISODES_PER_SEED
+    assert episode_seed(0, MAX_EPISODES - 1) < episode_seed(1, 0) == episode_seed(0, MAX_EPISODES)
 
 
 def test_the_matches_bound_is_the_vector_envs():

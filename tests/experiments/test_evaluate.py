@@ -282,6 +282,7 @@ def test_summarise_names_the_metric_of_an_episode_value_it_cannot_count():
         ({"episodes": -3}, "episodes: expects a positive integer, got -3"),
         ({"episodes": 0}, "episodes: expects a positive integer, got 0"),
         ({"episodes": 2.0}, "episodes: expects a positive integer, got 2.0"),
+        ({"episodes": 10**12}, "episodes: expects a positive integer up to 1000003, got 10"),
         ({"episodes": 1, "seed": -1}, "seed: expects an integer >= 0, got -1"),
         ({"episodes": 1, "seed": 1.5}, "seed: expects an integer >= 0, got 1.5"),
     ],

@@ -173,6 +173,10 @@ def float_in(low: float, high: float, unit: str = "") -> Callable[[str], float]:
 #: The most matches one command plays: they are played together, one native vector env of
 #: that many sub-environments (envs.config.MAX_VECTOR_ENVS; the parser imports no envs)
 MAX_MATCHES = 65_536
+#: The most episodes of one fixed-seed set (``--episodes``): past it, the set of ``--seed s``
+#: replays the first episodes of ``--seed s+1`` (envs.seeding.EPISODES_PER_SEED); 10**12
+#: ran, unrefused, for years
+MAX_EPISODES = 1_000_003
 
 
 def int_in(low: int, high: int) -> Callable[[str], int]:

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from activevision.cli.args import (
     FIGURE_AND_GIF_HELP,
+    MAX_EPISODES,
     add_overwrite,
     add_weights,
     check_run,
@@ -18,6 +19,7 @@ from activevision.cli.args import (
     env_config_of_run,
     error_levels,
     figure_file,
+    int_in,
     localisation_error,
     path,
     positive_int,
@@ -368,7 +370,7 @@ def add_parsers(sub: Any) -> None:
     _add_common(p, "a training run: adds the learned policy")
     p.add_argument("--methods", nargs="+", type=method, help=" ".join(_method_names()))
     _add_runs(p)
-    p.add_argument("--episodes", type=positive_int, default=100)
+    p.add_argument("--episodes", type=int_in(1, MAX_EPISODES), default=100)
     p.add_argument(
         "--error",
         type=localisation_error,
@@ -399,7 +401,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument(
         "--errors", type=error_levels, default="0:2:0.25", help="start:stop:step or a,b,c"
     )
-    p.add_argument("--episodes", type=positive_int, default=100)
+    p.add_argument("--episodes", type=int_in(1, MAX_EPISODES), default=100)
     p.add_argument("--out", type=path)
     p.add_argument(
         "--overwrite", action="store_true", help="start over instead of resuming compare.csv"

@@ -8,7 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from activevision.cli.args import MAX_MATCHES, int_in, path, positive_int, seed
+from activevision.cli.args import MAX_EPISODES, MAX_MATCHES, int_in, path, positive_int, seed
 
 
 def quickstart_steps(args: argparse.Namespace) -> list[list[str]]:
@@ -94,7 +94,7 @@ def add_parsers(sub: Any) -> None:
     p.set_defaults(func=None)  # run by cli.main, which passes itself
     p.add_argument("--out", type=path, default=Path("runs/quickstart"))
     p.add_argument("--steps", type=positive_int, default=None, help="default: the preset's")
-    p.add_argument("--episodes", type=positive_int, default=100)
+    p.add_argument("--episodes", type=int_in(1, MAX_EPISODES), default=100)
     p.add_argument("--seed", type=seed, default=0)
     p.add_argument(
         "--matches", type=int_in(1, MAX_MATCHES), default=16, help="of the match comparison"

@@ -8,15 +8,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from activevision.cli.args import (
+    MAX_EPISODES,
     add_overwrite,
     add_weights,
     check_run,
     check_weights,
     choice_list,
     env_config_of_run,
+    int_in,
     localisation_error,
     path,
-    positive_int,
     seed,
 )
 from activevision.cli.outputs import (
@@ -186,7 +187,7 @@ def add_parsers(sub: Any) -> None:
         metavar="NAME",
         help="play only these (clean is always played); default: all (see --list)",
     )
-    p.add_argument("--episodes", type=positive_int, default=200)
+    p.add_argument("--episodes", type=int_in(1, MAX_EPISODES), default=200)
     p.add_argument("--seed", type=seed, default=0)
     p.add_argument(
         "--error",

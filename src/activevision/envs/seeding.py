@@ -6,12 +6,15 @@ from __future__ import annotations
 import numpy as np
 from gymnasium.utils import seeding
 
+#: Episodes in one fixed-seed set: past it, the set of ``base_seed`` runs into the next's
+EPISODES_PER_SEED = 1_000_003
+
 
 def episode_seed(base_seed: int, episode: int) -> int:
     """Seed of episode ``episode`` of the set ``base_seed``: every method sees the same start
-    for the same seed, and sets of different base seeds do not overlap for < 1,000,003
-    episodes."""
-    return base_seed * 1_000_003 + episode
+    for the same seed, and sets of different base seeds do not overlap for up to
+    :data:`EPISODES_PER_SEED` episodes."""
+    return base_seed * EPISODES_PER_SEED + episode
 
 
 def single_env_seed(seed: int | None) -> int | None:

@@ -13,7 +13,7 @@ import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.envs.config import check_count
-from activevision.envs.seeding import episode_seed
+from activevision.envs.seeding import EPISODES_PER_SEED, episode_seed
 from activevision.experiments.policies import HeadPolicy, HeadTarget
 
 Z95 = 1.959963984540054  #: two-sided 95% quantile of the standard normal
@@ -233,10 +233,11 @@ def evaluate_policy(
         intervals, and per-decision latencies (empty unless ``measure_latency``).
 
     ValueError unless ``episodes`` is a positive integer (-3 played none and returned NaN
-    intervals) and ``seed`` an integer >= 0 (-1 was Gymnasium's refusal of episode 0's
-    seed, -1000003).
+    intervals) up to :data:`~activevision.envs.seeding.EPISODES_PER_SEED` (more would replay
+    the next seed's episodes) and ``seed`` an integer >= 0 (-1 was Gymnasium's refusal of
+    episode 0's seed, -1000003).
     """
-    episodes = check_count("episodes", episodes)
+    episodes = check_count("episodes", episodes, EPISODES_PER_SEED)
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise ValueError(f"seed: expects an integer >= 0, got {seed!r}")
     seed = int(seed)  # a NumPy integer's episode seeds would overflow, and Gymnasium wants ints
