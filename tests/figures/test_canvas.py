@@ -14,6 +14,7 @@ from activevision.figures.canvas import (
     figure_format,
     new_figure,
     save_figure,
+    save_gif,
     save_rgb,
 )
 
@@ -107,3 +108,41 @@ def test_postscript_is_dated_without_touching_the_environment(tmp_path, suffix, 
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "86400")
     save_figure(fig, tmp_path / f"b.{suffix}", dpi=50)
     assert b"%%CreationDate: Fri Jan 02 00:00:00 1970" in (tmp_path / f"b.{suffix}").read_bytes()
+
+
+def _frames(count: int = 2, shape: tuple[int, ...] = (4, 6, 3)) -> list[np.ndarray]:
+    return [np.full(shape, 40 * i, dtype=np.uint8) for i in range(count)]
+
+
+def test_save_gif_writes_a_looping_gif_of_every_frame(tmp_path):
+    from PIL import Image
+
+    save_gif(_frames(3), tmp_path / "a.gif", fps=4)
+    save_gif(iter(_frames(3)), tmp_path / "b.gif", fps=4.0)
+    assert (tmp_path / "a.gif").read_bytes() == (tmp_path / "b.gif").read_bytes()
+    with Image.open(tmp_path / "a.gif") as gif:
+        assert (gif.n_frames, gif.info["duration"], gif.info["loop"]) == (3, 250, 0)
+
+
+@pytest.mark.parametrize(
+    ("frames", "fps", "error", "match"),
+    [
+        ([], 2, ValueError, r"frames: expects at least one frame, got none"),
+        (_frames(), 0, ValueError, r"fps: expects a finite positive number, got 0"),
+        (_frames(), -2.0, ValueError, r"fps: expects a finite positive number, got -2\.0"),
+        (_frames(), float("nan"), ValueError, r"fps: expects a finite positive number, got nan"),
+        (_frames(), float("inf"), ValueError, r"fps: expects a finite positive number"),
+        (_frames(), "2", TypeError, r"fps: expects a positive number, got '2'"),
+        (_frames(), True, TypeError, r"fps: expects a positive number, got True"),
+        (_frames() + _frames(1, (5, 6, 3)), 2, ValueError, r"frames\[2\]: .* of one shape"),
+        (_frames(1, (4, 6)), 2, ValueError, r"frames\[0\]: expects an \(H, W, 3\) uint8"),
+        (_frames(1, (4, 6, 4)), 2, ValueError, r"frames\[0\]: expects an \(H, W, 3\) uint8"),
+        (_frames(1, (0, 6, 3)), 2, ValueError, r"frames\[0\]: expects an \(H, W, 3\) uint8"),
+        ([np.zeros((4, 6, 3))], 2, ValueError, r"frames\[0\]: .* got shape \(4, 6, 3\) of float64"),
+        ([[[[0, 0, 0]]]], 2, TypeError, r"frames\[0\]: expects a numpy array, got list"),
+    ],
+)
+def test_save_gif_refuses_bad_frames_or_fps_before_writing(tmp_path, frames, fps, error, match):
+    with pytest.raises(error, match=match):
+        save_gif(frames, tmp_path / "a.gif", fps=fps)
+    assert list(tmp_path.iterdir()) == []

@@ -4,6 +4,8 @@ canvas, so drawing never touches the user's backend or pyplot's global figures."
 from __future__ import annotations
 
 import io
+import math
+import numbers
 import os
 import re
 from collections.abc import Callable, Sequence
@@ -111,11 +113,48 @@ def save_rgb(rgb: np.ndarray, path: str | os.PathLike[str]) -> None:
     _write_same_bytes(path, lambda f, fmt, metadata: imsave(f, rgb, format=fmt, metadata=metadata))
 
 
+def _check_fps(fps: object) -> float:
+    """``fps`` as a float, if a finite positive number: a ValueError naming it otherwise
+    (0 was a ZeroDivisionError, a negative or NaN a GIF of nonsense durations)."""
+    if isinstance(fps, bool) or not isinstance(fps, numbers.Real):
+        raise TypeError(f"fps: expects a positive number, got {fps!r}")
+    if not math.isfinite(fps) or fps <= 0:
+        raise ValueError(f"fps: expects a finite positive number, got {fps!r}")
+    return float(fps)
+
+
+def _check_frames(frames: Sequence[np.ndarray]) -> None:
+    """TypeError unless every frame is an array, ValueError unless there is one at least,
+    each (H, W, 3) uint8 with H, W > 0 and all of one shape (an empty list was an
+    IndexError, other frames Pillow's errors or a GIF of mixed sizes), naming the frame."""
+    if len(frames) == 0:
+        raise ValueError("frames: expects at least one frame, got none")
+    first = frames[0]
+    for index, frame in enumerate(frames):
+        if not isinstance(frame, np.ndarray):
+            raise TypeError(f"frames[{index}]: expects a numpy array, got {type(frame).__name__}")
+        shape = frame.shape
+        if len(shape) != 3 or shape[2] != 3 or 0 in shape or frame.dtype != np.uint8:
+            raise ValueError(
+                f"frames[{index}]: expects an (H, W, 3) uint8 RGB array, "
+                f"got shape {shape} of {frame.dtype}"
+            )
+        if shape != first.shape:
+            raise ValueError(
+                f"frames[{index}]: expects every frame of one shape, got {shape} "
+                f"after {first.shape}"
+            )
+
+
 def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: float) -> None:
-    """Write RGB frames (H, W, 3) uint8 as a looping animated GIF, atomically (Pillow,
-    matplotlib's own dependency)."""
+    """Write RGB frames (H, W, 3) uint8, all of one shape, as a looping animated GIF shown at
+    ``fps`` (a positive number) frames a second, atomically (Pillow, matplotlib's own
+    dependency). Bad frames or fps are refused before anything is written."""
     from PIL import Image
 
+    fps = _check_fps(fps)
+    frames = list(frames)  # an iterator of frames, as was taken, is checked and saved once
+    _check_frames(frames)
     images = [Image.fromarray(f) for f in frames]
     with atomic_path(path) as tmp:
         images[0].save(
