@@ -485,3 +485,36 @@ def test_compare_matches_refuses_two_entries_of_one_label_before_playing():
     with pytest.raises(ValueError, match="two strategies are named a: rename one"):
         compare_matches(entries, SMALL, 2, seed=3, progress=played.append)
     assert played == []
+
+
+@pytest.mark.parametrize(
+    ("arguments", "error", "match"),
+    [
+        ({"matches": 0}, ValueError, r"^matches: expects a positive integer, got 0$"),
+        ({"matches": -2}, ValueError, r"^matches: expects a positive integer, got -2$"),
+        ({"matches": 2.0}, ValueError, r"^matches: expects a positive integer, got 2\.0$"),
+        ({"matches": True}, ValueError, r"^matches: expects a positive integer, got True$"),
+        ({"matches": 10**12}, ValueError, r"^matches: expects a positive integer up to 65536"),
+        ({"seed": -1}, ValueError, r"^seed: expects an integer >= 0, got -1$"),
+        ({"seed": 1.5}, ValueError, r"^seed: expects an integer >= 0, got 1\.5$"),
+        ({"config": {"ticks": 3}}, TypeError, r"^config: expects a MatchConfig, got dict$"),
+    ],
+)
+def test_compare_matches_names_a_bad_count_before_playing(arguments, error, match):
+    # matches=0 was refused as the env's "num_envs", a negative seed by gymnasium's
+    # "Seed must be greater or equal to zero", once the user's strategies had played
+    played = []
+    entries = expand_methods(
+        ["ball_track"], strategies=[("mine", lambda c: _ActsWrongAtTick(c, 99))]
+    )
+    given = {"config": SMALL, "matches": 2, "seed": 3, **arguments}
+    with pytest.raises(error, match=match):
+        compare_matches(entries, progress=played.append, **given)
+    assert played == []
+
+
+def test_play_matches_names_a_clip_match_past_the_matches():
+    with pytest.raises(ValueError, match=r"^clip_match: expects a match's index, 0 to 1, got 2$"):
+        play_matches("random", SMALL, 2, seed=3, clip_match=2)
+    with pytest.raises(ValueError, match=r"^matches: expects a positive integer, got 0$"):
+        play_matches("random", SMALL, 0, seed=3)

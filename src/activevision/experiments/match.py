@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import numbers
 import time
 from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -24,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from activevision.envs.config import MAX_VECTOR_ENVS, check_count
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.scores import MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
@@ -111,7 +113,18 @@ def play_matches(
 ) -> MethodResult:
     """Play ``matches`` matches of ``config`` with strategy ``method`` in lock-step
     (``options``: its model, run or margin); the result is named ``label`` (default:
-    ``method``)."""
+    ``method``); match ``clip_match`` is recorded tick by tick. Bad counts are refused
+    before playing (:func:`check_play_arguments`; ``clip_match`` past the matches was
+    numpy's IndexError)."""
+    check_play_arguments(config, matches, seed)
+    if (
+        isinstance(clip_match, bool)
+        or not isinstance(clip_match, numbers.Integral)
+        or not 0 <= clip_match < matches
+    ):
+        raise ValueError(
+            f"clip_match: expects a match's index, 0 to {matches - 1}, got {clip_match!r}"
+        )
     start = time.perf_counter()
     policy = make_match_policy(method, config, options)
     env = ActiveVisionMatchVectorEnv(matches, config)
@@ -209,6 +222,20 @@ def check_labels(entries: Sequence[tuple[str, str, StrategyOptions]]) -> None:
         raise ValueError(f"two strategies are named {', '.join(twice)}: rename one")
 
 
+def check_play_arguments(config: MatchConfig, matches: int, seed: int) -> None:
+    """TypeError unless ``config`` is a MatchConfig (which checks its own ticks), ValueError
+    naming ``matches`` unless it is a positive integer up to :data:`MAX_VECTOR_ENVS` (the
+    env's own limit, by which it was refused as ``num_envs``), or ``seed`` unless it is an
+    integer >= 0 (or None: fresh draws, other matches for each strategy)."""
+    if not isinstance(config, MatchConfig):
+        raise TypeError(f"config: expects a MatchConfig, got {type(config).__name__}")
+    check_count("matches", matches, MAX_VECTOR_ENVS)
+    if seed is not None and (
+        isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0
+    ):
+        raise ValueError(f"seed: expects an integer >= 0, got {seed!r}")
+
+
 #: Ticks a user's strategy plays as a trial before any strategy's matches (compare_matches).
 TRIAL_TICKS = 3
 
@@ -224,7 +251,9 @@ def compare_matches(
     :func:`expand_methods`, on the same seeds. The user's strategies first play
     :data:`TRIAL_TICKS` ticks of the same matches: one that fails fails before the others
     have played (which can take minutes), not after. ValueError if two entries share a
-    label (both were played, and the figures drew one of them)."""
+    label (both were played, and the figures drew one of them), or for bad counts
+    (:func:`check_play_arguments`), before any strategy plays."""
+    check_play_arguments(config, matches, seed)
     check_labels(entries)
     trial = config.replace(ticks=min(config.ticks, TRIAL_TICKS))
     for label, name, options in entries:
