@@ -277,6 +277,48 @@ def test_summarise_names_the_metric_of_an_episode_value_it_cannot_count():
 
 
 @pytest.mark.parametrize(
+    ("values", "error", "match"),
+    [
+        (
+            (v for v in [0.1, 0.2]),
+            TypeError,
+            r"^mean_interval: values .* of numbers, got generator$",
+        ),
+        (iter([0.1, 0.2]), TypeError, r"^mean_interval: values .* got list_iterator$"),
+        ({0.1, 0.2}, TypeError, r"^mean_interval: values .* got set$"),
+        ({"a": 0.1}, TypeError, r"^mean_interval: values .* got dict$"),
+        ("12", TypeError, r"^mean_interval: values .* got str$"),
+        (0.5, TypeError, r"^mean_interval: values .* got float$"),
+        ([0.1, "a"], ValueError, r"^mean_interval: values expects numbers: could not convert"),
+    ],
+)
+def test_mean_interval_names_values_of_a_type_it_cannot_take(values, error, match):
+    # a generator was "float() argument must be a string or a real number, not 'generator'"
+    with pytest.raises(error, match=match):
+        mean_interval(values)
+
+
+def test_summarise_names_episodes_of_a_type_it_cannot_take():
+    from activevision.experiments.evaluate import METRICS, summarise
+
+    episode = dict.fromkeys(METRICS, 0.0)
+    # a dict was "string indices must be integers, not 'str'"; a generator was read by the
+    # first metric alone, the others summarising no episodes
+    for episodes, kind in (
+        (episode, "dict"),
+        ((e for e in [episode]), "generator"),
+        ("abc", "str"),
+    ):
+        with pytest.raises(TypeError, match=rf"^summarise: episodes expects .*, got {kind}$"):
+            summarise(episodes)
+    with pytest.raises(TypeError, match=r"^summarise: episodes\[1\] expects a dict .*, got int$"):
+        summarise([episode, 3])
+    with pytest.raises(ValueError, match=r"^summarise: episodes\[1\] has no head_travel$"):
+        summarise([episode, {k: v for k, v in episode.items() if k != "head_travel"}])
+    assert summarise((episode, episode))["reward"] == summarise([episode, episode])["reward"]
+
+
+@pytest.mark.parametrize(
     ("kwargs", "message"),
     [
         ({"episodes": -3}, "episodes: expects a positive integer, got -3"),

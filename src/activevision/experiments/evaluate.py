@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import numbers
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence, Set
 from dataclasses import dataclass
 from typing import Any
 
@@ -68,6 +68,15 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> Interval:
     return Interval(p, max(0.0, min(p, centre - half)), min(1.0, max(p, centre + half)))
 
 
+def _check_collection(name: str, of: str, values: object) -> None:
+    """TypeError naming ``name`` and the type of ``values`` unless it is a sized collection
+    of ``of`` (a list, tuple, array, ...): an iterator is read once (numpy saw one object in
+    a generator, :func:`summarise` saw it empty after its first metric), a set drops
+    repeated values, a dict is its keys and a string its letters."""
+    if not isinstance(values, Collection) or isinstance(values, str | bytes | Mapping | Set):
+        raise TypeError(f"{name} expects a sequence of {of}, got {type(values).__name__}")
+
+
 def mean_interval(
     values: Sequence[float], z: float = Z95, bounds: tuple[float, float] | None = None
 ) -> Interval:
@@ -87,8 +96,13 @@ def mean_interval(
     ValueError if ``values`` is not one sequence of numbers (a table of them was read as
     one sample of every cell, n its rows), if ``bounds`` is not ``(low, high)`` with low <=
     high, or a value lies outside them (the cut interval left the mean outside it: values
-    of 2 within (0, 1) read 2.0 [0.88, 1.44])."""
-    x = np.asarray(values, float)
+    of 2 within (0, 1) read 2.0 [0.88, 1.44]) or a value is no number; TypeError naming
+    the type when ``values`` is no sized collection (:func:`_check_collection`)."""
+    _check_collection("mean_interval: values", "numbers", values)
+    try:
+        x = np.asarray(values, float)
+    except (TypeError, ValueError) as error:  # "could not convert string to float: 'a'"
+        raise ValueError(f"mean_interval: values expects numbers: {error}") from None
     if x.ndim != 1:
         raise ValueError(f"mean_interval: values expects a 1-D sequence, got shape {x.shape}")
     if bounds is not None:
@@ -119,7 +133,19 @@ def summarise(episodes: Sequence[dict], time_limit: int | None = None) -> dict[s
     """Mean and 95% interval of every metric over ``episodes``, each within the values it
     can take: shares within [0, 1], durations within 0 and ``time_limit`` (None: at least
     0), head travel at least 0 (the normal approximation read a ball-loss duration of
-    19.75 [19.26, 20.24] in episodes of 20 steps)."""
+    19.75 [19.26, 20.24] in episodes of 20 steps). TypeError unless ``episodes`` is a
+    sequence of dicts (a dict was "string indices must be integers"), ValueError naming the
+    episode that lacks a metric (it was a bare KeyError)."""
+    _check_collection("summarise: episodes", "per-episode dicts", episodes)
+    for index, episode in enumerate(episodes):
+        if not isinstance(episode, Mapping):
+            raise TypeError(
+                f"summarise: episodes[{index}] expects a dict of the episode's metrics,"
+                f" got {type(episode).__name__}"
+            )
+        missing = [name for name in METRICS if name not in episode]
+        if missing:
+            raise ValueError(f"summarise: episodes[{index}] has no {', '.join(missing)}")
     bounds = {
         **SHARE_BOUNDS,
         **dict.fromkeys(DURATIONS, (0.0, math.inf if time_limit is None else float(time_limit))),
