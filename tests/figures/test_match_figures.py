@@ -51,3 +51,26 @@ def test_plot_error_over_time_takes_nested_lists(tmp_path):
     # a list of lists was "'list' object has no attribute 'mean'"
     plot_error_over_time({"a": [[0.1, 0.2], [0.3, 0.1]]}, 0.1, tmp_path / "error.png", "t")
     assert (tmp_path / "error.png").stat().st_size > 5_000
+
+
+@pytest.mark.parametrize(
+    ("matches", "title", "bands"),
+    [
+        ({"a": 1, "b": 1}, "t; one match: no 95% bands", 0),
+        ({"a": 2, "b": 1}, "t; bands: 95% intervals, none over one match", 1),
+        ({"a": 2, "b": 3}, "t; bands: 95% intervals", 2),
+    ],
+)
+def test_plot_error_over_time_claims_bands_only_where_it_draws_them(
+    monkeypatch, matches, title, bands
+):
+    # one match's curve was titled "bands: 95% intervals" with no band drawn
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    curves = {name: np.full((4, m), 0.2) + np.arange(m) * 0.1 for name, m in matches.items()}
+    plot_error_over_time(curves, 0.1, "x", "t")
+    ax = drawn[0].axes[0]
+    assert ax.get_title() == title
+    assert len(ax.collections) == bands

@@ -106,8 +106,9 @@ def plot_error_over_time(
     title: str,
 ) -> None:
     """Mean position error over matches at each tick (``curves``: method -> (ticks, M)),
-    with a 95% band. ValueError where there is no curve or one is not a (ticks, M) array
-    (a blank figure, numpy's AxisError of a (ticks,) array)."""
+    with a 95% band where M > 1 (the title says which). ValueError where there is no curve
+    or one is not a (ticks, M) array (a blank figure, numpy's AxisError of a (ticks,)
+    array)."""
     if not curves:
         raise ValueError("plot_error_over_time: no curves to draw")
     for name, errors in curves.items():
@@ -124,20 +125,28 @@ def plot_error_over_time(
         errors = np.asarray(errors, dtype=float)
         t = np.arange(1, len(errors) + 1) * tick_seconds
         mean = errors.mean(axis=1)
-        half = (
-            1.96 * errors.std(axis=1, ddof=1) / math.sqrt(errors.shape[1])
-            if errors.shape[1] > 1
-            else 0
-        )
         ax.plot(t, mean, lw=1.2, label=name, color=colour)
-        ax.fill_between(t, mean - half, mean + half, alpha=0.2, color=colour)
+        if errors.shape[1] > 1:  # one match has no interval
+            half = 1.96 * errors.std(axis=1, ddof=1) / math.sqrt(errors.shape[1])
+            ax.fill_between(t, mean - half, mean + half, alpha=0.2, color=colour)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("position error (m), mean over matches")
-    ax.set_title(f"{title}; bands: 95% intervals", fontsize=9)
+    ax.set_title(f"{title}; {_bands_note(curves)}", fontsize=9)
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
     save_figure(fig, path, dpi=110)
+
+
+def _bands_note(curves: Mapping[str, np.ndarray]) -> str:
+    """What the error figure's bands are: 95% intervals, drawn for curves of two matches or
+    more (the title claimed bands over a single match's curve, which has none)."""
+    singles = sum(np.shape(errors)[1] == 1 for errors in curves.values())
+    if singles == len(curves):
+        return "one match: no 95% bands"
+    if singles:
+        return "bands: 95% intervals, none over one match"
+    return "bands: 95% intervals"
 
 
 def draw_match_tick(
