@@ -276,6 +276,36 @@ def test_summarise_names_the_metric_of_an_episode_value_it_cannot_count():
         summarise([*episodes, {**episodes[0], "success_duration": 25}], time_limit=20)
 
 
+def test_plot_compare_fits_the_legend_of_long_names_in_the_figure(tmp_path, monkeypatch):
+    from activevision.io import write_csv
+
+    def rows(methods):
+        cells = {
+            m + end: 0.5
+            for m in ("success_rate", "success", "regret_within")
+            for end in ("", "_low", "_high")
+        }
+        return [{"method": m, "error": e, **cells} for m in methods for e in (0.0, 1.0)]
+
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.compare.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    # eight 40-character names in one row ran past both edges; one of 150 characters past
+    # a single panel's
+    write_csv(
+        tmp_path / "many.csv",
+        rows([f"strategy_with_a_forty_character_name_{i:03d}" for i in range(8)]),
+    )
+    plot_compare(tmp_path / "many.csv", "x")
+    write_csv(tmp_path / "one.csv", rows(["scan", "a_strategy_" * 14]))
+    plot_compare(tmp_path / "one.csv", "x", metrics="success")
+    for fig in drawn:
+        fig.draw_without_rendering()
+        legend, box = fig.legends[0].get_window_extent(), fig.bbox
+        assert box.x0 <= legend.x0 and legend.x1 <= box.x1 and box.y0 <= legend.y0
+
+
 @pytest.mark.parametrize(
     ("values", "error", "match"),
     [

@@ -74,3 +74,44 @@ def test_plot_error_over_time_claims_bands_only_where_it_draws_them(
     ax = drawn[0].axes[0]
     assert ax.get_title() == title
     assert len(ax.collections) == bands
+
+
+def _legends_fit(fig) -> bool:
+    """Whether every legend lies within what holds it: a panel's within the panel, the
+    figure's within the figure (at the dpi it is saved at)."""
+    fig.set_dpi(120)
+    fig.draw_without_rendering()
+    held = [(legend, fig.bbox) for legend in fig.legends]
+    held += [(ax.get_legend(), ax.get_window_extent()) for ax in fig.axes if ax.get_legend()]
+
+    def within(b, box):
+        return (
+            box.x0 - 1 <= b.x0 and b.x1 <= box.x1 + 1 and box.y0 - 1 <= b.y0 <= b.y1 <= box.y1 + 1
+        )
+
+    return bool(held) and all(within(legend.get_window_extent(), box) for legend, box in held)
+
+
+@pytest.mark.parametrize(
+    "names",
+    [
+        # ran off the panel and the figure's bottom
+        [f"strategy_with_a_forty_character_name_{i:03d}" for i in range(30)],
+        ["a", "strategy_with_a_very_long_name_" * 20],  # ran off the left edge
+    ],
+)
+def test_plot_pareto_keeps_the_legend_of_long_names_inside_the_figure(monkeypatch, names):
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    points = {
+        name: {**POINT, "ball_in_view": (0.2 + 0.02 * i, 0.15 + 0.02 * i, 0.25 + 0.02 * i)}
+        for i, name in enumerate(names)
+    }
+    plot_pareto(points, names[:2], "x", "t")
+    assert _legends_fit(drawn[0])
+    # ordinary names keep their legend inside the left panel
+    plot_pareto({"a": POINT, "b": {**POINT, "ball_in_view": (0.3, 0.2, 0.4)}}, ["a"], "x", "t")
+    assert drawn[1].axes[0].get_legend() is not None and not drawn[1].legends
+    assert _legends_fit(drawn[1])

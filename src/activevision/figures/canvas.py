@@ -8,6 +8,7 @@ import math
 import numbers
 import os
 import re
+import textwrap
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -32,6 +33,38 @@ def figure_to_rgb(fig: Figure) -> np.ndarray:
     canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+
+#: Characters a line of a legend's label is cut to, widest first, where a label does not fit
+#: the figure's width in one column.
+_LABEL_LINES = (60, 40, 30, 20, 10)
+
+
+def fit_legend(
+    fig: Figure, handles: Sequence[Any], labels: Sequence[str], columns: int, **kwargs: Any
+) -> tuple[int, list[str]]:
+    """The most columns, up to ``columns``, and the labels in which
+    ``fig.legend(handles, labels, ncol=..., **kwargs)`` is no wider than the figure: a label
+    too wide for one column is broken into lines (long method names ran past the figure's
+    edge). The legend itself is for the caller to place; ``columns`` and ``labels`` come
+    back as they are where they fit."""
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+
+    def fits(ncol: int, names: list[str]) -> bool:
+        legend = fig.legend(handles, names, ncol=ncol, **kwargs)
+        width = legend.get_window_extent(renderer).width
+        legend.remove()
+        return bool(width <= fig.bbox.width)
+
+    names = list(labels)
+    for ncol in range(max(1, columns), 0, -1):
+        if fits(ncol, names):
+            return ncol, names
+    for chars in _LABEL_LINES:
+        names = [textwrap.fill(label, chars) for label in labels]
+        if fits(1, names):
+            break
+    return 1, names
 
 
 #: The format a figure is written in, by its file's suffix: those both writers below handle

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from typing import Any
 
-from activevision.figures.canvas import new_figure, save_figure
+from activevision.figures.canvas import fit_legend, new_figure, save_figure
 from activevision.io import read_csv
 
 #: y-axis labels (the CSV's column names say less to a reader)
@@ -76,10 +77,14 @@ def plot_compare(
         ax.set_title(TITLES.get(metric, metric), fontsize=10)
         ax.set_ylim(-0.02, 1.02)
         ax.grid(alpha=0.3)
-    # one legend for every panel, below them: inside one it covered curves
+    # one legend for every panel, below them (inside one it covered curves), in as many
+    # columns as fit the figure's width (long names ran past its edges)
     handles, labels = axes[0][0].get_legend_handles_labels()
+    style: dict[str, Any] = {"loc": "lower center", "fontsize": 9, "frameon": False}
     columns = max(1, min(len(labels), 3 * len(metrics)))  # ~3 names a panel's width
-    legend_rows = -(-len(labels) // columns)
-    fig.legend(handles, labels, loc="lower center", ncol=columns, fontsize=9, frameon=False)
+    columns, labels = fit_legend(fig, handles, labels, columns, **style)
+    fig.legend(handles, labels, ncol=columns, **style)
+    # a name too long for one column is broken into lines (in the one column)
+    legend_rows = -(-len(labels) // columns) + sum(label.count("\n") for label in labels)
     fig.tight_layout(rect=(0, 0.02 + 0.055 * legend_rows, 1, 1))
     save_figure(fig, out_png, dpi=120)

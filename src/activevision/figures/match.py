@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Collection, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from matplotlib import colormaps
@@ -14,7 +16,13 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Ellipse, Polygon
 
-from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
+from activevision.figures.canvas import (
+    figure_to_rgb,
+    fit_legend,
+    new_figure,
+    save_figure,
+    save_gif,
+)
 from activevision.figures.scene import camera_beside
 from activevision.figures.topview import draw_field
 from activevision.geometry import CameraConfig, FieldSpec
@@ -89,8 +97,25 @@ def plot_pareto(
     zoom.set_xlim(min(xs) - pad_x, max(xs) + pad_x)
     zoom.set_ylim(min(ys) - pad_y, max(ys) + pad_y)
     whole.set_title(title, fontsize=9)
-    whole.legend(fontsize=7)
+    _legend_inside_or_below(fig, whole)
     save_figure(fig, path, dpi=120)
+
+
+def _legend_inside_or_below(fig: Figure, ax: Axes) -> None:
+    """``ax``'s legend inside it where it fits, else below the panels in as many columns as
+    fit the figure's width (long or many method names ran past the figure's edges)."""
+    legend = ax.legend(fontsize=7)
+    with warnings.catch_warnings():  # a legend too large collapses the layout: moved below
+        warnings.filterwarnings("ignore", "constrained_layout not applied", UserWarning)
+        fig.draw_without_rendering()  # the layout and the legend's place
+    inside, box = legend.get_window_extent(), ax.get_window_extent()
+    if box.x0 <= inside.x0 and inside.x1 <= box.x1 and box.y0 <= inside.y0 and inside.y1 <= box.y1:
+        return
+    legend.remove()
+    handles, labels = ax.get_legend_handles_labels()
+    style: dict[str, Any] = {"loc": "outside lower center", "fontsize": 7, "frameon": False}
+    columns, labels = fit_legend(fig, handles, labels, len(labels), **style)
+    fig.legend(handles, labels, ncol=columns, **style)
 
 
 def _colours(n: int) -> list[tuple[float, float, float, float]]:
