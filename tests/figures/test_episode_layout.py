@@ -43,3 +43,12 @@ def test_the_row_label_counts_the_trace_s_steps(trace):
     short = trace.snapshots[:11]  # an episode of a 10-step limit
     assert label(success=False, ball_lost=False, snapshots=short) == "no success in 10 steps"
     assert label(success=False, ball_lost=True) == "ball lost"
+
+
+def test_an_animation_of_no_snapshots_is_refused_before_writing(trace, tmp_path):
+    from activevision.figures.episode import animate_episode
+
+    # it was an IndexError (the last frame lingers on the outcome) after the drawing
+    with pytest.raises(ValueError, match="animate_episode: the trace has no snapshots"):
+        animate_episode(dataclasses.replace(trace, snapshots=[]), tmp_path / "a.gif")
+    assert list(tmp_path.iterdir()) == []

@@ -47,6 +47,14 @@ def test_plot_error_over_time_names_what_it_cannot_draw(tmp_path, curves, messag
     assert not (tmp_path / "error.png").exists()
 
 
+@pytest.mark.parametrize("tick_seconds", [0, -0.32, float("nan"), float("inf"), "0.32", None])
+def test_plot_error_over_time_names_a_bad_tick_length(tmp_path, tick_seconds):
+    # 0 drew every tick at time 0, a negative one ran time backwards
+    with pytest.raises(ValueError, match="tick_seconds expects a positive number"):
+        plot_error_over_time({"a": np.zeros((3, 2))}, tick_seconds, tmp_path / "e.png", "t")
+    assert not (tmp_path / "e.png").exists()
+
+
 def test_plot_error_over_time_takes_nested_lists(tmp_path):
     # a list of lists was "'list' object has no attribute 'mean'"
     plot_error_over_time({"a": [[0.1, 0.2], [0.3, 0.1]]}, 0.1, tmp_path / "error.png", "t")

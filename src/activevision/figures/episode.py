@@ -135,7 +135,10 @@ def episodes_figure(traces: list[EpisodeTrace], columns: int = 6) -> Figure:
 
 
 def animate_episode(trace: EpisodeTrace, out_gif: str | os.PathLike[str], fps: int = 3) -> None:
-    """An animated GIF: camera image beside the top view, one frame per step."""
+    """An animated GIF: camera image beside the top view, one frame per step. ValueError
+    for a trace without snapshots (it was an IndexError after the loop)."""
+    if not trace.snapshots:
+        raise ValueError("animate_episode: the trace has no snapshots to draw")
     frames = []
     for s in trace.snapshots:
         fig = view_figure(

@@ -5,6 +5,7 @@ the belief's ellipse. Plain arrays in; the caller gathers them from the env."""
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import warnings
 from collections.abc import Collection, Mapping, Sequence
@@ -133,9 +134,14 @@ def plot_error_over_time(
     """Mean position error over matches at each tick (``curves``: method -> (ticks, M)),
     with a 95% band where M > 1 (the title says which). ValueError where there is no curve
     or one is not a (ticks, M) array (a blank figure, numpy's AxisError of a (ticks,)
-    array)."""
+    array), or ``tick_seconds`` is not a positive number."""
     if not curves:
         raise ValueError("plot_error_over_time: no curves to draw")
+    if not (isinstance(tick_seconds, numbers.Real) and 0 < tick_seconds < math.inf):
+        # 0 drew every tick at time 0, a negative time ran backwards
+        raise ValueError(
+            f"plot_error_over_time: tick_seconds expects a positive number, got {tick_seconds!r}"
+        )
     for name, errors in curves.items():
         shape = np.shape(errors)
         if len(shape) != 2 or 0 in shape:
