@@ -335,8 +335,8 @@ def test_our_robot_sidesteps_round_a_robot_its_step_closes_in_on():
     step, which closes in on the robot. It turned on the spot, and among standing robots
     near a corner stood so for up to 533 of a match's 600 ticks. It sidesteps instead: the
     step's part across the way to the robot, and half a step away from it (drift would
-    bring a bare sidestep closer every other tick); the sidestep is its odometry, and it
-    keeps its waypoint."""
+    bring a bare sidestep closer every other tick), at the step's length; the sidestep is
+    its odometry, and it keeps its waypoint."""
     side = 0.6 / np.sqrt(2)
     waypoint = (1.5, 1.5 * np.sqrt(3))
     batch = _facing((side, -side), waypoint)
@@ -345,6 +345,7 @@ def test_our_robot_sidesteps_round_a_robot_its_step_closes_in_on():
     towards = np.array([1.0, -1.0]) / np.sqrt(2)
     across = step - (step @ towards) * towards
     expected = across - 0.5 * np.hypot(*step) * towards
+    expected *= np.hypot(*step) / np.hypot(*expected)  # no faster than it walks
     np.testing.assert_allclose(odometry, [*expected, 0.16], atol=1e-12)
     assert expected[1] > 0.02 and expected[0] > 0  # mostly to the left, a little on
     gap = np.hypot(*(batch.pose[0, :2] - (side, -side)))
@@ -359,17 +360,21 @@ def test_a_sidestep_needs_a_way_across():
     pose = np.zeros(3)
     assert sidestep(pose, 0.61, 0.0, 0.064, 0.0) == (0.0, 0.0)
     assert sidestep(pose, 0.61, 0.1, 0.064, 0.0) == (0.0, 0.0)  # 9 degrees off: 0.16 across
-    # beside it (blocked only by the step's drift): the step, and half a step away
-    assert sidestep(pose, 0.0, 0.61, 0.064, 0.0) == (0.064, -0.032)
+    # beside it (blocked only by the step's drift): the step, and half a step away, at the
+    # step's length (a sidestep of 0.072 m walked 12% faster than the robot walks)
+    np.testing.assert_allclose(
+        sidestep(pose, 0.0, 0.61, 0.064, 0.0), 0.064 * np.array([2.0, -1.0]) / np.sqrt(5)
+    )
     x, y = sidestep(pose, 0.5, 0.5, 0.064, 0.0)  # 45 degrees: 0.71 of it across
-    np.testing.assert_allclose([x, y], [0.032 - 0.032 / np.sqrt(2), -0.032 - 0.032 / np.sqrt(2)])
+    way = np.array([0.032 - 0.032 / np.sqrt(2), -0.032 - 0.032 / np.sqrt(2)])
+    np.testing.assert_allclose([x, y], way * 0.064 / np.hypot(*way))
 
 
 def test_our_robot_whose_sidestep_is_blocked_too_turns_on_the_spot():
     """The robot 45 degrees to the right of the sidestep test, and a second one standing
     where the sidestep (to the left) ends within 0.6 m of it: our robot turns on the spot
-    (its position unchanged, the turn its odometry) and, the waypoint lying beyond the
-    robot its sidestep would walk into, takes a new one from its give-way draws."""
+    (its position unchanged, the turn its odometry) and, wedged between two robots, takes a
+    new waypoint from its give-way draws."""
     side = 0.6 / np.sqrt(2)
     waypoint = (1.5, 1.5 * np.sqrt(3))
     batch = MatchBatch(
@@ -401,13 +406,13 @@ def test_our_robot_whose_sidestep_is_blocked_too_turns_on_the_spot():
     np.testing.assert_array_equal(batch.waypoint[0], waypoint)
 
 
-@pytest.mark.parametrize(("target", "before"), [("waypoints", 533), ("ball", 212)])
-def test_our_robot_among_standing_robots_never_stands_long(target, before):
+@pytest.mark.parametrize("target", ["waypoints", "ball"])
+def test_our_robot_among_standing_robots_never_stands_long(target):
     """Among four standing robots, walking to waypoints or to the ball, our robot stands
     still (its position unchanged) for at most 60 ticks running in 300 matches of 600
     (waypoint pauses are up to 15 ticks). Turning on the spot where a robot stood half beside its
-    way it stood for ``before`` ticks; sidestepping, but keeping its waypoint when wedged
-    between two robots, 188 (waypoints)."""
+    way it stood for 533 ticks walking to waypoints, 212 walking to the ball; sidestepping,
+    but keeping its waypoint when wedged between two robots, 188 (waypoints)."""
     cfg = MatchConfig(robots=RobotsConfig(count=(4, 4)), walk=WalkConfig(target=target))
     _, _, own = _play(cfg, list(range(1000, 1300)), 600)
     moved = np.hypot(*np.moveaxis(np.diff(own[..., :2], axis=0), -1, 0)) > 0  # (T, N)
@@ -416,7 +421,26 @@ def test_our_robot_among_standing_robots_never_stands_long(target, before):
     for step in moved:
         standing = np.where(step, 0, standing + 1)
         longest = max(longest, int(standing.max()))
-    assert 0 < longest <= 60 < before
+    assert 0 < longest <= 60
+
+
+def test_a_sidestep_cut_short_by_the_carpet_s_edge_keeps_a_waypoint_clear_of_the_robot():
+    """The sidestep test on the carpet's edge (y = 4 m): the sidestep, to the left, is cut
+    at the edge and still closes in on the same robot. Our robot turns on the spot and keeps
+    its waypoint, which lies clear of that robot (it is not wedged between two: it took a
+    new waypoint, and walking to the ball a detour, whenever a sidestep was blocked)."""
+    side = 0.6 / np.sqrt(2)
+    for target in ("waypoints", "ball"):
+        waypoint = (1.5, 4.0 + 1.5 * np.sqrt(3))
+        batch = _facing((side, 4.0 - side), waypoint=waypoint, target=target)
+        batch.pose[0] = batch.mean[0] = (0.0, 4.0, 0.0)
+        batch.ball_relative[0] = (1.5, 1.5 * np.sqrt(3))  # the ball on the waypoint
+        odometry = _move(batch)
+        np.testing.assert_allclose(odometry, [0.0, 0.0, 0.16])
+        np.testing.assert_array_equal(batch.pose[0, :2], [0.0, 4.0])
+        if target == "waypoints":
+            np.testing.assert_array_equal(batch.waypoint[0], waypoint)
+        assert batch.detour[0] == 0
 
 
 def _play_own(bounces: bool, seeds: list[int], ticks: int):

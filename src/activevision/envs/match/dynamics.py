@@ -130,8 +130,9 @@ def sidestep(
     """The sidestep round the robot at ``(robot_x, robot_y)`` that a walking engine makes
     of the robot-frame step ``(dx, dy)`` of a robot at ``pose`` (3,): the step's part
     across the way to that robot, and a part away from it of :data:`SIDESTEP_OUTWARD` of
-    the step, instead of its part towards it. ``(0, 0)`` where the part across is less
-    than :data:`MIN_SIDESTEP` of the step (or there is no step)."""
+    the step, instead of its part towards it, at the step's length (no faster than it
+    walks). ``(0, 0)`` where the part across is less than :data:`MIN_SIDESTEP` of the step
+    (or there is no step)."""
     bx, by = to_robot_frame(robot_x, robot_y, pose)
     distance, length = math.hypot(bx, by), math.hypot(dx, dy)
     if distance == 0.0 or length == 0.0:
@@ -142,7 +143,9 @@ def sidestep(
     if math.hypot(across_x, across_y) < MIN_SIDESTEP * length:
         return 0.0, 0.0
     away = SIDESTEP_OUTWARD * length
-    return across_x - away * ux, across_y - away * uy
+    side_x, side_y = across_x - away * ux, across_y - away * uy
+    scale = length / math.hypot(side_x, side_y)
+    return side_x * scale, side_y * scale
 
 
 @njit(cache=True)

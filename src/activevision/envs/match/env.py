@@ -58,12 +58,12 @@ class ActiveVisionMatchEnv(gym.Env):
        slip per tick); the commanded step is its odometry. It gives way to the other
        robots: a step that would end within ``robots.min_spacing`` of one it does not make,
        but sidesteps round that robot (the step's part across the way to it, and half a
-       step away from it; the sidestep is its odometry). Where no sidestep is left (the
-       robot about straight ahead) or it too is blocked, it turns on the spot (its odometry
-       the turn alone), giving up a waypoint that lies beyond that robot, or any where
-       its sidestep was blocked too (wedged between robots), for a new one (walking to
-       the ball, with the ball beyond it, it walks to such a waypoint for a
-       detour of 20 ticks, then to the ball again);
+       step away from it, as long as the step; the sidestep is its odometry). Where no
+       sidestep is left (the robot about straight ahead) or it too is blocked, it turns on
+       the spot (its odometry the turn alone), giving up a waypoint that lies beyond that
+       robot, or any where another robot blocked its sidestep (wedged between two), for a
+       new one (walking to the ball, with the ball beyond it or so wedged, it walks to such
+       a waypoint for a detour of 20 ticks, then to the ball again);
     3. the ball (:class:`BallConfig`) rolls with constant deceleration, bounces off the
        field lines, and is kicked at random times in random directions. It rolls through
        our own robot unless ``ball.bounces_off_own_robot`` (then it bounces off our body as

@@ -181,14 +181,14 @@ def move_kernel(
     after it): a step whose true motion (the commanded step and its drift) would end closer
     than ``spacing`` to one of them while closing in on it is not made. The robot
     sidesteps round that robot instead (:func:`~activevision.envs.match.dynamics.sidestep`,
-    with the same drift draws), its odometry the sidestep: it turned on the spot, and
-    among standing robots stood so for up to 533 of a match's 600 ticks. Where the step
+    with the same drift draws), its odometry the sidestep (turning on the spot instead, it
+    stood for up to 533 of a match's 600 ticks among standing robots). Where the step
     leaves no sidestep (that robot about straight ahead) or the sidestep is blocked too, it
     turns on the spot: its position unchanged, its heading turned by the commanded turn and
     that turn's drift alone, its odometry the turn (its walking engine commanded no step,
     and it made none). A waypoint beyond that robot (:func:`_beyond`), or any where its
-    sidestep was blocked too (wedged between robots: keeping it, it stood up to 188
-    ticks), it gives up for a new one from its give-way draws; one clear of it it keeps,
+    sidestep was blocked by another robot (wedged between two: keeping it, it stood up to
+    188 ticks), it gives up for a new one from its give-way draws; one clear of it it keeps,
     turning on the spot until a step towards it parts from the robot. Walking to the ball,
     with the ball beyond that robot, it takes such a waypoint as a detour, walked to for
     :data:`DETOUR_TICKS` ticks (or until reached) before it turns to the ball again: it
@@ -212,22 +212,22 @@ def move_kernel(
         drift = normals[j, 2 * k : 2 * k + 3]
         _walk(moved, s.pose[n], (dx, dy, dth), drift, model, p)
         blocker = blocking_robot(s.pose[n], moved, s.robots[n], p.spacing)
-        can_sidestep = False
+        wedged = False
         if blocker >= 0:
-            # go round it, where the step leaves a sidestep
+            # go round it, where the step leaves a sidestep ((0, 0): none)
             rx, ry = s.robots[n, blocker, 0], s.robots[n, blocker, 1]
             side_x, side_y = sidestep(s.pose[n], rx, ry, dx, dy)
-            can_sidestep = side_x != 0.0 or side_y != 0.0
-            if can_sidestep:
+            if side_x != 0.0 or side_y != 0.0:
                 _walk(moved, s.pose[n], (side_x, side_y, dth), drift, model, p)
-                blocker = blocking_robot(s.pose[n], moved, s.robots[n], p.spacing)
-                if blocker < 0:
-                    dx, dy = side_x, side_y
+                other = blocking_robot(s.pose[n], moved, s.robots[n], p.spacing)
+                if other < 0:
+                    blocker, dx, dy = -1, side_x, side_y
+                wedged = other >= 0 and other != blocker
         if blocker >= 0:
-            # give way: turn on the spot, as commanded, with a pure turn's drift; a robot
-            # whose sidestep is blocked too stands wedged between robots, and takes a new
-            # waypoint as one beyond them (it stood up to 188 ticks of 600 turning to its own)
-            if can_sidestep or _beyond(s, n, blocker):
+            # give way: turn on the spot, as commanded, with a pure turn's drift (no slip of
+            # a step); wedged between two robots, it takes a new waypoint as if beyond them
+            # (keeping its own, it stood up to 188 ticks of 600 turning to it)
+            if wedged or _beyond(s, n, blocker):
                 give_way = uniforms[j, k + 10 : k + 12]
                 s.waypoint[n, 0] = p.waypoint_x * (2 * give_way[0] - 1)
                 s.waypoint[n, 1] = p.waypoint_y * (2 * give_way[1] - 1)
