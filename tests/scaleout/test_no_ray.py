@@ -15,7 +15,7 @@ from activevision.scaleout import RAY_INSTALL_HINT, aggregate, require_ray
 from activevision.scaleout.compare import default_method_names
 from activevision.scaleout.sweep import (
     UNFINISHED_WARNING,
-    base_config,
+    checked_base,
     grid_points,
     trial_config,
     trial_name,
@@ -84,23 +84,33 @@ def test_a_set_key_is_checked_against_each_grid_algo_and_env():
     from activevision.training import preset
 
     sets = {"sb3.tau": 0.01, "env.action_type": "continuous", "replay.buffer_size": 50_000}
-    config = base_config(preset("paper"), sets, {"algo": ["sac", "td3"]})
+    config = checked_base(preset("paper"), sets, {"algo": ["sac", "td3"]})
     trials = [trial_config(config, 0, p) for p in grid_points({"algo": ["sac", "td3"]})]
     assert [(t.algo, t.sb3.tau) for t in trials] == [("sac", 0.01), ("td3", 0.01)]
-    config = base_config(preset("sac_head"), {"sb3.action_noise": 0.2}, {"algo": ["td3"]})
+    config = checked_base(preset("sac_head"), {"sb3.action_noise": 0.2}, {"algo": ["td3"]})
     assert trial_config(config, 0, {"algo": "td3"}).sb3.action_noise == 0.2
     # read by TD3 only: the SAC trial would store it unread
     with pytest.raises(ValueError, match="never read by an algo='sac' run"):
-        base_config(preset("sac_head"), {"sb3.action_noise": 0.2}, {"algo": ["sac", "td3"]})
+        checked_base(preset("sac_head"), {"sb3.action_noise": 0.2}, {"algo": ["sac", "td3"]})
     # no grid over algo: the base config's algo decides, as --set on train
     with pytest.raises(ValueError, match="never read by an algo='sac' run"):
-        base_config(preset("sac_head"), {"sb3.action_noise": 0.2}, {"learning_rate": ["1e-3"]})
+        checked_base(preset("sac_head"), {"sb3.action_noise": 0.2}, {"learning_rate": ["1e-3"]})
     # a grid over the env: a match key holds where every trial plays the match
     match_grid = {"env_id": ['"ActiveVisionMatch-v0"'], "algo": ['"dagger"']}
     sets = {"match.ticks": 300, "match.observation": "image+head+belief", "act_by": "action"}
-    assert base_config(preset("paper"), sets, match_grid).match.ticks == 300
+    assert checked_base(preset("paper"), sets, match_grid).match.ticks == 300
     with pytest.raises(ValueError, match="sets the match env's config"):
-        base_config(preset("paper"), sets, {"algo": ['"dagger"']})
+        checked_base(preset("paper"), sets, {"algo": ['"dagger"']})
+    # a grid over the DAgger teacher: a teacher's margin holds where every trial's reads it
+    margin = {"dagger.glance_track_margin_deg": 10.0}
+    teachers = {"dagger.match_teacher": ["glance_track"]}
+    assert checked_base(preset("match_dagger"), margin, teachers).dagger.match_teacher == (
+        "glance_track"
+    )
+    with pytest.raises(ValueError, match="only the glance_track teacher reads it"):
+        checked_base(
+            preset("match_dagger_glance"), margin, {"dagger.match_teacher": ["entropy_track"]}
+        )
 
 
 def _metrics(run_dir: Path, success: list[float], epoch_steps: int = 300) -> None:

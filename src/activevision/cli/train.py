@@ -185,8 +185,8 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     Trials that failed end it with an error (exit code 2) after the outputs of the others."""
     from activevision.scaleout.sweep import (
         UNFINISHED_WARNING,
-        base_config,
         check_trials_finished,
+        checked_base,
         sweep,
     )
     from activevision.training import load_config, preset
@@ -198,7 +198,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
 
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     grid = dict(args.grid or [])
-    config = base_config(config, parse_overrides(args.set or []), grid)
+    config = checked_base(config, parse_overrides(args.set or []), grid)
     with warnings.catch_warnings():
         # the command ends with one error line on failed trials (check_trials_finished)
         warnings.filterwarnings("ignore", message=UNFINISHED_WARNING)

@@ -116,19 +116,27 @@ def _point_values(point: Mapping[str, Any]) -> dict[str, Any]:
     return {k: override_value(k, v) if isinstance(v, str) else v for k, v in point.items()}
 
 
-def base_config(
+#: The settings that decide which other keys a run reads (``training.config``'s unread-key
+#: checks): a ``--set`` key is checked against each of their grid values.
+DECIDING_KEYS = ("algo", "env_id", "dagger.match_teacher", "dagger.act_by")
+
+
+def checked_base(
     config: TrainConfig, overrides: Mapping[str, Any], grid: Mapping[str, Sequence[Any]] | None
 ) -> TrainConfig:
-    """``config`` with ``overrides`` (a ``--set`` list's values) applied: the sweep's
-    ``base_config``. Every key must be read by the trials' runs; where the grid varies
-    ``algo`` or ``env_id``, by each of them (``--set sb3.tau=0.01 --grid algo=sac,td3``
-    holds, though the preset's algo never reads ``sb3.*``)."""
+    """``config`` with ``overrides`` (a ``--set`` list's values) applied: the sweep's base
+    config. Every key must be read by the trials' runs; where the grid varies a setting of
+    :data:`DECIDING_KEYS`, by each of them (``--set sb3.tau=0.01 --grid algo=sac,td3``
+    holds, though the preset's algo never reads ``sb3.*``; ``--set
+    dagger.glance_track_margin_deg=10 --grid dagger.match_teacher=entropy_track`` does not).
+    Where it does, the base takes the first grid point's deciding values: each trial sets
+    its own."""
     paths = field_paths()
-    deciding = {k: v for k, v in (grid or {}).items() if paths.get(k.strip()) in ("algo", "env_id")}
+    deciding = {k: v for k, v in (grid or {}).items() if paths.get(k.strip()) in DECIDING_KEYS}
     if not deciding:
         return with_values(config, overrides)
     bases = [with_values(config, {**overrides, **_point_values(p)}) for p in grid_points(deciding)]
-    return bases[0]  # each trial sets its own algo and env: any point's base serves
+    return bases[0]
 
 
 # ---------------------------------------------------------------------- the trainable
