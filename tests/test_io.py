@@ -5,7 +5,7 @@ import os
 
 import pytest
 
-from activevision.io import write_text
+from activevision.io import write_csv, write_text
 
 
 def test_a_write_replaces_the_file_whole_and_leaves_no_temporary(tmp_path):
@@ -63,8 +63,15 @@ def test_read_csv_names_the_line_of_a_row_cut_short_or_run_on_and_a_file_not_tex
     path.write_text("x,y\n1,2,3\n")
     with pytest.raises(ValueError, match=r"a\.csv line 2 has more cells than its header"):
         read_csv(path)
+    # the line in the file, past blank lines and a cell of two lines (a count of rows: 3)
+    path.write_text('x,y\n1,"a\nb"\n\n\n3\n')
+    with pytest.raises(ValueError, match=r"a\.csv line 6 has fewer cells than its header"):
+        read_csv(path)
     path.write_bytes(b"\xff\xfex,y\n")
     with pytest.raises(ValueError, match=r"a\.csv is damaged .*UnicodeDecodeError"):
         read_csv(path)
     path.write_text("x,y\n1,2\n")
     assert read_csv(path) == [{"x": "1", "y": "2"}]
+    write_csv(path, [{"x": "Müller", "y": "—"}])  # UTF-8 both ways, whatever the locale
+    assert path.read_bytes() == "x,y\r\nMüller,—\r\n".encode()
+    assert read_csv(path) == [{"x": "Müller", "y": "—"}]

@@ -77,8 +77,9 @@ def nan_as_null(data: Any) -> Any:
 
 
 def write_csv(path: str | os.PathLike, rows: Sequence[dict]) -> None:
-    """Rows of dicts with the same keys (the first row's keys are the header)."""
-    with atomic_path(path) as tmp, tmp.open("w", newline="") as f:
+    """Rows of dicts with the same keys (the first row's keys are the header), as UTF-8 (as
+    :func:`read_csv` reads them, whatever the locale)."""
+    with atomic_path(path) as tmp, tmp.open("w", encoding="utf-8", newline="") as f:
         if rows:
             writer = csv.DictWriter(f, fieldnames=list(rows[0]))
             writer.writeheader()
@@ -86,18 +87,27 @@ def write_csv(path: str | os.PathLike, rows: Sequence[dict]) -> None:
 
 
 def read_csv(path: str | os.PathLike) -> list[dict[str, str]]:
-    """A CSV file's rows as dicts keyed by its header; ValueError naming the file and line
-    where a row has more or fewer cells than the header (a file cut mid-row: DictReader
-    fills the missing cells with None, which were read on as values) or the file is not
-    CSV text."""
+    """A CSV file's rows as dicts keyed by its header (:func:`read_csv_lines`)."""
+    return [row for _, row in read_csv_lines(path)]
+
+
+def read_csv_lines(path: str | os.PathLike) -> list[tuple[int, dict[str, str]]]:
+    """A CSV file's rows as dicts keyed by its header, each with the line it ends on;
+    ValueError naming the file and line where a row has more or fewer cells than the header
+    (a file cut mid-row: DictReader fills the missing cells with None, which were read on as
+    values) or the file is not CSV text."""
+    rows = []
     try:
         with Path(path).open(encoding="utf-8", newline="") as f:
-            rows = list(csv.DictReader(f))
+            reader = csv.DictReader(f)
+            # the reader's line, not a count of rows: it skips blank lines, and a quoted
+            # cell may hold several
+            rows = [(reader.line_num, row) for row in reader]
     except (UnicodeDecodeError, csv.Error) as error:  # binary, a NUL, a field past the limit
         raise ValueError(
             f"{path} is damaged or not a file activevision wrote ({type(error).__name__}: {error})"
         ) from None
-    for line, row in enumerate(rows, start=2):  # the header is line 1
+    for line, row in rows:
         if None in row or None in row.values():  # DictReader's marks of a row cut or run on
             raise ValueError(
                 f"{path} line {line} has {'more' if None in row else 'fewer'} cells than its"

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from activevision.figures.canvas import fit_legend, new_figure, save_figure
-from activevision.io import read_csv
+from activevision.io import read_csv_lines
 
 #: y-axis labels (the CSV's column names say less to a reader)
 Y_LABELS = {
@@ -35,7 +35,8 @@ def plot_compare(
     has. ValueError naming the file where it has no rows, a row is cut short or a cell is
     not a number, or it has none of ``metrics`` (blank panels, or matplotlib's "Number of
     columns must be a positive integer")."""
-    rows = read_csv(csv_path)
+    lines = read_csv_lines(csv_path)
+    rows = [row for _, row in lines]
     if not rows:
         raise ValueError(f"{csv_path} holds no levels to draw")
     if isinstance(metrics, str):  # one name, not its letters
@@ -48,7 +49,7 @@ def plot_compare(
             f"{csv_path} has none of the columns {', '.join(asked)} (each with its _low and"
             " _high) beside error and method"
         )
-    for line, row in enumerate(rows, start=2):
+    for line, row in lines:
         for column in ("error", *(f"{m}{end}" for m in metrics for end in ("", "_low", "_high"))):
             try:
                 float(row[column])
