@@ -896,32 +896,46 @@ def test_ctrl_c_is_one_line_and_an_interrupted_run_says_how_to_resume(
     assert not out.exists()  # the folder it made is removed again
 
 
+MATCH_ARGV = ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "random"]
+
+
 @pytest.mark.parametrize(
-    ("argv", "last_writer", "outputs"),
+    ("argv", "last_writer", "outputs", "last_output"),
     [
         (
-            ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "random"],
+            MATCH_ARGV,
             "activevision.figures.match.save_gif",
             ["match.csv", "match_pareto.png", "match_error.png"],
+            "match_clip.gif",
+        ),
+        # with --baseline: an older match_paired.csv outlived a failed first write
+        (
+            [*MATCH_ARGV, "--baseline", "random"],
+            "activevision.io.write_csv",
+            [],
+            "match_paired.csv",
         ),
         (
             ["robustness", "--method", "random", "--episodes", "1", "--perturbations", "clean"],
             "activevision.figures.robustness.plot_robustness",
             ["robustness.csv"],
+            "robustness.png",
         ),
         (
             ["evaluate", "--methods", "random", "--episodes", "2"],
             "activevision.io.write_json",
             ["evaluation.csv", "episodes.csv"],
+            "evaluation.json",
         ),
     ],
 )
 def test_an_interrupt_while_writing_outputs_leaves_none_of_them(
-    tmp_path, monkeypatch, one_clear_line, argv, last_writer, outputs
+    tmp_path, monkeypatch, one_clear_line, argv, last_writer, outputs, last_output
 ):
     """Ctrl-C while ``match`` wrote its figures left match.csv and two figures without the
     GIF (robustness: its CSV without the figure), a set that looked finished. An interrupted
-    command leaves none of its outputs, as one stopped while it played."""
+    command leaves none of its outputs (``outputs`` written before ``last_writer`` writes
+    ``last_output``), as one stopped while it played."""
     import importlib
 
     module_name, _, name = last_writer.rpartition(".")
@@ -944,8 +958,9 @@ def test_an_interrupt_while_writing_outputs_leaves_none_of_them(
     monkeypatch.setattr(module, name, written)
     assert main([*argv, "--out", str(out)]) == 0
     monkeypatch.setattr(module, name, write_then_interrupt)
+    assert (out / last_output).exists()
     assert main([*argv, "--out", str(out), "--overwrite"]) == 130
-    assert not out.exists() or not [p for p in out.iterdir() if p.name in outputs]
+    assert not out.exists() or not [p for p in out.iterdir() if p.name in [*outputs, last_output]]
 
 
 def test_sigterm_stops_train_as_ctrl_c_does(tmp_path, tiny_train):

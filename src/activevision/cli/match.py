@@ -251,7 +251,10 @@ def cmd_match(args: argparse.Namespace) -> None:
         print(
             f"privileged references (read the simulator's truth): {', '.join(sorted(references))}"
         )
-    with removed_on_failure(made, files):  # all of its outputs, or none
+    # all of its outputs, or none: an older paired CSV too (it was left beside the
+    # removed set when a write before it failed under --overwrite)
+    outputs = files + ([paired_path] if args.baseline is not None else [])
+    with removed_on_failure(made, outputs):
         csv_path, pareto_path, error_path, clip_path = files
         write_csv(csv_path, csv_rows(results, args.matches, args.seed, config))
         if args.baseline is None and args.overwrite and paired_path.exists():
@@ -264,7 +267,6 @@ def cmd_match(args: argparse.Namespace) -> None:
                 print(format_difference(method, metrics, width))
             pairs = paired_rows(differences, args.baseline, args.matches, args.seed)
             write_csv(paired_path, pairs)
-            files.append(paired_path)
         # the run by its folder's name, not by the path given: the figures are the same bytes
         # whatever the current directory and wherever the run lies
         run_name = None if args.run is None else args.run.resolve().name
@@ -298,7 +300,7 @@ def cmd_match(args: argparse.Namespace) -> None:
             robot_radius=config.robots.radius,
         )
         save_gif(frames, clip_path, fps=10)
-    print(f"wrote {', '.join(str(f) for f in files)}")
+    print(f"wrote {', '.join(str(f) for f in outputs)}")
 
 
 def add_parsers(sub: Any) -> None:

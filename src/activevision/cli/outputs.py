@@ -136,7 +136,8 @@ def removed_on_failure(made: list[Path], outputs: Sequence[Path] = ()) -> Iterat
     """When the block fails, remove the command's ``outputs`` (read when it fails: a list may
     grow) and the folders ``made`` (:func:`make_output_folder`) again: a failed or
     interrupted command leaves neither an empty folder nor a part of its set of outputs
-    (a CSV without its figures). Under ``--overwrite`` the older set goes with it."""
+    (a CSV without its figures). Under ``--overwrite`` the older set goes with it (the
+    block is the writing: an interrupt before it leaves the older set as it was)."""
     try:
         yield
     except BaseException:
