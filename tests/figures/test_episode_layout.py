@@ -45,10 +45,18 @@ def test_the_row_label_counts_the_trace_s_steps(trace):
     assert label(success=False, ball_lost=True) == "ball lost"
 
 
-def test_an_animation_of_no_snapshots_is_refused_before_writing(trace, tmp_path):
+def test_an_animation_of_no_snapshots_is_refused_before_writing(trace, tmp_path, monkeypatch):
     from activevision.figures.episode import animate_episode
 
     # it was an IndexError (the last frame lingers on the outcome) after the drawing
     with pytest.raises(ValueError, match="animate_episode: the trace has no snapshots"):
         animate_episode(dataclasses.replace(trace, snapshots=[]), tmp_path / "a.gif")
+
+    # a bad fps is named before the frames are drawn (then save_gif refused it)
+    def drawn(*args, **kwargs):
+        raise AssertionError("drew a frame")
+
+    monkeypatch.setattr("activevision.figures.episode.view_figure", drawn)
+    with pytest.raises(ValueError, match="fps: expects a finite positive number, got 0"):
+        animate_episode(trace, tmp_path / "a.gif", fps=0)
     assert list(tmp_path.iterdir()) == []

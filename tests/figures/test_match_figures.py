@@ -47,7 +47,7 @@ def test_plot_error_over_time_names_what_it_cannot_draw(tmp_path, curves, messag
     assert not (tmp_path / "error.png").exists()
 
 
-@pytest.mark.parametrize("tick_seconds", [0, -0.32, float("nan"), float("inf"), "0.32", None])
+@pytest.mark.parametrize("tick_seconds", [0, -0.32, float("nan"), float("inf"), "0.32", None, True])
 def test_plot_error_over_time_names_a_bad_tick_length(tmp_path, tick_seconds):
     # 0 drew every tick at time 0, a negative one ran time backwards
     with pytest.raises(ValueError, match="tick_seconds expects a positive number"):

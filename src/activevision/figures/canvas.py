@@ -146,7 +146,7 @@ def save_rgb(rgb: np.ndarray, path: str | os.PathLike[str]) -> None:
     _write_same_bytes(path, lambda f, fmt, metadata: imsave(f, rgb, format=fmt, metadata=metadata))
 
 
-def _check_fps(fps: object) -> float:
+def check_fps(fps: object) -> float:
     """``fps`` as a float, if a finite positive number: a ValueError naming it otherwise
     (0 was a ZeroDivisionError, a negative or NaN a GIF of nonsense durations)."""
     if isinstance(fps, bool) or not isinstance(fps, numbers.Real):
@@ -185,7 +185,7 @@ def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: fl
     dependency). Bad frames or fps are refused before anything is written."""
     from PIL import Image
 
-    fps = _check_fps(fps)
+    fps = check_fps(fps)
     frames = list(frames)  # an iterator of frames, as was taken, is checked and saved once
     _check_frames(frames)
     images = [Image.fromarray(f) for f in frames]

@@ -13,7 +13,13 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.figure import Figure
 
-from activevision.figures.canvas import figure_to_rgb, new_figure, save_figure, save_gif
+from activevision.figures.canvas import (
+    check_fps,
+    figure_to_rgb,
+    new_figure,
+    save_figure,
+    save_gif,
+)
 from activevision.figures.scene import view_figure
 from activevision.figures.topview import draw_topview, landmark_key
 from activevision.geometry import CameraConfig, FieldSpec, LandmarkSet
@@ -139,6 +145,7 @@ def animate_episode(trace: EpisodeTrace, out_gif: str | os.PathLike[str], fps: i
     for a trace without snapshots (it was an IndexError after the loop)."""
     if not trace.snapshots:
         raise ValueError("animate_episode: the trace has no snapshots to draw")
+    check_fps(fps)  # before drawing every frame
     frames = []
     for s in trace.snapshots:
         fig = view_figure(

@@ -137,7 +137,9 @@ def plot_error_over_time(
     array), or ``tick_seconds`` is not a positive number."""
     if not curves:
         raise ValueError("plot_error_over_time: no curves to draw")
-    if not (isinstance(tick_seconds, numbers.Real) and 0 < tick_seconds < math.inf):
+    if isinstance(tick_seconds, bool) or not (
+        isinstance(tick_seconds, numbers.Real) and 0 < tick_seconds < math.inf
+    ):
         # 0 drew every tick at time 0, a negative time ran backwards
         raise ValueError(
             f"plot_error_over_time: tick_seconds expects a positive number, got {tick_seconds!r}"
