@@ -303,3 +303,9 @@ def test_runtime_action_names_are_the_envs():
     from activevision.runtime.metadata import STANDARD_ACTION_NAMES
 
     assert STANDARD_ACTION_NAMES == ACTION_NAMES_8WAY
+
+
+def test_the_controller_s_thread_bound_is_the_training_config_s():
+    from activevision.training.config import MAX_THREADS as TRAINING_MAX_THREADS
+
+    assert MAX_THREADS == TRAINING_MAX_THREADS
