@@ -3,6 +3,8 @@ sub-environments of the native vector envs."""
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 from gymnasium.utils import seeding
 
@@ -15,6 +17,15 @@ def episode_seed(base_seed: int, episode: int) -> int:
     for the same seed, and sets of different base seeds do not overlap for up to
     :data:`EPISODES_PER_SEED` episodes."""
     return base_seed * EPISODES_PER_SEED + episode
+
+
+def check_seed(seed: object) -> int:
+    """``seed`` as an int, if it is an integer >= 0 (a NumPy one too): a ValueError naming
+    it otherwise (a bool, a float; a negative one was Gymnasium's refusal of a derived
+    seed)."""
+    if isinstance(seed, bool | np.bool_) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise ValueError(f"seed: expects an integer >= 0, got {seed!r}")
+    return int(seed)
 
 
 def single_env_seed(seed: int | None) -> int | None:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import numbers
 import time
 from collections.abc import Collection, Mapping, Sequence, Set
 from dataclasses import dataclass
@@ -13,7 +12,7 @@ import numpy as np
 
 from activevision.envs import ActiveVisionEnv, EnvConfig
 from activevision.envs.config import check_count
-from activevision.envs.seeding import EPISODES_PER_SEED, episode_seed
+from activevision.envs.seeding import EPISODES_PER_SEED, check_seed, episode_seed
 from activevision.experiments.policies import HeadPolicy, HeadTarget
 
 Z95 = 1.959963984540054  #: two-sided 95% quantile of the standard normal
@@ -264,9 +263,7 @@ def evaluate_policy(
     episode 0's seed, -1000003).
     """
     episodes = check_count("episodes", episodes, EPISODES_PER_SEED)
-    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
-        raise ValueError(f"seed: expects an integer >= 0, got {seed!r}")
-    seed = int(seed)  # a NumPy integer's episode seeds would overflow, and Gymnasium wants ints
+    seed = check_seed(seed)  # an int: a NumPy integer's episode seeds would overflow
     env = env or ActiveVisionEnv(config or EnvConfig())
     latencies: list[float] | None = [] if measure_latency else None
     records = [

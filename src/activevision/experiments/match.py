@@ -29,6 +29,7 @@ from activevision.envs.config import MAX_VECTOR_ENVS, check_count
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.scores import MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
+from activevision.envs.seeding import check_seed
 from activevision.experiments.evaluate import Interval, mean_interval
 from activevision.experiments.match_methods import (
     USER_STRATEGY,
@@ -230,10 +231,8 @@ def check_play_arguments(config: MatchConfig, matches: int, seed: int) -> None:
     if not isinstance(config, MatchConfig):
         raise TypeError(f"config: expects a MatchConfig, got {type(config).__name__}")
     check_count("matches", matches, MAX_VECTOR_ENVS)
-    if seed is not None and (
-        isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0
-    ):
-        raise ValueError(f"seed: expects an integer >= 0, got {seed!r}")
+    if seed is not None:
+        check_seed(seed)
 
 
 #: Ticks a user's strategy plays as a trial before any strategy's matches (compare_matches).
