@@ -461,6 +461,7 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
         (v for k, v in changes.items() if paths.get(k.strip()) == "env_id"), config.env_id
     )
     algo = next((v for k, v in changes.items() if paths.get(k.strip()) == "algo"), config.algo)
+    resolved: dict[str, str] = {}  # each key as given -> its full path
     for key, value in changes.items():
         path = paths.get(key.strip()) or _env_alias(key.strip())
         if path is None:
@@ -474,17 +475,17 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
                 )
             raise ValueError(f"unknown TrainConfig key {key!r}")
         _refuse_unread(key.strip(), path, algo, env_id, paths)
+        resolved[key.strip()] = path
         *parents, leaf = path.split(".")
         target = nested
         for part in parents:
             target = target[part]
         target[leaf] = value
     result = config_from_dict(TrainConfig, nested)
-    for key in changes:
-        path = paths.get(key.strip()) or _env_alias(key.strip()) or ""
+    for key, path in resolved.items():  # what the whole result decides (its DAgger teacher)
         unread = _unread_given(result, path)
         if unread:
-            raise ValueError(f"{_named(key.strip(), path)} is never read by this run: {unread}")
+            raise ValueError(f"{_named(key, path)} is never read by this run: {unread}")
     return result
 
 
