@@ -123,3 +123,25 @@ def test_plot_pareto_keeps_the_legend_of_long_names_inside_the_figure(monkeypatc
     plot_pareto({"a": POINT, "b": {**POINT, "ball_in_view": (0.3, 0.2, 0.4)}}, ["a"], "x", "t")
     assert drawn[1].axes[0].get_legend() is not None and not drawn[1].legends
     assert _legends_fit(drawn[1])
+
+
+def test_plot_pareto_checking_its_legend_leaves_a_fitting_figure_the_same_bytes(
+    tmp_path, monkeypatch
+):
+    # the check lays the figure out once before it is saved: a legend that fits must come
+    # out as the plain legend inside the panel did, byte for byte
+    points = {
+        f"method_{i}": {
+            "ball_in_view": (0.3 + 0.05 * i, 0.28 + 0.05 * i, 0.32 + 0.05 * i),
+            "position_rmse": POINT["position_rmse"],
+        }
+        for i in range(6)
+    }
+    checked, plain = tmp_path / "checked.png", tmp_path / "plain.png"
+    plot_pareto(points, ["method_5"], checked, "t", references=["method_0"])
+    monkeypatch.setattr(
+        "activevision.figures.match._legend_inside_or_below",
+        lambda fig, ax: ax.legend(fontsize=7),
+    )
+    plot_pareto(points, ["method_5"], plain, "t", references=["method_0"])
+    assert checked.read_bytes() == plain.read_bytes()

@@ -37,6 +37,9 @@ __all__ = [
     "save_gif",
 ]
 
+#: dots per inch of the Pareto figure
+PARETO_DPI = 120
+
 #: a method's point and whiskers: (mean, low, high) of each axis
 Point = Mapping[str, tuple[float, float, float]]
 
@@ -59,7 +62,8 @@ def plot_pareto(
     unknown = [name for name in front if name not in points]
     if unknown:
         raise ValueError(f"plot_pareto: the front's {', '.join(unknown)} has no point")
-    fig = new_figure(figsize=(12.0, 5.0), layout="constrained")
+    # at the dpi it is saved at: whether the legend fits is judged on the layout saved
+    fig = new_figure(figsize=(12.0, 5.0), layout="constrained", dpi=PARETO_DPI)
     whole, zoom = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     # tab20 for many strategies: the default cycle repeats its colours after ten
     colours = _colours(len(points))
@@ -99,7 +103,7 @@ def plot_pareto(
     zoom.set_ylim(min(ys) - pad_y, max(ys) + pad_y)
     whole.set_title(title, fontsize=9)
     _legend_inside_or_below(fig, whole)
-    save_figure(fig, path, dpi=120)
+    save_figure(fig, path, dpi=PARETO_DPI)
 
 
 def _legend_inside_or_below(fig: Figure, ax: Axes) -> None:
