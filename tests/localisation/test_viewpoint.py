@@ -291,7 +291,7 @@ def test_search_names_the_argument_of_a_bad_shape_or_type(landmarks, cam):
         best_viewpoint(np.zeros(3), COV0, "x", landmarks, cam)
     with pytest.raises(ValueError, match=r"ball_radius must be a number >= 0"):
         best_viewpoint(np.zeros(3), COV0, [1.0, 0.0], landmarks, cam, ball_radius=-0.07)
-    with pytest.raises(ValueError, match=r"grid expects ViewpointGrid, got 'x'"):
+    with pytest.raises(TypeError, match=r"grid expects ViewpointGrid, got 'x'"):
         best_viewpoint(np.zeros(3), COV0, [1.0, 0.0], landmarks, cam, grid="x")  # type: ignore[arg-type]
     # (N, 2) poses: the kernel read each heading past its row, a silently wrong search
     with pytest.raises(ValueError, match=r"poses, shape \(3,\) or \(N, 3\), got shape \(2, 2\)"):

@@ -189,9 +189,9 @@ def _search(
 
 
 def _check_setting(name: str, value: object, kind: type) -> None:
-    """ValueError unless ``value`` (a search's ``cam``, ``grid`` or ``ukf``) is a ``kind``."""
+    """TypeError unless ``value`` (a search's ``cam``, ``grid`` or ``ukf``) is a ``kind``."""
     if not isinstance(value, kind):
-        raise ValueError(f"best viewpoint search: {name} expects {kind.__name__}, got {value!r}")
+        raise TypeError(f"best viewpoint search: {name} expects {kind.__name__}, got {value!r}")
 
 
 def _float_array(name: str, value: object, dtype: type = np.float64) -> np.ndarray:
