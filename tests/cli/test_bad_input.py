@@ -61,6 +61,9 @@ BAD_ARGUMENTS = [
     (["compare", "--methods", "learned"], "--run"),
     (["compare", "--episodes", "0"], "--episodes"),
     (["compare", "--chunk", "0"], "--chunk"),
+    # options of a compare on Ray, given without --ray: they were silently ignored
+    (["compare", "--verbose", "--out", "{tmp}/c"], "--verbose applies to a compare on Ray"),
+    (["compare", "--num-cpus", "2", "--address", "auto", "--out", "{tmp}/c"], "--address, --num"),
     (["episode", "--seed", "-1", "--out", "{tmp}/e.png"], "'-1'"),
     (["episode", "--policies", "nope", "--out", "{tmp}/e.png"], "'nope'"),
     (["episode", "--policies", "learned", "--out", "{tmp}/e.png"], "--run"),
@@ -400,6 +403,21 @@ def test_a_run_another_process_trains_is_refused_on_one_line(tmp_path, tiny_trai
         assert main([*tiny_train, "--out", str(busy)]) == 2
         one_clear_line(f"{busy} is being trained by another process (pid {pid})")
     assert main([*tiny_train, "--out", str(busy)]) == 0
+
+
+def test_a_refused_compare_on_ray_leaves_the_compare_csv_it_would_overwrite(
+    tmp_path, one_clear_line, capsys
+):
+    """``--ray --runs`` is refused: before the refusal, --overwrite had removed compare.csv."""
+    out = tmp_path / "cmp"
+    argv = ["compare", "--methods", "random", "--errors", "0.1", "--episodes", "1"]
+    assert main([*argv, "--out", str(out)]) == 0
+    before = (out / "compare.csv").read_bytes()
+    capsys.readouterr()
+    refused = [*argv, "--out", str(out), "--overwrite", "--ray", "--runs", str(tmp_path)]
+    assert main(refused) == 2
+    one_clear_line("--runs plays in this process: leave out --ray")
+    assert (out / "compare.csv").read_bytes() == before
 
 
 def test_a_compare_folder_another_compare_writes_is_refused(tmp_path, one_clear_line, capsys):

@@ -161,6 +161,31 @@ def test_compare_ray_equals_local(tmp_path):
     assert again == _read(tmp_path / "ray" / "compare.csv")
 
 
+@pytest.mark.parametrize("verbose", [False, True])
+def test_compare_ray_prints_the_workers_output_only_when_verbose(tmp_path, monkeypatch, verbose):
+    """Quiet by default (an idle worker's shutdown traceback reached the driver); with
+    ``verbose`` (``compare --ray --verbose``) the workers' warnings and errors are shown."""
+    from contextlib import contextmanager
+
+    started = []
+
+    class Started(Exception):
+        pass
+
+    @contextmanager
+    def recording_session(address, num_cpus, **kwargs):
+        started.append(kwargs)
+        raise Started
+        yield  # a generator, as ray_session is
+
+    # the module (the package's attribute of that name is the function)
+    module = sys.modules["activevision.scaleout.ray_session"]
+    monkeypatch.setattr(module, "ray_session", recording_session)
+    with pytest.raises(Started):
+        compare_ray(tmp_path, ["random"], [0.0], 2, verbose=verbose)
+    assert started == [{"log_to_driver": verbose}]
+
+
 def test_a_failing_trial_is_reported_with_its_error(tmp_path):
     """A grid value the trainer refuses (no machine has CUDA device 99) fails its trial; the
     sweep names the trial and the trainer's own error, and trials.csv keeps it."""

@@ -217,6 +217,7 @@ def cmd_compare(args: argparse.Namespace) -> None:
     from activevision.training.run_lock import RunLock
 
     check_weights(args)
+    _check_ray_options(args)  # before --overwrite removes a compare.csv
     check_run(args.run)  # before the outputs inside it
     out = args.out or (args.run / "compare" if args.run else Path("compare"))
     if is_training_run(out):  # its folder is the trainer's (and its lock the trainer's)
@@ -236,6 +237,25 @@ def cmd_compare(args: argparse.Namespace) -> None:
             lock.release(remove=True)
 
 
+def _check_ray_options(args: argparse.Namespace) -> None:
+    """ValueError where ``compare``'s options do not go together with or without --ray."""
+    if args.ray and args.runs:
+        raise ValueError("--runs plays in this process: leave out --ray")
+    if args.ray and args.strategy:
+        raise ValueError("--strategy plays in this process: leave out --ray")
+    ray_only = [
+        flag
+        for flag, value in (
+            ("--address", args.address),
+            ("--num-cpus", args.num_cpus),
+            ("--verbose", args.verbose),
+        )
+        if value
+    ]
+    if ray_only and not args.ray:
+        raise ValueError(f"{', '.join(ray_only)} applies to a compare on Ray: add --ray")
+
+
 def _compare_into(out: Path, args: argparse.Namespace) -> None:
     """``cmd_compare``'s work, in ``out`` (made, and locked against another compare)."""
     from activevision.figures.compare import plot_compare
@@ -243,10 +263,6 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
     if args.overwrite:
         (out / "compare.csv").unlink(missing_ok=True)
     env_config = env_config_of_run(args.run)
-    if args.ray and args.runs:
-        raise ValueError("--runs plays in this process: leave out --ray")
-    if args.ray and args.strategy:
-        raise ValueError("--strategy plays in this process: leave out --ray")
     if args.ray:
         from activevision.scaleout.compare import compare_ray, default_method_names
 
@@ -262,6 +278,7 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
             chunk=args.chunk,
             address=args.address,
             num_cpus=args.num_cpus,
+            verbose=args.verbose,
         )
     else:
         from activevision.experiments.compare import compare, default_methods
@@ -410,6 +427,11 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--address", help="with --ray: auto | ray://HEAD:10001 (default: local)")
     p.add_argument("--num-cpus", type=positive_int, help="with --ray: CPUs of the local Ray")
     p.add_argument("--chunk", type=positive_int, default=25, help="with --ray: episodes a task")
+    p.add_argument(
+        "--verbose",
+        action="store_true",
+        help="with --ray: print the workers' output too (warnings, a worker's traceback)",
+    )
 
     text = "episode figure (and GIF) of two methods from one start"
     p = sub.add_parser("episode", help=text, description=text)

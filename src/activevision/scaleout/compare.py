@@ -62,6 +62,7 @@ def compare_ray(
     chunk: int = 25,
     address: str | None = None,
     num_cpus: int | None = None,
+    verbose: bool = False,
 ) -> list[dict]:
     """Run the experiment on Ray into ``out_dir/compare.csv`` (same file as the local run).
 
@@ -70,6 +71,7 @@ def compare_ray(
     level completes, in level order, so an interrupted run loses only unfinished levels.
     ``weights``: the run's "final" or "best" weights.
     ``address``/``num_cpus``: see :func:`~activevision.scaleout.ray_session.ray_session`.
+    ``verbose``: the workers' output (warnings, a worker's traceback) is printed too.
     """
     from activevision.envs import ActiveVisionEnv
     from activevision.experiments.compare import check_resumable, done_levels
@@ -89,9 +91,9 @@ def compare_ray(
     starts = list(range(0, episodes, chunk))
     limit = time_limit(ActiveVisionEnv(config))  # the tasks' envs', for the durations' bounds
 
-    # no worker's output: a chunk's error reaches ray.get as an exception, and an idle worker
-    # that Ray's shutdown stops with SIGTERM may print a traceback ("SystemExit: 1")
-    with ray_session(address, num_cpus, log_to_driver=False) as ray:
+    # quiet: no worker's output; a chunk's error reaches ray.get as an exception, and an idle
+    # worker that Ray's shutdown stops with SIGTERM may print a traceback ("SystemExit: 1")
+    with ray_session(address, num_cpus, log_to_driver=verbose) as ray:
         task = ray.remote(num_cpus=1)(evaluate_chunk)
         config_ref = ray.put(config)
         pending: list[tuple[int, float, dict[str, list[Any]]]] = []
