@@ -167,7 +167,7 @@ def _check(value: Any, hint: Any, finite: bool) -> Any:
     if hint is int:
         return int(_require(_is_int(value), value))
     if hint is float:
-        _require(isinstance(value, numbers.Real) and not _is_bool(value), value)
+        _require(is_real(value), value)
         number = float(value)
         if finite and not math.isfinite(number):
             raise _Mismatch(nonfinite=True)
@@ -213,6 +213,11 @@ def _require(ok: bool, value: Any) -> Any:
 def _is_bool(value: Any) -> bool:
     # numpy booleans are neither bool nor numbers.Integral, so name them explicitly.
     return isinstance(value, bool | np.bool_)
+
+
+def is_real(value: object) -> bool:
+    """Whether ``value`` is a real number (NumPy's included), not a bool."""
+    return isinstance(value, numbers.Real) and not _is_bool(value)
 
 
 def _is_int(value: Any) -> bool:

@@ -4,7 +4,6 @@ the belief the environment starts each episode with."""
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -13,7 +12,7 @@ import numpy as np
 import numpy.typing as npt
 
 from activevision.geometry.field import LandmarkType
-from activevision.typecheck import check_dataclass_fields, in_range
+from activevision.typecheck import check_dataclass_fields, in_range, is_real
 
 
 @dataclass(frozen=True)
@@ -126,7 +125,7 @@ class UKFConfig:
             given = getattr(self, name)
             values = tuple(given) if isinstance(given, tuple | list | np.ndarray) else ()
             # real numbers only: float() took True and "0.5" too
-            if len(values) != 3 or not all(_is_real(v) for v in values):
+            if len(values) != 3 or not all(is_real(v) for v in values):
                 raise ValueError(
                     f"UKFConfig.{name}: expects 3 numbers (m, m, rad), got {getattr(self, name)!r}"
                 )
@@ -182,11 +181,6 @@ class UKFConfig:
             np.array([r.range_fraction for r in rows], dtype=np.float64),
             np.array([r.bearing for r in rows], dtype=np.float64),
         )
-
-
-def _is_real(value: object) -> bool:
-    """Whether ``value`` is a real number (NumPy's included), not a bool."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
 
 
 def _ukf_config(values: dict[str, Any]) -> UKFConfig:

@@ -81,7 +81,8 @@ MAX_THREADS = 1024
 
 def _thread_count(num_threads: object) -> int:
     """``num_threads`` as an int in ``1..MAX_THREADS`` (NumPy integers too); a bool, a float,
-    a string or a number out of range is a ValueError naming it."""
+    a string or a number out of range is a ValueError naming it. (Not the envs' own
+    ``check_count``: the robot runtime imports nothing else of activevision.)"""
     if (
         isinstance(num_threads, bool | np.bool_)
         or not isinstance(num_threads, numbers.Integral)
