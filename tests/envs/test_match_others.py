@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from activevision.envs.match.config import BallConfig, MatchConfig, OthersConfig, WalkConfig
-from activevision.envs.match.dynamics import sidestep
+from activevision.envs.match.dynamics import blocking_robot, sidestep
 from activevision.envs.match.kernels import DETOUR_TICKS, move_kernel
 from activevision.envs.match.others import bounce_ball, walk_others
 from activevision.envs.match.simulation import MatchBatch
@@ -351,6 +351,25 @@ def test_our_robot_sidesteps_round_a_robot_its_step_closes_in_on():
     gap = np.hypot(*(batch.pose[0, :2] - (side, -side)))
     assert gap > 0.6  # it parted from the robot, drift and all
     np.testing.assert_array_equal(batch.waypoint[0], waypoint)
+
+
+def test_the_blocking_robot_is_the_one_the_step_ends_nearest():
+    """Of the robots a step closes in on within the spacing, the nearest blocks it (the
+    sidestep goes round it), not the first by index; an empty slot nearer still, and a
+    robot already too close that the step parts from, block nothing."""
+    before, after = np.zeros(3), np.array([0.064, 0.0, 0.0])
+    robots = np.array(
+        [
+            [0.6, 0.3, 0.6, 0.5],  # ends 0.614 m away, closing in: blocks
+            [0.6, 0.0, 0.6, 0.5],  # ends 0.536 m away, closing in: nearer
+            [0.1, 0.0, 0.0, 0.5],  # an empty slot (height 0)
+            [-0.3, 0.0, 0.6, 0.5],  # 0.36 m away, but the step parts from it
+        ]
+    )
+    assert blocking_robot(before, after, robots, 0.7) == 1
+    assert blocking_robot(before, after, robots[[0, 2, 3]], 0.7) == 0
+    assert blocking_robot(before, after, robots[[2, 3]], 0.7) == -1
+    assert blocking_robot(before, after, robots, 0.6) == 1  # 0.614 is clear of 0.6
 
 
 def test_a_sidestep_needs_a_way_across():

@@ -64,17 +64,20 @@ def move_pose(pose: np.ndarray, dx: float, dy: float, dth: float, hx: float, hy:
 def blocking_robot(
     before: np.ndarray, after: np.ndarray, robots: np.ndarray, spacing: float
 ) -> int:
-    """The first of ``robots`` (R, 4) rows ``(x, y, height, grey)`` (height 0: an empty slot)
-    that a robot stepping from ``before`` to ``after`` ((2,) or more: x, y first) would end
-    closer than ``spacing`` to while closing in on it (a robot already too close may part);
-    -1 when there is none."""
+    """Of ``robots`` (R, 4) rows ``(x, y, height, grey)`` (height 0: an empty slot), the
+    one that a robot stepping from ``before`` to ``after`` ((2,) or more: x, y first) would
+    end nearest to, of those it would end closer than ``spacing`` to while closing in on
+    them (a robot already too close may part); -1 when there is none. The nearest, not the
+    first by index: the sidestep goes round the robot most in the way."""
+    nearest, nearest_gap = -1, spacing
     for r in range(robots.shape[0]):
         if robots[r, 2] <= 0:
             continue
         gap = math.hypot(after[0] - robots[r, 0], after[1] - robots[r, 1])
-        if gap < spacing and gap < math.hypot(before[0] - robots[r, 0], before[1] - robots[r, 1]):
-            return r
-    return -1
+        closing = gap < math.hypot(before[0] - robots[r, 0], before[1] - robots[r, 1])
+        if gap < nearest_gap and closing:
+            nearest, nearest_gap = r, gap
+    return nearest
 
 
 @njit(cache=True)
