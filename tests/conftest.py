@@ -1,6 +1,27 @@
 """Shared by every test."""
 
+import hashlib
+import os
+import sys
+from pathlib import Path
+
 import pytest
+
+
+def _source_numba_cache() -> Path:
+    """The numba cache of this state of the sources, as ``make test`` names it: numba checks
+    a cached kernel against its own file only, not the files of the kernels it calls, so
+    after an edit to one of those a plain ``pytest`` ran the old code from the default cache
+    beside the sources."""
+    root = Path(__file__).resolve().parent.parent
+    sources = sorted((root / "src").rglob("*.py"), key=lambda p: os.fsencode(p.relative_to(root)))
+    digest = hashlib.sha1(b"".join(p.read_bytes() for p in sources)).hexdigest()[:16]
+    return root / ".numba_cache" / digest
+
+
+# before numba is imported (it reads the variable once); make test and the user's own win
+if "NUMBA_CACHE_DIR" not in os.environ and "numba" not in sys.modules:
+    os.environ["NUMBA_CACHE_DIR"] = str(_source_numba_cache())
 
 
 @pytest.fixture(autouse=True)
