@@ -548,3 +548,24 @@ def test_a_run_trained_for_another_camera_plays_in_its_camera(tmp_path, tiny_tra
         assert main([*TINY, "--out", str(tmp_path / "m2"), *onnx]) == 0
     differs = [str(w.message) for w in warned if "camera differs" in str(w.message)]
     assert len(differs) == 1 and "hfov: robot 58.0 deg, trained 70.0 deg" in differs[0]
+
+
+def test_a_match_run_of_another_camera_plays_episodes_through_it(tmp_path, tiny_train, capsys):
+    """evaluate, episode and robustness play a match-trained run (match_ddqn) on episodes
+    seen through the camera it was trained for: a 160 x 90 network was a traceback in the
+    episodes' 160 x 120 image ("mat1 and mat2 shapes cannot be multiplied")."""
+    run = tmp_path / "wide"
+    argv = [*tiny_train, "--out", str(run), "--set", "match.camera.width=160"]
+    argv += ["--set", "match.camera.height=90", "--set", "match.step_deg=6"]
+    argv[argv.index("quickstart_ddqn")] = "match_ddqn"
+    assert main(argv) == 0
+    played = ["--run", str(run), "--episodes", "2"]
+    assert main(["evaluate", *played, "--methods", "learned", "--out", str(tmp_path / "e")]) == 0
+    robust = ["robustness", *played, "--perturbations", "clean", "--out", str(tmp_path / "r")]
+    assert main(robust) == 0
+    assert main(["episode", "--run", str(run), "--out", str(tmp_path / "ep.png")]) == 0
+    assert "Traceback" not in capsys.readouterr().err
+    from activevision.cli.args import env_config_of_run
+
+    env = env_config_of_run(run)
+    assert (env.camera.width, env.camera.height, env.step_deg) == (160, 90, 6.0)
