@@ -360,6 +360,17 @@ def test_a_run_without_its_log_has_nothing_to_plot(run, capsys, one_clear_line):
     one_clear_line("has no metrics.csv (its training log): nothing to plot")
 
 
+def test_plot_of_a_config_alone_names_only_the_missing_log(tmp_path, one_clear_line):
+    """A folder with a run's config.json and nothing else (a run killed at once): the
+    refusal read "no config.json and metrics.csv", as if config.json were missing too."""
+    (tmp_path / "config.json").write_text("{}")
+    assert main(["plot", str(tmp_path)]) == 2
+    line = one_clear_line("is not a training run (no metrics.csv)")
+    assert "config.json" not in line
+    assert main(["plot", str(tmp_path / "none")]) == 2
+    one_clear_line("(no config.json and no metrics.csv)")
+
+
 def test_plot_names_a_plots_folder_that_is_a_file(run, capsys, one_clear_line):
     shutil.rmtree(run / "plots", ignore_errors=True)
     (run / "plots").write_text("mine")

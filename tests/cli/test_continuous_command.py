@@ -93,3 +93,19 @@ def test_runs_observing_what_the_env_does_not_give_are_refused(trained, tmp_path
     evaluate = ["evaluate", "--run", str(trained), "--runs", str(run), "--episodes", "2"]
     assert main([*evaluate, "--out", str(tmp_path / "e")]) == 2
     one_clear_line("--runs", "observes 'image+head'")
+
+
+def test_runs_remembering_moves_the_env_does_not_give_are_named(tmp_path, one_clear_line):
+    """Two runs of one observation that differ in the moves they remember: the refusal
+    names what the comparison's env lacks (it read "observes 'image+head' ..., which the
+    comparison's env ('image+head') does not give", the same observation twice)."""
+    runs = {}
+    for history in (0, 1):
+        runs[history] = run = tmp_path / f"history{history}"
+        args = ["train", "--algo", "dagger", "--set", "env.observation=image+head", *DAGGER_TINY]
+        args += ["--set", "env.action_type=discrete", "--set", f"env.action_history={history}"]
+        args += ["--steps", "40", "--out", str(run)]
+        assert main(args) == 0
+    evaluate = ["evaluate", "--run", str(runs[0]), "--runs", str(runs[1]), "--episodes", "2"]
+    assert main([*evaluate, "--out", str(tmp_path / "e")]) == 2
+    one_clear_line("does not give: no actions (env.action_history = 1: the moves it remembers)")

@@ -8,6 +8,7 @@ import pytest
 from PIL import Image
 
 from activevision.cli import build_parser, main
+from activevision.runtime import CameraMismatchWarning
 
 TINY = ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "random"]
 
@@ -519,3 +520,52 @@ def test_a_strategy_calling_sys_exit_is_one_line_not_a_silent_exit_0(
     assert main(argv) == 2
     one_clear_line(needle, "SystemExit", "exiting.py")
     assert not (tmp_path / "m").exists()
+
+
+def test_a_run_trained_for_another_camera_plays_in_its_camera(tmp_path, tiny_train, capsys):
+    """A match run trained for the robot's camera (README: ``--set match.camera.*``) plays
+    matches seen through that camera, as it plays its detector: its 160 x 90 network was a
+    traceback in the default camera's 160 x 120 matches ("mat1 and mat2 shapes cannot be
+    multiplied"), and a wider field of view played silently through the paper's. Its
+    exported policy played by onnx_policy in matches of another camera is warned about."""
+    run = tmp_path / "wide"
+    camera = ["match.camera.width=160", "match.camera.height=90", "match.camera.hfov=1.2217"]
+    argv = [*tiny_train, "--out", str(run)]
+    argv[argv.index("quickstart_ddqn")] = "match_ddqn"
+    for setting in camera:
+        argv += ["--set", setting]
+    assert main(argv) == 0
+    capsys.readouterr()
+    out = tmp_path / "m"
+    assert main([*TINY, "--out", str(out), "--run", str(run), "--methods", "learned"]) == 0
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.err
+    assert f"camera 160x90 px, hfov 70 deg (the one {run} was trained with)" in captured.out
+    assert main(["export", str(run), "-o", str(tmp_path / "policy.onnx")]) == 0
+    capsys.readouterr()
+    onnx = ["--methods", "onnx_policy", "--model", str(tmp_path / "policy.onnx")]
+    with pytest.warns(CameraMismatchWarning) as warned:
+        assert main([*TINY, "--out", str(tmp_path / "m2"), *onnx]) == 0
+    differs = [str(w.message) for w in warned if "camera differs" in str(w.message)]
+    assert len(differs) == 1 and "hfov: robot 58.0 deg, trained 70.0 deg" in differs[0]
+
+
+def test_a_match_run_of_another_camera_plays_episodes_through_it(tmp_path, tiny_train, capsys):
+    """evaluate, episode and robustness play a match-trained run (match_ddqn) on episodes
+    seen through the camera it was trained for: a 160 x 90 network was a traceback in the
+    episodes' 160 x 120 image ("mat1 and mat2 shapes cannot be multiplied")."""
+    run = tmp_path / "wide"
+    argv = [*tiny_train, "--out", str(run), "--set", "match.camera.width=160"]
+    argv += ["--set", "match.camera.height=90", "--set", "match.step_deg=6"]
+    argv[argv.index("quickstart_ddqn")] = "match_ddqn"
+    assert main(argv) == 0
+    played = ["--run", str(run), "--episodes", "2"]
+    assert main(["evaluate", *played, "--methods", "learned", "--out", str(tmp_path / "e")]) == 0
+    robust = ["robustness", *played, "--perturbations", "clean", "--out", str(tmp_path / "r")]
+    assert main(robust) == 0
+    assert main(["episode", "--run", str(run), "--out", str(tmp_path / "ep.png")]) == 0
+    assert "Traceback" not in capsys.readouterr().err
+    from activevision.cli.args import env_config_of_run
+
+    env = env_config_of_run(run)
+    assert (env.camera.width, env.camera.height, env.step_deg) == (160, 90, 6.0)

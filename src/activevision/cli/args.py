@@ -287,12 +287,22 @@ def check_run(run_dir: Path | None, option: str = "--run") -> None:
 def env_config_of_run(run_dir: Path | None) -> EnvConfig:
     """The EnvConfig a run trained on (its config.json), else the paper's default. Its
     actions are the paper's discrete ones: a continuous policy moves by head targets
-    (``HeadTarget``), so every method plays the same env."""
+    (``HeadTarget``), so every method plays the same env. A run trained on the match
+    (``match_ddqn``) plays episodes through the match's camera, with its moves: the image
+    its network takes and the moves its actions are (its config's ``env`` is the unused
+    default)."""
     from activevision.envs import EnvConfig
 
     if run_dir is None:
         return EnvConfig()
-    from activevision.training.config import load_config
+    from activevision.training.config import MATCH_ENV_ID, load_config
 
     check_run(run_dir)
-    return load_config(run_dir / "config.json").env.replace(action_type="discrete")
+    config = load_config(run_dir / "config.json")
+    env = config.env.replace(action_type="discrete")
+    if config.env_id == MATCH_ENV_ID:
+        match = config.match
+        world = {"camera": match.camera, "step_deg": match.step_deg, "action_set": "8way"}
+        if any(getattr(env, key) != value for key, value in world.items()):
+            env = env.replace(**world)
+    return env

@@ -72,11 +72,21 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
         other = env_config_of_run(run)
         if not observes_within(other, env_config):
             wanted = vector_keys(other)
+            # what the env lacks, where both give vectors (two runs of one observation
+            # differ in "actions": the moves they remember, env.action_history)
+            missing = [
+                f"actions (env.action_history = {other.action_history}: the moves it remembers)"
+                if key == "actions"
+                else key
+                for key in wanted
+                if key not in vector_keys(env_config)
+            ]
+            lacks = f": no {', '.join(missing)}" if env_config.observation != "image" else ""
             raise ValueError(
                 f"--runs {run} observes {other.observation!r} ({', '.join(wanted) or 'image'}),"
                 f" which the comparison's env ({env_config.observation!r}, from --run, or the"
-                " shipped policy's where it plays) does not give: compare runs that observe"
-                " the same inputs"
+                f" shipped policy's where it plays) does not give{lacks}; compare runs that"
+                " observe the same inputs"
             )
         name = f"learned:{run.resolve().name}"  # the folder's name, however it was given
         if name in policies:

@@ -32,6 +32,7 @@ from activevision.cli.outputs import (
 if TYPE_CHECKING:
     from activevision.envs.match.config import DetectionConfig, MatchConfig
     from activevision.experiments.match_methods import StrategyOptions
+    from activevision.geometry import CameraConfig
 
 OUTPUT_FILES = ("match.csv", "match_pareto.png", "match_error.png", "match_clip.gif")
 PAIRED_FILE = "match_paired.csv"  #: with --baseline
@@ -57,6 +58,9 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
         text += f", detector {detector_text(config.detection)}"
         if args.detection is None:
             text += f" (the one {args.run if run is None else run} was trained with)"
+    camera = camera_text(config.camera)
+    if camera:  # only a run's: the command line names no camera
+        text += f", camera {camera} (the one {args.run if run is None else run} was trained with)"
     if args.ball_bounces_off_us:
         text += ", the ball bouncing off our robot"
     return text
@@ -73,16 +77,40 @@ def detector_text(detection: DetectionConfig) -> str:
     return text
 
 
-def _run_detection(run: Path | None) -> DetectionConfig | None:
-    """The detector a training run on the match was trained with (None: the run is not on
-    the match, or there is no run)."""
+def camera_text(camera: CameraConfig) -> str:
+    """What of ``camera`` differs from the paper's: ``"160x90 px, hfov 70 deg"``, or
+    nothing."""
+    import math
+
+    from activevision.geometry import CameraConfig
+
+    default = CameraConfig()
+    parts = []
+    if (camera.width, camera.height) != (default.width, default.height):
+        parts.append(f"{camera.width}x{camera.height} px")
+    if camera.hfov != default.hfov:
+        parts.append(f"hfov {math.degrees(camera.hfov):.3g} deg")
+    if camera.camera_height != default.camera_height:
+        parts.append(f"height {camera.camera_height:g} m")
+    for axis in ("pan", "tilt"):
+        low, high = getattr(camera, f"{axis}_min"), getattr(camera, f"{axis}_max")
+        if (low, high) != (getattr(default, f"{axis}_min"), getattr(default, f"{axis}_max")):
+            parts.append(f"{axis} {math.degrees(low):.3g}..{math.degrees(high):.3g} deg")
+    return ", ".join(parts)
+
+
+def _run_world(run: Path | None) -> tuple[DetectionConfig | None, CameraConfig | None]:
+    """The detector a training run on the match was trained with, and the camera of any
+    run (its network sees that camera's image; None: no run, or not one)."""
     from activevision.training import load_config
     from activevision.training.config import MATCH_ENV_ID
 
     if run is None or not (run / "config.json").is_file():
-        return None  # no run, or not one: _strategies says so
+        return None, None  # no run, or not one: _strategies says so
     run_config = load_config(run / "config.json")
-    return run_config.match.detection if run_config.env_id == MATCH_ENV_ID else None
+    if run_config.env_id == MATCH_ENV_ID:
+        return run_config.match.detection, run_config.match.camera
+    return None, run_config.env.camera
 
 
 def _match_config(args: argparse.Namespace) -> MatchConfig:
@@ -95,10 +123,13 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
         WalkConfig,
     )
     from activevision.envs.robots import RobotsConfig
+    from activevision.geometry import CameraConfig
 
     if args.robot_speed and not args.robots:
         raise ValueError("--robot-speed moves the other robots: give --robots N (1-8) too")
-    trained = _run_detection(args.run)
+    # a run plays the world it was trained for: its camera (the image its network takes)
+    # and, trained on the match, its detector
+    trained, camera = _run_world(args.run)
     if args.detection:
         detection = DetectionConfig(*args.detection)
         if trained is not None and trained != detection:
@@ -118,6 +149,7 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
         others=OthersConfig(speed=args.robot_speed),
         ball=BallConfig(bounces_off_own_robot=args.ball_bounces_off_us),
         detection=detection,
+        camera=camera or CameraConfig(),
     )
 
 

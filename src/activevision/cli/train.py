@@ -171,7 +171,9 @@ def cmd_plot(args: argparse.Namespace) -> None:
     from activevision.training import plot_run
 
     if not is_training_run(args.run):
-        raise ValueError(f"{args.run} is not a training run (no config.json and metrics.csv)")
+        # name what is missing: a run's config.json alone read "no config.json and metrics.csv"
+        missing = [n for n in ("config.json", "metrics.csv") if not (args.run / n).is_file()]
+        raise ValueError(f"{args.run} is not a training run (no {' and no '.join(missing)})")
     if not (args.run / "metrics.csv").is_file():
         raise ValueError(f"{args.run} has no metrics.csv (its training log): nothing to plot")
     plots = args.run / "plots"
