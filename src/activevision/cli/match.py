@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -252,6 +253,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     from activevision.experiments.match_methods import privileged_methods
     from activevision.figures.match import clip_frames, plot_error_over_time, plot_pareto, save_gif
     from activevision.io import write_csv
+    from activevision.runtime.controller import CameraMismatchWarning
 
     seconds = args.ticks * config.tick_seconds
     play = f"{seconds / 60:.1f} min" if seconds >= 60 else f"{seconds:.3g} s"
@@ -266,7 +268,10 @@ def cmd_match(args: argparse.Namespace) -> None:
         print("one match gives no 95% intervals (they need 2 or more matches): nan below")
     width = max(NAME_WIDTH, max(len(label) for label in labels) + 2)
     print(table_header(width), flush=True)
-    with _unmade_when_failing(made, args):
+    with _unmade_when_failing(made, args), warnings.catch_warnings():
+        # each strategy was made once already, to check it (_strategies): a policy of another
+        # camera than the matches' has said so, and says it once
+        warnings.simplefilter("ignore", CameraMismatchWarning)
         results = compare_matches(
             entries,
             config,

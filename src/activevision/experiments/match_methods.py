@@ -81,7 +81,7 @@ from activevision.envs.match.observations import (
     knowledge_vectors,
     vector_keys,
 )
-from activevision.geometry import CameraConfig, LandmarkSet, clip_head, field_landmarks
+from activevision.geometry import LandmarkSet, clip_head, field_landmarks
 from activevision.localisation import LocalisationConfig, best_viewpoints
 
 if TYPE_CHECKING:
@@ -298,10 +298,6 @@ def plan_views(
     return np.where(result.ok[:, None], views, ball_direction(info, config))
 
 
-#: (policy file, matches' camera) pairs OnnxMatchPolicy has checked the camera of
-_CAMERAS_CHECKED: set[tuple[Path, CameraConfig]] = set()
-
-
 class OnnxMatchPolicy:
     """An exported policy (default: the shipped episodic one) through ``HeadController``,
     every tick; an episodic policy that takes them is fed the belief as its prior pose and
@@ -321,13 +317,8 @@ class OnnxMatchPolicy:
         self.localisation = LocalisationConfig.for_camera(config.camera)
         self._make = lambda: HeadController(self.model)
         # the matches' camera is the robot's: one CameraMismatchWarning when the policy was
-        # trained for another, once per model and camera (a command makes each strategy
-        # twice: to check it, then to play it; Python's own once-per-place is reset whenever
-        # a library changes the warning filters)
-        seen = (self.model.resolve(), config.camera)
-        camera = None if seen in _CAMERAS_CHECKED else config.camera
-        _CAMERAS_CHECKED.add(seen)
-        self._check_moves(HeadController(self.model, camera=camera).metadata)
+        # trained for another
+        self._check_moves(HeadController(self.model, camera=config.camera).metadata)
 
     def _check_moves(self, meta: PolicyMetadata) -> None:
         """A discrete policy's actions index its own moves: in a discrete match they are
