@@ -29,7 +29,7 @@ import torch
 
 from activevision.cli.args import positive_int, refused_by, seed
 from activevision.envs import ActiveVisionEnv
-from activevision.envs.observations import observes_within
+from activevision.envs.observations import play_differences
 from activevision.experiments.evaluate import evaluate_policy, paired_steps
 from activevision.experiments.policies import LearnedPolicy, OraclePolicy
 from activevision.training import load_config
@@ -57,11 +57,12 @@ def main() -> None:
         env_config = config.env.replace(action_type="discrete")
         for run in args.runs:
             other = load_config(run / "config.json").env
-            if not observes_within(other, env_config):  # it would fail mid-evaluation
+            continuous = other.action_type == "continuous"
+            differences = play_differences(other, env_config, moves_by_target=continuous)
+            if differences:  # it would fail mid-evaluation, or play another policy
                 parser.error(
-                    f"--runs {run} observes {other.observation!r}, which the first run's env"
-                    f" ({env_config.observation!r}) does not give: compare runs that observe"
-                    " the same inputs"
+                    f"--runs {run} was trained on {'; '.join(differences)} in the first run's"
+                    " env: compare runs trained on the same inputs, camera and moves"
                 )
             kinds[run.name] = other.action_type
             policies[run.name] = LearnedPolicy.from_run(run)

@@ -138,7 +138,9 @@ def test_continuous_refuses_a_run_its_env_does_not_feed(tmp_path: Path) -> None:
     lines = [line for line in done.stderr.splitlines() if line.strip()]
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr, done.stderr
-    assert lines[-1].startswith(f"continuous.py: error: --runs {head} observes 'image+head'")
+    assert lines[-1].startswith(
+        f"continuous.py: error: --runs {head} was trained on observation 'image+head'"
+    )
 
 
 def test_continuous_writes_no_nan_into_its_json():

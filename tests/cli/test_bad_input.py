@@ -416,6 +416,21 @@ def test_a_run_another_process_trains_is_refused_on_one_line(tmp_path, tiny_trai
     assert main([*tiny_train, "--out", str(busy)]) == 0
 
 
+def test_runs_of_another_image_stack_are_refused_on_one_line(
+    trained, tiny_train, tmp_path, one_clear_line, capsys
+):
+    """A run of two stacked frames beside a run of one: its network took the comparison's
+    one-frame images in the first step, a traceback ("expected input ... to have 2
+    channels")."""
+    stacked = tmp_path / "stacked"
+    assert main([*tiny_train, "--set", "env.frame_stack=2", "--out", str(stacked)]) == 0
+    capsys.readouterr()
+    argv = ["evaluate", "--run", str(trained), "--runs", str(stacked), "--episodes", "1"]
+    assert main([*argv, "--out", str(tmp_path / "e")]) == 2
+    one_clear_line(f"--runs {stacked} was trained on frame_stack 2 against 1")
+    assert not (tmp_path / "e").exists()
+
+
 def test_a_refused_compare_on_ray_leaves_the_compare_csv_it_would_overwrite(
     tmp_path, one_clear_line, capsys
 ):

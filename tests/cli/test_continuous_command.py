@@ -92,7 +92,7 @@ def test_runs_observing_what_the_env_does_not_give_are_refused(trained, tmp_path
     assert main([*args, "--set", "env.action_history=0", "--steps", "40", "--out", str(run)]) == 0
     evaluate = ["evaluate", "--run", str(trained), "--runs", str(run), "--episodes", "2"]
     assert main([*evaluate, "--out", str(tmp_path / "e")]) == 2
-    one_clear_line("--runs", "observes 'image+head'")
+    one_clear_line("--runs", "trained on observation 'image+head' (head) against 'image'")
 
 
 def test_runs_remembering_moves_the_env_does_not_give_are_named(tmp_path, one_clear_line):
@@ -108,4 +108,7 @@ def test_runs_remembering_moves_the_env_does_not_give_are_named(tmp_path, one_cl
         assert main(args) == 0
     evaluate = ["evaluate", "--run", str(runs[0]), "--runs", str(runs[1]), "--episodes", "2"]
     assert main([*evaluate, "--out", str(tmp_path / "e")]) == 2
-    one_clear_line("does not give: no actions (env.action_history = 1: the moves it remembers)")
+    one_clear_line(
+        "'image+head' (head, actions) against 'image+head': no actions (action_history 1:"
+        " the moves it remembers)"
+    )

@@ -273,5 +273,5 @@ def test_runs_are_checked_against_the_env_the_shipped_policy_plays(
     out = tmp_path / "e"
     argv = ["evaluate", "--methods", "shipped", "--runs", str(trained), "--episodes", "1"]
     assert main([*argv, "--out", str(out)]) == 2
-    one_clear_line(f"--runs {trained} observes 'image'", "shipped policy's")
+    one_clear_line(f"--runs {trained} was trained on observation 'image'", "shipped policy's")
     assert not out.exists()

@@ -10,10 +10,11 @@ import pytest
 
 from activevision.envs import ActiveVisionEnv, ActiveVisionVectorEnv, EnvConfig
 from activevision.envs.actions import action_table, greedy_actions
-from activevision.envs.observations import flatten_vectors, vector_keys
+from activevision.envs.observations import flatten_vectors, play_differences, vector_keys
 from activevision.envs.starts import quantise_pose
 from activevision.envs.view import viewpoint_search
 from activevision.experiments.policies import greedy_action
+from activevision.geometry import CameraConfig
 
 KINDS = ("image+head", "image+head+pose", "image+head+pose+proposal")
 
@@ -179,3 +180,48 @@ def test_entropy_regret_is_the_search_entropy_difference():
         env.jump_head(*info["goal_viewpoint"])
         assert env.entropy_regret() == pytest.approx(0.0, abs=1e-12)
     assert checked > 20
+
+
+HEAD = EnvConfig(observation="image+head")
+
+
+@pytest.mark.parametrize(
+    ("trained", "given", "named"),
+    [
+        (EnvConfig(), EnvConfig(), None),
+        (HEAD, EnvConfig(observation="image+head+pose"), None),  # a subset of the vectors
+        (HEAD, EnvConfig(), "observation 'image+head' (head) against 'image'"),
+        (
+            HEAD.replace(action_history=1),
+            HEAD,
+            "no actions (action_history 1: the moves it remembers)",
+        ),
+        # the same keys, vectors of other lengths: they reached the network
+        (HEAD.replace(action_history=2), HEAD.replace(action_history=1), "action_history 2"),
+        (EnvConfig(frame_stack=2), EnvConfig(), "frame_stack 2 against 1"),
+        (
+            EnvConfig(camera=CameraConfig(width=160, height=90)),
+            EnvConfig(),
+            "images of 160x90 px against 160x120",
+        ),
+        # the same image size, another view of the field: a silently different policy
+        (EnvConfig(camera=CameraConfig(hfov=1.2)), EnvConfig(), "camera CameraConfig("),
+        # a discrete policy's actions index its own moves
+        (EnvConfig(step_deg=6.0), EnvConfig(), "moves of 6 deg, 8way, against 3 deg, 8way"),
+        (EnvConfig(action_set="4way"), EnvConfig(), "moves of 3 deg, 4way"),
+    ],
+)
+def test_play_differences_names_what_a_policy_would_meet_that_it_was_not_trained_on(
+    trained, given, named
+):
+    differences = play_differences(trained, given)
+    if named is None:
+        assert differences == []
+    else:
+        assert len(differences) == 1 and named in differences[0], differences
+
+
+def test_a_policy_moving_by_head_targets_plays_any_moves():
+    """A continuous policy moves by head targets, which an env of any moves takes."""
+    trained = EnvConfig(step_deg=6.0)
+    assert play_differences(trained, EnvConfig(), moves_by_target=True) == []

@@ -62,36 +62,30 @@ def _policies(
 
 def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolicy]:
     """``--runs``: each run's learned policy, as method ``learned:NAME`` (NAME: its
-    directory). Each must observe a subset of what the comparison's env gives (``--run``'s,
-    or the paper's image); a continuous policy plays the same env, moving by head targets."""
-    from activevision.envs.observations import observes_within, vector_keys
+    directory). Each must take what the comparison's env gives (``--run``'s, or the paper's
+    image), in its camera and moves (:func:`~activevision.envs.observations.play_differences`);
+    a continuous policy plays the same env, moving by head targets."""
+    from activevision.envs.observations import play_differences
     from activevision.experiments.policies import LearnedPolicy
 
     policies: dict[str, HeadPolicy] = {}
     for run in args.runs or []:
-        other = env_config_of_run(run)
-        if not observes_within(other, env_config):
-            wanted = vector_keys(other)
-            # what the env lacks, where both give vectors (two runs of one observation
-            # differ in "actions": the moves they remember, env.action_history)
-            missing = [
-                f"actions (env.action_history = {other.action_history}: the moves it remembers)"
-                if key == "actions"
-                else key
-                for key in wanted
-                if key not in vector_keys(env_config)
-            ]
-            lacks = f": no {', '.join(missing)}" if env_config.observation != "image" else ""
+        # every run plays in the comparison's env (--run's, or the shipped policy's where
+        # it plays): an image of another size or stack was a traceback in the first step,
+        # another camera or other moves a silently different policy
+        policy = LearnedPolicy.from_run(run, weights=args.weights)
+        differences = play_differences(
+            env_config_of_run(run), env_config, moves_by_target=policy.max_move is not None
+        )
+        if differences:
             raise ValueError(
-                f"--runs {run} observes {other.observation!r} ({', '.join(wanted) or 'image'}),"
-                f" which the comparison's env ({env_config.observation!r}, from --run, or the"
-                f" shipped policy's where it plays) does not give{lacks}; compare runs that"
-                " observe the same inputs"
+                f"--runs {run} was trained on {'; '.join(differences)} in the comparison's"
+                " env (from --run, or the shipped policy's where it plays): compare runs"
+                " trained on the same inputs, camera and moves"
             )
         name = f"learned:{run.resolve().name}"  # the folder's name, however it was given
         if name in policies:
             raise ValueError(f"--runs names two runs {run.resolve().name!r}: rename one directory")
-        policy = LearnedPolicy.from_run(run, weights=args.weights)
         policy.name = name
         policies[name] = policy
     return policies

@@ -64,6 +64,52 @@ def observes_within(cfg: EnvConfig, given: EnvConfig) -> bool:
     return set(vector_keys(cfg)) <= set(vector_keys(given))
 
 
+def play_differences(
+    trained: EnvConfig, given: EnvConfig, moves_by_target: bool = False
+) -> list[str]:
+    """What a policy trained on ``trained`` would meet in an env of ``given`` that its
+    network does not take, or that would change what its moves or its images mean; empty
+    where it can play there. Each entry names the setting and both values (``given``'s
+    second). ``moves_by_target``: the policy moves by head targets (a continuous one),
+    which any env takes; a discrete one's actions index its own moves."""
+    differences = []
+    if not observes_within(trained, given):
+        missing = [
+            f"actions (action_history {trained.action_history}: the moves it remembers)"
+            if key == "actions"
+            else key
+            for key in vector_keys(trained)
+            if key not in vector_keys(given)
+        ]
+        differences.append(
+            f"observation {trained.observation!r} ({', '.join(vector_keys(trained)) or 'image'})"
+            f" against {given.observation!r}" + (f": no {', '.join(missing)}" if missing else "")
+        )
+    camera, env_camera = trained.camera, given.camera
+    if (camera.width, camera.height) != (env_camera.width, env_camera.height):
+        differences.append(
+            f"images of {camera.width}x{camera.height} px against {env_camera.width}x"
+            f"{env_camera.height}"
+        )
+    elif camera != env_camera:  # the same size, another view of the field
+        differences.append(f"camera {camera} against {env_camera}")
+    if trained.frame_stack != given.frame_stack:
+        differences.append(f"frame_stack {trained.frame_stack} against {given.frame_stack}")
+    remembered = "actions" in vector_keys(trained) and "actions" in vector_keys(given)
+    if remembered and trained.action_history != given.action_history:
+        differences.append(
+            f"action_history {trained.action_history} against {given.action_history}"
+            " (the moves it remembers)"
+        )
+    moves, env_moves = (trained.step_deg, trained.action_set), (given.step_deg, given.action_set)
+    if not moves_by_target and moves != env_moves:
+        differences.append(
+            f"moves of {trained.step_deg:g} deg, {trained.action_set}, against"
+            f" {given.step_deg:g} deg, {given.action_set}"
+        )
+    return differences
+
+
 def vector_sizes(cfg: EnvConfig, n_actions: int) -> dict[str, int]:
     """Length of each vector key."""
     return {
