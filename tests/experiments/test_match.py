@@ -11,6 +11,7 @@ import pytest
 
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import track_grid
+from activevision.experiments.evaluate import Interval
 from activevision.experiments.match import (
     MATCH_METRICS,
     MatchClip,
@@ -199,6 +200,9 @@ def test_paired_differences_by_hand():
     half = 1.959964 * np.std([0, 0.1, 0.2, 0.3], ddof=1) / 2  # z * s / sqrt(4)
     assert (ball.mean, ball.high - ball.mean) == pytest.approx((0.15, half), rel=1e-5)
     assert format_difference("a", differences["a"]).split()[:2] == ["a", "-0.010"]
+    # a difference that rounds to zero reads +0.000, not -0.000
+    near_zero = {**differences["a"], "position_rmse": Interval(-1e-5, -2e-5, -1e-6)}
+    assert format_difference("a", near_zero).split()[1:3] == ["+0.000", "[0.000,0.000]"]
     row = paired_rows(differences, "b", 4, 7)[0]
     assert (row["method"], row["baseline"], row["seed"]) == ("a", "b", 7)
     assert row["ball_in_view_diff_low"] == pytest.approx(0.15 - half, rel=1e-5)
@@ -468,7 +472,6 @@ def test_a_user_strategy_that_fails_at_once_fails_before_the_others_play():
 def test_table_cells_never_run_into_each_other():
     """A share difference of 22 characters ("-43.3% [-65.4%,-21.3%]") followed
     "+0.0% [-39.0%,39.0%]" with no space between: every cell is now apart from the last."""
-    from activevision.experiments.evaluate import Interval
 
     wide = dict.fromkeys(MATCH_METRICS, Interval(-0.433, -0.654, -0.213))
     wide["lost_share"] = Interval(0.0, -0.39, 0.39)

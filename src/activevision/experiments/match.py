@@ -472,8 +472,9 @@ def format_difference(
     cells = []
     for name, (_, fmt) in MATCH_METRICS.items():
         iv = differences[name]
-        signed = fmt.replace("{:", "{:+")
-        cells.append(f"{signed.format(iv.mean)} [{fmt.format(iv.low)},{fmt.format(iv.high)}]")
+        # "z": a difference that rounds to zero reads 0, not -0.000
+        signed, bound = fmt.replace("{:", "{:+z"), fmt.replace("{:", "{:z")
+        cells.append(f"{signed.format(iv.mean)} [{bound.format(iv.low)},{bound.format(iv.high)}]")
     return f"{method:<{width}}" + _cells(cells)
 
 
