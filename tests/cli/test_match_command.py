@@ -541,6 +541,9 @@ def test_a_run_trained_for_another_camera_plays_in_its_camera(tmp_path, tiny_tra
     captured = capsys.readouterr()
     assert "Traceback" not in captured.err
     assert f"camera 160x90 px, hfov 70 deg (the one {run} was trained with)" in captured.out
+    with (out / "match.csv").open() as f:  # and match.csv records it, for report.md
+        (row,) = csv.DictReader(f)
+    assert (row["camera_px"], float(row["hfov_deg"])) == ("160x90", pytest.approx(70, abs=0.01))
     assert main(["export", str(run), "-o", str(tmp_path / "policy.onnx")]) == 0
     capsys.readouterr()
     onnx = ["--methods", "onnx_policy", "--model", str(tmp_path / "policy.onnx")]

@@ -38,7 +38,7 @@ from activevision.experiments.match_methods import (
     privileged,
     privileged_methods,
 )
-from activevision.geometry import field_landmarks
+from activevision.geometry import CameraConfig, field_landmarks
 
 SMALL = MatchConfig(ticks=12)
 
@@ -157,6 +157,10 @@ def test_match_csv_records_the_walk_the_other_robots_speed_and_the_ball():
         ),
         tick_seconds=0.5,
         detection=dataclasses.replace(SMALL.detection, ball_noise=0.1),
+        # a robot's own camera (a run trained for it plays its matches through it)
+        camera=CameraConfig(
+            width=160, height=90, hfov=math.radians(70), camera_height=0.62, tilt_max=1.0
+        ),
     )
     row = csv_rows([fake("a", 0.1, 0.5)], 4, 0, world)[0]
     recorded = {name: row[name] for name in WORLD_COLUMNS}
@@ -172,6 +176,10 @@ def test_match_csv_records_the_walk_the_other_robots_speed_and_the_ball():
         "restitution": 0.3,
         "tick_s": 0.5,
         "ball_noise": 0.1,
+        "camera_px": "160x90",
+        "hfov_deg": 70.0,
+        "camera_height": 0.62,
+        "head_range_deg": "-90..90 5..57.3",
     }
     assert all(column.meaning for column in WORLD_COLUMNS.values())
     # as the CSV gives them back (text): every one differs from the default world

@@ -374,6 +374,34 @@ WORLD_COLUMNS: dict[str, WorldColumn] = {
         "the ball detector's noise, a fraction of the ball's range (detection.ball_noise)",
         lambda v: f"ball detections off by {_float_text(v)} of their range",
     ),
+    # the camera: a run trained for a robot's own plays its matches through it
+    "camera_px": WorldColumn(
+        lambda c: f"{c.camera.width}x{c.camera.height}",
+        "the camera's image, WIDTHxHEIGHT px (camera.width, camera.height)",
+        lambda v: f"a {v} px camera",
+    ),
+    "hfov_deg": WorldColumn(
+        lambda c: round(math.degrees(c.camera.hfov), 4),
+        "the camera's horizontal field of view, degrees (camera.hfov, in rad)",
+        lambda v: f"a {_float_text(v)}° field of view",
+    ),
+    "camera_height": WorldColumn(
+        lambda c: c.camera.camera_height,
+        "the camera's height above the carpet, m (camera.camera_height)",
+        lambda v: f"the camera {_float_text(v)} m high",
+    ),
+    "head_range_deg": WorldColumn(
+        lambda c: " ".join(
+            f"{math.degrees(low):.4g}..{math.degrees(high):.4g}"
+            for low, high in (
+                (c.camera.pan_min, c.camera.pan_max),
+                (c.camera.tilt_min, c.camera.tilt_max),
+            )
+        ),
+        "the head's pan and tilt ranges, degrees, PAN_LOW..PAN_HIGH TILT_LOW..TILT_HIGH"
+        " (camera.pan_min ... camera.tilt_max, in rad)",
+        lambda v: f"the head panning {v.split()[0]}° and tilting {v.split()[-1]}°",
+    ),
 }
 
 
