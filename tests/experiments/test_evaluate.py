@@ -413,3 +413,17 @@ def test_plot_compare_names_a_csv_it_cannot_draw(tmp_path):
     with pytest.raises(ValueError, match=r"compare\.csv line 3: success_rate is not a number: ''"):
         plot_compare(path, png)
     assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_evaluate_policy_names_an_env_gymnasium_wrapped():
+    # gymnasium.make's env failed on its first episode with "'TimeLimit' object has no
+    # attribute 'max_episode_steps'"; its .unwrapped env plays the same episodes
+    import gymnasium as gym
+
+    env = gym.make("ActiveVision-v0")
+    with pytest.raises(
+        TypeError, match=r"^evaluate_policy: env expects an ActiveVisionEnv.*Limit$"
+    ):
+        evaluate_policy(Recorder(), episodes=2, env=env)
+    records, _, _ = evaluate_policy(Recorder(), episodes=2, env=env.unwrapped)
+    assert records == evaluate_policy(Recorder(), episodes=2)[0]
