@@ -413,3 +413,53 @@ def test_plot_compare_names_a_csv_it_cannot_draw(tmp_path):
     with pytest.raises(ValueError, match=r"compare\.csv line 3: success_rate is not a number: ''"):
         plot_compare(path, png)
     assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_evaluate_policy_names_an_env_gymnasium_wrapped():
+    # gymnasium.make's env failed on its first episode with "'TimeLimit' object has no
+    # attribute 'max_episode_steps'"; its .unwrapped env plays the same episodes
+    import gymnasium as gym
+
+    env = gym.make("ActiveVision-v0")
+    with pytest.raises(
+        TypeError, match=r"^evaluate_policy: env expects an ActiveVisionEnv.*Limit$"
+    ):
+        evaluate_policy(Recorder(), episodes=2, env=env)
+    records, _, _ = evaluate_policy(Recorder(), episodes=2, env=env.unwrapped)
+    assert records == evaluate_policy(Recorder(), episodes=2)[0]
+
+
+def test_a_learned_policy_names_an_observation_its_network_does_not_take():
+    # a student of image + head angles played in the paper's image-only env failed inside
+    # torch ("mat1 and mat2 shapes cannot be multiplied"), a Q-network of 4 stacked frames
+    # in an env of 1 with torch's "expected input[1, 1, 120, 160] to have 4 channels"
+    import torch
+
+    from activevision.agents.q_network import QNetwork
+    from activevision.agents.student import StudentNetwork
+    from activevision.envs import EnvConfig
+    from activevision.experiments.policies import LearnedPolicy
+
+    torch.manual_seed(0)
+    student = LearnedPolicy(StudentNetwork(9, vector_size=2), vector_keys=("head",))
+    stacked = LearnedPolicy(QNetwork(9, stack=4))
+    cases = [
+        (student, EnvConfig(), r"takes a Dict of an image \(1, 120, 160\) and \['head'\] \(2"),
+        (stacked, EnvConfig(), r"takes an image \(4, 120, 160\), got an image \(1, 120, 160\);"),
+        (LearnedPolicy(QNetwork(9)), EnvConfig(observation="image+head"), r"got a Dict of an"),
+    ]
+    for policy, config, message in cases:
+        with pytest.raises(
+            ValueError, match=rf"^method learned: the observation does not fit.*{message}"
+        ):
+            evaluate_policy(policy, episodes=1, config=config)
+    # in the envs they were made for (a Dict holding more keys too), they play; so does a
+    # student of the image alone (an SB3 run's actor) in the paper's env
+    for policy, config in [
+        (student, EnvConfig(observation="image+head")),
+        (student, EnvConfig(observation="image+head+pose")),
+        (stacked, EnvConfig(frame_stack=4)),
+        (LearnedPolicy(StudentNetwork(9)), EnvConfig()),
+    ]:
+        records, _, _ = evaluate_policy(policy, episodes=1, config=config)
+        assert records[0]["steps"] >= 1

@@ -29,18 +29,41 @@ IMAGE_KEY = "image"  #: the Dict observation's image (``envs.observations.IMAGE_
 class StudentFeatures(BaseFeaturesExtractor):
     """(B, 256) features of SB3's preprocessed observation: a uint8 image Box (scaled to
     [0, 1] by SB3), or a Dict of that image and float vectors, concatenated in
-    ``vector_keys`` order (the order ``envs.observations`` lays them out)."""
+    ``vector_keys`` order (the order ``envs.observations`` lays them out). With a Dict
+    holding vectors, ``vector_keys`` must name those read (``()``: the image alone); a key
+    the space lacks, or one named for a bare image, is a ValueError."""
 
     def __init__(
         self,
         observation_space: gym.Space[Any],
-        vector_keys: tuple[str, ...] = (),
+        vector_keys: tuple[str, ...] | None = None,
         downsample: int = 2,
     ) -> None:
         if isinstance(observation_space, gym.spaces.Dict):
+            keys = sorted(k for k in observation_space.spaces if k != IMAGE_KEY)
+            if IMAGE_KEY not in observation_space.spaces:
+                raise ValueError(f"need a Dict observation with an {IMAGE_KEY!r} key, got {keys}")
+            # a Dict's vectors were dropped without a word when no vector_keys were given
+            # (the policy saw the image alone), and a key the space lacks was a bare KeyError
+            if vector_keys is None and keys:
+                raise ValueError(
+                    f"vector_keys: the Dict observation holds the vectors {keys}; name those the"
+                    " features read, in the order they are concatenated"
+                    " (envs.observations.vector_keys(config)), or () for the image alone"
+                )
+            vector_keys = tuple(vector_keys or ())
+            missing = [k for k in vector_keys if k not in observation_space.spaces]
+            if missing:
+                raise ValueError(
+                    f"vector_keys: the Dict observation has no {missing}; its vectors: {keys}"
+                )
             image_space = observation_space[IMAGE_KEY]
             sizes = [math.prod(observation_space[k].shape or ()) for k in vector_keys]
         else:
+            if vector_keys:
+                named = list(vector_keys)
+                raise ValueError(f"vector_keys: the observation is the image alone, no {named}")
+            vector_keys = ()
             image_space, sizes = observation_space, []
         if image_space.shape is None or len(image_space.shape) != 3 or image_space.shape[0] != 1:
             raise ValueError(f"need a (1, H, W) image observation, got {image_space}")

@@ -260,10 +260,20 @@ def evaluate_policy(
     ValueError unless ``episodes`` is a positive integer (-3 played none and returned NaN
     intervals) up to :data:`~activevision.envs.seeding.EPISODES_PER_SEED` (more would replay
     the next seed's episodes) and ``seed`` an integer >= 0 (-1 was Gymnasium's refusal of
-    episode 0's seed, -1000003).
+    episode 0's seed, -1000003); TypeError unless ``env`` is None or an
+    :class:`ActiveVisionEnv` (not one wrapped by ``gymnasium.make``).
     """
     episodes = check_count("episodes", episodes, EPISODES_PER_SEED)
     seed = check_seed(seed)  # an int: a NumPy integer's episode seeds would overflow
+    if env is not None and not isinstance(env, ActiveVisionEnv):
+        # gymnasium.make's env (TimeLimit and any wrapper) failed on its first episode with
+        # "'TimeLimit' object has no attribute 'max_episode_steps'"; unwrapping it silently
+        # would drop its wrappers (a frame stack, another time limit)
+        raise TypeError(
+            "evaluate_policy: env expects an ActiveVisionEnv, whose episodes it plays itself"
+            " (ActiveVisionEnv(config), or gymnasium.make(...).unwrapped), got"
+            f" {type(env).__name__}"
+        )
     env = env or ActiveVisionEnv(config or EnvConfig())
     latencies: list[float] | None = [] if measure_latency else None
     records = [

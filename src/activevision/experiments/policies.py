@@ -209,6 +209,12 @@ class LearnedPolicy:
         self.goal_evidence = goal_evidence
         #: a continuous student's largest move (pan, tilt) rad; None: discrete actions
         self.max_move = None if max_move is None else np.asarray(max_move, dtype=np.float64)
+        #: the image (stack, H, W) and vector length the network takes (None: a network of
+        #: another kind, which says neither)
+        size = getattr(self.net, "image_shape", None)
+        stack = int(getattr(self.net, "stack", 1))
+        self._image_shape = None if size is None else (stack, *size)
+        self._vector_size = int(getattr(self.net, "vector_size", 0) or 0)
 
     @classmethod
     def from_run(
@@ -251,6 +257,7 @@ class LearnedPolicy:
             self.goal_evidence.reset()
 
     def act(self, obs: Observation, info: dict) -> int | HeadTarget:
+        self._check_fits(obs)
         torch = self.torch
         with torch.inference_mode():
             if not self.takes_vector:
@@ -277,6 +284,36 @@ class LearnedPolicy:
                 pan, tilt = head[0] + action * self.max_move
                 return HeadTarget(float(pan), float(tilt))
             return int(action)
+
+    def _check_fits(self, obs: Observation) -> None:
+        """ValueError unless ``obs`` is what the network takes: an env of another observation
+        (a policy of image + head angles in the paper's image-only env, a frame stack of 4 in
+        one of 1) failed inside torch ("mat1 and mat2 shapes cannot be multiplied"). A Dict
+        may hold more keys than the policy reads (``envs.observations.observes_within``)."""
+        if self._image_shape is None:
+            return
+        is_dict = isinstance(obs, dict)
+        image = obs.get(IMAGE_KEY) if isinstance(obs, dict) else obs
+        shape = None if image is None else tuple(np.shape(image))
+        # a Q-network takes the bare image; a student an image alone or in a Dict, which must
+        # hold the vector it reads (if any)
+        fits = shape == self._image_shape and (self.takes_vector or not is_dict)
+        if fits and self._vector_size:
+            missing = not isinstance(obs, dict) or any(k not in obs for k in self.vector_keys)
+            size = 0 if missing else sum(int(np.size(obs[k])) for k in self.vector_keys)
+            fits = not missing and size == self._vector_size
+        if fits:
+            return
+        takes = f"an image {self._image_shape}"
+        if self._vector_size:
+            takes = f"a Dict of {takes} and {list(self.vector_keys)} ({self._vector_size} numbers)"
+        got = "no image" if shape is None else f"an image {shape}"
+        if isinstance(obs, dict):
+            got = f"a Dict of {got} and {sorted(k for k in obs if k != IMAGE_KEY)}"
+        raise ValueError(
+            f"method {self.name}: the observation does not fit the policy: it takes {takes},"
+            f" got {got}; play it in an env of its run's observation (config.json's env)"
+        )
 
 
 def _check_weights_fit(network: Any, config: Any, run_dir: Any, weights: str) -> None:
