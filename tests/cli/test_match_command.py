@@ -572,3 +572,22 @@ def test_a_match_run_of_another_camera_plays_episodes_through_it(tmp_path, tiny_
 
     env = env_config_of_run(run)
     assert (env.camera.width, env.camera.height, env.step_deg) == (160, 90, 6.0)
+
+
+def test_a_match_run_of_a_neck_that_barely_tilts_plays_episodes(tmp_path):
+    """A match run of a camera whose tilt limits leave out the episodes' default start tilt
+    (5-25 degrees) starts its episodes within its limits: its EnvConfig was refused
+    ("start_tilt_range_deg: must lie within the camera's tilt limits"), and with it
+    evaluate, compare, episode and robustness of the run."""
+    from activevision.cli.args import env_config_of_run
+    from activevision.training import apply_overrides, preset
+    from activevision.training.config import save_config
+
+    run = tmp_path / "neck"
+    run.mkdir()
+    limits = ["match.camera.tilt_min=0.5", "match.camera.tilt_max=0.9"]
+    save_config(apply_overrides(preset("match_ddqn"), limits), run / "config.json")
+    env = env_config_of_run(run)
+    assert (env.camera.tilt_min, env.camera.tilt_max) == (0.5, 0.9)
+    low, high = env.start_tilt_range_deg
+    assert (low, high) == pytest.approx((np.degrees(0.5), np.degrees(0.9)))

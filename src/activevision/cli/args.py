@@ -295,6 +295,7 @@ def env_config_of_run(run_dir: Path | None) -> EnvConfig:
 
     if run_dir is None:
         return EnvConfig()
+    from activevision.envs.match.config import MATCH_ACTION_SET
     from activevision.training.config import MATCH_ENV_ID, load_config
 
     check_run(run_dir)
@@ -302,7 +303,6 @@ def env_config_of_run(run_dir: Path | None) -> EnvConfig:
     env = config.env.replace(action_type="discrete")
     if config.env_id == MATCH_ENV_ID:
         match = config.match
-        world = {"camera": match.camera, "step_deg": match.step_deg, "action_set": "8way"}
-        if any(getattr(env, key) != value for key, value in world.items()):
-            env = env.replace(**world)
+        moves = {"step_deg": match.step_deg, "action_set": MATCH_ACTION_SET}
+        env = env.through_camera(match.camera).replace(**moves)
     return env

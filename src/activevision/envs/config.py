@@ -186,6 +186,18 @@ class EnvConfig:
         """A copy with ``changes``; an unknown name is a ValueError naming the fields."""
         return replace_fields(self, changes)
 
+    def through_camera(self, camera: CameraConfig) -> EnvConfig:
+        """This config seen through ``camera``: the images, head limits and views a policy
+        trained with it expects. A start tilt range outside its tilt limits becomes those
+        limits (a neck that barely tilts left the default 5-25 degrees outside them)."""
+        if camera == self.camera:
+            return self
+        low, high = math.degrees(camera.tilt_min), math.degrees(camera.tilt_max)
+        start = self.start_tilt_range_deg
+        if not low <= start[0] <= start[1] <= high:
+            start = (low, high)
+        return self.replace(camera=camera, start_tilt_range_deg=start)
+
 
 def field_spec(value: object, name: str) -> FieldSpec:
     """A config's ``field`` (``name``, for messages) as a FieldSpec: a preset name (how JSON

@@ -66,7 +66,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from activevision.envs.actions import action_table
-from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.config import MATCH_ACTION_SET, MatchConfig
 from activevision.envs.match.heads import (
     DEFAULT_TRACK_MARGIN_DEG,
     EntropyTrackTeacher,
@@ -327,11 +327,12 @@ class OnnxMatchPolicy:
             return  # the command is followed towards its target, at the match's speed
         if meta.step_deg is None:
             return  # a bare export_onnx file: its moves are not recorded
-        if meta.action_set != "8way" or not math.isclose(meta.step_deg, self.config.step_deg):
+        same_step = math.isclose(meta.step_deg, self.config.step_deg)
+        if meta.action_set != MATCH_ACTION_SET or not same_step:
             raise ValueError(
                 f"{self.model}: its policy's actions are {meta.step_deg:g}-degree"
                 f" {meta.action_set} moves; play it with --step-deg {meta.step_deg:g}"
-                + (" (the match's moves are 8-way)" if meta.action_set != "8way" else "")
+                + (" (the match's moves are 8-way)" if meta.action_set != MATCH_ACTION_SET else "")
                 + ", or with --action-type continuous, which follows its commands"
             )
 
@@ -479,7 +480,7 @@ class RandomMoves:
     name = "random"
 
     def __init__(self, config: MatchConfig) -> None:
-        self.n_actions = len(action_table(config.step_deg, "8way"))
+        self.n_actions = len(action_table(config.step_deg, MATCH_ACTION_SET))
         self.continuous = config.action_type == "continuous"
 
     def reset(self, n: int, rng: np.random.Generator) -> None:

@@ -373,13 +373,7 @@ def with_camera(config: EnvConfig, camera: Any, source: str = "policy.json") -> 
         raise PolicyFileError(
             f"{source}: 'camera' does not fit this activevision: {error}"
         ) from error
-    if trained == config.camera:
-        return config
-    low, high = math.degrees(trained.tilt_min), math.degrees(trained.tilt_max)
-    start = config.start_tilt_range_deg
-    if not low <= start[0] <= start[1] <= high:
-        start = (low, high)
-    return config.replace(camera=trained, start_tilt_range_deg=start)
+    return config.through_camera(trained)
 
 
 class OnnxPolicy:

@@ -43,7 +43,7 @@ from torch.nn import functional as F
 
 from activevision.agents.student import StudentNetwork
 from activevision.envs.actions import action_table
-from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.config import MATCH_ACTION_SET, MatchConfig
 from activevision.envs.match.heads import EntropyTrackTeacher, GlanceTrackTeacher
 from activevision.envs.match.observations import (
     IMAGE_KEY,
@@ -79,7 +79,7 @@ class MatchDaggerTrainer(ImitationRun):
         match, dag = config.match, config.dagger
         self.continuous = match.action_type == "continuous"
         self.keys = vector_keys(match)
-        self.n_actions = len(action_table(match.step_deg, "8way"))
+        self.n_actions = len(action_table(match.step_deg, MATCH_ACTION_SET))
         self.env = ActiveVisionMatchVectorEnv(dag.num_envs, match)
         self.teacher = (
             GlanceTrackTeacher(match, track_margin_deg=dag.glance_track_margin_deg)

@@ -25,6 +25,8 @@ from activevision.typecheck import check_dataclass_fields, in_range, replace_fie
 #: uncertainty) and the robot's ball model (``envs.match.observations``).
 MatchObservation = Literal["image", "image+head", "image+head+belief"]
 MATCH_OBSERVATIONS: tuple[str, ...] = typing.get_args(MatchObservation)
+#: The discrete moves of a match's head: the paper's eight, of ``step_deg`` each
+MATCH_ACTION_SET = "8way"
 #: What the reward scores: the belief's entropy (what a robot can compute) or its true error.
 RewardKind = Literal["entropy", "error"]
 #: Where the robot walks: random waypoints, or scripted to the ball (a striker).

@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from activevision.envs.actions import action_table, oracle_actions
-from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.config import MATCH_ACTION_SET, MatchConfig
 from activevision.geometry import CameraConfig, LandmarkSet, clip_head, field_landmarks
 from activevision.localisation import ViewpointGrid, best_viewpoints, grid_spanning
 
@@ -62,7 +62,7 @@ def move_towards(head: np.ndarray, target: np.ndarray, config: MatchConfig) -> n
     """The actions of ``config``'s kind that move heads (N, 2) towards targets (N, 2) rad at
     head speed: the discrete move of ``step_deg`` that ends closest, or the continuous move
     straight there, at most ``max_move_deg`` per axis."""
-    table = action_table(config.step_deg, "8way")
+    table = action_table(config.step_deg, MATCH_ACTION_SET)
     return oracle_actions(head, target, config.action_type, table, config.max_move)
 
 

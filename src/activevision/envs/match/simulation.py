@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from activevision.envs.actions import action_table, head_moves, require_reset
-from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.config import MATCH_ACTION_SET, MatchConfig
 from activevision.envs.match.dynamics import to_robot_frame
 from activevision.envs.match.kernels import MatchParams, MatchState, move_kernel, sense_kernel
 from activevision.envs.match.others import bounce_ball, walk_others
@@ -59,7 +59,7 @@ class MatchBatch:
         self.n = num_envs
         self.landmarks = field_landmarks(cfg.field)
         self.renderer = Renderer(cfg.field, cfg.camera)
-        self.actions = action_table(cfg.step_deg, "8way")
+        self.actions = action_table(cfg.step_deg, MATCH_ACTION_SET)
         k = self.k = len(self.landmarks)
         types = self.landmarks.types
         self._point_ids = np.flatnonzero(np.isin(types, [int(t) for t in _POINT_TYPES]))
