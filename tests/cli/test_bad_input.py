@@ -64,6 +64,11 @@ BAD_ARGUMENTS = [
     # options of a compare on Ray, given without --ray: they were silently ignored
     (["compare", "--verbose", "--out", "{tmp}/c"], "--verbose applies to a compare on Ray"),
     (["compare", "--num-cpus", "2", "--address", "auto", "--out", "{tmp}/c"], "--address, --num"),
+    (["compare", "--chunk", "5", "--out", "{tmp}/c"], "--chunk applies to a compare on Ray"),
+    (
+        ["compare", "--ray", "--num-cpus", "2", "--address", "auto", "--out", "{tmp}/c"],
+        "--num-cpus sets a local Ray's CPUs",
+    ),
     (["episode", "--seed", "-1", "--out", "{tmp}/e.png"], "'-1'"),
     (["episode", "--policies", "nope", "--out", "{tmp}/e.png"], "'nope'"),
     (["episode", "--policies", "learned", "--out", "{tmp}/e.png"], "--run"),
@@ -434,7 +439,8 @@ def test_runs_of_another_image_stack_are_refused_on_one_line(
 def test_a_refused_compare_on_ray_leaves_the_compare_csv_it_would_overwrite(
     tmp_path, one_clear_line, capsys
 ):
-    """``--ray --runs`` is refused: before the refusal, --overwrite had removed compare.csv."""
+    """A compare refused before its first row keeps the compare.csv that --overwrite would
+    replace (``--ray --runs`` and a --runs that is no run removed it before the refusal)."""
     out = tmp_path / "cmp"
     argv = ["compare", "--methods", "random", "--errors", "0.1", "--episodes", "1"]
     assert main([*argv, "--out", str(out)]) == 0
@@ -443,6 +449,12 @@ def test_a_refused_compare_on_ray_leaves_the_compare_csv_it_would_overwrite(
     refused = [*argv, "--out", str(out), "--overwrite", "--ray", "--runs", str(tmp_path)]
     assert main(refused) == 2
     one_clear_line("--runs plays in this process: leave out --ray")
+    assert (out / "compare.csv").read_bytes() == before
+    # nor one refused after the outputs were checked: a --runs that is no run (it was
+    # removed then too, and the error was a bare "[Errno 2] No such file")
+    missing = tmp_path / "nope"
+    assert main([*argv, "--out", str(out), "--overwrite", "--runs", str(missing)]) == 2
+    one_clear_line(f"--runs {missing}: not a training run")
     assert (out / "compare.csv").read_bytes() == before
 
 

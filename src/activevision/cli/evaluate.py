@@ -39,6 +39,10 @@ if TYPE_CHECKING:
     from activevision.experiments.policies import HeadPolicy
 
 
+#: ``compare --ray``'s episodes a Ray task (``--chunk``)
+RAY_CHUNK = 25
+
+
 def _method_names() -> tuple[str, ...]:
     from activevision.experiments.methods import method_names
 
@@ -67,15 +71,17 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
     a continuous policy plays the same env, moving by head targets."""
     from activevision.envs.observations import play_differences
     from activevision.experiments.policies import LearnedPolicy
+    from activevision.training.config import load_config
 
     policies: dict[str, HeadPolicy] = {}
     for run in args.runs or []:
+        check_run(run, "--runs")
         # every run plays in the comparison's env (--run's, or the shipped policy's where
         # it plays): an image of another size or stack was a traceback in the first step,
         # another camera or other moves a silently different policy
-        policy = LearnedPolicy.from_run(run, weights=args.weights)
+        continuous = load_config(run / "config.json").env.action_type == "continuous"
         differences = play_differences(
-            env_config_of_run(run), env_config, moves_by_target=policy.max_move is not None
+            env_config_of_run(run), env_config, moves_by_target=continuous
         )
         if differences:
             raise ValueError(
@@ -86,6 +92,7 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
         name = f"learned:{run.resolve().name}"  # the folder's name, however it was given
         if name in policies:
             raise ValueError(f"--runs names two runs {run.resolve().name!r}: rename one directory")
+        policy = LearnedPolicy.from_run(run, weights=args.weights)
         policy.name = name
         policies[name] = policy
     return policies
@@ -252,34 +259,43 @@ def _check_ray_options(args: argparse.Namespace) -> None:
         for flag, value in (
             ("--address", args.address),
             ("--num-cpus", args.num_cpus),
+            ("--chunk", args.chunk),
             ("--verbose", args.verbose),
         )
         if value
     ]
     if ray_only and not args.ray:
         raise ValueError(f"{', '.join(ray_only)} applies to a compare on Ray: add --ray")
+    if args.address is not None and args.num_cpus is not None:
+        raise ValueError("--num-cpus sets a local Ray's CPUs: leave it out with --address")
 
 
 def _compare_into(out: Path, args: argparse.Namespace) -> None:
     """``cmd_compare``'s work, in ``out`` (made, and locked against another compare)."""
     from activevision.figures.compare import plot_compare
 
-    if args.overwrite:
-        (out / "compare.csv").unlink(missing_ok=True)
     env_config = env_config_of_run(args.run)
+    # --overwrite removes compare.csv only once every method is made and checked: a refusal
+    # before the first row left the user without the old file and without a new one
     if args.ray:
         from activevision.scaleout.compare import compare_ray, default_method_names
+        from activevision.scaleout.ray_session import check_reachable, require_ray
 
+        names = default_method_names(args.run, args.methods)
+        require_ray()
+        if args.address is not None:
+            check_reachable(args.address)
+        _start_over(out, args)
         compare_ray(
             out,
-            default_method_names(args.run, args.methods),
+            names,
             args.errors,
             args.episodes,
             args.seed,
             env_config,
             run_dir=args.run,
             weights=args.weights,
-            chunk=args.chunk,
+            chunk=args.chunk or RAY_CHUNK,
             address=args.address,
             num_cpus=args.num_cpus,
             verbose=args.verbose,
@@ -298,9 +314,16 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
         users = _user_methods(args, env_config, methods)
         _try_users(users, env_config, args.errors[0], args.seed)
         methods.update(users)
+        _start_over(out, args)
         compare(out, methods, args.errors, args.episodes, args.seed, env_config)
     plot_compare(out / "compare.csv", out / "compare.png")
     print(f"wrote {out}/compare.csv and compare.png")
+
+
+def _start_over(out: Path, args: argparse.Namespace) -> None:
+    """``--overwrite``: remove the compare.csv that would be resumed."""
+    if args.overwrite:
+        (out / "compare.csv").unlink(missing_ok=True)
 
 
 def _try_users(
@@ -430,7 +453,11 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--ray", action="store_true", help="distribute over Ray tasks")
     p.add_argument("--address", help="with --ray: auto | ray://HEAD:10001 (default: local)")
     p.add_argument("--num-cpus", type=positive_int, help="with --ray: CPUs of the local Ray")
-    p.add_argument("--chunk", type=positive_int, default=25, help="with --ray: episodes a task")
+    p.add_argument(
+        "--chunk",
+        type=positive_int,
+        help=f"with --ray: episodes a task (default {RAY_CHUNK})",
+    )
     p.add_argument(
         "--verbose",
         action="store_true",

@@ -71,7 +71,8 @@ def compare_ray(
     level completes, in level order, so an interrupted run loses only unfinished levels.
     ``weights``: the run's "final" or "best" weights.
     ``address``/``num_cpus``: see :func:`~activevision.scaleout.ray_session.ray_session`.
-    ``verbose``: the workers' output (warnings, a worker's traceback) is printed too.
+    ``verbose``: the workers' output (warnings, a worker's traceback) is printed too (where
+    this call starts Ray: a Ray already initialised in the process keeps its own setting).
     """
     from activevision.envs import ActiveVisionEnv
     from activevision.experiments.compare import check_resumable, done_levels
