@@ -190,7 +190,7 @@ HEAD = EnvConfig(observation="image+head")
     [
         (EnvConfig(), EnvConfig(), None),
         (HEAD, EnvConfig(observation="image+head+pose"), None),  # a subset of the vectors
-        (HEAD, EnvConfig(), "observation 'image+head' (head) against 'image'"),
+        (HEAD, EnvConfig(), "against 'image': the env gives the bare image, no vectors"),
         (
             HEAD.replace(action_history=1),
             HEAD,
@@ -205,7 +205,11 @@ HEAD = EnvConfig(observation="image+head")
             "images of 160x90 px against 160x120",
         ),
         # the same image size, another view of the field: a silently different policy
-        (EnvConfig(camera=CameraConfig(hfov=1.2)), EnvConfig(), "camera CameraConfig("),
+        (
+            EnvConfig(camera=CameraConfig(hfov=1.2)),
+            EnvConfig(),
+            "a camera of hfov 68.8 deg against hfov 58 deg",
+        ),
         # a discrete policy's actions index its own moves
         (EnvConfig(step_deg=6.0), EnvConfig(), "moves of 6 deg, 8way, against 3 deg, 8way"),
         (EnvConfig(action_set="4way"), EnvConfig(), "moves of 3 deg, 4way"),

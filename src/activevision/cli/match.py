@@ -59,7 +59,7 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
         text += f", detector {detector_text(config.detection)}"
         if args.detection is None:
             text += f" (the one {args.run if run is None else run} was trained with)"
-    camera = camera_text(config.camera)
+    camera = config.camera.differences()
     if camera:  # only a run's: the command line names no camera
         text += f", camera {camera} (the one {args.run if run is None else run} was trained with)"
     if args.ball_bounces_off_us:
@@ -76,28 +76,6 @@ def detector_text(detection: DetectionConfig) -> str:
     if detection.ball_noise != DetectionConfig().ball_noise:
         text += f", ball noise {detection.ball_noise:g} of its range"
     return text
-
-
-def camera_text(camera: CameraConfig) -> str:
-    """What of ``camera`` differs from the paper's: ``"160x90 px, hfov 70 deg"``, or
-    nothing."""
-    import math
-
-    from activevision.geometry import CameraConfig
-
-    default = CameraConfig()
-    parts = []
-    if (camera.width, camera.height) != (default.width, default.height):
-        parts.append(f"{camera.width}x{camera.height} px")
-    if camera.hfov != default.hfov:
-        parts.append(f"hfov {math.degrees(camera.hfov):.3g} deg")
-    if camera.camera_height != default.camera_height:
-        parts.append(f"height {camera.camera_height:g} m")
-    for axis in ("pan", "tilt"):
-        low, high = getattr(camera, f"{axis}_min"), getattr(camera, f"{axis}_max")
-        if (low, high) != (getattr(default, f"{axis}_min"), getattr(default, f"{axis}_max")):
-            parts.append(f"{axis} {math.degrees(low):.3g}..{math.degrees(high):.3g} deg")
-    return ", ".join(parts)
 
 
 def _run_world(run: Path | None) -> tuple[DetectionConfig | None, CameraConfig | None]:

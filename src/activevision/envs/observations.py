@@ -81,9 +81,14 @@ def play_differences(
             for key in vector_keys(trained)
             if key not in vector_keys(given)
         ]
+        why = f": no {', '.join(missing)}" if missing else ""
+        if trained.observation == "image":
+            why = ": a network of the bare image takes no Dict"
+        elif given.observation == "image":
+            why = ": the env gives the bare image, no vectors"
         differences.append(
             f"observation {trained.observation!r} ({', '.join(vector_keys(trained)) or 'image'})"
-            f" against {given.observation!r}" + (f": no {', '.join(missing)}" if missing else "")
+            f" against {given.observation!r}{why}"
         )
     camera, env_camera = trained.camera, given.camera
     if (camera.width, camera.height) != (env_camera.width, env_camera.height):
@@ -92,7 +97,9 @@ def play_differences(
             f"{env_camera.height}"
         )
     elif camera != env_camera:  # the same size, another view of the field
-        differences.append(f"camera {camera} against {env_camera}")
+        differences.append(
+            f"a camera of {camera.differences(env_camera)} against {env_camera.differences(camera)}"
+        )
     if trained.frame_stack != given.frame_stack:
         differences.append(f"frame_stack {trained.frame_stack} against {given.frame_stack}")
     remembered = "actions" in vector_keys(trained) and "actions" in vector_keys(given)

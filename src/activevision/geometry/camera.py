@@ -98,6 +98,23 @@ class CameraConfig:
         f = self.focal
         return np.array([[f, 0, self.width / 2], [0, f, self.height / 2], [0, 0, 1.0]])
 
+    def differences(self, other: CameraConfig | None = None) -> str:
+        """What of this camera differs from ``other`` (default: the paper's), in words and
+        degrees: ``"160x90 px, hfov 70 deg"``; empty where nothing does."""
+        other = other or CameraConfig()
+        parts = []
+        if (self.width, self.height) != (other.width, other.height):
+            parts.append(f"{self.width}x{self.height} px")
+        if self.hfov != other.hfov:
+            parts.append(f"hfov {math.degrees(self.hfov):.3g} deg")
+        if self.camera_height != other.camera_height:
+            parts.append(f"height {self.camera_height:g} m")
+        for axis in ("pan", "tilt"):
+            low, high = getattr(self, f"{axis}_min"), getattr(self, f"{axis}_max")
+            if (low, high) != (getattr(other, f"{axis}_min"), getattr(other, f"{axis}_max")):
+                parts.append(f"{axis} {math.degrees(low):.3g}..{math.degrees(high):.3g} deg")
+        return ", ".join(parts)
+
 
 def head_in_limits(pan: npt.ArrayLike, tilt: npt.ArrayLike, cam: CameraConfig) -> np.ndarray:
     """True where the head angles lie within the (closed) limits."""
