@@ -339,3 +339,33 @@ def test_the_figure_of_no_rows_is_refused(tmp_path):
     with pytest.raises(ValueError, match="plot_robustness: no rows to draw"):
         plot_robustness([], tmp_path / "r.png")
     assert not (tmp_path / "r.png").exists()
+
+
+def test_the_legend_names_only_the_kinds_of_bar_drawn(tmp_path, monkeypatch):
+    # a --perturbations of two gain rows listed "other robots", "camera mounted off the
+    # model" and the hatching of rows outside the training ranges, none of them drawn
+    import activevision.figures.robustness as figure
+
+    drawn = {}
+    monkeypatch.setattr(figure, "save_figure", lambda fig, path, dpi: drawn.update(fig=fig))
+    clean = {"name": "clean", "factor": "none", "level": "trained", "setting": "as trained"}
+    for metric in ("success_rate", "goal_reached"):
+        clean |= {metric: 0.8, f"{metric}_low": 0.7, f"{metric}_high": 0.9}
+    strong = clean | {"name": "gain-dark-strong", "factor": "gain", "level": "strong"}
+    rows = [clean | {"in_training_range": True}, strong | {"in_training_range": True}]
+    figure.plot_robustness(rows, tmp_path / "r.png")
+    (legend,) = drawn["fig"].legends
+    labels = [t.get_text() for t in legend.get_texts()]
+    assert labels == ["strong (beyond the robust training ranges)", figure.CLEAN_LABEL]
+    robots = clean | {"name": "robots-2", "factor": "robots", "level": "strong"}
+    mild = clean | {"name": "gain-dark-mild", "factor": "gain", "level": "mild"}
+    rows += [robots | {"in_training_range": False}, mild | {"in_training_range": True}]
+    figure.plot_robustness(rows, tmp_path / "r.png")
+    labels = [t.get_text() for t in drawn["fig"].legends[0].get_texts()]
+    assert labels == [
+        "mild (inside the robust training ranges)",
+        "strong (beyond them)",
+        "other robots",
+        "outside this policy's training ranges",
+        figure.CLEAN_LABEL,
+    ]

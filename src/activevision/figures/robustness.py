@@ -125,12 +125,19 @@ def plot_robustness(
     hatched = Patch(facecolor="#999999", hatch="//", edgecolor="white")
     hatched.set_hatch_linewidth(0.6)
     hatched.set_label("outside this policy's training ranges")
+    # only the kinds of bar drawn (a --perturbations of a few rows listed other robots and
+    # a camera mount it never played)
+    shown = set(colours)
+    beyond = "them" if COLOURS["mild"] in shown else "the robust training ranges"
+    kinds = [
+        ("mild", "mild (inside the robust training ranges)"),
+        ("strong", f"strong (beyond {beyond})"),
+        ("robots", "other robots"),
+        ("mount", "camera mounted off the model"),
+    ]
     handles = [
-        Patch(color=COLOURS["mild"], label="mild (inside the robust training ranges)"),
-        Patch(color=COLOURS["strong"], label="strong (beyond them)"),
-        Patch(color=COLOURS["robots"], label="other robots"),
-        Patch(color=COLOURS["mount"], label="camera mounted off the model"),
-        *([hatched] if trained else []),
+        *(Patch(color=COLOURS[k], label=text) for k, text in kinds if COLOURS[k] in shown),
+        *([hatched] if any(outside) else []),
         Line2D(
             [],
             [],
