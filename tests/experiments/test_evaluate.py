@@ -306,6 +306,26 @@ def test_plot_compare_fits_the_legend_of_long_names_in_the_figure(tmp_path, monk
         assert box.x0 <= legend.x0 and legend.x1 <= box.x1 and box.y0 <= legend.y0
 
 
+def test_plot_compare_draws_the_interval_of_a_single_error_level(tmp_path, monkeypatch):
+    # --errors 0.3: the band over one error level had no width, and no interval was drawn
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import to_rgba
+
+    from activevision.io import write_csv
+
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.compare.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    cells = {"success": 0.5, "success_low": 0.2, "success_high": 0.9}
+    write_csv(tmp_path / "one.csv", [{"method": "scan", "error": 0.3, **cells}])
+    plot_compare(tmp_path / "one.csv", "x", metrics="success")
+    (ax,) = drawn[0].axes
+    (whisker,) = [c for c in ax.collections if isinstance(c, LineCollection)]
+    np.testing.assert_allclose(whisker.get_segments()[0], [[0.3, 0.2], [0.3, 0.9]])
+    assert whisker.get_color()[0].tolist() == list(to_rgba(ax.lines[0].get_color()))
+
+
 @pytest.mark.parametrize(
     ("values", "error", "match"),
     [

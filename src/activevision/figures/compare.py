@@ -1,5 +1,6 @@
 """The paper's comparison figure: success of every method vs the robot's localisation error,
-one curve per method with its 95% band, read from ``compare.csv``."""
+one curve per method with its 95% band (whiskers at a single error level), read from
+``compare.csv``."""
 
 from __future__ import annotations
 
@@ -66,13 +67,21 @@ def plot_compare(
             )
             e = [float(r["error"]) for r in sel]
             mean = [float(r[metric]) for r in sel]
-            ax.plot(e, mean, "o-", ms=3, label=method)
-            ax.fill_between(
-                e,
-                [float(r[f"{metric}_low"]) for r in sel],
-                [float(r[f"{metric}_high"]) for r in sel],
-                alpha=0.2,
-            )
+            (line,) = ax.plot(e, mean, "o-", ms=3, label=method)
+            low = [float(r[f"{metric}_low"]) for r in sel]
+            high = [float(r[f"{metric}_high"]) for r in sel]
+            if len(sel) == 1:
+                # a band over one error level has no width: its interval went undrawn
+                ax.errorbar(
+                    e,
+                    mean,
+                    yerr=[[mean[0] - low[0]], [high[0] - mean[0]]],
+                    fmt="none",
+                    ecolor=line.get_color(),
+                    capsize=3,
+                )
+            else:
+                ax.fill_between(e, low, high, facecolor=line.get_color(), alpha=0.2)
         ax.set_xlabel("localisation error e (m and rad)")
         ax.set_ylabel(Y_LABELS.get(metric, metric))
         ax.set_title(TITLES.get(metric, metric), fontsize=10)
