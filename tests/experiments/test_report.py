@@ -270,3 +270,10 @@ def test_plot_refuses_a_config_edited_after_the_checkpoint(tmp_path):
     (run / "config.json").write_text("{}")
     with pytest.raises(RuntimeError, match=r"config\.json was changed after checkpoint"):
         plot_run(run, tmp_path / "plots")
+
+
+def test_the_match_section_counts_one_match_in_the_singular(tmp_path):
+    # match --matches 1 was reported as "1 matches of 300 ticks"
+    run = make_run(tmp_path)
+    write_rows(run / "match" / "match.csv", [match_row("ball_track") | {"matches": 1}])
+    assert "`ActiveVisionMatch-v0`: 1 match of 300 ticks" in write_report(run).read_text()

@@ -145,3 +145,28 @@ def test_plot_pareto_checking_its_legend_leaves_a_fitting_figure_the_same_bytes(
     )
     plot_pareto(points, ["method_5"], plain, "t", references=["method_0"])
     assert checked.read_bytes() == plain.read_bytes()
+
+
+def test_plot_pareto_of_one_match_says_it_has_no_whiskers(monkeypatch):
+    # one match has no interval (NaN ends): the whiskers were missing without a word
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    single = {"ball_in_view": (0.5, np.nan, np.nan), "position_rmse": (0.1, np.nan, np.nan)}
+    plot_pareto({"a": single}, ["a"], "x", "1 match x 19.2 s")
+    plot_pareto({"a": POINT}, ["a"], "x", "2 matches x 19.2 s")
+    titles = [fig.axes[0].get_title() for fig in drawn]
+    assert titles == ["1 match x 19.2 s\none match: no 95% whiskers", "2 matches x 19.2 s"]
+
+
+def test_match_counts_one_match_and_one_method_in_the_singular():
+    # the figures' titles and the printed header read "1 methods x 1 matches"
+    from activevision.cli.match import _count
+
+    assert [_count(1, "match"), _count(2, "match"), _count(1, "method")] == [
+        "1 match",
+        "2 matches",
+        "1 method",
+    ]
+    assert _count(11, "method") == "11 methods"

@@ -45,6 +45,11 @@ def _method_names() -> tuple[str, ...]:
     return match_method_names()
 
 
+def _count(n: int, noun: str) -> str:
+    """``n`` and the noun, plural unless one ("1 match", "2 matches"; it read "1 matches")."""
+    return f"{n} {noun}" + ("" if n == 1 else "es" if noun.endswith("ch") else "s")
+
+
 def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None = None) -> str:
     """What differs from the default world: ``", 4 other robots walking at 0.2 m/s,
     detector 0.6/0.15/0.2"``, or nothing; ``run`` names the run a detector came from
@@ -237,7 +242,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     play = f"{seconds / 60:.1f} min" if seconds >= 60 else f"{seconds:.3g} s"
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
     print(
-        f"{len(labels)} methods x {args.matches} matches of {args.ticks} ticks"
+        f"{_count(len(labels), 'method')} x {_count(args.matches, 'match')} of {args.ticks} ticks"
         f" ({play} of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
         f" walking to {args.walk}{_world_text(args, config)}"
@@ -287,7 +292,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         run_name = None if args.run is None else args.run.resolve().name
         world = _world_text(args, config, run_name)
         title = (
-            f"{args.matches} matches x {play}, seed {args.seed},"
+            f"{_count(args.matches, 'match')} x {play}, seed {args.seed},"
             f" {args.action_type} head {args.step_deg:g} deg/tick{world}"
         )
         points = {

@@ -199,7 +199,8 @@ def _match_part(match_rows: list[dict]) -> list[str]:
         "",
         "## Head control through whole matches",
         "",
-        f"`ActiveVisionMatch-v0`: {first['matches']} matches"
+        f"`ActiveVisionMatch-v0`: {first['matches']} match"
+        + ("" if str(first["matches"]) == "1" else "es")
         + (f" of {first['ticks']} ticks" if first.get("ticks") else "")
         + f" from seed {first['seed']}, the"
         " same for every strategy; the robot walks, the ball is kicked about, the UKF"

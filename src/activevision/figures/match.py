@@ -101,7 +101,12 @@ def plot_pareto(
     pad_x, pad_y = max(1.0, 0.1 * (max(xs) - min(xs))), max(1e-3, 0.1 * (max(ys) - min(ys)))
     zoom.set_xlim(min(xs) - pad_x, max(xs) + pad_x)
     zoom.set_ylim(min(ys) - pad_y, max(ys) + pad_y)
-    whole.set_title(title, fontsize=9)
+    # one match has no interval (NaN ends): its whiskers are missing, and the title says so
+    # (on a line of its own: a title of the world beside it ran past the figure's edge)
+    ends = [v for p in points.values() for k in ("ball_in_view", "position_rmse") for v in p[k][1:]]
+    whole.set_title(
+        title + ("\none match: no 95% whiskers" if all(np.isnan(ends)) else ""), fontsize=9
+    )
     _legend_inside_or_below(fig, whole)
     save_figure(fig, path, dpi=PARETO_DPI)
 
