@@ -170,3 +170,23 @@ def test_match_counts_one_match_and_one_method_in_the_singular():
         "1 method",
     ]
     assert _count(11, "method") == "11 methods"
+
+
+def test_a_long_title_of_the_match_figures_stays_inside_them(monkeypatch):
+    # the world of moving robots and a detector ran past both edges of the figure ("2 " and
+    # "bands: 95% intervals" cut off)
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    title = (
+        "2 matches x 9.6 s, seed 0, discrete head 3 deg/tick, 3 other robots walking at"
+        " 0.2 m/s, detector 0.9/0.4/0.1"
+    )
+    plot_pareto({"a": POINT}, ["a"], "x", title)
+    plot_error_over_time({"a": np.full((30, 2), 0.1)}, 0.32, "x", title)
+    for fig in drawn:
+        renderer = fig.canvas.get_renderer()
+        fig.draw(renderer)
+        box, text = fig.bbox, fig.axes[0].title.get_window_extent(renderer)
+        assert box.x0 <= text.x0 and text.x1 <= box.x1

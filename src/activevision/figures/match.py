@@ -105,7 +105,9 @@ def plot_pareto(
     # (on a line of its own: a title of the world beside it ran past the figure's edge)
     ends = [v for p in points.values() for k in ("ball_in_view", "position_rmse") for v in p[k][1:]]
     whole.set_title(
-        title + ("\none match: no 95% whiskers" if all(np.isnan(ends)) else ""), fontsize=9
+        title + ("\none match: no 95% whiskers" if all(np.isnan(ends)) else ""),
+        fontsize=9,
+        wrap=True,  # a long world (robots, detector) ran past the figure's edges
     )
     _legend_inside_or_below(fig, whole)
     save_figure(fig, path, dpi=PARETO_DPI)
@@ -173,7 +175,7 @@ def plot_error_over_time(
             ax.fill_between(t, mean - half, mean + half, alpha=0.2, color=colour)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("position error (m), mean over matches")
-    ax.set_title(f"{title}; {_bands_note(curves)}", fontsize=9)
+    ax.set_title(f"{title}; {_bands_note(curves)}", fontsize=9, wrap=True)
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
