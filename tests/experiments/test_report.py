@@ -277,3 +277,59 @@ def test_the_match_section_counts_one_match_in_the_singular(tmp_path):
     run = make_run(tmp_path)
     write_rows(run / "match" / "match.csv", [match_row("ball_track") | {"matches": 1}])
     assert "`ActiveVisionMatch-v0`: 1 match of 300 ticks" in write_report(run).read_text()
+
+
+def robustness_row(name, setting, trained, success, goal, drops):
+    """A robustness.csv row (``activevision robustness --run``'s columns)."""
+    row = {
+        "method": "learned",
+        "error": 1.0,
+        "name": name,
+        "factor": name.split("-")[0],
+        "level": "mild",
+        "setting": setting,
+        "in_training_range": trained,
+        "in_robust_range": True,
+        "n": 200,
+        "seed": 0,
+    }
+    for metric, (mean, low, high) in (("success_rate", success), ("goal_reached", goal)):
+        row |= {metric: mean, f"{metric}_low": low, f"{metric}_high": high}
+    return row | {"success_rate_drop_pts": drops[0], "goal_reached_drop_pts": drops[1]}
+
+
+def test_the_robustness_suite_of_the_run_is_reported(tmp_path):
+    """``activevision robustness --run RUN`` writes RUN/robustness/: the report left it out."""
+    run = make_run(tmp_path)
+    rows = [
+        robustness_row(
+            "clean", "as trained", True, (0.865, 0.84, 0.891), (0.52, 0.451, 0.588), (0, 0)
+        ),
+        robustness_row(
+            "gain-dark-mild",
+            "gain=0.75",
+            False,
+            (0.759, 0.724, 0.793),
+            (0.265, 0.209, 0.33),
+            (10.64, 25.5),
+        ),
+    ]
+    write_rows(run / "robustness" / "robustness.csv", rows)
+    report = write_report(run).read_text()
+    assert "## Robustness" in report
+    assert "`learned` on 200 fixed-seed episodes a row from seed 0, localisation error 1" in report
+    assert (
+        "| clean | as trained | yes | 86.5 [84.0, 89.1] | +0.0 | 52.0 [45.1, 58.8] | +0.0 |"
+        in report
+    )
+    assert (
+        "| gain-dark-mild | gain=0.75 | no | 75.9 [72.4, 79.3] | -10.6 | 26.5 [20.9, 33.0] |"
+        " -25.5 |" in report
+    )
+    assert "robustness/robustness.png" not in report  # no figure: no link to none
+    (run / "robustness" / "robustness.png").write_bytes(b"")
+    assert "![robustness](robustness/robustness.png)" in write_report(run).read_text()
+    # a robustness.csv of another layout is named, not a KeyError
+    write_rows(run / "robustness" / "robustness.csv", [{"method": "learned", "n": 1}])
+    with pytest.raises(ValueError, match=r"robustness.csv is damaged or not a file"):
+        write_report(run)

@@ -8,6 +8,8 @@ Layout of a run directory after the quickstart::
     runs/NAME/compare/compare.{csv,png}       success vs localisation error
     runs/NAME/episode.png, episode.gif        learned vs random from one start
     runs/NAME/match/match.csv, match_*.png    head-control strategies through whole matches
+    runs/NAME/robustness/robustness.{csv,png} the policy under named perturbations
+                                              (``activevision robustness --run``)
     runs/NAME/report.md                       this page
 """
 
@@ -137,6 +139,11 @@ def write_report(run_dir: str | Path) -> Path:
     if match_rows:
         with _reading(match_csv):
             parts += _match_part(match_rows)
+    robustness_csv = run / "robustness" / "robustness.csv"
+    robustness_rows = _csv_rows(robustness_csv)
+    if robustness_rows:
+        with _reading(robustness_csv):
+            parts += _robustness_part(robustness_rows, run / "robustness" / "robustness.png")
     parts += [
         "",
         "## Configuration",
@@ -221,6 +228,51 @@ def _match_part(match_rows: list[dict]) -> list[str]:
         "",
         "Animated: [match_clip.gif](match/match_clip.gif)",
     ]
+
+
+def _robustness_part(rows: list[dict], figure: Path) -> list[str]:
+    """The report's section on the robustness suite (``activevision robustness --run``,
+    written in the run's ``robustness/``), from ``robustness.csv``'s rows."""
+    first = rows[0]
+
+    def percent(row: dict, metric: str) -> str:
+        ends = (float(row[metric + end]) for end in ("", "_low", "_high"))
+        mean, low, high = (f"{100 * v:.1f}" for v in ends)
+        return f"{mean} [{low}, {high}]"
+
+    def change(row: dict, metric: str) -> str:
+        return f"{-float(row[f'{metric}_drop_pts']):+z.1f}"  # z: no -0.0
+
+    lines = [
+        "| perturbation | setting | in its training | success rate % | change | goal"
+        " reached % | change |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        trained = "yes" if r["in_training_range"] == "True" else "no"
+        lines.append(
+            f"| {r['name']} | {r['setting']} | {trained} | {percent(r, 'success_rate')} |"
+            f" {change(r, 'success_rate')} | {percent(r, 'goal_reached')} |"
+            f" {change(r, 'goal_reached')} |"
+        )
+    parts = [
+        "",
+        "## Robustness",
+        "",
+        f"`{first['method']}` on {first['n']} fixed-seed episodes a row from seed"
+        f" {first['seed']}, localisation error {_float_text(first['error'])}: each"
+        " perturbation against the row `clean` (the policy's own training world), in"
+        " points. Mean [95% interval].",
+        "",
+        "\n".join(lines),
+    ]
+    if figure.exists():
+        parts += ["", "![robustness](robustness/robustness.png)"]
+    return parts
+
+
+def _float_text(value: str) -> str:
+    return f"{float(value):g}"
 
 
 def _is_number(value: str) -> bool:
