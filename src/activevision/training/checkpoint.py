@@ -137,6 +137,19 @@ def remove_stale_writes(run_dir: str | os.PathLike[str]) -> list[Path]:
     return stale + weights
 
 
+def remove_earlier_weights(run_dir: str | os.PathLike[str]) -> list[Path]:
+    """Delete the run's ``policy.safetensors`` and ``best_policy.safetensors`` before a
+    fresh run starts in ``run_dir`` (``train --out RUN --overwrite`` over an attempt that
+    stopped before its first checkpoint): they are the earlier attempt's weights, which
+    ``export``, ``evaluate`` and ``--weights best`` would read as this run's. Returns what
+    was removed."""
+    removed = [Path(run_dir) / name for name in _RUN_WEIGHTS]
+    removed = [path for path in removed if path.is_file()]
+    for path in removed:
+        path.unlink(missing_ok=True)
+    return removed
+
+
 def verify_checkpoint(
     path: str | os.PathLike[str], expected_files: tuple[str, ...] = CHECKPOINT_FILES
 ) -> None:
