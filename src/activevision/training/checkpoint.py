@@ -105,6 +105,12 @@ def write_checkpoint(
             shutil.rmtree(final)
         os.replace(tmp, final)
         fsync_path(directory)
+    except OSError as error:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if error.filename is not None or error.errno is None:
+            raise
+        # a full disk: "[Errno 28] No space left on device" named neither file nor run
+        raise type(error)(error.errno, f"cannot write {final}: {error.strerror}") from None
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
