@@ -511,6 +511,21 @@ def test_a_run_started_over_keeps_no_weights_of_the_earlier_attempt(
     assert not out.exists()
 
 
+def test_a_corrupt_newest_checkpoint_names_the_older_whole_one(run, tmp_path, one_clear_line):
+    # the run keeps its two newest checkpoints, but the error named only the corrupt one
+    newest = latest(run)
+    flip_bytes(newest / "model.safetensors")
+    assert main(["train", "--resume", str(run)]) == 2
+    one_clear_line("corrupt", "older checkpoint step_000000030 is whole", str(newest))
+    shutil.move(newest, tmp_path / "aside")  # the advice works
+    assert main(["train", "--resume", str(run)]) == 0
+    # both broken: nothing to offer
+    for checkpoint in (run / "checkpoints").iterdir():
+        flip_bytes(checkpoint / "model.safetensors")
+    assert main(["train", "--resume", str(run)]) == 2
+    assert "older" not in one_clear_line("corrupt")
+
+
 def test_stale_checkpoint_writes_are_cleaned_on_the_next_start(trained, tmp_path):
     run = Path(shutil.copytree(trained, tmp_path / "run"))
     stale = run / "checkpoints" / ".step_000000090.abc.tmp"
