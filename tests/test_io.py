@@ -30,6 +30,22 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path, monkeypat
     assert os.listdir(tmp_path) == ["b.txt"]
 
 
+def test_a_write_that_fails_on_a_full_disk_names_the_file_asked_for(tmp_path):
+    # a full disk failed plot, report, export with "[Errno 28] No space left on device" alone
+    from activevision.io import atomic_path
+
+    target = tmp_path / "plots" / "reward.png"
+    with pytest.raises(OSError) as caught, atomic_path(target):
+        raise OSError(28, "No space left on device")  # what a file's write() raises
+    assert caught.value.errno == 28
+    assert str(caught.value) == f"[Errno 28] cannot write {target}: No space left on device"
+    assert os.listdir(target.parent) == []
+    other = tmp_path / "input.csv"  # an error that names its own file is left as it was
+    with pytest.raises(FileNotFoundError) as caught, atomic_path(target):
+        other.read_text()
+    assert caught.value.filename == str(other)
+
+
 def test_a_write_that_cannot_start_names_the_file_asked_for(tmp_path):
     (tmp_path / "plain").write_text("a file, not a folder")
     target = tmp_path / "plain" / "x.png"

@@ -44,6 +44,11 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         fsync_path(tmp)
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
+    except OSError as error:
+        if error.filename not in (None, name) or error.errno is None:
+            raise  # another file's error, which names it
+        # a full disk or a failed write: "[Errno 28] No space left on device" named no file
+        raise type(error)(error.errno, f"cannot write {path}: {error.strerror}") from None
     finally:
         tmp.unlink(missing_ok=True)
 

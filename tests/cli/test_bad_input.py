@@ -495,6 +495,37 @@ def test_run_without_checkpoint_needs_overwrite(run, capsys, tiny_train, one_cle
     assert main([*tiny_train, "--out", str(run), "--overwrite"]) == 0
 
 
+def test_a_run_started_over_keeps_no_weights_of_the_earlier_attempt(
+    run, capsys, tiny_train, one_clear_line
+):
+    # an attempt that validated, then stopped before its first checkpoint; started over
+    # with --overwrite (and no validation), its best_policy was exported as the new run's
+    shutil.copyfile(run / "policy.safetensors", run / "best_policy.safetensors")
+    shutil.rmtree(run / "checkpoints")
+    assert main([*tiny_train, "--steps", "30", "--out", str(run), "--overwrite"]) == 0
+    capsys.readouterr()
+    assert not (run / "best_policy.safetensors").exists()
+    out = run.parent / "best.onnx"
+    assert main(["export", str(run), "--weights", "best", "-o", str(out)]) == 2
+    one_clear_line("best_policy.safetensors")
+    assert not out.exists()
+
+
+def test_a_corrupt_newest_checkpoint_names_the_older_whole_one(run, tmp_path, one_clear_line):
+    # the run keeps its two newest checkpoints, but the error named only the corrupt one
+    newest = latest(run)
+    flip_bytes(newest / "model.safetensors")
+    assert main(["train", "--resume", str(run)]) == 2
+    one_clear_line("corrupt", "older checkpoint step_000000030 is whole", str(newest))
+    shutil.move(newest, tmp_path / "aside")  # the advice works
+    assert main(["train", "--resume", str(run)]) == 0
+    # both broken: nothing to offer
+    for checkpoint in (run / "checkpoints").iterdir():
+        flip_bytes(checkpoint / "model.safetensors")
+    assert main(["train", "--resume", str(run)]) == 2
+    assert "older" not in one_clear_line("corrupt")
+
+
 def test_stale_checkpoint_writes_are_cleaned_on_the_next_start(trained, tmp_path):
     run = Path(shutil.copytree(trained, tmp_path / "run"))
     stale = run / "checkpoints" / ".step_000000090.abc.tmp"

@@ -229,6 +229,22 @@ def test_tensorboard_logger_keeps_the_tags_and_purges_on_resume(tmp_path):
     assert epsilon == [(10, float(EPOCH_FIELDS.index("epsilon"))), (20, 9.0)]  # 30 purged
 
 
+def test_a_fresh_start_drops_the_tensorboard_curves_of_an_earlier_attempt(tmp_path):
+    # train --out RUN --overwrite kept the older attempt's events: two runs' curves in one
+    earlier = TensorBoardLogger(tmp_path / "tb")
+    earlier.start(None)
+    earlier.record_epoch(epoch_row(10, epsilon=7.0), 10)
+    earlier.close()
+    notes = tmp_path / "tb" / "notes.txt"  # not TensorBoard's: left alone
+    notes.write_text("mine")
+    again = TensorBoardLogger(tmp_path / "tb")
+    again.start(None)
+    again.record_epoch(epoch_row(20, epsilon=9.0), 20)
+    again.close()
+    assert scalars(tmp_path / "tb")["charts/epsilon"] == [(20, 9.0)]
+    assert notes.read_text() == "mine"
+
+
 def test_a_training_run_writes_todays_tensorboard_tags(tmp_path, fake_env_factory):
     train(tiny_config(tensorboard=True), tmp_path, fake_env_factory, aux_target=goal_offset)
     found = scalars(tmp_path / "tensorboard")

@@ -169,3 +169,16 @@ def test_weights_writes_a_kill_left_behind_are_removed(tmp_path):
         path.write_bytes(b"\0" * 100)
     assert sorted(ckpt.remove_stale_writes(tmp_path)) == sorted(stale)
     assert not any(p.exists() for p in stale) and all(p.exists() for p in kept)
+
+
+def test_a_checkpoint_write_on_a_full_disk_names_the_checkpoint(tmp_path):
+    """``train`` on a full disk ended in "[Errno 28] No space left on device" alone."""
+
+    def write_files(directory):
+        raise OSError(28, "No space left on device")  # what the weights file's write() raises
+
+    with pytest.raises(OSError) as caught:
+        ckpt.write_checkpoint(tmp_path, 30, write_files)
+    final = tmp_path / "checkpoints" / "step_000000030"
+    assert str(caught.value) == f"[Errno 28] cannot write {final}: No space left on device"
+    assert list((tmp_path / "checkpoints").iterdir()) == []  # nor the temporary folder

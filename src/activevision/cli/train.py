@@ -63,14 +63,22 @@ def _resume(args: argparse.Namespace) -> Path | None:
         raise ValueError(f"--resume {args.resume}: not a training run (no config.json)")
     try:
         trainer = reopen_run(args.resume)
-    except CheckpointError:
+    except CheckpointError as error:
         folder = args.resume / CHECKPOINTS_DIR
         if folder.exists() and not folder.is_dir():
             raise CheckpointError(
                 f"{folder} is not a directory: it holds the run's checkpoints"
             ) from None
-        if list_checkpoints(args.resume):
-            raise
+        checkpoints = list_checkpoints(args.resume)
+        if checkpoints:
+            older = _older_whole_checkpoint(checkpoints)
+            if older is None:
+                raise
+            # the run keeps two checkpoints for this, but the line named only the broken one
+            raise CheckpointError(
+                f"{error}; its older checkpoint {older.name} is whole: move"
+                f" {checkpoints[-1]} out of the run to resume from that one"
+            ) from None
         # stopped before its first checkpoint (a kill -9, a crash): said "no checkpoint in
         # RUN/checkpoints", without what to do
         raise ValueError(
@@ -93,6 +101,25 @@ def _resume(args: argparse.Namespace) -> Path | None:
         trainer.close()
     run_dir: Path = args.resume
     return run_dir
+
+
+def _older_whole_checkpoint(checkpoints: list[Path]) -> Path | None:
+    """The run's older checkpoint where the newest one fails its verification (a file
+    corrupt, missing or added) and the older one passes it; else None."""
+    from activevision.training.checkpoint import CheckpointError, verify_checkpoint
+
+    if len(checkpoints) < 2:
+        return None
+    try:
+        verify_checkpoint(checkpoints[-1])
+        return None  # whole: the error is another (an edited config.json, its state)
+    except CheckpointError:
+        pass
+    try:
+        verify_checkpoint(checkpoints[-2])
+    except CheckpointError:
+        return None
+    return checkpoints[-2]
 
 
 def _interrupted(args: argparse.Namespace) -> str:

@@ -105,6 +105,12 @@ def write_checkpoint(
             shutil.rmtree(final)
         os.replace(tmp, final)
         fsync_path(directory)
+    except OSError as error:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if error.filename is not None or error.errno is None:
+            raise
+        # a full disk: "[Errno 28] No space left on device" named neither file nor run
+        raise type(error)(error.errno, f"cannot write {final}: {error.strerror}") from None
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -135,6 +141,19 @@ def remove_stale_writes(run_dir: str | os.PathLike[str]) -> list[Path]:
     for path in weights:
         path.unlink(missing_ok=True)
     return stale + weights
+
+
+def remove_earlier_weights(run_dir: str | os.PathLike[str]) -> list[Path]:
+    """Delete the run's ``policy.safetensors`` and ``best_policy.safetensors`` before a
+    fresh run starts in ``run_dir`` (``train --out RUN --overwrite`` over an attempt that
+    stopped before its first checkpoint): they are the earlier attempt's weights, which
+    ``export``, ``evaluate`` and ``--weights best`` would read as this run's. Returns what
+    was removed."""
+    removed = [Path(run_dir) / name for name in _RUN_WEIGHTS]
+    removed = [path for path in removed if path.is_file()]
+    for path in removed:
+        path.unlink(missing_ok=True)
+    return removed
 
 
 def verify_checkpoint(

@@ -37,6 +37,7 @@ METRICS_CSV = "metrics.csv"  #: one row per epoch
 EPISODES_CSV = "episodes.csv"  #: one row per episode
 EVALUATIONS_CSV = "evaluations.csv"  #: one row per validation
 TENSORBOARD_DIR = "tensorboard"
+EVENTS_PREFIX = "events.out.tfevents."  #: the names of TensorBoard's event files
 
 #: TensorBoard tags of an episode's record fields and of a validation row's
 EPISODE_TAGS = {"reward": "charts/episodic_return", "length": "charts/episodic_length"}
@@ -178,6 +179,10 @@ class TensorBoardLogger:
 
     def start(self, resume: LogPosition | None) -> None:
         self._purge_step = None if resume is None else resume.step
+        if resume is None and self.log_dir.is_dir():  # an earlier attempt's curves
+            for events in self.log_dir.glob(f"{EVENTS_PREFIX}*"):
+                if events.is_file():
+                    events.unlink()
 
     def record_epoch(self, row: Record, step: int) -> None:
         for key, tag in TENSORBOARD_TAGS.items():

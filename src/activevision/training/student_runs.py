@@ -62,7 +62,8 @@ class StudentRun:
             self.logger = LoggerGroup(
                 default_loggers(self.config, run_dir) if loggers is None else loggers
             )
-            if not resuming:
+            if not resuming:  # fresh logs, and no weights of an earlier attempt
+                ckpt.remove_earlier_weights(self.run_dir)
                 self.logger.start(None)
         except BaseException:
             self.close()  # the lock, and what the subclass built before

@@ -133,6 +133,7 @@ class Trainer:
             default_loggers(config, self.run_dir) if loggers is None else loggers
         )
         if not resuming:  # a fresh run starts fresh logs (a resumed one: at its checkpoint)
+            ckpt.remove_earlier_weights(self.run_dir)
             self.logger.start(None)
 
     @property
