@@ -108,16 +108,15 @@ def _older_whole_checkpoint(checkpoints: list[Path]) -> Path | None:
     corrupt, missing or added) and the older one passes it; else None."""
     from activevision.training.checkpoint import CheckpointError, verify_checkpoint
 
-    if len(checkpoints) < 2:
-        return None
-    try:
-        verify_checkpoint(checkpoints[-1])
-        return None  # whole: the error is another (an edited config.json, its state)
-    except CheckpointError:
-        pass
-    try:
-        verify_checkpoint(checkpoints[-2])
-    except CheckpointError:
+    def whole(checkpoint: Path) -> bool:
+        try:
+            verify_checkpoint(checkpoint)
+        except CheckpointError:
+            return False
+        return True
+
+    # a whole newest one: the error is another (an edited config.json, its state)
+    if len(checkpoints) < 2 or whole(checkpoints[-1]) or not whole(checkpoints[-2]):
         return None
     return checkpoints[-2]
 

@@ -74,21 +74,22 @@ def play_differences(
     which any env takes; a discrete one's actions index its own moves."""
     differences = []
     if not observes_within(trained, given):
-        missing = [
-            f"actions (action_history {trained.action_history}: the moves it remembers)"
-            if key == "actions"
-            else key
-            for key in vector_keys(trained)
-            if key not in vector_keys(given)
-        ]
-        why = f": no {', '.join(missing)}" if missing else ""
         if trained.observation == "image":
-            why = ": a network of the bare image takes no Dict"
+            why = "a network of the bare image takes no Dict"
         elif given.observation == "image":
-            why = ": the env gives the bare image, no vectors"
+            why = "the env gives the bare image, no vectors"
+        else:
+            missing = [
+                f"actions (action_history {trained.action_history}: the moves it remembers)"
+                if key == "actions"
+                else key
+                for key in vector_keys(trained)
+                if key not in vector_keys(given)
+            ]
+            why = f"no {', '.join(missing)}"
         differences.append(
             f"observation {trained.observation!r} ({', '.join(vector_keys(trained)) or 'image'})"
-            f" against {given.observation!r}{why}"
+            f" against {given.observation!r}: {why}"
         )
     camera, env_camera = trained.camera, given.camera
     if (camera.width, camera.height) != (env_camera.width, env_camera.height):

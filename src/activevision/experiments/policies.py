@@ -292,16 +292,14 @@ class LearnedPolicy:
         may hold more keys than the policy reads (``envs.observations.observes_within``)."""
         if self._image_shape is None:
             return
-        is_dict = isinstance(obs, dict)
         image = obs.get(IMAGE_KEY) if isinstance(obs, dict) else obs
         shape = None if image is None else tuple(np.shape(image))
         # a Q-network takes the bare image; a student an image alone or in a Dict, which must
         # hold the vector it reads (if any)
-        fits = shape == self._image_shape and (self.takes_vector or not is_dict)
+        fits = shape == self._image_shape and (self.takes_vector or not isinstance(obs, dict))
         if fits and self._vector_size:
-            missing = not isinstance(obs, dict) or any(k not in obs for k in self.vector_keys)
-            size = 0 if missing else sum(int(np.size(obs[k])) for k in self.vector_keys)
-            fits = not missing and size == self._vector_size
+            fits = isinstance(obs, dict) and all(k in obs for k in self.vector_keys)
+            fits = fits and sum(int(np.size(obs[k])) for k in self.vector_keys) == self._vector_size
         if fits:
             return
         takes = f"an image {self._image_shape}"
