@@ -17,6 +17,7 @@ from activevision.experiments.robustness import (
     PERTURBATIONS,
     ROBUST_APPEARANCE,
     ROBUST_ROBOTS,
+    format_row,
     format_table,
     neutral_config,
     perturbation_names,
@@ -369,3 +370,22 @@ def test_the_legend_names_only_the_kinds_of_bar_drawn(tmp_path, monkeypatch):
         "outside this policy's training ranges",
         figure.CLEAN_LABEL,
     ]
+
+
+def test_the_bars_are_labelled_as_the_table_prints_them(tmp_path, monkeypatch):
+    # the labels were rounded to whole points, half to even: 72.5% read "72" beside a table
+    # that says 72.5
+    import activevision.figures.robustness as figure
+
+    drawn = {}
+    monkeypatch.setattr(figure, "save_figure", lambda fig, path, dpi: drawn.update(fig=fig))
+    clean = {"name": "clean", "factor": "none", "level": "trained", "setting": "as trained"}
+    clean |= {"in_training_range": True, "success_rate_drop_pts": 0.0}
+    clean |= {"goal_reached_drop_pts": 0.0}
+    for metric, value in (("success_rate", 0.725), ("goal_reached", 0.125)):
+        clean |= {metric: value, f"{metric}_low": value - 0.05, f"{metric}_high": value + 0.05}
+    figure.plot_robustness([clean], tmp_path / "r.png")
+    labels = [[t.get_text() for t in ax.texts] for ax in drawn["fig"].axes]
+    assert labels == [["72.5"], ["12.5"]]
+    cells = format_row(clean).split()
+    assert "72.5" in cells and "12.5" in cells

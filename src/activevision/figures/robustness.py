@@ -110,8 +110,8 @@ def plot_robustness(
             ax.axvline(100 * float(clean[metric]), color="black", ls="--", lw=1, zorder=3)
         for b in breaks:
             ax.axhline(b, color="#bbbbbb", lw=0.5)
-        for yi, m in zip(y, mean, strict=True):
-            ax.text(102.5, yi, f"{m:.0f}", va="center", ha="left", fontsize=7)
+        for yi, m in zip(y, mean, strict=True):  # as the table prints them: 72.5, not "72"
+            ax.text(102.5, yi, f"{m:.1f}", va="center", ha="left", fontsize=7)
         ax.set_xlim(-2, 111)  # the axis off 0: a clean line at 0% would hide in it
         ax.set_xticks(range(0, 101, 20))
         ax.set_xlabel(label)
