@@ -185,3 +185,28 @@ def test_a_short_runs_epoch_axis_counts_whole_epochs():
         draw_curve(ax, curve, table, {})
         ticks = [t for t in ax.get_xticks() if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
         assert ticks and all(float(t).is_integer() for t in ticks), (curve.x, ticks)
+
+
+def test_the_viewpoint_figure_shows_every_footprint_whole(tmp_path, monkeypatch):
+    # a start near the carpet's edge looks beyond it: its footprints were cut at the carpet
+    import numpy as np
+
+    import activevision.figures.scene as scene
+    from activevision.envs import EnvConfig
+    from activevision.envs.simulation import EpisodeBatch
+    from activevision.envs.view import viewpoint_search
+
+    drawn = {}
+    monkeypatch.setattr(scene, "save_figure", lambda fig, path, dpi: drawn.update(fig=fig))
+    sim = EpisodeBatch(EnvConfig(), 1)
+    sim.reset(np.zeros(1, dtype=np.int64), [np.random.default_rng(0)])
+    search = viewpoint_search(sim, 0)
+    corners = np.concatenate(search.footprints)
+    carpet_x, carpet_y = search.field.carpet_half_extent
+    assert np.abs(corners[:, 0]).max() > carpet_x or np.abs(corners[:, 1]).max() > carpet_y
+    scene.plot_viewpoint_search(search, tmp_path / "vp.png")
+    ax = drawn["fig"].axes[0]
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert x0 < corners[:, 0].min() and corners[:, 0].max() < x1
+    assert y0 < corners[:, 1].min() and corners[:, 1].max() < y1
+    assert x0 <= -carpet_x and carpet_x <= x1 and y0 <= -carpet_y and carpet_y <= y1

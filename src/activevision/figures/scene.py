@@ -101,6 +101,15 @@ def _title(search: ViewpointSearch) -> str:
     return f"{len(search.footprints)} candidate viewpoints (hatched: ball not in view); {status}"
 
 
+def _fit_footprints(ax: Axes, footprints: np.ndarray, margin: float = 0.1) -> None:
+    """Widen the field's limits to every footprint: views from near the carpet's edge look
+    beyond it, and were cut off there."""
+    corners = footprints.reshape(-1, 2)
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    ax.set_xlim(min(x0, corners[:, 0].min() - margin), max(x1, corners[:, 0].max() + margin))
+    ax.set_ylim(min(y0, corners[:, 1].min() - margin), max(y1, corners[:, 1].max() + margin))
+
+
 def plot_viewpoint_search(search: ViewpointSearch, out_png: str | os.PathLike[str]) -> None:
     """Top view with every candidate footprint shaded by its entropy, written as PNG."""
     entropies = np.asarray(search.entropies).reshape(-1)
@@ -130,6 +139,7 @@ def plot_viewpoint_search(search: ViewpointSearch, out_png: str | os.PathLike[st
         ax.add_patch(Polygon(best, closed=True, fill=False, ec="red", lw=2.5, zorder=6))
         draw_landmarks(ax, search.landmarks, search.landmark_ids)
     draw_robot(ax, search.pose, search.ball, search.field.ball_radius)
+    _fit_footprints(ax, search.footprints)
     sm = ScalarMappable(norm=norm, cmap=cmap)
     fig.colorbar(sm, ax=ax, fraction=0.03, pad=0.01, label="entropy ½ ln|2πeΣ| after update")
     ax.set_title(_title(search), fontsize=10)
