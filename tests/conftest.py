@@ -2,6 +2,7 @@
 
 import hashlib
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -19,9 +20,19 @@ def _source_numba_cache() -> Path:
     return root / ".numba_cache" / digest
 
 
+def _prune_other_numba_caches(current: Path) -> None:
+    """Remove the caches of earlier states of the sources, as ``make`` does: each edit left
+    one more folder of compiled kernels behind."""
+    if current.parent.is_dir():
+        for other in current.parent.iterdir():
+            if other != current:
+                shutil.rmtree(other, ignore_errors=True)
+
+
 # before numba is imported (it reads the variable once); make test and the user's own win
 if "NUMBA_CACHE_DIR" not in os.environ and "numba" not in sys.modules:
     os.environ["NUMBA_CACHE_DIR"] = str(_source_numba_cache())
+    _prune_other_numba_caches(Path(os.environ["NUMBA_CACHE_DIR"]))
 
 
 @pytest.fixture(autouse=True)
