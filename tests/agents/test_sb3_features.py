@@ -30,3 +30,17 @@ def test_a_dict_observations_vectors_are_read_or_refused_never_dropped():
     obs = {k: torch.as_tensor(np.asarray(v)[None]) for k, v in space.sample().items()}
     obs["image"] = obs["image"].float() / 255
     assert read(obs).shape == (1, read.features_dim)
+
+
+def test_a_float_image_is_refused_not_read_255_times_too_bright():
+    # SB3 scales a uint8 image to [0, 1]; behind DtypeObservation(env, float32) the image
+    # reached the trunk as 0-255, which it reads as scaled, without a word
+    env = gym.wrappers.DtypeObservation(gym.make("ActiveVision-v0"), np.float32)
+    with pytest.raises(ValueError, match=r"^need the env's uint8 image .* got dtype float32"):
+        StudentFeatures(env.observation_space)
+    space = gym.make("ActiveVision-v0", observation="image+head").observation_space
+    floats = gym.spaces.Dict(
+        {**space.spaces, "image": gym.spaces.Box(0, 255, (1, 120, 160), np.float32)}
+    )
+    with pytest.raises(ValueError, match=r"^need the env's uint8 image"):
+        StudentFeatures(floats, vector_keys=("head",))

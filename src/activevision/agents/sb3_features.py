@@ -17,6 +17,7 @@ import math
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
@@ -67,6 +68,14 @@ class StudentFeatures(BaseFeaturesExtractor):
             image_space, sizes = observation_space, []
         if image_space.shape is None or len(image_space.shape) != 3 or image_space.shape[0] != 1:
             raise ValueError(f"need a (1, H, W) image observation, got {image_space}")
+        # SB3 scales only a uint8 image to [0, 1]: a float image (DtypeObservation, a
+        # user's cast) reached the trunk as 0-255 and was read as if scaled, 255 times too
+        # bright, without a word (and a policy trained so exports to a runtime that scales)
+        if getattr(image_space, "dtype", None) != np.uint8:
+            raise ValueError(
+                "need the env's uint8 image (SB3 scales it to [0, 1]; the trunk reads that),"
+                f" got dtype {getattr(image_space, 'dtype', None)}: {image_space}"
+            )
         height, width = image_space.shape[1:]
         trunk = StudentNetwork(0, sum(sizes), (height, width), downsample)
         super().__init__(observation_space, features_dim=trunk.sizes[2])
