@@ -4,9 +4,10 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
+from stable_baselines3 import PPO, SAC
 
 import activevision.envs  # noqa: F401
-from activevision.agents.sb3_features import StudentFeatures
+from activevision.agents.sb3_features import StudentFeatures, actor_network
 
 
 def test_a_dict_observations_vectors_are_read_or_refused_never_dropped():
@@ -44,3 +45,50 @@ def test_a_float_image_is_refused_not_read_255_times_too_bright():
     )
     with pytest.raises(ValueError, match=r"^need the env's uint8 image"):
         StudentFeatures(floats, vector_keys=("head",))
+
+
+def _student_model(algo: type, env: gym.Env, policy_kwargs: dict | None = None, **kwargs):
+    policy_kwargs = {
+        "features_extractor_class": StudentFeatures,
+        "net_arch": {"pi": [], "vf": []} if algo is PPO else {"pi": [], "qf": [8]},
+        **(policy_kwargs or {}),
+    }
+    extra = {"n_steps": 8, "batch_size": 8} if algo is PPO else {"buffer_size": 10}
+    return algo("CnnPolicy", env, policy_kwargs=policy_kwargs, seed=0, **extra, **kwargs)
+
+
+def test_ppo_with_squashed_gsde_copies_as_its_tanh_not_a_clip():
+    # PPO(use_sde=True, squash_output=True) acts tanh(mean); the copy clipped the mean, and
+    # so acted otherwise wherever the mean left [-1, 1], without a word
+    env = gym.make("ActiveVision-v0", action_type="continuous")
+    for squash in (False, True):
+        model = _student_model(PPO, env, use_sde=True, policy_kwargs={"squash_output": squash})
+        with torch.no_grad():  # means well beyond [-1, 1], where tanh and clip part
+            model.policy.action_net.weight.mul_(200)
+        actor = actor_network(model, n_actions=2)
+        assert actor.squash == ("tanh" if squash else "clip")
+        for seed in range(3):
+            obs, _ = env.reset(seed=seed)
+            want, _ = model.predict(obs, deterministic=True)
+            with torch.inference_mode():
+                got = actor(torch.from_numpy(obs[None])).numpy()[0]
+            np.testing.assert_allclose(got, want, atol=1e-5)
+            assert np.abs(got).max() < 1 if squash else np.abs(got).max() == 1
+
+
+def test_actors_that_are_no_student_network_are_refused_naming_why():
+    env = gym.make("ActiveVision-v0", action_type="continuous")
+    # gSDE's SAC clips its mean before the tanh: it said "not built with StudentFeatures"
+    sde = _student_model(SAC, env, use_sde=True)
+    with pytest.raises(ValueError, match=r"^SAC with use_sde=True clips its actor's mean"):
+        actor_network(sde, n_actions=2)
+    unclipped = _student_model(SAC, env, use_sde=True, policy_kwargs={"clip_mean": 0.0})
+    obs, _ = env.reset(seed=0)
+    with torch.inference_mode():
+        got = actor_network(unclipped, n_actions=2)(torch.from_numpy(obs[None])).numpy()[0]
+    np.testing.assert_allclose(got, unclipped.predict(obs, deterministic=True)[0], atol=1e-5)
+    # a discrete model's action count: torch's size-mismatch RuntimeError before
+    discrete = _student_model(PPO, gym.make("ActiveVision-v0", action_set="4way"))
+    with pytest.raises(ValueError, match=r"^n_actions: the model acts in Discrete\(5\), got n_"):
+        actor_network(discrete, n_actions=9)
+    assert actor_network(discrete, n_actions=5).logits.out_features == 5

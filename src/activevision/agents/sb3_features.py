@@ -97,8 +97,9 @@ class StudentFeatures(BaseFeaturesExtractor):
 
 def actor_network(model: Any, n_actions: int) -> StudentNetwork:
     """A CPU copy of an SB3 model's deterministic actor as a ``StudentNetwork``: SAC's
-    ``tanh(mu)``, TD3's ``tanh(mu)``, PPO's clipped Gaussian mean (continuous) or action
-    logits (discrete, ``n_actions`` of them)."""
+    ``tanh(mu)``, TD3's ``tanh(mu)``, PPO's clipped Gaussian mean (its tanh with gSDE's
+    ``squash_output``; continuous) or action logits (discrete: ``n_actions`` must be the
+    model's). A model whose actor is no trunk and one linear layer is a ValueError."""
     from stable_baselines3 import PPO, SAC, TD3
 
     if isinstance(model, SAC):
@@ -110,14 +111,29 @@ def actor_network(model: Any, n_actions: int) -> StudentNetwork:
             raise ValueError("TD3's actor has hidden layers: build it with net_arch pi=[]")
     elif isinstance(model, PPO):
         policy = model.policy
-        features, head, squash = policy.pi_features_extractor, policy.action_net, "clip"
+        # PPO's mean is clipped to the action space, or with gSDE's squash_output=True
+        # squashed by tanh (its distribution's mode): the copy took "clip" for both and
+        # acted otherwise than the model whenever the mean left [-1, 1]
+        squash = "tanh" if policy.squash_output else "clip"
+        features, head = policy.pi_features_extractor, policy.action_net
         _check_empty(policy.mlp_extractor.policy_net, "PPO")
     else:
         raise TypeError(f"not a Stable-Baselines3 SAC, TD3 or PPO model: {type(model).__name__}")
+    if isinstance(model, SAC) and model.use_sde and not isinstance(head, nn.Linear):
+        # gSDE's SAC clips its mean (Hardtanh, clip_mean) before the tanh: no StudentNetwork
+        raise ValueError(
+            "SAC with use_sde=True clips its actor's mean (clip_mean) before the tanh, which a"
+            " StudentNetwork cannot: build it without use_sde, or with clip_mean=0"
+        )
     if not isinstance(features, StudentFeatures) or not isinstance(head, nn.Linear):
         raise ValueError("the model was not built with StudentFeatures and a linear actor")
     trunk = features.trunk
     continuous = isinstance(model.action_space, gym.spaces.Box)
+    if not continuous and n_actions != model.action_space.n:
+        # was torch's size-mismatch RuntimeError from load_state_dict
+        raise ValueError(
+            f"n_actions: the model acts in {model.action_space}, got n_actions={n_actions}"
+        )
     network = StudentNetwork(
         2 if continuous else n_actions,
         trunk.vector_size,
