@@ -8,6 +8,7 @@ from stable_baselines3 import PPO, SAC
 
 import activevision.envs  # noqa: F401
 from activevision.agents.sb3_features import StudentFeatures, actor_network
+from activevision.envs.match.observations import vector_keys as match_vector_keys
 
 
 def test_a_dict_observations_vectors_are_read_or_refused_never_dropped():
@@ -25,6 +26,13 @@ def test_a_dict_observations_vectors_are_read_or_refused_never_dropped():
     torch.manual_seed(0)
     read = StudentFeatures(space, vector_keys=("head", "pose", "pose_error"))
     assert read.trunk.vector_size == 7
+    # the match's Dict: the message named envs.observations.vector_keys alone, whose
+    # EnvConfig a MatchConfig is not (an AttributeError on action_history)
+    match = gym.make("ActiveVisionMatch-v0", observation="image+head+belief")
+    with pytest.raises(ValueError, match=r"the match's: envs\.match\.observations\.vector_keys"):
+        StudentFeatures(match.observation_space)
+    keys = match_vector_keys(match.unwrapped.config)
+    assert StudentFeatures(match.observation_space, vector_keys=keys).trunk.vector_size == 12
     alone = StudentFeatures(space, vector_keys=())  # the image alone, asked for
     assert alone.trunk.vector_size == 0
     assert StudentFeatures(image).trunk.vector_size == 0

@@ -50,7 +50,8 @@ class StudentFeatures(BaseFeaturesExtractor):
                 raise ValueError(
                     f"vector_keys: the Dict observation holds the vectors {keys}; name those the"
                     " features read, in the order they are concatenated"
-                    " (envs.observations.vector_keys(config)), or () for the image alone"
+                    " (envs.observations.vector_keys(config); the match's:"
+                    " envs.match.observations.vector_keys(config)), or () for the image alone"
                 )
             vector_keys = tuple(vector_keys or ())
             missing = [k for k in vector_keys if k not in observation_space.spaces]
