@@ -100,3 +100,16 @@ def test_actors_that_are_no_student_network_are_refused_naming_why():
     with pytest.raises(ValueError, match=r"^n_actions: the model acts in Discrete\(5\), got n_"):
         actor_network(discrete, n_actions=9)
     assert actor_network(discrete, n_actions=5).logits.out_features == 5
+
+
+def test_an_image_too_small_after_its_average_names_the_camera_and_the_downsample():
+    # an 80 x 60 camera at the default 2 x 2 average (and the paper's at sb3.downsample=4,
+    # which the config takes) said "image 30x40 is too small", an image no one had
+    space = gym.make("ActiveVision-v0", camera={"width": 80, "height": 60}).observation_space
+    with pytest.raises(ValueError, match=r"^image 60x80 averaged 2 x 2 is 30x40, too small .*31"):
+        StudentFeatures(space)
+    assert StudentFeatures(space, downsample=1).trunk.image_shape == (60, 80)
+    paper = gym.make("ActiveVision-v0").observation_space
+    with pytest.raises(ValueError, match=r"^image 120x160 averaged 4 x 4 is 30x40, too small"):
+        StudentFeatures(paper, downsample=4)
+    assert StudentFeatures(paper, downsample=3).trunk.hidden(torch.zeros(1, 1, 120, 160)).shape
