@@ -20,6 +20,11 @@ def test_a_dict_observations_vectors_are_read_or_refused_never_dropped():
         StudentFeatures(space)
     with pytest.raises(ValueError, match=r"^vector_keys: the Dict observation has no \['ball'\]"):
         StudentFeatures(space, vector_keys=("head", "ball"))
+    # every key of the space, the image too: its pixels went to the vector MLP; a key
+    # named twice went in twice
+    for named in (tuple(space.spaces), ("head", "pose", "head")):
+        with pytest.raises(ValueError, match=r"^vector_keys: names each vector once, never"):
+            StudentFeatures(space, vector_keys=named)
     image = gym.make("ActiveVision-v0").observation_space
     with pytest.raises(ValueError, match=r"^vector_keys: the observation is the image alone"):
         StudentFeatures(image, vector_keys=("head",))

@@ -54,6 +54,13 @@ class StudentFeatures(BaseFeaturesExtractor):
                     " envs.match.observations.vector_keys(config)), or () for the image alone"
                 )
             vector_keys = tuple(vector_keys or ())
+            # every key of the space (the image too) fed the image's pixels to the vector MLP
+            # as one more vector, and a key named twice went in twice, without a word
+            if IMAGE_KEY in vector_keys or len(set(vector_keys)) != len(vector_keys):
+                raise ValueError(
+                    f"vector_keys: names each vector once, never the {IMAGE_KEY!r} the CNN"
+                    f" reads; got {list(vector_keys)}, the Dict's vectors: {keys}"
+                )
             missing = [k for k in vector_keys if k not in observation_space.spaces]
             if missing:
                 raise ValueError(
