@@ -17,6 +17,7 @@ import math
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
@@ -49,9 +50,17 @@ class StudentFeatures(BaseFeaturesExtractor):
                 raise ValueError(
                     f"vector_keys: the Dict observation holds the vectors {keys}; name those the"
                     " features read, in the order they are concatenated"
-                    " (envs.observations.vector_keys(config)), or () for the image alone"
+                    " (envs.observations.vector_keys(config); the match's:"
+                    " envs.match.observations.vector_keys(config)), or () for the image alone"
                 )
             vector_keys = tuple(vector_keys or ())
+            # every key of the space (the image too) fed the image's pixels to the vector MLP
+            # as one more vector, and a key named twice went in twice, without a word
+            if IMAGE_KEY in vector_keys or len(set(vector_keys)) != len(vector_keys):
+                raise ValueError(
+                    f"vector_keys: names each vector once, never the {IMAGE_KEY!r} the CNN"
+                    f" reads; got {list(vector_keys)}, the Dict's vectors: {keys}"
+                )
             missing = [k for k in vector_keys if k not in observation_space.spaces]
             if missing:
                 raise ValueError(
@@ -67,6 +76,14 @@ class StudentFeatures(BaseFeaturesExtractor):
             image_space, sizes = observation_space, []
         if image_space.shape is None or len(image_space.shape) != 3 or image_space.shape[0] != 1:
             raise ValueError(f"need a (1, H, W) image observation, got {image_space}")
+        # SB3 scales only a uint8 image to [0, 1]: a float image (DtypeObservation, a
+        # user's cast) reached the trunk as 0-255 and was read as if scaled, 255 times too
+        # bright, without a word (and a policy trained so exports to a runtime that scales)
+        if getattr(image_space, "dtype", None) != np.uint8:
+            raise ValueError(
+                "need the env's uint8 image (SB3 scales it to [0, 1]; the trunk reads that),"
+                f" got dtype {getattr(image_space, 'dtype', None)}: {image_space}"
+            )
         height, width = image_space.shape[1:]
         trunk = StudentNetwork(0, sum(sizes), (height, width), downsample)
         super().__init__(observation_space, features_dim=trunk.sizes[2])
@@ -88,8 +105,9 @@ class StudentFeatures(BaseFeaturesExtractor):
 
 def actor_network(model: Any, n_actions: int) -> StudentNetwork:
     """A CPU copy of an SB3 model's deterministic actor as a ``StudentNetwork``: SAC's
-    ``tanh(mu)``, TD3's ``tanh(mu)``, PPO's clipped Gaussian mean (continuous) or action
-    logits (discrete, ``n_actions`` of them)."""
+    ``tanh(mu)``, TD3's ``tanh(mu)``, PPO's clipped Gaussian mean (its tanh with gSDE's
+    ``squash_output``; continuous) or action logits (discrete: ``n_actions`` must be the
+    model's). A model whose actor is no trunk and one linear layer is a ValueError."""
     from stable_baselines3 import PPO, SAC, TD3
 
     if isinstance(model, SAC):
@@ -101,14 +119,29 @@ def actor_network(model: Any, n_actions: int) -> StudentNetwork:
             raise ValueError("TD3's actor has hidden layers: build it with net_arch pi=[]")
     elif isinstance(model, PPO):
         policy = model.policy
-        features, head, squash = policy.pi_features_extractor, policy.action_net, "clip"
+        # PPO's mean is clipped to the action space, or with gSDE's squash_output=True
+        # squashed by tanh (its distribution's mode): the copy took "clip" for both and
+        # acted otherwise than the model whenever the mean left [-1, 1]
+        squash = "tanh" if policy.squash_output else "clip"
+        features, head = policy.pi_features_extractor, policy.action_net
         _check_empty(policy.mlp_extractor.policy_net, "PPO")
     else:
         raise TypeError(f"not a Stable-Baselines3 SAC, TD3 or PPO model: {type(model).__name__}")
+    if isinstance(model, SAC) and model.use_sde and not isinstance(head, nn.Linear):
+        # gSDE's SAC clips its mean (Hardtanh, clip_mean) before the tanh: no StudentNetwork
+        raise ValueError(
+            "SAC with use_sde=True clips its actor's mean (clip_mean) before the tanh, which a"
+            " StudentNetwork cannot: build it without use_sde, or with clip_mean=0"
+        )
     if not isinstance(features, StudentFeatures) or not isinstance(head, nn.Linear):
         raise ValueError("the model was not built with StudentFeatures and a linear actor")
     trunk = features.trunk
     continuous = isinstance(model.action_space, gym.spaces.Box)
+    if not continuous and n_actions != model.action_space.n:
+        # was torch's size-mismatch RuntimeError from load_state_dict
+        raise ValueError(
+            f"n_actions: the model acts in {model.action_space}, got n_actions={n_actions}"
+        )
     network = StudentNetwork(
         2 if continuous else n_actions,
         trunk.vector_size,

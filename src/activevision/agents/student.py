@@ -28,6 +28,9 @@ from torch.nn import functional as F
 
 from activevision.agents.q_network import PAPER_IMAGE_SHAPE, feature_shape
 
+#: the smallest image side the paper's CNN takes (conv 5 s2, pool 2, conv 3 s2, conv 3 s2)
+MIN_CNN_SIDE = 31
+
 
 class StudentNetwork(nn.Module):
     """Action logits (or continuous moves) for a batch of uint8 images (B, 1, H, W) and
@@ -74,6 +77,13 @@ class StudentNetwork(nn.Module):
         self.conv1 = nn.Conv2d(1, 32, kernel_size=5, stride=2)
         self.conv2 = nn.Conv2d(32, 64, kernel_size=3, stride=2)
         self.conv3 = nn.Conv2d(64, 64, kernel_size=3, stride=2)
+        if self.downsample > 1 and (h < MIN_CNN_SIDE or w < MIN_CNN_SIDE):
+            # "image 30x40 is too small" named neither the camera's 60x80 nor the average
+            raise ValueError(
+                f"image {self.image_shape[0]}x{self.image_shape[1]} averaged {self.downsample}"
+                f" x {self.downsample} is {h}x{w}, too small for the paper's CNN (at least"
+                f" {MIN_CNN_SIDE} px a side): use a smaller downsample"
+            )
         channels, fh, fw = feature_shape(h, w)
         self.image_fc = nn.Linear(channels * fh * fw, self.sizes[0])
         fused_in = self.sizes[0]
