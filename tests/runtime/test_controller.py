@@ -88,7 +88,8 @@ def test_command_and_clipping_to_head_limits(tmp_path, helpers):
     command = controller.act(frame, math.radians(89.5), math.radians(64.0))
     assert command.target_pan == pytest.approx(math.pi / 2)
     assert command.target_tilt == pytest.approx(math.radians(65.0))
-    command = controller.act(frame, 3.0, -1.0)  # outside the limits already: clipped in
+    with pytest.warns(UserWarning, match="outside the pan limits"):  # HeadAngleWarning
+        command = controller.act(frame, 3.0, -1.0)  # outside the limits already: clipped in
     assert command.target_pan == pytest.approx(math.pi / 2)
     assert command.target_tilt == pytest.approx(math.radians(5.0))
 
@@ -309,3 +310,34 @@ def test_the_controller_s_thread_bound_is_the_training_config_s():
     from activevision.training.config import MAX_THREADS as TRAINING_MAX_THREADS
 
     assert MAX_THREADS == TRAINING_MAX_THREADS
+
+
+def test_head_angles_well_outside_the_limits_warn_once(tmp_path, helpers):
+    """A robot whose tilt is positive *up* gives -0.3 rad for a head looking 17 deg down:
+    the policy (tilt limits 5..65 deg down) never saw it, and its clipped command turns the
+    head the wrong way. That was silent; now one HeadAngleWarning names the angle, the limits
+    and the convention. Within 5 deg of the limits (a head resting level, a joint
+    overshooting) nothing is said."""
+    import warnings
+
+    from activevision.runtime import HeadAngleWarning
+
+    controller = HeadController(biased_policy(tmp_path, helpers, 4))  # tilt down
+    frame = np.zeros((120, 160), dtype=np.uint8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        controller.act(frame, 0.0, 0.0)  # level: 5 deg above tilt_min, within the margin
+        controller.act(frame, math.radians(94.9), math.radians(69.9))
+    with pytest.warns(HeadAngleWarning) as caught:
+        command = controller.act(frame, 0.1, -0.3)
+    assert len(caught) == 1 and caught[0].filename == __file__
+    message = str(caught[0].message)
+    for needle in ("tilt -17.2 deg", "5 to 65 deg", "tilt positive down", "radians"):
+        assert needle in message, message
+    assert command.target_tilt == pytest.approx(math.radians(5.0))  # still clipped in
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once per controller
+        controller.act(frame, 2.5, -0.3)
+    assert issubclass(HeadAngleWarning, UserWarning)
+    with pytest.warns(HeadAngleWarning, match="pan 143.2 deg"):
+        HeadController(controller.model_path).act(frame, 2.5, 0.3)

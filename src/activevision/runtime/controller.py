@@ -37,6 +37,18 @@ class CameraMismatchWarning(UserWarning):
     policy was trained for: the policy may not transfer."""
 
 
+class HeadAngleWarning(UserWarning):
+    """A head angle given to :meth:`HeadController.act` lies well outside the head limits the
+    policy was trained within (:data:`HEAD_LIMIT_MARGIN` beyond): most often a sign
+    convention that is not the policy's (tilt positive up). Once per controller."""
+
+
+#: How far beyond the policy's head limits (rad) a head angle given to ``act`` may lie
+#: before a :class:`HeadAngleWarning`: a head resting level below a 5-degree tilt limit, or a
+#: joint overshooting its limit, is no sign of a wrong convention.
+HEAD_LIMIT_MARGIN = math.radians(5.0)
+
+
 class HeadCommand(NamedTuple):
     """One decision of the policy. Angles in radians; pan positive left, tilt positive down."""
 
@@ -208,6 +220,7 @@ class HeadController:
         self.last_goal_logits: np.ndarray | None = None
         # the frame size last checked against the policy's aspect ratio, None once warned
         self._frame_size: tuple[int, int] | None = (0, 0)
+        self._angles_warned = False  # a HeadAngleWarning was given
 
     @property
     def trained_camera(self) -> CameraModel | None:
@@ -308,8 +321,14 @@ class HeadController:
 
         Raises:
             ValueError: an input the policy needs is missing, or one it does not take is given.
+
+        Warns:
+            HeadAngleWarning: once, for a head angle more than :data:`HEAD_LIMIT_MARGIN`
+                outside the policy's head limits (a convention that is not the policy's).
         """
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
+        if not self._angles_warned:
+            self._check_head_angles(pan, tilt)
         self._fill_vector(pan, tilt, pose, proposal, pose_error, belief, ball)
         scores = self.q_values(frame, color_order)
         goal_logits = self.last_goal_logits
@@ -423,6 +442,26 @@ class HeadController:
                 CameraMismatchWarning,
                 stacklevel=_caller_level(),  # the caller of act, q_values or observe
             )
+
+    def _check_head_angles(self, pan: float, tilt: float) -> None:
+        """One HeadAngleWarning for a head angle more than HEAD_LIMIT_MARGIN outside the
+        policy's head limits (the first such; none after it)."""
+        limits = self.metadata.head_limits
+        for name, angle in (("pan", pan), ("tilt", tilt)):
+            low, high = getattr(limits, f"{name}_min"), getattr(limits, f"{name}_max")
+            if low - HEAD_LIMIT_MARGIN <= angle <= high + HEAD_LIMIT_MARGIN:
+                continue
+            self._angles_warned = True
+            warnings.warn(
+                f"head angle {name} {math.degrees(angle):.1f} deg lies outside the {name}"
+                f" limits the policy was trained within, {math.degrees(low):.3g} to"
+                f" {math.degrees(high):.3g} deg: check the convention act expects (radians,"
+                " pan positive left, tilt positive down from horizontal) and the neck's"
+                " zero. The command is clipped into the limits; this is said once",
+                HeadAngleWarning,
+                stacklevel=_caller_level(),  # the caller of act
+            )
+            return
 
     def _check_signature(self) -> None:
         """The ONNX graph's input and output must agree with the metadata."""
