@@ -222,6 +222,15 @@ def test_corrupt_metadata(policy_copy):
         ({"action_table_deg": [[0, 0]] * 5, "n_actions": 5}, "one name per action"),
         ({"input_name": "image"}, "no input 'image'"),
         ({"format_version": 99}, "format_version"),
+        # True == 1 and 1.0 == 1 were read as format 1: not what an export writes
+        ({"format_version": True}, "'format_version' must be an integer .*, got True"),
+        ({"format_version": 1.0}, "'format_version' must be an integer .*, got 1.0"),
+        ({"format_version": "1"}, "'format_version' must be an integer .*, got '1'"),
+        ({"format_version": 0}, "unsupported 'format_version' 0"),
+        (  # a newer export: say what to do about it
+            {"format_version": 2},
+            "'format_version' 2 is newer than this activevision reads \\(1\\): upgrade",
+        ),
         ({"head_limits_deg": {"pan_min": 0}}, "head_limits_deg"),
         ({"model_sha256": "0" * 64}, "SHA-256"),
         ({"model_sha256": None}, "model_sha256"),
