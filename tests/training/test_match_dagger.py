@@ -252,11 +252,16 @@ def test_head_controller_bounds_the_vectors_as_the_match_env_does(tmp_path):
 
 def test_a_student_refuses_what_it_was_not_trained_for(tmp_path, capsys):
     from activevision.cli import main
+    from activevision.export import export_run
 
     train(tiny(steps=2 * TICKS), tmp_path / "run")
     run, out = str(tmp_path / "run"), str(tmp_path / "m")
+    model = str(export_run(tmp_path / "run").model_path)
     base = ["match", "--matches", "1", "--ticks", "3", "--out", out]
+    demo = ["demo", "--policy", model, "--out", str(tmp_path / "m" / "d.png")]
     for argv, needle in (
+        # was "EnvConfig.observation: expects one of 'image', ..., got 'image+head+belief'"
+        (demo, f"activevision match --methods onnx_policy --model {model}"),
         ([*base, "--methods", "ball_track", "--run", run], "add it to --methods"),
         (
             [*base, "--methods", "ball_track", "learned", "--run", run, "--step-deg", "6"],
