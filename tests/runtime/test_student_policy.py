@@ -143,6 +143,11 @@ def test_an_unexpected_input_names_what_the_policy_was_trained_on(tmp_path):
         ({"proposal": (True, 0.3)}, "proposal pan must be a number of radians, got True"),
         ({"pose": (1.0, "2", 0.0)}, r"pose must be 3 numbers, got \(1\.0, '2', 0\.0\)"),
         ({"pose": (1, 2, True)}, r"pose must be 3 numbers, got \(1, 2, True\)"),
+        # was clipped to 10 m, silently: a corner of the field the robot is not in
+        (
+            {"pose": (3000.0, -1500.0, 0.3)},
+            r"pose x, y must be metres .*within \+-50\), got \(3000, -1500\) \(millimetres\?\)",
+        ),
     ],
     ids=[
         "negative-error",
@@ -152,6 +157,7 @@ def test_an_unexpected_input_names_what_the_policy_was_trained_on(tmp_path):
         "bool",
         "str",
         "bool-in-list",
+        "pose-millimetres",
     ],
 )
 def test_nonsense_inputs_are_refused_by_name(tmp_path, given, message):

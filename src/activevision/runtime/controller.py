@@ -389,7 +389,7 @@ class HeadController:
             if key == "head":
                 parts.append(np.array([pan, tilt]))
             elif key == "pose":
-                x, y, theta = _finite_vector("pose", pose, 3)
+                x, y, theta = _on_the_field("pose", _finite_vector("pose", pose, 3))
                 parts.append(np.array([x, y, math.cos(theta), math.sin(theta)]))
             elif key == "pose_error":
                 parts.append(_non_negative("pose_error", _finite_vector(key, pose_error, 1)))
@@ -398,6 +398,8 @@ class HeadController:
                 known = _finite_vector(key, belief if key == "belief" else ball, 3)
                 if key == "belief":
                     _non_negative("belief", known)
+                else:
+                    _on_the_field("ball", known)
                 parts.append(known)
             elif key == "proposal":
                 parts.append(_proposal_vector(proposal, pan, tilt))
@@ -600,6 +602,24 @@ def _finite_vector(name: str, value: Any, size: int) -> np.ndarray:
     if not np.isfinite(array).all():
         raise ValueError(f"{name} must be finite, got {value!r}")
     return array
+
+
+#: The largest x or y (m) a pose or a ball position given to ``act`` may have: far beyond any
+#: RoboCup field (the largest is 14 x 9 m) and any localisation error the policies are scored
+#: at (10 m), yet below millimetres for all but a robot within 5 cm of the centre spot.
+FIELD_BOUND_M = 50.0
+
+
+def _on_the_field(name: str, values: np.ndarray) -> np.ndarray:
+    """``values``, or ValueError: an x or y (its first two) beyond FIELD_BOUND_M, which the
+    network would see clipped to 10 m, a place the robot is not (millimetres given)."""
+    x, y = float(values[0]), float(values[1])
+    if max(abs(x), abs(y)) > FIELD_BOUND_M:
+        raise ValueError(
+            f"{name} x, y must be metres (within +-{FIELD_BOUND_M:g}), got ({x:g}, {y:g})"
+            " (millimetres?)"
+        )
+    return values
 
 
 def _non_negative(name: str, values: np.ndarray) -> np.ndarray:
