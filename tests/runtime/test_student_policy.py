@@ -351,3 +351,57 @@ def test_a_continuous_policy_plays_matches_at_the_match_head_speed(tmp_path, act
         np.testing.assert_array_equal(actions[i], want)
     env.step(actions)  # the env accepts them
     env.close()
+
+
+def test_onnx_continuous_goal_student_plays_like_pytorch(tmp_path):
+    """The shipped policy's kind (continuous moves, goal evidence read at the views' offsets
+    in the camera's frame, image + head + pose + error + proposal) through ONNX and
+    HeadController, which builds the vector itself: the same head targets as the PyTorch
+    student on the env's observations, episode after episode (the parity test above plays
+    discrete students only)."""
+    from activevision.experiments.policies import HeadTarget
+
+    config = EnvConfig(
+        observation=KIND,
+        action_type="continuous",
+        prior_error_range=(0.0, 1.0),
+        max_move_deg=(10.0, 10.0),
+    )
+    env = ActiveVisionEnv(config)
+    views, keys = env.sim.localisation.grid.views, vector_keys(config)
+    torch.manual_seed(2)
+    vector = sum(vector_sizes(config, 9).values())
+    network = StudentNetwork(2, vector, n_goals=offset_count(views), continuous=True).eval()
+    metadata = policy_metadata(env.sim.actions, config.camera)
+    metadata.update(
+        observation=KIND,
+        vector_keys=list(keys),
+        action_type="continuous",
+        max_move_deg=[10.0, 10.0],
+        act_by="goal",
+        goal_views_deg=np.degrees(views).tolist(),
+        goal_frame="camera",
+    )
+    paths = export_onnx(network, tmp_path / "policy.onnx", metadata)
+    evidence = GoalEvidence(1, views, env.sim.actions, frame="camera")
+    torch_policy = LearnedPolicy(
+        network, vector_keys=keys, goal_evidence=evidence, max_move=config.max_move
+    )
+    onnx_policy = OnnxPolicy(paths.model_path)
+    limits = onnx_policy.controller.metadata.head_limits
+    envs = ActiveVisionEnv(config), ActiveVisionEnv(config)
+    decisions = 0
+    for seed in range(5):
+        (obs_a, info_a), (obs_b, info_b) = (e.reset(seed=seed) for e in envs)
+        torch_policy.reset(info_a, np.random.default_rng(0))
+        onnx_policy.reset(info_b, np.random.default_rng(0))
+        for _ in range(20):
+            a, b = torch_policy.act(obs_a, info_a), onnx_policy.act(obs_b, info_b)
+            assert isinstance(a, HeadTarget) and isinstance(b, HeadTarget)
+            assert limits.clip(a.pan, a.tilt) == pytest.approx((b.pan, b.tilt), abs=1e-5)
+            decisions += 1
+            obs_a, _, done, _, info_a = envs[0].jump_head(a.pan, a.tilt)
+            obs_b, _, _, _, info_b = envs[1].jump_head(b.pan, b.tilt)
+            if done:
+                break
+    assert decisions >= 20
