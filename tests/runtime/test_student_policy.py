@@ -405,3 +405,29 @@ def test_onnx_continuous_goal_student_plays_like_pytorch(tmp_path):
             if done:
                 break
     assert decisions >= 20
+
+
+def test_a_proposal_well_outside_the_head_limits_warns_once(tmp_path):
+    """A proposal planned by the robot's own code in its own convention (tilt positive up)
+    lies where the policy was never shown one (best_viewpoint plans within the head limits):
+    one HeadAngleWarning naming it, as for the head angles; a proposal within the limits, or
+    none found, says nothing."""
+    import warnings
+
+    from activevision.runtime import HeadAngleWarning
+
+    _, paths, _, _ = exported(tmp_path)
+    controller = HeadController(paths.model_path)
+    frame = np.zeros((120, 160), np.uint8)
+    inputs = {"pose": (0.5, 0.2, 0.3), "pose_error": 0.1}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        controller.act(frame, 0.1, 0.3, **inputs, proposal=(-1.5, 1.1))
+        controller.act(frame, 0.1, 0.3, **inputs, proposal=(math.nan, math.nan))
+    with pytest.warns(HeadAngleWarning) as caught:
+        controller.act(frame, 0.1, 0.3, **inputs, proposal=(0.2, -0.4))
+    assert len(caught) == 1 and caught[0].filename == __file__
+    assert "proposal tilt -22.9 deg lies outside the tilt limits" in str(caught[0].message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once per controller
+        controller.act(frame, 0.1, 0.3, **inputs, proposal=(0.2, -0.4))

@@ -38,9 +38,9 @@ class CameraMismatchWarning(UserWarning):
 
 
 class HeadAngleWarning(UserWarning):
-    """A head angle given to :meth:`HeadController.act` lies well outside the head limits the
-    policy was trained within (:data:`HEAD_LIMIT_MARGIN` beyond): most often a sign
-    convention that is not the policy's (tilt positive up). Once per controller."""
+    """A head angle (or a proposal) given to :meth:`HeadController.act` lies well outside the
+    head limits the policy was trained within (:data:`HEAD_LIMIT_MARGIN` beyond): most often
+    a sign convention that is not the policy's (tilt positive up). Once per controller."""
 
 
 #: How far beyond the policy's head limits (rad) a head angle given to ``act`` may lie
@@ -323,8 +323,9 @@ class HeadController:
             ValueError: an input the policy needs is missing, or one it does not take is given.
 
         Warns:
-            HeadAngleWarning: once, for a head angle more than :data:`HEAD_LIMIT_MARGIN`
-                outside the policy's head limits (a convention that is not the policy's).
+            HeadAngleWarning: once, for a head angle or a proposal more than
+                :data:`HEAD_LIMIT_MARGIN` outside the policy's head limits (a convention that
+                is not the policy's).
         """
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
         if not self._angles_warned:
@@ -402,7 +403,7 @@ class HeadController:
                     _on_the_field("ball", known)
                 parts.append(known)
             elif key == "proposal":
-                parts.append(_proposal_vector(proposal, pan, tilt))
+                parts.append(self._proposal(proposal, pan, tilt))
             else:
                 onehot = np.zeros((len(self._history), self.n_actions))
                 seen = self._history >= 0
@@ -414,6 +415,14 @@ class HeadController:
             self._vector[0] = np.clip(np.concatenate(parts), -VECTOR_BOUND, VECTOR_BOUND)
 
     # ------------------------------------------------------------------ internals
+    def _proposal(self, proposal: Any, pan: float, tilt: float) -> np.ndarray:
+        """The proposal's part of the vector; one found well outside the head limits warns
+        (once, as the head angles do)."""
+        vector = _proposal_vector(proposal, pan, tilt)
+        if vector[4] and not self._angles_warned:
+            self._check_head_angles(float(vector[0]), float(vector[1]), "proposal")
+        return vector
+
     def _check_camera(self) -> None:
         """One CameraMismatchWarning when the robot's camera is not the trained one."""
         trained, robot = self.trained_camera, self.robot_camera
@@ -445,9 +454,9 @@ class HeadController:
                 stacklevel=_caller_level(),  # the caller of act, q_values or observe
             )
 
-    def _check_head_angles(self, pan: float, tilt: float) -> None:
-        """One HeadAngleWarning for a head angle more than HEAD_LIMIT_MARGIN outside the
-        policy's head limits (the first such; none after it)."""
+    def _check_head_angles(self, pan: float, tilt: float, what: str = "head angle") -> None:
+        """One HeadAngleWarning for a head angle (or the proposal's, ``what``) more than
+        HEAD_LIMIT_MARGIN outside the policy's head limits (the first such; none after it)."""
         limits = self.metadata.head_limits
         for name, angle in (("pan", pan), ("tilt", tilt)):
             low, high = getattr(limits, f"{name}_min"), getattr(limits, f"{name}_max")
@@ -455,7 +464,7 @@ class HeadController:
                 continue
             self._angles_warned = True
             warnings.warn(
-                f"head angle {name} {math.degrees(angle):.1f} deg lies outside the {name}"
+                f"{what} {name} {math.degrees(angle):.1f} deg lies outside the {name}"
                 f" limits the policy was trained within, {math.degrees(low):.3g} to"
                 f" {math.degrees(high):.3g} deg: check the convention act expects (radians,"
                 " pan positive left, tilt positive down from horizontal) and the neck's"
