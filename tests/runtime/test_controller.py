@@ -94,6 +94,31 @@ def test_command_and_clipping_to_head_limits(tmp_path, helpers):
     assert command.target_tilt == pytest.approx(math.radians(5.0))
 
 
+def test_targets_stay_within_the_robots_own_limits_too(tmp_path, helpers):
+    """Given the robot's camera, whose neck reaches less than the policy's limits (pan +-60
+    deg, tilt 0 to 60 against +-90 and 5 to 65), the targets stay within both: they were
+    clipped to the policy's alone, commanding 61 deg from a neck that stops at 60, though the
+    README promises targets "already clipped to the limits"."""
+    from activevision.runtime import CameraModel
+
+    model = biased_policy(tmp_path, helpers, 6)  # (+d, +d): pan left, tilt down
+    robot = CameraModel.from_degrees(640, 480, 58.0, 0.5, (-60, 60), (0, 60))
+    controller = HeadController(model, camera=robot)
+    frame = np.zeros((480, 640, 3), dtype=np.uint8)
+    d = math.radians(3.0) * math.sqrt(2) / 2
+    command = controller.act(frame, math.radians(59.0), math.radians(59.0))
+    assert command.d_pan == pytest.approx(d) and command.d_tilt == pytest.approx(d)  # its move
+    assert command.target_pan == pytest.approx(math.radians(60.0))
+    assert command.target_tilt == pytest.approx(math.radians(60.0))
+    command = controller.act(frame, 0.1, 0.4)  # inside both: the plain sum
+    assert (command.target_pan, command.target_tilt) == pytest.approx((0.1 + d, 0.4 + d))
+    # the robot's neck reaches further than the policy's limits: the policy's still bound it
+    wide = CameraModel.from_degrees(640, 480, 58.0, 0.5, (-120, 120), (0, 80))
+    command = HeadController(model, camera=wide).act(frame, math.radians(89.5), 1.13)
+    assert command.target_pan == pytest.approx(math.pi / 2)
+    assert command.target_tilt == pytest.approx(math.radians(65.0))
+
+
 def test_frame_stack_and_reset(tmp_path, frames, helpers):
     network = helpers.make_network(stack=3, seed=3)
     controller = HeadController(helpers.export(network, tmp_path).model_path)

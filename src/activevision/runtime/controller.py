@@ -24,6 +24,7 @@ from activevision.runtime.metadata import (
     CAMERA_TOLERANCES,
     VECTOR_BOUND,
     CameraModel,
+    HeadLimits,
     PolicyFileError,
     PolicyMetadata,
     load_metadata,
@@ -57,8 +58,10 @@ class HeadCommand(NamedTuple):
     action: int
     d_pan: float  #: the action's pan step
     d_tilt: float  #: the action's tilt step
-    target_pan: float  #: current pan + d_pan, clipped to the head limits
-    target_tilt: float  #: current tilt + d_tilt, clipped to the head limits
+    #: current pan + d_pan, clipped to the policy's head limits (and to the robot's, given
+    #: ``HeadController(..., camera=...)``)
+    target_pan: float
+    target_tilt: float  #: current tilt + d_tilt, clipped the same way
 
 
 def robot_session_options(num_threads: int = 1) -> Any:  # onnxruntime.SessionOptions (untyped)
@@ -131,6 +134,7 @@ class HeadController:
             CAMERA_TOLERANCES`, one :class:`CameraMismatchWarning` names each difference
             and how to retrain. Resolution alone does not matter: frames are resized. No
             check when the policy.json predates the camera record (``trained_camera`` None).
+            Every command's targets stay within its pan and tilt limits too.
             With or without ``camera``, the frames' aspect ratio is checked against the
             policy input's, whenever their size changes, until the first that differs (one
             CameraMismatchWarning: frames would be stretched).
@@ -221,6 +225,13 @@ class HeadController:
         # the frame size last checked against the policy's aspect ratio, None once warned
         self._frame_size: tuple[int, int] | None = (0, 0)
         self._angles_warned = False  # a HeadAngleWarning was given
+        robot = self.robot_camera
+        # the robot's neck limits (camera=), which bound the targets beside the policy's
+        self._robot_limits = (
+            None
+            if robot is None
+            else HeadLimits(robot.pan_min, robot.pan_max, robot.tilt_min, robot.tilt_max)
+        )
 
     @property
     def trained_camera(self) -> CameraModel | None:
@@ -352,6 +363,8 @@ class HeadController:
                 self._history[-1] = action
             d_pan, d_tilt = self._table[action]
         target_pan, target_tilt = self.metadata.head_limits.clip(pan + d_pan, tilt + d_tilt)
+        if self._robot_limits is not None:  # and where the robot's neck reaches
+            target_pan, target_tilt = self._robot_limits.clip(target_pan, target_tilt)
         return HeadCommand(action, d_pan, d_tilt, target_pan, target_tilt)
 
     def _fill_vector(
