@@ -316,6 +316,32 @@ def test_runtime_imports_and_runs_without_torch(policy):
     assert 0 <= int(action) < 9 and loaded.strip() == "[]"
 
 
+def test_runtime_runs_where_numba_cannot_write_its_cache(policy, frames, helpers):
+    """A read-only install run by a user without a writable home (a robot's service
+    account): numba has nowhere to put the frame resize's on-disk cache and refused the
+    import, "RuntimeError: cannot cache function 'block_mean_kernel': no locator available"
+    (seen as user nobody with HOME=/nonexistent). The kernel is compiled afresh instead, and
+    the controller decides as anywhere else."""
+    frame = helpers.colourise(frames(640, 480)[0], seed=1)
+    np.save(policy.model_path.parent / "frame.npy", frame)
+    script = textwrap.dedent(f"""
+        from numba.core import caching
+        impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba >= 0.61 / older
+        impl._locator_classes = []  # no place numba may write its cache
+        import numpy as np
+        from activevision.runtime import HeadController
+        controller = HeadController({str(policy.model_path)!r})
+        frame = np.load({str(policy.model_path.parent / "frame.npy")!r})
+        print(list(controller.q_values(frame)))
+    """)
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 0, result.stderr
+    here = HeadController(policy.model_path).q_values(frame)
+    np.testing.assert_array_equal(np.array(eval(result.stdout)), here)
+
+
 def test_missing_onnxruntime_names_the_extra(policy):
     script = textwrap.dedent(f"""
         import sys
