@@ -88,9 +88,35 @@ def test_command_and_clipping_to_head_limits(tmp_path, helpers):
     command = controller.act(frame, math.radians(89.5), math.radians(64.0))
     assert command.target_pan == pytest.approx(math.pi / 2)
     assert command.target_tilt == pytest.approx(math.radians(65.0))
-    command = controller.act(frame, 3.0, -1.0)  # outside the limits already: clipped in
+    with pytest.warns(UserWarning, match="outside the pan limits"):  # HeadAngleWarning
+        command = controller.act(frame, 3.0, -1.0)  # outside the limits already: clipped in
     assert command.target_pan == pytest.approx(math.pi / 2)
     assert command.target_tilt == pytest.approx(math.radians(5.0))
+
+
+def test_targets_stay_within_the_robots_own_limits_too(tmp_path, helpers):
+    """Given the robot's camera, whose neck reaches less than the policy's limits (pan +-60
+    deg, tilt 0 to 60 against +-90 and 5 to 65), the targets stay within both: they were
+    clipped to the policy's alone, commanding 61 deg from a neck that stops at 60, though the
+    README promises targets "already clipped to the limits"."""
+    from activevision.runtime import CameraModel
+
+    model = biased_policy(tmp_path, helpers, 6)  # (+d, +d): pan left, tilt down
+    robot = CameraModel.from_degrees(640, 480, 58.0, 0.5, (-60, 60), (0, 60))
+    controller = HeadController(model, camera=robot)
+    frame = np.zeros((480, 640, 3), dtype=np.uint8)
+    d = math.radians(3.0) * math.sqrt(2) / 2
+    command = controller.act(frame, math.radians(59.0), math.radians(59.0))
+    assert command.d_pan == pytest.approx(d) and command.d_tilt == pytest.approx(d)  # its move
+    assert command.target_pan == pytest.approx(math.radians(60.0))
+    assert command.target_tilt == pytest.approx(math.radians(60.0))
+    command = controller.act(frame, 0.1, 0.4)  # inside both: the plain sum
+    assert (command.target_pan, command.target_tilt) == pytest.approx((0.1 + d, 0.4 + d))
+    # the robot's neck reaches further than the policy's limits: the policy's still bound it
+    wide = CameraModel.from_degrees(640, 480, 58.0, 0.5, (-120, 120), (0, 80))
+    command = HeadController(model, camera=wide).act(frame, math.radians(89.5), 1.13)
+    assert command.target_pan == pytest.approx(math.pi / 2)
+    assert command.target_tilt == pytest.approx(math.radians(65.0))
 
 
 def test_frame_stack_and_reset(tmp_path, frames, helpers):
@@ -221,6 +247,15 @@ def test_corrupt_metadata(policy_copy):
         ({"action_table_deg": [[0, 0]] * 5, "n_actions": 5}, "one name per action"),
         ({"input_name": "image"}, "no input 'image'"),
         ({"format_version": 99}, "format_version"),
+        # True == 1 and 1.0 == 1 were read as format 1: not what an export writes
+        ({"format_version": True}, "'format_version' must be an integer .*, got True"),
+        ({"format_version": 1.0}, "'format_version' must be an integer .*, got 1.0"),
+        ({"format_version": "1"}, "'format_version' must be an integer .*, got '1'"),
+        ({"format_version": 0}, "unsupported 'format_version' 0"),
+        (  # a newer export: say what to do about it
+            {"format_version": 2},
+            "'format_version' 2 is newer than this activevision reads \\(1\\): upgrade",
+        ),
         ({"head_limits_deg": {"pan_min": 0}}, "head_limits_deg"),
         ({"model_sha256": "0" * 64}, "SHA-256"),
         ({"model_sha256": None}, "model_sha256"),
@@ -281,6 +316,32 @@ def test_runtime_imports_and_runs_without_torch(policy):
     assert 0 <= int(action) < 9 and loaded.strip() == "[]"
 
 
+def test_runtime_runs_where_numba_cannot_write_its_cache(policy, frames, helpers):
+    """A read-only install run by a user without a writable home (a robot's service
+    account): numba has nowhere to put the frame resize's on-disk cache and refused the
+    import, "RuntimeError: cannot cache function 'block_mean_kernel': no locator available"
+    (seen as user nobody with HOME=/nonexistent). The kernel is compiled afresh instead, and
+    the controller decides as anywhere else."""
+    frame = helpers.colourise(frames(640, 480)[0], seed=1)
+    np.save(policy.model_path.parent / "frame.npy", frame)
+    script = textwrap.dedent(f"""
+        from numba.core import caching
+        impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba >= 0.61 / older
+        impl._locator_classes = []  # no place numba may write its cache
+        import numpy as np
+        from activevision.runtime import HeadController
+        controller = HeadController({str(policy.model_path)!r})
+        frame = np.load({str(policy.model_path.parent / "frame.npy")!r})
+        print(list(controller.q_values(frame)))
+    """)
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 0, result.stderr
+    here = HeadController(policy.model_path).q_values(frame)
+    np.testing.assert_array_equal(np.array(eval(result.stdout)), here)
+
+
 def test_missing_onnxruntime_names_the_extra(policy):
     script = textwrap.dedent(f"""
         import sys
@@ -309,3 +370,34 @@ def test_the_controller_s_thread_bound_is_the_training_config_s():
     from activevision.training.config import MAX_THREADS as TRAINING_MAX_THREADS
 
     assert MAX_THREADS == TRAINING_MAX_THREADS
+
+
+def test_head_angles_well_outside_the_limits_warn_once(tmp_path, helpers):
+    """A robot whose tilt is positive *up* gives -0.3 rad for a head looking 17 deg down:
+    the policy (tilt limits 5..65 deg down) never saw it, and its clipped command turns the
+    head the wrong way. That was silent; now one HeadAngleWarning names the angle, the limits
+    and the convention. Within 5 deg of the limits (a head resting level, a joint
+    overshooting) nothing is said."""
+    import warnings
+
+    from activevision.runtime import HeadAngleWarning
+
+    controller = HeadController(biased_policy(tmp_path, helpers, 4))  # tilt down
+    frame = np.zeros((120, 160), dtype=np.uint8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        controller.act(frame, 0.0, 0.0)  # level: 5 deg above tilt_min, within the margin
+        controller.act(frame, math.radians(94.9), math.radians(69.9))
+    with pytest.warns(HeadAngleWarning) as caught:
+        command = controller.act(frame, 0.1, -0.3)
+    assert len(caught) == 1 and caught[0].filename == __file__
+    message = str(caught[0].message)
+    for needle in ("tilt -17.2 deg", "5 to 65 deg", "tilt positive down", "radians"):
+        assert needle in message, message
+    assert command.target_tilt == pytest.approx(math.radians(5.0))  # still clipped in
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once per controller
+        controller.act(frame, 2.5, -0.3)
+    assert issubclass(HeadAngleWarning, UserWarning)
+    with pytest.warns(HeadAngleWarning, match="pan 143.2 deg"):
+        HeadController(controller.model_path).act(frame, 2.5, 0.3)

@@ -143,6 +143,11 @@ def test_an_unexpected_input_names_what_the_policy_was_trained_on(tmp_path):
         ({"proposal": (True, 0.3)}, "proposal pan must be a number of radians, got True"),
         ({"pose": (1.0, "2", 0.0)}, r"pose must be 3 numbers, got \(1\.0, '2', 0\.0\)"),
         ({"pose": (1, 2, True)}, r"pose must be 3 numbers, got \(1, 2, True\)"),
+        # was clipped to 10 m, silently: a corner of the field the robot is not in
+        (
+            {"pose": (3000.0, -1500.0, 0.3)},
+            r"pose x, y must be metres .*within \+-50\), got \(3000, -1500\) \(millimetres\?\)",
+        ),
     ],
     ids=[
         "negative-error",
@@ -152,6 +157,7 @@ def test_an_unexpected_input_names_what_the_policy_was_trained_on(tmp_path):
         "bool",
         "str",
         "bool-in-list",
+        "pose-millimetres",
     ],
 )
 def test_nonsense_inputs_are_refused_by_name(tmp_path, given, message):
@@ -345,3 +351,83 @@ def test_a_continuous_policy_plays_matches_at_the_match_head_speed(tmp_path, act
         np.testing.assert_array_equal(actions[i], want)
     env.step(actions)  # the env accepts them
     env.close()
+
+
+def test_onnx_continuous_goal_student_plays_like_pytorch(tmp_path):
+    """The shipped policy's kind (continuous moves, goal evidence read at the views' offsets
+    in the camera's frame, image + head + pose + error + proposal) through ONNX and
+    HeadController, which builds the vector itself: the same head targets as the PyTorch
+    student on the env's observations, episode after episode (the parity test above plays
+    discrete students only)."""
+    from activevision.experiments.policies import HeadTarget
+
+    config = EnvConfig(
+        observation=KIND,
+        action_type="continuous",
+        prior_error_range=(0.0, 1.0),
+        max_move_deg=(10.0, 10.0),
+    )
+    env = ActiveVisionEnv(config)
+    views, keys = env.sim.localisation.grid.views, vector_keys(config)
+    torch.manual_seed(2)
+    vector = sum(vector_sizes(config, 9).values())
+    network = StudentNetwork(2, vector, n_goals=offset_count(views), continuous=True).eval()
+    metadata = policy_metadata(env.sim.actions, config.camera)
+    metadata.update(
+        observation=KIND,
+        vector_keys=list(keys),
+        action_type="continuous",
+        max_move_deg=[10.0, 10.0],
+        act_by="goal",
+        goal_views_deg=np.degrees(views).tolist(),
+        goal_frame="camera",
+    )
+    paths = export_onnx(network, tmp_path / "policy.onnx", metadata)
+    evidence = GoalEvidence(1, views, env.sim.actions, frame="camera")
+    torch_policy = LearnedPolicy(
+        network, vector_keys=keys, goal_evidence=evidence, max_move=config.max_move
+    )
+    onnx_policy = OnnxPolicy(paths.model_path)
+    limits = onnx_policy.controller.metadata.head_limits
+    envs = ActiveVisionEnv(config), ActiveVisionEnv(config)
+    decisions = 0
+    for seed in range(5):
+        (obs_a, info_a), (obs_b, info_b) = (e.reset(seed=seed) for e in envs)
+        torch_policy.reset(info_a, np.random.default_rng(0))
+        onnx_policy.reset(info_b, np.random.default_rng(0))
+        for _ in range(20):
+            a, b = torch_policy.act(obs_a, info_a), onnx_policy.act(obs_b, info_b)
+            assert isinstance(a, HeadTarget) and isinstance(b, HeadTarget)
+            assert limits.clip(a.pan, a.tilt) == pytest.approx((b.pan, b.tilt), abs=1e-5)
+            decisions += 1
+            obs_a, _, done, _, info_a = envs[0].jump_head(a.pan, a.tilt)
+            obs_b, _, _, _, info_b = envs[1].jump_head(b.pan, b.tilt)
+            if done:
+                break
+    assert decisions >= 20
+
+
+def test_a_proposal_well_outside_the_head_limits_warns_once(tmp_path):
+    """A proposal planned by the robot's own code in its own convention (tilt positive up)
+    lies where the policy was never shown one (best_viewpoint plans within the head limits):
+    one HeadAngleWarning naming it, as for the head angles; a proposal within the limits, or
+    none found, says nothing."""
+    import warnings
+
+    from activevision.runtime import HeadAngleWarning
+
+    _, paths, _, _ = exported(tmp_path)
+    controller = HeadController(paths.model_path)
+    frame = np.zeros((120, 160), np.uint8)
+    inputs = {"pose": (0.5, 0.2, 0.3), "pose_error": 0.1}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        controller.act(frame, 0.1, 0.3, **inputs, proposal=(-1.5, 1.1))
+        controller.act(frame, 0.1, 0.3, **inputs, proposal=(math.nan, math.nan))
+    with pytest.warns(HeadAngleWarning) as caught:
+        controller.act(frame, 0.1, 0.3, **inputs, proposal=(0.2, -0.4))
+    assert len(caught) == 1 and caught[0].filename == __file__
+    assert "proposal tilt -22.9 deg lies outside the tilt limits" in str(caught[0].message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once per controller
+        controller.act(frame, 0.1, 0.3, **inputs, proposal=(0.2, -0.4))

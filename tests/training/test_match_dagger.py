@@ -248,15 +248,25 @@ def test_head_controller_bounds_the_vectors_as_the_match_env_does(tmp_path):
     np.testing.assert_allclose(vector[6:], [VECTOR_BOUND, 0.2, 0.1, 2, -1, VECTOR_BOUND])
     with pytest.raises(ValueError, match=r"belief must be standard deviations >= 0"):
         controller.act(frame, 0.1, 0.3, pose=(1, 2, 0.5), belief=(0.1, -0.2, 0.1), ball=(2, -1, 3))
+    # the ball model in millimetres was clipped to 10 m, silently
+    with pytest.raises(ValueError, match=r"ball x, y must be metres .*\(2000, -1000\)"):
+        controller.act(
+            frame, 0.1, 0.3, pose=(1, 2, 0.5), belief=(0.1, 0.2, 0.1), ball=(2000, -1000, 3)
+        )
 
 
 def test_a_student_refuses_what_it_was_not_trained_for(tmp_path, capsys):
     from activevision.cli import main
+    from activevision.export import export_run
 
     train(tiny(steps=2 * TICKS), tmp_path / "run")
     run, out = str(tmp_path / "run"), str(tmp_path / "m")
+    model = str(export_run(tmp_path / "run").model_path)
     base = ["match", "--matches", "1", "--ticks", "3", "--out", out]
+    demo = ["demo", "--policy", model, "--out", str(tmp_path / "m" / "d.png")]
     for argv, needle in (
+        # was "EnvConfig.observation: expects one of 'image', ..., got 'image+head+belief'"
+        (demo, f"activevision match --methods onnx_policy --model {model}"),
         ([*base, "--methods", "ball_track", "--run", run], "add it to --methods"),
         (
             [*base, "--methods", "ball_track", "learned", "--run", run, "--step-deg", "6"],

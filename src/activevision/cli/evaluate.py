@@ -64,6 +64,38 @@ def _policies(
     return {name: make_policy(name, error, env_config, args.run, args.weights) for name in names}
 
 
+def _shipped_first(
+    names: list[str], args: argparse.Namespace, env_config: Any, error: float = 0.0
+) -> tuple[dict[str, HeadPolicy], Any]:
+    """The shipped policy where ``names`` has it, and the env every method then plays.
+
+    Without ``--run`` that is the shipped policy's own env (its observation, camera and
+    moves), as ``demo`` plays it; with ``--run``, the run's, which the shipped policy must
+    fit (ValueError naming each difference, before any episode: it was a first-step error
+    naming ``OnnxPolicy.env_config()``, after every episode of the methods before it)."""
+    from activevision.envs.observations import play_differences
+    from activevision.experiments.compare import config_at_error
+    from activevision.experiments.policies import OnnxPolicy
+
+    if "shipped" not in names:
+        return {}, env_config
+    shipped = _policies(["shipped"], args, env_config, error)
+    onnx = shipped["shipped"]
+    if not isinstance(onnx, OnnxPolicy):  # a registry whose "shipped" is another policy
+        return shipped, env_config
+    own = onnx.env_config(env_config)
+    if args.run is None:
+        return shipped, config_at_error(own, error)
+    differences = play_differences(own, env_config, moves_by_target=onnx.controller.continuous)
+    if differences:
+        raise ValueError(
+            f"the shipped policy was trained on {'; '.join(differences)} in the env of --run"
+            f" {args.run}: play shipped without --run (every method then plays its env), or"
+            " beside a run trained on the same inputs, camera and moves"
+        )
+    return shipped, env_config
+
+
 def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolicy]:
     """``--runs``: each run's learned policy, as method ``learned:NAME`` (NAME: its
     directory). Each must take what the comparison's env gives (``--run``'s, or the paper's
@@ -139,17 +171,12 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     check_outputs(own=[*files, latency_path], overwrite=args.overwrite)
     from activevision.experiments.compare import config_at_error
     from activevision.experiments.methods import runnable_methods
-    from activevision.experiments.policies import OnnxPolicy
 
     # a policy that observes a prior pose gets one --error off, as the entropy methods do
     env_config = config_at_error(env_config_of_run(args.run), args.error)
     names = args.methods or runnable_methods(_compare_method_names(), args.run)
-    shipped = _policies(["shipped"], args, env_config, args.error) if "shipped" in names else {}
-    onnx = shipped.get("shipped")
-    if args.run is None and isinstance(onnx, OnnxPolicy):
-        # every method plays the shipped policy's env (its observation and moves): settled
-        # before any other policy is built (a MethodContext, a --runs check) for that env
-        env_config = config_at_error(onnx.env_config(env_config), args.error)
+    # settled before any other policy is built (a MethodContext, a --runs check) for that env
+    shipped, env_config = _shipped_first(names, args, env_config, args.error)
     others = [name for name in names if name not in shipped]
     policies = shipped | _policies(others, args, env_config, args.error)
     policies = {name: policies[name] for name in names}  # in the order named
@@ -355,7 +382,9 @@ def cmd_episode(args: argparse.Namespace) -> None:
 
     env_config = config_at_error(env_config_of_run(args.run), 0.0)
     names = args.policies or (["learned", "random"] if args.run else ["oracle", "random"])
-    policies = _policies(names, args, env_config)
+    shipped, env_config = _shipped_first(names, args, env_config)
+    others = _policies([name for name in names if name not in shipped], args, env_config)
+    policies = {name: (shipped | others)[name] for name in names}  # in the order named
     traces = [trace_episode(p, args.seed, env_config) for p in policies.values()]
     plot_episodes(traces, args.out)
     animate_episode(traces[0], gif)

@@ -398,9 +398,16 @@ class OnnxPolicy:
         tilts within that camera's limits. Evaluation plays the paper's clean world whatever
         the policy was trained in;
         ``activevision robustness`` plays the trained one as its ``clean`` row.
-        PolicyFileError if the record does not fit this activevision's configs.
+        PolicyFileError if the record does not fit this activevision's configs; ValueError
+        for a match student, which plays only in matches.
         """
         meta = self.controller.metadata
+        if {"belief", "ball"} & set(meta.vector_keys):  # no episodic env gives them
+            path = self.controller.model_path
+            raise ValueError(
+                f"{path} is a match student (it takes the belief and the ball model): play it"
+                f" with `activevision match --methods onnx_policy --model {path}`"
+            )
         base = base or EnvConfig()
         if trained_world and meta.world is not None:
             base = with_world(base, meta.world, source=str(self.controller.metadata_path))

@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import math
 
-from numba import vectorize
+from activevision.geometry.jit import cached_vectorize
 
 PI = math.pi
 TWO_PI = 2.0 * math.pi
 
 
-@vectorize(["float64(float64)"], cache=True, nopython=True)
+@cached_vectorize(["float64(float64)"], nopython=True)
 def wrap_angle(angle: float) -> float:
     """``angle`` (rad) wrapped to ``(-pi, pi]``."""
     wrapped = PI - ((PI - angle) % TWO_PI)

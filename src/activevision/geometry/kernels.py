@@ -15,10 +15,10 @@ from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike
 
 from activevision.geometry.camera import CameraConfig
+from activevision.geometry.jit import cached_njit
 from activevision.geometry.landmarks import LandmarkSet
 
 
@@ -57,7 +57,7 @@ def _camera_fields(cam: CameraConfig) -> tuple[float, ...]:
 _last_camera: tuple[CameraConfig | None, tuple[float, ...]] = (None, ())
 
 
-@njit(cache=True)
+@cached_njit()
 def camera_rotation(yaw: float, tilt: float, rot: np.ndarray) -> None:
     """Rows: camera right, down, forward (as ``geometry.camera.world_to_camera_rotation``)."""
     cy, sy, ct, st = math.cos(yaw), math.sin(yaw), math.cos(tilt), math.sin(tilt)
@@ -66,7 +66,7 @@ def camera_rotation(yaw: float, tilt: float, rot: np.ndarray) -> None:
     rot[2, 0], rot[2, 1], rot[2, 2] = cy * ct, sy * ct, -st
 
 
-@njit(cache=True)
+@cached_njit()
 def image_halfplanes(
     x: float, y: float, rot: np.ndarray, cam: CameraModel, planes: np.ndarray
 ) -> None:
@@ -88,7 +88,7 @@ def image_halfplanes(
         planes[3, k] = height * w - v
 
 
-@njit(cache=True)
+@cached_njit()
 def range_interval(
     ax: float, ay: float, bx: float, by: float, cx: float, cy: float, max_distance: float
 ) -> tuple[bool, float, float]:
@@ -107,7 +107,7 @@ def range_interval(
     return disc >= 0.0, (-qb - sq) / (2 * qa), (-qb + sq) / (2 * qa)
 
 
-@njit(cache=True)
+@cached_njit()
 def clip_visible(
     ax: float, ay: float, bx: float, by: float, planes: np.ndarray, r0: float, r1: float
 ) -> bool:
@@ -126,7 +126,7 @@ def clip_visible(
     return max(t0, r0) <= min(t1, r1)
 
 
-@njit(cache=True)
+@cached_njit()
 def ball_in_image(
     bx: float, by: float, radius: float, x: float, y: float, rot: np.ndarray, cam: CameraModel
 ) -> bool:
@@ -144,7 +144,7 @@ def ball_in_image(
     return u >= 0.0 and u <= width and v >= 0.0 and v <= height
 
 
-@njit(cache=True)
+@cached_njit()
 def visible_landmarks(
     segments: np.ndarray,
     max_distance: np.ndarray,
@@ -162,7 +162,7 @@ def visible_landmarks(
         out[k] = ok and clip_visible(ax, ay, bx, by, planes, r0, r1)
 
 
-@njit(cache=True)
+@cached_njit()
 def visibility_kernel(
     segments: np.ndarray,
     max_distance: np.ndarray,
@@ -185,7 +185,7 @@ def visibility_kernel(
     return out
 
 
-@njit(cache=True)
+@cached_njit()
 def ball_kernel(
     balls: np.ndarray,
     poses: np.ndarray,

@@ -17,8 +17,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from activevision.geometry.jit import cached_njit
 from activevision.geometry.landmarks import LandmarkSet
 
 #: Points along a landmark that must all be hidden for the landmark to be.
@@ -81,7 +81,7 @@ def _float64(values: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(values, dtype=np.float64)
 
 
-@njit(cache=True)
+@cached_njit()
 def _sight_line_hidden(
     cx: float, cy: float, cz: float, px: float, py: float, pz: float, cylinders: np.ndarray
 ) -> bool:
@@ -112,7 +112,7 @@ def _sight_line_hidden(
     return False
 
 
-@njit(cache=True)
+@cached_njit()
 def _hidden_points_kernel(
     camera: np.ndarray, points: np.ndarray, cylinders: np.ndarray, hidden: np.ndarray
 ) -> None:
@@ -123,7 +123,7 @@ def _hidden_points_kernel(
             hidden[n, m] = _sight_line_hidden(cx, cy, cz, p[0], p[1], p[2], cylinders[n])
 
 
-@njit(cache=True)
+@cached_njit()
 def _hidden_landmarks_kernel(
     camera: np.ndarray, samples: np.ndarray, cylinders: np.ndarray, hidden: np.ndarray
 ) -> None:

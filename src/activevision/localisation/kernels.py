@@ -20,9 +20,10 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from activevision.geometry.angles import wrap_angle as wrap
+from activevision.geometry.jit import cached_njit
 from activevision.geometry.kernels import (
     CameraModel,
     ball_in_image,
@@ -55,7 +56,7 @@ NOT_PD = 1
 GATED = 2
 
 
-@njit(cache=True)
+@cached_njit()
 def chol3(A: np.ndarray, L: np.ndarray) -> bool:
     """Lower Cholesky factor of the 3x3 ``A`` into ``L``; False if ``A`` is not PD."""
     d0 = A[0, 0]
@@ -78,21 +79,21 @@ def chol3(A: np.ndarray, L: np.ndarray) -> bool:
     return True
 
 
-@njit(cache=True)
+@cached_njit()
 def point_rb(px: float, py: float, pth: float, ax: float, ay: float) -> tuple[float, float]:
     """Range and bearing of the point ``a`` from pose ``(px, py, pth)``."""
     ex, ey = ax - px, ay - py
     return math.hypot(ex, ey), wrap(math.atan2(ey, ex) - pth)
 
 
-@njit(cache=True)
+@cached_njit()
 def unit_normal(ax: float, ay: float, bx: float, by: float) -> tuple[float, float]:
     dx, dy = bx - ax, by - ay
     length = math.hypot(dx, dy)
     return -dy / length, dx / length
 
 
-@njit(cache=True)
+@cached_njit()
 def expected_rb(
     px: float, py: float, pth: float, ax: float, ay: float, bx: float, by: float
 ) -> tuple[float, float]:
@@ -106,7 +107,7 @@ def expected_rb(
     return nx * (ax - px) + ny * (ay - py), wrap(math.atan2(ny, nx) - pth)
 
 
-@njit(cache=True)
+@cached_njit()
 def sigma_points3(x: np.ndarray, L: np.ndarray, sig: np.ndarray) -> None:
     """Merwe's 7 sigma points of a pose into ``sig`` (7, 3): ``x``, ``x + L[:, k]``,
     ``x - L[:, k]`` (``L``: the Cholesky factor of ``(n + lambda) P``)."""
@@ -117,7 +118,7 @@ def sigma_points3(x: np.ndarray, L: np.ndarray, sig: np.ndarray) -> None:
             sig[k + 4, j] = x[j] - L[j, k]
 
 
-@njit(cache=True)
+@cached_njit()
 def ukf_update_rb(
     x: np.ndarray,
     P: np.ndarray,
@@ -209,7 +210,7 @@ def ukf_update_rb(
     return (OK if chol3(P, L) else NOT_PD), distance
 
 
-@njit(cache=True)
+@cached_njit()
 def plan_start(s: int, means: np.ndarray, landmarks: Landmarks, plan: Plan) -> None:
     """Planning for start ``s`` (believed pose ``means[s]``): the expected detection ``z =
     h(mu)`` of every landmark, its noise and range interval, and the landmark order (closest
@@ -232,7 +233,7 @@ def plan_start(s: int, means: np.ndarray, landmarks: Landmarks, plan: Plan) -> N
     order[s] = np.argsort(zs[s, :, 0], kind="mergesort")
 
 
-@njit(cache=True)
+@cached_njit()
 def plan_starts(means: np.ndarray, hidden: np.ndarray, landmarks: Landmarks) -> Plan:
     """:func:`plan_start` for every start: the :class:`Plan`. A landmark ``hidden[s]`` from
     start ``s`` counts as out of range (never seen, whatever the view)."""
@@ -254,7 +255,7 @@ def plan_starts(means: np.ndarray, hidden: np.ndarray, landmarks: Landmarks) -> 
     return plan
 
 
-@njit(cache=True)
+@cached_njit()
 def search_block(
     block: int,
     n_blocks: int,
@@ -332,7 +333,7 @@ def search_block(
             errors[s, v] = NOT_PD
 
 
-@njit(cache=True)
+@cached_njit()
 def search_outputs(n_starts: int, n_views: int, n_lm: int) -> SearchOutput:
     """An empty :class:`SearchOutput` of a search."""
     return SearchOutput(
@@ -344,7 +345,7 @@ def search_outputs(n_starts: int, n_views: int, n_lm: int) -> SearchOutput:
     )
 
 
-@njit(cache=True)
+@cached_njit()
 def search_kernel(
     starts: Fields,
     landmarks: Fields,
@@ -366,7 +367,7 @@ def search_kernel(
     return out
 
 
-@njit(cache=True, parallel=True)
+@cached_njit(parallel=True)
 def search_kernel_parallel(
     starts: Fields,
     landmarks: Fields,

@@ -27,9 +27,9 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from activevision.geometry.angles import wrap_angle as wrap
+from activevision.geometry.jit import cached_njit
 from activevision.geometry.landmarks import LandmarkSet
 from activevision.localisation.bundles import Landmarks, SigmaWeights, UKFScratch
 from activevision.localisation.config import DEFAULT_UKF, UKFConfig
@@ -84,7 +84,7 @@ class TrackStats(NamedTuple):
     declared_lost: np.ndarray  #: bool: the lost detector fired this call
 
 
-@njit(cache=True)
+@cached_njit()
 def predict_odometry(
     x: np.ndarray,
     P: np.ndarray,
@@ -139,7 +139,7 @@ def predict_odometry(
     return chol3(P, L)
 
 
-@njit(cache=True)
+@cached_njit()
 def track_one(
     n: int,
     means: np.ndarray,
@@ -206,7 +206,7 @@ def track_one(
     return OK
 
 
-@njit(cache=True)
+@cached_njit()
 def track_kernel(
     means: np.ndarray,
     covs: np.ndarray,

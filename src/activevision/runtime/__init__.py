@@ -16,6 +16,7 @@ Export a trained run with :func:`activevision.export.export_run` (needs torch an
 
 from activevision.runtime.controller import (
     CameraMismatchWarning,
+    HeadAngleWarning,
     HeadCommand,
     HeadController,
     robot_session_options,
@@ -40,6 +41,7 @@ __all__ = [
     "CameraMismatchWarning",
     "CameraModel",
     "FramePreprocessor",
+    "HeadAngleWarning",
     "HeadCommand",
     "HeadController",
     "HeadLimits",

@@ -24,6 +24,7 @@ from activevision.runtime.metadata import (
     CAMERA_TOLERANCES,
     VECTOR_BOUND,
     CameraModel,
+    HeadLimits,
     PolicyFileError,
     PolicyMetadata,
     load_metadata,
@@ -37,6 +38,18 @@ class CameraMismatchWarning(UserWarning):
     policy was trained for: the policy may not transfer."""
 
 
+class HeadAngleWarning(UserWarning):
+    """A head angle (or a proposal) given to :meth:`HeadController.act` lies well outside the
+    head limits the policy was trained within (:data:`HEAD_LIMIT_MARGIN` beyond): most often
+    a sign convention that is not the policy's (tilt positive up). Once per controller."""
+
+
+#: How far beyond the policy's head limits (rad) a head angle given to ``act`` may lie
+#: before a :class:`HeadAngleWarning`: a head resting level below a 5-degree tilt limit, or a
+#: joint overshooting its limit, is no sign of a wrong convention.
+HEAD_LIMIT_MARGIN = math.radians(5.0)
+
+
 class HeadCommand(NamedTuple):
     """One decision of the policy. Angles in radians; pan positive left, tilt positive down."""
 
@@ -45,8 +58,10 @@ class HeadCommand(NamedTuple):
     action: int
     d_pan: float  #: the action's pan step
     d_tilt: float  #: the action's tilt step
-    target_pan: float  #: current pan + d_pan, clipped to the head limits
-    target_tilt: float  #: current tilt + d_tilt, clipped to the head limits
+    #: current pan + d_pan, clipped to the policy's head limits (and to the robot's, given
+    #: ``HeadController(..., camera=...)``)
+    target_pan: float
+    target_tilt: float  #: current tilt + d_tilt, clipped the same way
 
 
 def robot_session_options(num_threads: int = 1) -> Any:  # onnxruntime.SessionOptions (untyped)
@@ -119,6 +134,7 @@ class HeadController:
             CAMERA_TOLERANCES`, one :class:`CameraMismatchWarning` names each difference
             and how to retrain. Resolution alone does not matter: frames are resized. No
             check when the policy.json predates the camera record (``trained_camera`` None).
+            Every command's targets stay within its pan and tilt limits too.
             With or without ``camera``, the frames' aspect ratio is checked against the
             policy input's, whenever their size changes, until the first that differs (one
             CameraMismatchWarning: frames would be stretched).
@@ -208,6 +224,14 @@ class HeadController:
         self.last_goal_logits: np.ndarray | None = None
         # the frame size last checked against the policy's aspect ratio, None once warned
         self._frame_size: tuple[int, int] | None = (0, 0)
+        self._angles_warned = False  # a HeadAngleWarning was given
+        robot = self.robot_camera
+        # the robot's neck limits (camera=), which bound the targets beside the policy's
+        self._robot_limits = (
+            None
+            if robot is None
+            else HeadLimits(robot.pan_min, robot.pan_max, robot.tilt_min, robot.tilt_max)
+        )
 
     @property
     def trained_camera(self) -> CameraModel | None:
@@ -308,8 +332,15 @@ class HeadController:
 
         Raises:
             ValueError: an input the policy needs is missing, or one it does not take is given.
+
+        Warns:
+            HeadAngleWarning: once, for a head angle or a proposal more than
+                :data:`HEAD_LIMIT_MARGIN` outside the policy's head limits (a convention that
+                is not the policy's).
         """
         pan, tilt = _finite_angle("pan", pan), _finite_angle("tilt", tilt)
+        if not self._angles_warned:
+            self._check_head_angles(pan, tilt)
         self._fill_vector(pan, tilt, pose, proposal, pose_error, belief, ball)
         scores = self.q_values(frame, color_order)
         goal_logits = self.last_goal_logits
@@ -332,6 +363,8 @@ class HeadController:
                 self._history[-1] = action
             d_pan, d_tilt = self._table[action]
         target_pan, target_tilt = self.metadata.head_limits.clip(pan + d_pan, tilt + d_tilt)
+        if self._robot_limits is not None:  # and where the robot's neck reaches
+            target_pan, target_tilt = self._robot_limits.clip(target_pan, target_tilt)
         return HeadCommand(action, d_pan, d_tilt, target_pan, target_tilt)
 
     def _fill_vector(
@@ -370,7 +403,7 @@ class HeadController:
             if key == "head":
                 parts.append(np.array([pan, tilt]))
             elif key == "pose":
-                x, y, theta = _finite_vector("pose", pose, 3)
+                x, y, theta = _on_the_field("pose", _finite_vector("pose", pose, 3))
                 parts.append(np.array([x, y, math.cos(theta), math.sin(theta)]))
             elif key == "pose_error":
                 parts.append(_non_negative("pose_error", _finite_vector(key, pose_error, 1)))
@@ -379,9 +412,11 @@ class HeadController:
                 known = _finite_vector(key, belief if key == "belief" else ball, 3)
                 if key == "belief":
                     _non_negative("belief", known)
+                else:
+                    _on_the_field("ball", known)
                 parts.append(known)
             elif key == "proposal":
-                parts.append(_proposal_vector(proposal, pan, tilt))
+                parts.append(self._proposal(proposal, pan, tilt))
             else:
                 onehot = np.zeros((len(self._history), self.n_actions))
                 seen = self._history >= 0
@@ -393,6 +428,14 @@ class HeadController:
             self._vector[0] = np.clip(np.concatenate(parts), -VECTOR_BOUND, VECTOR_BOUND)
 
     # ------------------------------------------------------------------ internals
+    def _proposal(self, proposal: Any, pan: float, tilt: float) -> np.ndarray:
+        """The proposal's part of the vector; one found well outside the head limits warns
+        (once, as the head angles do)."""
+        vector = _proposal_vector(proposal, pan, tilt)
+        if vector[4] and not self._angles_warned:
+            self._check_head_angles(float(vector[0]), float(vector[1]), "proposal")
+        return vector
+
     def _check_camera(self) -> None:
         """One CameraMismatchWarning when the robot's camera is not the trained one."""
         trained, robot = self.trained_camera, self.robot_camera
@@ -423,6 +466,26 @@ class HeadController:
                 CameraMismatchWarning,
                 stacklevel=_caller_level(),  # the caller of act, q_values or observe
             )
+
+    def _check_head_angles(self, pan: float, tilt: float, what: str = "head angle") -> None:
+        """One HeadAngleWarning for a head angle (or the proposal's, ``what``) more than
+        HEAD_LIMIT_MARGIN outside the policy's head limits (the first such; none after it)."""
+        limits = self.metadata.head_limits
+        for name, angle in (("pan", pan), ("tilt", tilt)):
+            low, high = getattr(limits, f"{name}_min"), getattr(limits, f"{name}_max")
+            if low - HEAD_LIMIT_MARGIN <= angle <= high + HEAD_LIMIT_MARGIN:
+                continue
+            self._angles_warned = True
+            warnings.warn(
+                f"{what} {name} {math.degrees(angle):.1f} deg lies outside the {name}"
+                f" limits the policy was trained within, {math.degrees(low):.3g} to"
+                f" {math.degrees(high):.3g} deg: check the convention act expects (radians,"
+                " pan positive left, tilt positive down from horizontal) and the neck's"
+                " zero. The command is clipped into the limits; this is said once",
+                HeadAngleWarning,
+                stacklevel=_caller_level(),  # the caller of act
+            )
+            return
 
     def _check_signature(self) -> None:
         """The ONNX graph's input and output must agree with the metadata."""
@@ -561,6 +624,24 @@ def _finite_vector(name: str, value: Any, size: int) -> np.ndarray:
     if not np.isfinite(array).all():
         raise ValueError(f"{name} must be finite, got {value!r}")
     return array
+
+
+#: The largest x or y (m) a pose or a ball position given to ``act`` may have: far beyond any
+#: RoboCup field (the largest is 14 x 9 m) and any localisation error the policies are scored
+#: at (10 m), yet below millimetres for all but a robot within 5 cm of the centre spot.
+FIELD_BOUND_M = 50.0
+
+
+def _on_the_field(name: str, values: np.ndarray) -> np.ndarray:
+    """``values``, or ValueError: an x or y (its first two) beyond FIELD_BOUND_M, which the
+    network would see clipped to 10 m, a place the robot is not (millimetres given)."""
+    x, y = float(values[0]), float(values[1])
+    if max(abs(x), abs(y)) > FIELD_BOUND_M:
+        raise ValueError(
+            f"{name} x, y must be metres (within +-{FIELD_BOUND_M:g}), got ({x:g}, {y:g})"
+            " (millimetres?)"
+        )
+    return values
 
 
 def _non_negative(name: str, values: np.ndarray) -> np.ndarray:

@@ -521,11 +521,22 @@ class _MetadataReader:
         self.values = values
         if values.get("format") != METADATA_FORMAT:
             raise self.fail(f"'format' must be {METADATA_FORMAT!r}, got {values.get('format')!r}")
-        version = values.get("format_version")
-        if version != METADATA_FORMAT_VERSION:
+        version, reads = values.get("format_version"), METADATA_FORMAT_VERSION
+        if version is not None and (isinstance(version, bool) or not isinstance(version, int)):
+            # True == 1 and 1.0 == 1: read as format 1 though no export writes them
             raise self.fail(
-                f"unsupported 'format_version' {version!r} (this activevision reads "
-                f"{METADATA_FORMAT_VERSION})"
+                f"'format_version' must be an integer (this activevision reads {reads}), got"
+                f" {version!r}"
+            )
+        if isinstance(version, int) and version > reads:
+            raise self.fail(
+                f"'format_version' {version} is newer than this activevision reads ({reads}):"
+                " upgrade activevision where the policy runs (pip install -U"
+                " 'activevision[runtime]'), or export the run with the version installed there"
+            )
+        if version != reads:
+            raise self.fail(
+                f"unsupported 'format_version' {version!r} (this activevision reads {reads})"
             )
 
     def fail(self, why: str) -> PolicyFileError:

@@ -33,13 +33,28 @@ into the network's size, with no OpenCV and no per-pixel Python loops:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numba import njit
 
 ColorOrder = Literal["rgb", "bgr"]
+
+
+def _compiled(function: Callable[..., Any]) -> Any:
+    """``function`` compiled by numba (``nogil``), its machine code cached on disk where numba
+    can write (beside the package, in ``~/.cache`` or ``NUMBA_CACHE_DIR``). A read-only
+    install run by a user without a writable home (a robot's service account) has no such
+    place, and numba's ``cache=True`` then refuses the import ("cannot cache function ...:
+    no locator available"): there the kernel is compiled afresh at each start instead, when
+    the :class:`FramePreprocessor` is made (about a second), not in a decision."""
+    try:
+        return njit(cache=True, nogil=True)(function)
+    except RuntimeError:
+        return njit(nogil=True)(function)
+
 
 #: ITU-R BT.601 luma weights for (R, G, B).
 BT601_LUMA_RGB: tuple[float, float, float] = (0.299, 0.587, 0.114)
@@ -226,7 +241,7 @@ def _luma(frame: np.ndarray, weights: np.ndarray) -> np.ndarray:
     return grey
 
 
-@njit(cache=True, nogil=True)
+@_compiled
 def block_mean_kernel(
     frame: np.ndarray, fy: int, fx: int, scale: np.ndarray, out: np.ndarray
 ) -> None:
