@@ -1,6 +1,6 @@
 """The robot's planning (the README's "On a robot": the best viewpoint for the shipped
-policy's proposal) where numba cannot write its on-disk cache: a read-only install run by a
-user without a writable home. ``@njit(cache=True)`` refused the import there ("RuntimeError:
+policy's proposal), and every module's import, where numba cannot write its on-disk cache:
+a read-only install run by a user without a writable home. ``@njit(cache=True)`` refused the import there ("RuntimeError:
 cannot cache function 'wrap_angle': no locator available", seen as user nobody with
 HOME=/nonexistent); the kernels are compiled afresh instead and plan the same views."""
 
@@ -51,3 +51,21 @@ def test_planning_runs_where_numba_cannot_write_its_cache():
     without = _run(NO_CACHE + PLAN)
     assert without == _run(PLAN)
     np.testing.assert_allclose(without["wrapped"], [4.0 - 2 * np.pi, -7.0 + 2 * np.pi])
+
+
+def test_every_module_imports_where_numba_cannot_write_its_cache():
+    # the renderer's and the envs' kernels too: a service user's training or evaluation
+    # stopped at the import as the robot's planning did
+    imported = _run(
+        NO_CACHE
+        + """
+import importlib, json, pkgutil
+import activevision
+packages = pkgutil.walk_packages(activevision.__path__, "activevision.")
+names = [m.name for m in packages if not m.name.endswith("__main__")]  # those run the CLI
+for name in names:
+    importlib.import_module(name)
+print(json.dumps({"modules": len(names)}))
+"""
+    )
+    assert imported["modules"] > 100

@@ -15,10 +15,10 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from activevision.envs.config import EnvConfig
 from activevision.geometry.angles import wrap_angle
+from activevision.geometry.jit import cached_njit
 from activevision.geometry.kernels import (
     CameraModel,
     ball_in_image,
@@ -79,7 +79,7 @@ def quantise_pose(poses: np.ndarray, cell_m: float, cell_deg: float) -> np.ndarr
     return out
 
 
-@njit(cache=True)
+@cached_njit()
 def candidate_kernel(
     u: np.ndarray,
     low: np.ndarray,

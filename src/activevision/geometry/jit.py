@@ -1,4 +1,4 @@
-"""numba's ``cache=True`` for the kernels a robot runs (geometry, localisation), where it can.
+"""numba's ``cache=True`` for every kernel of the package, where numba can keep a cache.
 
 numba keeps compiled kernels on disk beside the package, in ``~/.cache`` or in
 ``NUMBA_CACHE_DIR``. A read-only install run by a user without a writable home (a robot's

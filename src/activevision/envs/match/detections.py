@@ -6,13 +6,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from activevision.geometry.angles import wrap_angle as wrap
+from activevision.geometry.jit import cached_njit
 from activevision.localisation.kernels import expected_rb
 
 
-@njit(cache=True)
+@cached_njit()
 def segment_distance(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
     """Distance from ``p`` to the segment ``a``-``b`` (a point when ``a == b``)."""
     dx, dy = bx - ax, by - ay
@@ -21,7 +21,7 @@ def segment_distance(px: float, py: float, ax: float, ay: float, bx: float, by: 
     return math.hypot(ax + t * dx - px, ay + t * dy - py)
 
 
-@njit(cache=True)
+@cached_njit()
 def detect_one(
     pose: np.ndarray,
     pan: float,

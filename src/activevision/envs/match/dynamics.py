@@ -8,12 +8,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from activevision.geometry.angles import wrap_angle as wrap
+from activevision.geometry.jit import cached_njit
 
 
-@njit(cache=True)
+@cached_njit()
 def walk_step(
     believed: np.ndarray,
     waypoint: np.ndarray,
@@ -37,7 +37,7 @@ def walk_step(
     return forward, 0.0, turn
 
 
-@njit(cache=True)
+@cached_njit()
 def drift_stds(
     dx: float, dy: float, dth: float, model: tuple[float, float, float, float, float]
 ) -> tuple[float, float, float]:
@@ -50,7 +50,7 @@ def drift_stds(
     return bx + trans, by + trans, bt + rf * abs(dth)
 
 
-@njit(cache=True)
+@cached_njit()
 def move_pose(pose: np.ndarray, dx: float, dy: float, dth: float, hx: float, hy: float) -> None:
     """Move ``pose`` (3,) in place by a robot-frame step; a robot stays within ``(hx, hy)``
     of the centre (stopped at the carpet's edge)."""
@@ -60,7 +60,7 @@ def move_pose(pose: np.ndarray, dx: float, dy: float, dth: float, hx: float, hy:
     pose[2] = wrap(pose[2] + dth)
 
 
-@njit(cache=True)
+@cached_njit()
 def blocking_robot(
     before: np.ndarray, after: np.ndarray, robots: np.ndarray, spacing: float
 ) -> int:
@@ -80,7 +80,7 @@ def blocking_robot(
     return nearest
 
 
-@njit(cache=True)
+@cached_njit()
 def roll_ball(
     ball: np.ndarray,
     velocity: np.ndarray,
@@ -126,7 +126,7 @@ SIDESTEP_OUTWARD = 0.5
 MIN_SIDESTEP = 0.25
 
 
-@njit(cache=True)
+@cached_njit()
 def sidestep(
     pose: np.ndarray, robot_x: float, robot_y: float, dx: float, dy: float
 ) -> tuple[float, float]:
@@ -151,7 +151,7 @@ def sidestep(
     return side_x * scale, side_y * scale
 
 
-@njit(cache=True)
+@cached_njit()
 def to_robot_frame(px: float, py: float, pose: np.ndarray) -> tuple[float, float]:
     """The world point ``(px, py)`` in the frame of ``pose`` (3,)."""
     dx, dy = px - pose[0], py - pose[1]
@@ -159,7 +159,7 @@ def to_robot_frame(px: float, py: float, pose: np.ndarray) -> tuple[float, float
     return c * dx + s * dy, -s * dx + c * dy
 
 
-@njit(cache=True)
+@cached_njit()
 def carry(rx: float, ry: float, dx: float, dy: float, dth: float) -> tuple[float, float]:
     """A robot-frame point after the robot moved by ``(dx, dy, dth)`` (its own frame): how a
     robot carries its ball model along with its odometry."""

@@ -12,7 +12,6 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from activevision.envs.match.detections import detect_one
 from activevision.envs.match.dynamics import (
@@ -25,6 +24,7 @@ from activevision.envs.match.dynamics import (
     to_robot_frame,
     walk_step,
 )
+from activevision.geometry.jit import cached_njit
 from activevision.geometry.kernels import (
     CameraModel,
     ball_in_image,
@@ -103,7 +103,7 @@ class MatchParams(NamedTuple):
 DETOUR_TICKS = 20
 
 
-@njit(cache=True)
+@cached_njit()
 def _next_waypoint(n: int, s: MatchState, p: MatchParams, draws: np.ndarray) -> None:
     """A robot at its waypoint (by its belief) pauses, then walks to the next: a random one,
     or (``walk_to_ball``) the ball's believed position less ``ball_standoff``, re-planned
@@ -130,7 +130,7 @@ def _next_waypoint(n: int, s: MatchState, p: MatchParams, draws: np.ndarray) -> 
         wp[1] = p.waypoint_y * (2 * draws[1] - 1)
 
 
-@njit(cache=True)
+@cached_njit()
 def _beyond(s: MatchState, n: int, blocker: int) -> bool:
     """Whether match ``n``'s waypoint lies beyond the other robot ``blocker``: their
     directions from our robot, in its own frame, less than 90 degrees apart (the waypoint
@@ -141,7 +141,7 @@ def _beyond(s: MatchState, n: int, blocker: int) -> bool:
     return bx * wx + by * wy > 0.0
 
 
-@njit(cache=True)
+@cached_njit()
 def _walk(
     moved: np.ndarray,
     pose: np.ndarray,
@@ -160,7 +160,7 @@ def _walk(
     )
 
 
-@njit(cache=True)
+@cached_njit()
 def move_kernel(
     idx: np.ndarray,
     targets: np.ndarray,
@@ -251,7 +251,7 @@ def move_kernel(
     return odometry
 
 
-@njit(cache=True)
+@cached_njit()
 def sense_kernel(
     idx: np.ndarray,
     odometry: np.ndarray,

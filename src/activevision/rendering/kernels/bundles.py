@@ -16,17 +16,17 @@ from __future__ import annotations
 from typing import Any, Literal, NamedTuple, TypedDict
 
 import numpy as np
-from numba import njit
 
 from activevision.geometry.camera import CameraConfig
+from activevision.geometry.jit import cached_njit
 from activevision.rendering.config import RenderConfig
 from activevision.rendering.scene import SceneArrays
 
 
 class JitFlags(TypedDict, total=False):
-    """The ``numba.njit`` flags the renderer's kernels use (typed for ``njit(**flags)``)."""
+    """The ``numba.njit`` flags the renderer's kernels use (typed for ``njit(**flags)``);
+    :func:`~activevision.geometry.jit.cached_njit` adds the cache where numba can keep one."""
 
-    cache: bool
     fastmath: bool
     nogil: bool
     error_model: Literal["python", "numpy"]
@@ -36,7 +36,7 @@ class JitFlags(TypedDict, total=False):
 #: Flags of every renderer kernel (the entry points add ``parallel``). ``error_model="numpy"``:
 #: a float division by zero gives inf or nan instead of a check and a raise in every loop
 #: that divides (an exit from the loop keeps it from vectorising); no kernel divides by zero.
-JIT: JitFlags = {"cache": True, "fastmath": True, "nogil": True, "error_model": "numpy"}
+JIT: JitFlags = {"fastmath": True, "nogil": True, "error_model": "numpy"}
 #: Flags of the parts of one kernel that only it calls: inlined into it by numba (one
 #: compiled function instead of several, each linking and optimising its callees again).
 JIT_PART: JitFlags = {**JIT, "inline": "always"}
@@ -195,7 +195,7 @@ def scene_bundles(
     return arrays, params
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def allocate_work(n_cams: int, scene: Scene, n_cyl: int) -> RenderWork:
     """Per-call :class:`RenderWork` for ``n_cams`` cameras. Uninitialised on purpose (speed):
     for each camera the setup writes every entry that the row pass reads, so an image never
@@ -222,7 +222,7 @@ def allocate_work(n_cams: int, scene: Scene, n_cyl: int) -> RenderWork:
     )
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def allocate_scratch(n_cams: int, scene: Scene, n_cyl: int) -> SetupScratch:
     """Per-call :class:`SetupScratch` for ``n_cams`` cameras (uninitialised, as
     :func:`allocate_work`)."""

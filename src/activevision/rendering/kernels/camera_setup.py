@@ -9,8 +9,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from activevision.geometry.jit import cached_njit
 from activevision.geometry.kernels import camera_rotation
 from activevision.rendering.appearance import LOOK
 from activevision.rendering.kernels.bundles import (
@@ -33,7 +33,7 @@ MOUNT_FOV = LOOK["mount_fov"]
 LINE_WIDTH = LOOK["line_width"]
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def setup_camera(
     n: int,
     scene: Scene,
@@ -257,7 +257,7 @@ def setup_camera(
     work.first_row[n] = first
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _tangents(
     ca: float, cb: float, r: float, pa: float, pb: float
 ) -> tuple[bool, float, float, float, float, float, float, float]:
@@ -281,7 +281,7 @@ def _tangents(
     return True, ua, ub, cos_b, t1a, t1b, t2a, t2b
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _angular_extent(
     a: float, z: float, r: float, focal: float, centre: float, size: int
 ) -> tuple[int, int]:
@@ -301,7 +301,7 @@ def _angular_extent(
     return max(math.floor(lo), 0), min(math.ceil(hi), size)
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _to_camera(
     rot: np.ndarray, cam: np.ndarray, x: float, y: float, z: float, out: np.ndarray
 ) -> None:

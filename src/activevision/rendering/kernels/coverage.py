@@ -8,8 +8,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from activevision.geometry.jit import cached_njit
 from activevision.rendering.kernels.bundles import JIT, Params
 
 
@@ -31,7 +31,7 @@ class RingRow(NamedTuple):
     k_in: float
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _halfplane_coverage(d: float, hi: float, lo: float, inv_2hi: float, inv_8hilo: float) -> float:
     """Fraction of a unit pixel inside a half-plane; ``d``: signed distance (px) of the pixel
     centre, ``hi >= lo``: half-widths of the pixel's projection onto the normal."""
@@ -49,7 +49,7 @@ def _halfplane_coverage(d: float, hi: float, lo: float, inv_2hi: float, inv_8hil
     return 0.5 + d * inv_2hi
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _coverage_at(d: float, n0: float, n1: float) -> float:
     """:func:`_halfplane_coverage` for a unit normal ``(n0, n1)`` known per pixel."""
     a = 0.5 * abs(n0)
@@ -59,7 +59,7 @@ def _coverage_at(d: float, n0: float, n1: float) -> float:
     return _halfplane_coverage(d, hi, lo, 0.5 / hi, 0.125 / (hi * lo))
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def fully_inside(edges: np.ndarray, n_edges: int, u: float, v: float) -> bool:
     """Whether the pixel centred at ``(u, v)`` lies entirely inside every edge."""
     for e in range(n_edges):
@@ -68,7 +68,7 @@ def fully_inside(edges: np.ndarray, n_edges: int, u: float, v: float) -> bool:
     return True
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def span(
     edges: np.ndarray, n_edges: int, v: float, threshold: float, width: int
 ) -> tuple[int, int]:
@@ -98,13 +98,13 @@ def span(
     return i0, i1
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _edge_coverage(edge: np.ndarray, u: float, v: float) -> float:
     d = edge[0] * u + edge[1] * v + edge[2]
     return _halfplane_coverage(d, edge[3], edge[4], edge[5], edge[6])
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def quad_coverage(edges: np.ndarray, u: float, v: float) -> float:
     """Fraction of the pixel centred at ``(u, v)`` covered by a quad: product of its two
     bands, each ``F1 + F2 - 1``."""
@@ -117,7 +117,7 @@ def quad_coverage(edges: np.ndarray, u: float, v: float) -> float:
     return band_a * band_b
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def paint_quad_pixels(
     edges: np.ndarray, v: float, i_start: int, i_end: int, paint: np.ndarray
 ) -> None:
@@ -129,7 +129,7 @@ def paint_quad_pixels(
             paint[i] = c
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _ring_pixels(i_start: int, i_end: int, g: RingRow, paint: np.ndarray) -> None:
     """The per-pixel part of :func:`ring_row` for columns ``[i_start, i_end)``; ``g``: the
     row's :class:`RingRow`."""
@@ -171,7 +171,7 @@ def _ring_pixels(i_start: int, i_end: int, g: RingRow, paint: np.ndarray) -> Non
             paint[i] = c
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def ring_row(
     h: np.ndarray,
     v: float,
@@ -214,7 +214,7 @@ def ring_row(
     _ring_pixels(hole1, s1, g, paint)
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def ball_shade(ball: np.ndarray, u: float, v: float, params: Params) -> tuple[float, float]:
     """``(coverage, grey)`` of the ball at pixel centre ``(u, v)``.
 

@@ -7,12 +7,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from activevision.geometry.jit import cached_njit
 from activevision.rendering.kernels.bundles import JIT, Z_NEAR, Optics
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def store_edge(
     a: np.ndarray,
     b: np.ndarray,
@@ -56,7 +56,7 @@ def store_edge(
     out[7] = 1.0 / l0 if abs(l0) > 1e-12 else 0.0
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _clip_plane(
     src: np.ndarray, n_src: int, dst: np.ndarray, a: float, b: float, c: float, e: float
 ) -> int:
@@ -82,7 +82,7 @@ def _clip_plane(
     return n_dst
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def store_empty(edges: np.ndarray, n_edges: int, rows: np.ndarray) -> None:
     """Mark a shape out of view: no rows, and ``n_edges`` edges that no pixel touches.
 
@@ -104,7 +104,7 @@ def store_empty(edges: np.ndarray, n_edges: int, rows: np.ndarray) -> None:
         edge[7] = 0.0
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def polygon_edges_and_rows(
     pts: np.ndarray,
     n_pts: int,

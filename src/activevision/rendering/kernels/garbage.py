@@ -11,8 +11,8 @@ never depends on what the memory held before, i.e. on the other frames of its ba
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from activevision.geometry.jit import cached_njit
 from activevision.rendering.kernels.bundles import EDGE_PARAMS, JIT, RenderWork, SetupScratch
 
 #: Kinds of garbage of :func:`fill_garbage`: random mixed values; an edge that takes every
@@ -23,7 +23,7 @@ GARBAGE_KINDS = 3
 _ACCEPT_ALL_EDGE = (0.0, 0.0, 1e30, 0.5, 0.5, 1.0, 0.5, 0.0)
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _xorshift(x: np.uint64) -> np.uint64:
     x ^= x << np.uint64(13)
     x ^= x >> np.uint64(7)
@@ -31,7 +31,7 @@ def _xorshift(x: np.uint64) -> np.uint64:
     return x
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def garbage_floats(arr: np.ndarray, seed: int) -> None:
     """Fill the C-contiguous float array ``arr`` with garbage of kind ``seed % GARBAGE_KINDS``
     drawn from ``seed``."""
@@ -58,7 +58,7 @@ def garbage_floats(arr: np.ndarray, seed: int) -> None:
             flat[i] = small
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _garbage_ints(arr: np.ndarray, seed: int) -> None:
     """Fill the C-contiguous int64 array ``arr`` with garbage of kind ``seed % GARBAGE_KINDS``
     (huge, negative, plausible row, column and object indices) drawn from ``seed``."""
@@ -82,7 +82,7 @@ def _garbage_ints(arr: np.ndarray, seed: int) -> None:
             flat[i] = np.int64(x >> np.uint64(40)) % 300
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def fill_garbage(work: RenderWork, scratch: SetupScratch, value: np.ndarray, seed: int) -> None:
     """Overwrite every buffer of the :class:`.bundles.RenderWork` ``work``, the
     :class:`.bundles.SetupScratch` ``scratch`` and the row scratch ``value`` with garbage of

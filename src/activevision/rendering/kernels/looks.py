@@ -23,9 +23,10 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 from numba.np.unsafe.ndarray import to_fixed_tuple as _to_fixed_tuple
 
+from activevision.geometry.jit import cached_njit
 from activevision.rendering.appearance import LOOK
 from activevision.rendering.kernels.bundles import JIT, JIT_PART, Params
 from activevision.rendering.kernels.selects import clamp
@@ -75,7 +76,7 @@ MIN_DEFOCUS = 0.2
 MIN_MOTION = 0.5
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _cell(key: int, a: float, b: float, salt: int, mask: int) -> int:
     """Table index of the pattern cell ``(floor(a), floor(b))`` of the episode ``key``."""
     ia: int = math.floor(a)
@@ -87,7 +88,7 @@ def _cell(key: int, a: float, b: float, salt: int, mask: int) -> int:
     return h & mask
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _hall(
     dx: float, dy: float, dz: float, ray: np.ndarray, params: Params, key: int, noise: np.ndarray
 ) -> float:
@@ -119,7 +120,7 @@ def _hall(
     return 0.3 * float(noise[_cell(key, s / WALL_CELL, 0.0, 4, mask)])
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _stripe(gx: float, width: float) -> float:
     """Mowing stripes across the field's length: +-1 in alternate bands ``width`` wide, with
     soft edges."""
@@ -135,7 +136,7 @@ KNOT_ROWS = 6
 CARPET, HALL, GROUND_X, GROUND_Y, ON_GROUND, GRAIN_INDEX = range(KNOT_ROWS)
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _carpet_knots(
     v: float,
     h: np.ndarray,
@@ -181,7 +182,7 @@ def _carpet_knots(
         knots[CARPET, m] += knots[ON_GROUND, m] * (grain * float(cell))
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _hall_knots(
     v: float,
     ray: np.ndarray,
@@ -202,7 +203,7 @@ def _hall_knots(
         knots[HALL, m] = clutter * _hall(dx, dy, dz, ray, params, key, noise)
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _blend_knots(value: np.ndarray, params: Params, knots: np.ndarray, texture: np.ndarray) -> None:
     """Add the knots' patterns, interpolated linearly between knots (into ``texture``),
     to ``value``: the carpet's on its share of each pixel, the hall's on the rest."""
@@ -229,7 +230,7 @@ def _blend_knots(value: np.ndarray, params: Params, knots: np.ndarray, texture: 
         value[i] += share * texture[0, i] + (one - share) * texture[1, i]
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def texture_row(
     v: float,
     value: np.ndarray,
@@ -280,7 +281,7 @@ def texture_row(
     _blend_knots(value, params, knots, texture)
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def worn_paint(
     v: float,
     lo: int,
@@ -310,7 +311,7 @@ def worn_paint(
             paint[i] *= WORN_KEEP
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def illuminate_row(v: float, value: np.ndarray, look: np.ndarray, params: Params) -> None:
     """Illumination of row centre ``v``: ``value * gain * (1 - vignetting r^2) + offset``,
     ``r`` the distance from the image centre relative to the corner's."""
@@ -331,7 +332,7 @@ def illuminate_row(v: float, value: np.ndarray, look: np.ndarray, params: Params
 MAX_TAPS = 15
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _blur_taps(sigma: float, move: float, taps: np.ndarray) -> int:
     """The blur filter along one image axis into ``taps`` (MAX_TAPS,): a Gaussian of
     ``sigma`` px (defocus; none below MIN_DEFOCUS) convolved with a box as long as ``move``
@@ -363,7 +364,7 @@ def _blur_taps(sigma: float, move: float, taps: np.ndarray) -> int:
 TAP_COUNTS = (3, 5, 7, 9, MAX_TAPS)
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _centred_taps(taps: np.ndarray, r: int) -> np.ndarray:
     """``taps[:2r + 1]`` as float32, centred in the smallest of :data:`TAP_COUNTS` that
     holds them, zero around."""
@@ -378,7 +379,7 @@ def _centred_taps(taps: np.ndarray, r: int) -> np.ndarray:
     return out
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def _filter_rows_by(src: np.ndarray, dst: np.ndarray, taps: Any) -> None:
     """Rows ``m..m + H`` of ``dst`` (H + 2m, W) float32 = ``src`` (H, W) uint8 filtered
     along each row (axis 1) by ``taps`` (a tuple: its length is a constant of the compiled
@@ -408,7 +409,7 @@ def _filter_rows_by(src: np.ndarray, dst: np.ndarray, taps: Any) -> None:
             dst[m + height + j, i] = dst[m + height - 1, i]
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _filter_column_by(rows: np.ndarray, taps: Any, row: np.ndarray, j: int) -> None:
     """``row`` (W,) float32 = row ``j`` of the image whose rows ``rows`` (H + n - 1, W)
     float32 holds padded as :func:`_filter_rows_by` writes them, filtered along the columns
@@ -423,7 +424,7 @@ def _filter_column_by(rows: np.ndarray, taps: Any, row: np.ndarray, j: int) -> N
         row[i] = acc
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _filter_rows(src: np.ndarray, dst: np.ndarray, taps: np.ndarray) -> None:
     """:func:`_filter_rows_by` with ``taps`` (n,) float32 of :func:`_centred_taps`."""
     n = taps.shape[0]
@@ -439,7 +440,7 @@ def _filter_rows(src: np.ndarray, dst: np.ndarray, taps: np.ndarray) -> None:
         _filter_rows_by(src, dst, to_fixed_tuple(taps, MAX_TAPS))
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _filter_column(rows: np.ndarray, taps: np.ndarray, row: np.ndarray, j: int) -> None:
     """:func:`_filter_column_by` with ``taps`` (n,) float32 of :func:`_centred_taps`."""
     n = taps.shape[0]
@@ -455,7 +456,7 @@ def _filter_column(rows: np.ndarray, taps: np.ndarray, row: np.ndarray, j: int) 
         _filter_column_by(rows, to_fixed_tuple(taps, MAX_TAPS), row, j)
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _add_noise(row: np.ndarray, read2: float, shot: float, noise: np.ndarray, first: int) -> None:
     """Sensor noise of std ``sqrt(read2 + shot * value)`` on ``row``, its normal numbers
     ``noise[first:]`` (indexed, not sliced: a view per row would be reference-counted)."""
@@ -465,7 +466,7 @@ def _add_noise(row: np.ndarray, read2: float, shot: float, noise: np.ndarray, fi
         row[i] += np.float32(math.sqrt(read2 + shot * signal)) * noise[first + i]
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _store_row(
     row: np.ndarray, img: np.ndarray, j: int, tone: np.ndarray, toned: bool, levels: np.ndarray
 ) -> None:
@@ -486,7 +487,7 @@ def _store_row(
         img[j, i] = tone[levels[i]]
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def finish_frame(
     img: np.ndarray, look: np.ndarray, tone: np.ndarray, focal: float, noise: np.ndarray
 ) -> None:
@@ -535,7 +536,7 @@ def finish_frame(
         _store_row(row, img, j, tone, toned, levels)
 
 
-@njit(**JIT, parallel=True)
+@cached_njit(**JIT, parallel=True)
 def finish_kernel(
     images: np.ndarray, rows: np.ndarray, tone: np.ndarray, focal: float, noise: np.ndarray
 ) -> None:
@@ -545,7 +546,7 @@ def finish_kernel(
         finish_frame(images[n], rows[n], tone[n], focal, noise)
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def finish_kernel_serial(
     images: np.ndarray, rows: np.ndarray, tone: np.ndarray, focal: float, noise: np.ndarray
 ) -> None:

@@ -13,8 +13,9 @@ must not change).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from activevision.geometry.jit import cached_njit
 from activevision.rendering.appearance import LOOK
 from activevision.rendering.kernels.bundles import (
     JIT,
@@ -54,7 +55,7 @@ CLUTTER = LOOK["clutter"]
 WEAR = LOOK["line_wear"]
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _quad_columns(
     edges: np.ndarray, v: float, width: int, min_width: int
 ) -> tuple[int, int, int, int]:
@@ -70,7 +71,7 @@ def _quad_columns(
     return s0, s1, i0, i1
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _carpet_row(edges: np.ndarray, v: float, params: Params, value: np.ndarray) -> None:
     """``value`` (W,) of a row the carpet's ``edges`` reach: background, the carpet and its
     anti-aliased border."""
@@ -94,7 +95,7 @@ def _carpet_row(edges: np.ndarray, v: float, params: Params, value: np.ndarray) 
         value[i] = background + c * (grass - background)
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _paint_quad_row(edges: np.ndarray, v: float, paint: np.ndarray) -> tuple[int, int]:
     """Max-combine a painted quad's coverage of row centre ``v`` into ``paint``; returns the
     columns ``[s0, s1)`` it touches."""
@@ -106,7 +107,7 @@ def _paint_quad_row(edges: np.ndarray, v: float, paint: np.ndarray) -> tuple[int
     return s0, s1
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _post_quad_row(edges: np.ndarray, v: float, grey: float, value: np.ndarray) -> None:
     """Composite a post's or crossbar's quad of grey ``grey`` over row centre ``v`` of
     ``value``, with its coverage as alpha."""
@@ -120,7 +121,7 @@ def _post_quad_row(edges: np.ndarray, v: float, grey: float, value: np.ndarray) 
         value[i] += a * (grey - value[i])
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def render_rows(
     n: int,
     rows: tuple[int, int],
@@ -227,14 +228,14 @@ def render_rows(
             )
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _check_size(params: Params, out: np.ndarray) -> None:
     """Every kernel takes the image size from ``params``: ``out`` must have it."""
     if out.shape[1] != params.height or out.shape[2] != params.width:
         raise ValueError("render kernels: out does not have the image size of params")
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def _bundles(
     scene: Fields, params: Fields, cameras: Fields, looks: Fields, out: np.ndarray
 ) -> tuple[Scene, Params, Cameras, Looks, RenderWork, SetupScratch]:
@@ -257,7 +258,7 @@ def _bundles(
     )
 
 
-@njit(**JIT, parallel=True)
+@cached_njit(**JIT, parallel=True)
 def render_kernel(
     scene: Fields,
     params: Fields,
@@ -310,7 +311,7 @@ def render_kernel(
         )
 
 
-@njit(**JIT)
+@cached_njit(**JIT)
 def render_kernel_serial(
     scene: Fields, params: Fields, cameras: Fields, looks: Fields, out: np.ndarray, garbage: int
 ) -> None:

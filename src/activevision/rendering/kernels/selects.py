@@ -10,15 +10,15 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
 
+from activevision.geometry.jit import cached_njit
 from activevision.rendering.kernels.bundles import JIT_PART
 
 #: A float scalar of Python or NumPy (numba compiles :func:`clamp` for each).
 Real = float | np.floating[Any]
 
 
-@njit(**JIT_PART)
+@cached_njit(**JIT_PART)
 def clamp(x: Real, lo: Real, hi: Real) -> Real:
     """``min(max(x, lo), hi)`` (the same value for every number but nan)."""
     return lo if x < lo else (hi if x > hi else x)
