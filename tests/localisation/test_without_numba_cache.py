@@ -1,8 +1,9 @@
 """The robot's planning (the README's "On a robot": the best viewpoint for the shipped
 policy's proposal), and every module's import, where numba cannot write its on-disk cache:
-a read-only install run by a user without a writable home. ``@njit(cache=True)`` refused the import there ("RuntimeError:
-cannot cache function 'wrap_angle': no locator available", seen as user nobody with
-HOME=/nonexistent); the kernels are compiled afresh instead and plan the same views."""
+a read-only install run by a user without a writable home. ``@njit(cache=True)`` refused
+the import there ("RuntimeError: cannot cache function 'wrap_angle': no locator available",
+seen as user nobody with HOME=/nonexistent); the kernels are compiled afresh instead and
+plan the same views."""
 
 from __future__ import annotations
 
