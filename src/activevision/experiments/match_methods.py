@@ -168,14 +168,18 @@ class BHumanCycle(TargetPolicy):
 
 
 class PatternPolicy(TargetPolicy):
-    """Visit a fixed list of (pan, tilt) points in turn, dwelling ``dwell`` ticks at each."""
+    """Visit a fixed list of (pan, tilt) points in turn, dwelling ``dwell`` ticks at each; a
+    point beyond the head's limits (another camera than the paper's) is looked at from the
+    nearest limit, where the head can reach it (unclipped, the head stopped at the limit,
+    never within reach of the point, and the pattern stopped there for the whole match)."""
 
     points_deg: tuple[tuple[float, float], ...] = ()
     dwell = 0
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         super().reset(n, rng)
-        self.points = np.radians(np.array(self.points_deg))
+        pan, tilt = np.radians(np.array(self.points_deg)).T
+        self.points = np.column_stack(clip_head(pan, tilt, self.config.camera))
         self.index = np.zeros(n, dtype=np.int64)
         self.waited = np.zeros(n, dtype=np.int64)
 
