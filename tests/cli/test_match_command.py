@@ -424,6 +424,28 @@ def test_the_ball_can_bounce_off_our_robot(tmp_path, capsys):
     assert not _match_config(build_parser().parse_args(TINY)).ball.bounces_off_own_robot
 
 
+def test_the_figures_titles_name_a_walk_to_the_ball(tmp_path, capsys, monkeypatch):
+    """The figures travel without the console's first line: their titles name what differs
+    from the default world, the walk too (``--walk ball`` changes ball in view most)."""
+    import activevision.figures.match as figures
+
+    titles = []
+    for name in ("plot_pareto", "plot_error_over_time"):
+        draw = getattr(figures, name)
+
+        def recorded(*args, draw=draw, **kwargs):
+            titles.append(args[3])  # both take (data, ..., path, title)
+            return draw(*args, **kwargs)
+
+        monkeypatch.setattr(figures, name, recorded)
+    argv = [*TINY, "--methods", "ball_track", "--ticks", "3"]
+    assert main([*argv, "--walk", "ball", "--out", str(tmp_path / "ball")]) == 0
+    assert len(titles) == 2 and all("walking to the ball" in t for t in titles), titles
+    titles.clear()
+    assert main([*argv, "--out", str(tmp_path / "waypoints")]) == 0
+    assert len(titles) == 2 and not any("walking" in t for t in titles), titles
+
+
 def test_help_says_95_percent_once(capsys):
     # argparse %-formats a description only where it holds "%(prog)": "95%%" printed as is
     assert main(["match", "--help"]) == 0
