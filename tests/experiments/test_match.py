@@ -474,6 +474,20 @@ def test_a_pattern_goes_round_on_a_head_that_cannot_reach_its_points(policy_clas
     assert list(dict.fromkeys(visited)) == expected
 
 
+@pytest.mark.parametrize(("tick_seconds", "tracked_age"), [(0.32, 3), (0.1, 10), (1.0, 1)])
+def test_bitbots_search_tracks_a_ball_seen_within_the_last_second(tick_seconds, tracked_age):
+    """The ball while it was seen within the last second, whatever a tick lasts: 3 ticks of
+    0.32 s, 10 of 0.1 s, 1 of 1 s (it was 3 ticks at every tick length)."""
+    policy = BitBotsSearch(MatchConfig(tick_seconds=tick_seconds))
+    policy.reset(2, np.random.default_rng(0))
+    ball = [[1.0, 0.5], [1.0, 0.5]]
+    info = info_for(np.radians([[0.0, 30.0], [0.0, 30.0]]), ball)
+    info["ball_age"] = np.array([tracked_age, tracked_age + 1])
+    target = policy.targets(info)
+    np.testing.assert_allclose(target[0], ball_direction(info, policy.config)[0])
+    np.testing.assert_allclose(target[1], np.radians([-90.0, 15.0]))  # the search's first
+
+
 def test_unknown_method_is_one_clear_error():
     with pytest.raises(ValueError, match="unknown match method 'nope'"):
         make_match_policy("nope", SMALL)

@@ -201,7 +201,13 @@ class BitBotsSearch(PatternPolicy):
 
     name = "bitbots_search"
     points_deg = ((-90.0, 15.0), (90.0, 15.0), (90.0, 40.0), (-90.0, 40.0))
-    recent_ticks = 3
+    recent_seconds = 1.0
+
+    def __init__(self, config: MatchConfig) -> None:
+        super().__init__(config)
+        # the ticks of a second (3 of the paper's 0.32 s): a fixed 3 ticks was 0.3 s of
+        # ticks of 0.1 s, 3 s of ticks of 1 s
+        self.recent_ticks = max(1, round(self.recent_seconds / config.tick_seconds))
 
     def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
         search = self.pattern_targets(info)
