@@ -47,6 +47,11 @@ def test_one_match_says_it_has_no_intervals(tmp_path, capsys):
     assert (tmp_path / "m" / "match_pareto.png").stat().st_size > 0
 
 
+def test_a_match_of_one_tick_says_tick(tmp_path, capsys):
+    assert main([*TINY, "--ticks", "1", "--out", str(tmp_path / "m")]) == 0
+    assert "2 matches of 1 tick (0.32 s of play)" in capsys.readouterr().out  # not "1 ticks"
+
+
 def test_a_continuous_match(tmp_path, capsys):
     out = tmp_path / "m"
     assert main([*TINY, "--action-type", "continuous", "--out", str(out)]) == 0
@@ -236,6 +241,10 @@ def not_a_strategy(config):
 class NoConfig:  # takes no config: not NAME(config)
     def reset(self, n, rng):
         pass
+
+
+class TwoLineName(BallTrack):
+    name = "my\\nhead"  # a label on two lines: the table's row and the CSV's broke
 """
 
 
@@ -272,6 +281,7 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
         ("mine.py:Nothing", "defines no class or function Nothing"),
         ("mine.py:NoConfig", "NoConfig(config) failed"),
         ("mine.py:not_a_strategy", "no reset or act method"),
+        ("mine.py:TwoLineName", r"its label 'my\nhead' is not one line of printable text"),
         ("no_such_module_xyz:Thing", "cannot import it"),
         ("broken.py:Mirror", "broken.py:2: "),
         ("mine.py:Mirror mine.py:Mirror", None),  # the same spec twice plays once

@@ -242,7 +242,8 @@ def cmd_match(args: argparse.Namespace) -> None:
     play = f"{seconds / 60:.1f} min" if seconds >= 60 else f"{seconds:.3g} s"
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
     print(
-        f"{_count(len(labels), 'method')} x {_count(args.matches, 'match')} of {args.ticks} ticks"
+        f"{_count(len(labels), 'method')} x {_count(args.matches, 'match')}"
+        f" of {_count(args.ticks, 'tick')}"
         f" ({play} of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
         f" walking to {args.walk}{_world_text(args, config)}"

@@ -684,7 +684,13 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     if not callable(factory):
         raise ValueError(f"--strategy {spec}: {where} defines no class or function {attr}")
     name = getattr(factory, "name", None)
-    return (name if isinstance(name, str) and name else attr), factory
+    label = name if isinstance(name, str) and name else attr
+    if not label.isprintable():  # a newline broke the table's row, the CSV's and the legend's
+        raise ValueError(
+            f"--strategy {spec}: its label {label!r} is not one line of printable text;"
+            " give NAME a name attribute that is"
+        )
+    return label, factory
 
 
 def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> MatchPolicy:
