@@ -1,6 +1,7 @@
 """``activevision match``: the tiny real command, its four outputs, and bad input."""
 
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -297,6 +298,35 @@ def test_a_bad_strategy_is_one_clear_line(tmp_path, monkeypatch, spec, needle, o
         return
     assert main(argv) == 2
     one_clear_line(needle)
+
+
+def test_a_strategy_imports_its_own_modules_under_the_script_too(tmp_path, monkeypatch):
+    """A team's strategy file imports the modules beside it, as ``python FILE.py`` would
+    run it, and a MODULE:NAME in the current directory is found under the
+    ``activevision`` script (whose sys.path has its bin folder, not the current
+    directory) as under ``python -m activevision``: both were "No module named ..."."""
+    team = tmp_path / "team"
+    team.mkdir()
+    (team / "team_helpers.py").write_text("NAME = 'ours'\n")
+    (team / "ours.py").write_text(
+        "from team_helpers import NAME\n"
+        "from activevision.experiments.match_methods import BallTrack\n\n\n"
+        "class Ours(BallTrack):\n    name = NAME\n"
+    )
+    (tmp_path / "here_strategy.py").write_text(MIRROR)
+    monkeypatch.chdir(tmp_path)
+    # the script's sys.path: no current directory in it
+    script_path = [p for p in sys.path if p not in ("", str(tmp_path), str(team))]
+    monkeypatch.setattr(sys, "path", script_path)
+    for name in ("team_helpers", "here_strategy"):
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    argv = [*TINY, "--methods", "ball_track", "--ticks", "2", "--strategy"]
+    assert main([*argv, "team/ours.py:Ours", "--out", "a"]) == 0
+    assert main([*argv, "here_strategy:Mirror", "--out", "b"]) == 0
+    with (tmp_path / "a" / "match.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["ball_track", "ours"]
+    with (tmp_path / "b" / "match.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["ball_track", "mirror"]
 
 
 WIDE = """

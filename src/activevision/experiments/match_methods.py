@@ -640,37 +640,13 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     """A user's strategy from ``"path/to/file.py:NAME"`` or ``"package.module:NAME"``:
     ``NAME`` is a class (or function) that takes the :class:`MatchConfig` and returns a
     :class:`MatchPolicy`. Returns its label (its ``name`` attribute, else ``NAME``) and the
-    factory; ValueError names what is wrong."""
-    import importlib
-    import importlib.util
-    import sys
-
+    factory; ValueError names what is wrong (:func:`_strategy_loader` says where the module
+    is looked for)."""
     where, sep, attr = spec.rpartition(":")
     if not sep or not where or not attr.isidentifier():
         raise ValueError(f"--strategy {spec}: write FILE.py:NAME or MODULE:NAME")
     # the package's own checks first: what the import itself raises is the user's code's
-    load: Callable[[], ModuleType]
-    if where.endswith(".py"):
-        path = Path(where)
-        if not path.is_file():
-            raise ValueError(f"--strategy {spec}: no such file {path}")
-        module_name = f"activevision_strategy_{path.stem}"
-        module_spec = importlib.util.spec_from_file_location(module_name, path)
-        if module_spec is None or module_spec.loader is None:
-            raise ValueError(f"--strategy {spec}: {path} is not a Python module")
-        found, loader = module_spec, module_spec.loader
-
-        def load() -> ModuleType:
-            module = importlib.util.module_from_spec(found)
-            sys.modules[module_name] = module  # dataclasses and pickling look modules up
-            loader.exec_module(module)
-            return module
-
-    else:
-
-        def load() -> ModuleType:
-            return importlib.import_module(where)
-
+    load = _strategy_loader(spec, where)
     try:
         module = load()
     except ImportError as error:
@@ -691,6 +667,49 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
             " give NAME a name attribute that is"
         )
     return label, factory
+
+
+def _strategy_loader(spec: str, where: str) -> Callable[[], ModuleType]:
+    """What imports ``where`` (a FILE.py or a MODULE) of ``--strategy spec``; ValueError for
+    a file that is not there. The file imports its own modules as ``python FILE.py`` would
+    run it: its folder is put on ``sys.path`` (at the end, where it shadows no installed
+    package); a MODULE is found in the current directory under the ``activevision`` script
+    as under ``python -m activevision``, which has it on ``sys.path``. Either stays there,
+    for the imports a strategy makes as it plays."""
+    import importlib
+    import importlib.util
+    import os
+    import sys
+
+    def importable(folder: str) -> None:
+        if folder not in sys.path:
+            sys.path.append(folder)
+
+    if not where.endswith(".py"):
+
+        def load_module() -> ModuleType:
+            if "" not in sys.path:  # "": the current directory, wherever it goes (python -c)
+                importable(os.getcwd())
+            return importlib.import_module(where)
+
+        return load_module
+    path = Path(where)
+    if not path.is_file():
+        raise ValueError(f"--strategy {spec}: no such file {path}")
+    module_name = f"activevision_strategy_{path.stem}"
+    module_spec = importlib.util.spec_from_file_location(module_name, path)
+    if module_spec is None or module_spec.loader is None:
+        raise ValueError(f"--strategy {spec}: {path} is not a Python module")
+    found, loader = module_spec, module_spec.loader
+
+    def load_file() -> ModuleType:
+        importable(str(path.resolve().parent))  # `from helpers import x` beside it
+        module = importlib.util.module_from_spec(found)
+        sys.modules[module_name] = module  # dataclasses and pickling look modules up
+        loader.exec_module(module)
+        return module
+
+    return load_file
 
 
 def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> MatchPolicy:
