@@ -284,6 +284,9 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
         ("mine.py:not_a_strategy", "no reset or act method"),
         ("mine.py:TwoLineName", r"its label 'my\nhead' is not one line of printable text"),
         ("no_such_module_xyz:Thing", "cannot import it"),
+        ("folder_xyz/:Mirror", "folder_xyz/ is no FILE.py (nor a MODULE name)"),  # a folder
+        ("folder_xyz:Mirror", "folder_xyz defines no class or function Mirror"),  # a package
+        ("mine.txt:Mirror", "mine.txt is no FILE.py"),
         ("broken.py:Mirror", "broken.py:2: "),
         ("mine.py:Mirror mine.py:Mirror", None),  # the same spec twice plays once
     ],
@@ -291,7 +294,12 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
 def test_a_bad_strategy_is_one_clear_line(tmp_path, monkeypatch, spec, needle, one_clear_line):
     (tmp_path / "mine.py").write_text(MIRROR)
     (tmp_path / "broken.py").write_text("class Mirror:\n    def act(self\n")
+    (tmp_path / "folder_xyz").mkdir()
+    (tmp_path / "mine.txt").write_text(MIRROR)
     monkeypatch.chdir(tmp_path)
+    # a MODULE is looked for in the current directory too: this test's, for this test only
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    monkeypatch.delitem(sys.modules, "folder_xyz", raising=False)
     argv = [*TINY, "--out", str(tmp_path / "m"), "--strategy", *spec.split()]
     if needle is None:
         assert main(argv) == 0

@@ -686,6 +686,10 @@ def _strategy_loader(spec: str, where: str) -> Callable[[], ModuleType]:
             sys.path.append(folder)
 
     if not where.endswith(".py"):
+        if "/" in where or os.sep in where or Path(where).is_file():
+            # a path, or a file not named .py, was "No module named '/path/to/it'" (a
+            # folder named alone may be a package: a MODULE)
+            raise ValueError(f"--strategy {spec}: {where} is no FILE.py (nor a MODULE name)")
 
         def load_module() -> ModuleType:
             if "" not in sys.path:  # "": the current directory, wherever it goes (python -c)
