@@ -1,6 +1,7 @@
 """``activevision match``: the tiny real command, its four outputs, and bad input."""
 
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +46,11 @@ def test_one_match_says_it_has_no_intervals(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "one match gives no 95% intervals" in printed and "[nan,nan]" in printed
     assert (tmp_path / "m" / "match_pareto.png").stat().st_size > 0
+
+
+def test_a_match_of_one_tick_says_tick(tmp_path, capsys):
+    assert main([*TINY, "--ticks", "1", "--out", str(tmp_path / "m")]) == 0
+    assert "2 matches of 1 tick (0.32 s of play)" in capsys.readouterr().out  # not "1 ticks"
 
 
 def test_a_continuous_match(tmp_path, capsys):
@@ -236,6 +242,10 @@ def not_a_strategy(config):
 class NoConfig:  # takes no config: not NAME(config)
     def reset(self, n, rng):
         pass
+
+
+class TwoLineName(BallTrack):
+    name = "my\\nhead"  # a label on two lines: the table's row and the CSV's broke
 """
 
 
@@ -272,7 +282,11 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
         ("mine.py:Nothing", "defines no class or function Nothing"),
         ("mine.py:NoConfig", "NoConfig(config) failed"),
         ("mine.py:not_a_strategy", "no reset or act method"),
+        ("mine.py:TwoLineName", r"its label 'my\nhead' is not one line of printable text"),
         ("no_such_module_xyz:Thing", "cannot import it"),
+        ("folder_xyz/:Mirror", "folder_xyz/ is no FILE.py (nor a MODULE name)"),  # a folder
+        ("folder_xyz:Mirror", "folder_xyz defines no class or function Mirror"),  # a package
+        ("mine.txt:Mirror", "mine.txt is no FILE.py"),
         ("broken.py:Mirror", "broken.py:2: "),
         ("mine.py:Mirror mine.py:Mirror", None),  # the same spec twice plays once
     ],
@@ -280,13 +294,47 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
 def test_a_bad_strategy_is_one_clear_line(tmp_path, monkeypatch, spec, needle, one_clear_line):
     (tmp_path / "mine.py").write_text(MIRROR)
     (tmp_path / "broken.py").write_text("class Mirror:\n    def act(self\n")
+    (tmp_path / "folder_xyz").mkdir()
+    (tmp_path / "mine.txt").write_text(MIRROR)
     monkeypatch.chdir(tmp_path)
+    # a MODULE is looked for in the current directory too: this test's, for this test only
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    monkeypatch.delitem(sys.modules, "folder_xyz", raising=False)
     argv = [*TINY, "--out", str(tmp_path / "m"), "--strategy", *spec.split()]
     if needle is None:
         assert main(argv) == 0
         return
     assert main(argv) == 2
     one_clear_line(needle)
+
+
+def test_a_strategy_imports_its_own_modules_under_the_script_too(tmp_path, monkeypatch):
+    """A team's strategy file imports the modules beside it, as ``python FILE.py`` would
+    run it, and a MODULE:NAME in the current directory is found under the
+    ``activevision`` script (whose sys.path has its bin folder, not the current
+    directory) as under ``python -m activevision``: both were "No module named ..."."""
+    team = tmp_path / "team"
+    team.mkdir()
+    (team / "team_helpers.py").write_text("NAME = 'ours'\n")
+    (team / "ours.py").write_text(
+        "from team_helpers import NAME\n"
+        "from activevision.experiments.match_methods import BallTrack\n\n\n"
+        "class Ours(BallTrack):\n    name = NAME\n"
+    )
+    (tmp_path / "here_strategy.py").write_text(MIRROR)
+    monkeypatch.chdir(tmp_path)
+    # the script's sys.path: no current directory in it
+    script_path = [p for p in sys.path if p not in ("", str(tmp_path), str(team))]
+    monkeypatch.setattr(sys, "path", script_path)
+    for name in ("team_helpers", "here_strategy"):
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    argv = [*TINY, "--methods", "ball_track", "--ticks", "2", "--strategy"]
+    assert main([*argv, "team/ours.py:Ours", "--out", "a"]) == 0
+    assert main([*argv, "here_strategy:Mirror", "--out", "b"]) == 0
+    with (tmp_path / "a" / "match.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["ball_track", "ours"]
+    with (tmp_path / "b" / "match.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["ball_track", "mirror"]
 
 
 WIDE = """
@@ -422,6 +470,28 @@ def test_the_ball_can_bounce_off_our_robot(tmp_path, capsys):
     args = build_parser().parse_args(argv)
     assert _match_config(args).ball.bounces_off_own_robot
     assert not _match_config(build_parser().parse_args(TINY)).ball.bounces_off_own_robot
+
+
+def test_the_figures_titles_name_a_walk_to_the_ball(tmp_path, capsys, monkeypatch):
+    """The figures travel without the console's first line: their titles name what differs
+    from the default world, the walk too (``--walk ball`` changes ball in view most)."""
+    import activevision.figures.match as figures
+
+    titles = []
+    for name in ("plot_pareto", "plot_error_over_time"):
+        draw = getattr(figures, name)
+
+        def recorded(*args, draw=draw, **kwargs):
+            titles.append(args[3])  # both take (data, ..., path, title)
+            return draw(*args, **kwargs)
+
+        monkeypatch.setattr(figures, name, recorded)
+    argv = [*TINY, "--methods", "ball_track", "--ticks", "3"]
+    assert main([*argv, "--walk", "ball", "--out", str(tmp_path / "ball")]) == 0
+    assert len(titles) == 2 and all("walking to the ball" in t for t in titles), titles
+    titles.clear()
+    assert main([*argv, "--out", str(tmp_path / "waypoints")]) == 0
+    assert len(titles) == 2 and not any("walking" in t for t in titles), titles
 
 
 def test_help_says_95_percent_once(capsys):

@@ -27,6 +27,7 @@ from activevision.experiments.match import (
 )
 from activevision.experiments.match_methods import (
     BHumanCycle,
+    BitBotsSearch,
     EntropyTrack,
     NUbots6Point,
     StrategyOptions,
@@ -38,7 +39,7 @@ from activevision.experiments.match_methods import (
     privileged,
     privileged_methods,
 )
-from activevision.geometry import CameraConfig, field_landmarks
+from activevision.geometry import CameraConfig, clip_head, field_landmarks
 
 SMALL = MatchConfig(ticks=12)
 
@@ -438,6 +439,53 @@ def test_six_point_look_visits_its_points_in_turn():
         visited.append(tuple(np.round(np.degrees(target[0]))))
     order = list(dict.fromkeys(visited))
     assert order == [(60, 15), (0, 15), (-60, 15), (-60, 45), (0, 45), (60, 45)]
+
+
+NARROW_HEAD = CameraConfig(
+    pan_min=math.radians(-60.0),
+    pan_max=math.radians(60.0),
+    tilt_min=math.radians(20.0),
+    tilt_max=math.radians(60.0),
+)
+
+
+@pytest.mark.parametrize(
+    ("policy_class", "expected"),
+    [
+        (NUbots6Point, [(60, 20), (0, 20), (-60, 20), (-60, 45), (0, 45), (60, 45)]),
+        (BitBotsSearch, [(-60, 20), (60, 20), (60, 40), (-60, 40)]),
+    ],
+)
+def test_a_pattern_goes_round_on_a_head_that_cannot_reach_its_points(policy_class, expected):
+    """A camera whose head pans +-60 deg and tilts 20-60 (a run trained for a robot's own
+    camera plays every strategy through it): the points beyond its limits are looked at
+    from the nearest limit, and the pattern goes on. The head stopped at the first point it
+    could not reach (the pattern's 90 or 15 degrees) and stayed there for the whole match."""
+    policy = policy_class(MatchConfig(camera=NARROW_HEAD))
+    policy.reset(1, np.random.default_rng(0))
+    head = np.radians([[10.0, 30.0]])
+    visited = []
+    for _ in range(40):
+        info = info_for(head, [[1.0, 0.0]])
+        info["ball_age"][:] = 100  # Bit-Bots search: a ball not seen for long
+        target = policy.targets(info)
+        head = np.column_stack(clip_head(target[:, 0], target[:, 1], NARROW_HEAD))
+        visited.append(tuple(np.round(np.degrees(target[0])).astype(int).tolist()))
+    assert list(dict.fromkeys(visited)) == expected
+
+
+@pytest.mark.parametrize(("tick_seconds", "tracked_age"), [(0.32, 3), (0.1, 10), (1.0, 1)])
+def test_bitbots_search_tracks_a_ball_seen_within_the_last_second(tick_seconds, tracked_age):
+    """The ball while it was seen within the last second, whatever a tick lasts: 3 ticks of
+    0.32 s, 10 of 0.1 s, 1 of 1 s (it was 3 ticks at every tick length)."""
+    policy = BitBotsSearch(MatchConfig(tick_seconds=tick_seconds))
+    policy.reset(2, np.random.default_rng(0))
+    ball = [[1.0, 0.5], [1.0, 0.5]]
+    info = info_for(np.radians([[0.0, 30.0], [0.0, 30.0]]), ball)
+    info["ball_age"] = np.array([tracked_age, tracked_age + 1])
+    target = policy.targets(info)
+    np.testing.assert_allclose(target[0], ball_direction(info, policy.config)[0])
+    np.testing.assert_allclose(target[1], np.radians([-90.0, 15.0]))  # the search's first
 
 
 def test_unknown_method_is_one_clear_error():

@@ -277,6 +277,8 @@ def test_the_match_section_counts_one_match_in_the_singular(tmp_path):
     run = make_run(tmp_path)
     write_rows(run / "match" / "match.csv", [match_row("ball_track") | {"matches": 1}])
     assert "`ActiveVisionMatch-v0`: 1 match of 300 ticks" in write_report(run).read_text()
+    write_rows(run / "match" / "match.csv", [match_row("ball_track") | {"ticks": 1}])
+    assert "16 matches of 1 tick from seed 0" in write_report(run).read_text()  # "1 ticks"
 
 
 def robustness_row(name, setting, trained, success, goal, drops):

@@ -190,3 +190,39 @@ def test_a_long_title_of_the_match_figures_stays_inside_them(monkeypatch):
         fig.draw(renderer)
         box, text = fig.bbox, fig.axes[0].title.get_window_extent(renderer)
         assert box.x0 <= text.x0 and text.x1 <= box.x1
+
+
+def test_the_default_command_s_eleven_strategies_get_eleven_hues_where_they_can(monkeypatch):
+    """Beyond ten methods tab20's colours came in its order, dark and light of one hue side
+    by side: the default command's eleven strategies were five pairs of near-twins (the
+    error figure's lines have no marker to tell them apart). The first ten now take its ten
+    hues, the rest their light shades."""
+    from matplotlib import colormaps
+
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    curves = {f"m{i}": np.full((3, 2), 0.05 + 0.01 * i) for i in range(11)}
+    plot_error_over_time(curves, 0.32, "x", "t")
+    tab20 = [tuple(c) for c in colormaps["tab20"].colors]
+    shades = [tab20.index(tuple(line.get_color()[:3])) for line in drawn[0].axes[0].lines]
+    assert len({i // 2 for i in shades[:10]}) == 10  # ten hues, one each
+    assert len(set(shades)) == 11
+    # ten or fewer: matplotlib's default ten, as before
+    plot_error_over_time({"a": np.zeros((3, 2)), "b": np.ones((3, 2))}, 0.32, "x", "t")
+    tab10 = [tuple(c) for c in colormaps["tab10"].colors]
+    assert [tuple(line.get_color()[:3]) for line in drawn[1].axes[0].lines] == tab10[:2]
+
+
+def test_an_error_curve_of_one_tick_is_drawn(monkeypatch):
+    # a line through one point draws nothing: --ticks 1 gave an empty figure with a legend
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    plot_error_over_time({"a": np.full((1, 2), 0.06)}, 0.32, "x", "t")
+    plot_error_over_time({"a": np.full((5, 2), 0.06)}, 0.32, "x", "t")
+    one, many = (fig.axes[0].lines[0] for fig in drawn)
+    assert one.get_marker() not in (None, "", "None") and one.get_xdata().tolist() == [0.32]
+    assert many.get_marker() in (None, "", "None")  # a curve: a line, as before

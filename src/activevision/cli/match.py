@@ -242,7 +242,8 @@ def cmd_match(args: argparse.Namespace) -> None:
     play = f"{seconds / 60:.1f} min" if seconds >= 60 else f"{seconds:.3g} s"
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
     print(
-        f"{_count(len(labels), 'method')} x {_count(args.matches, 'match')} of {args.ticks} ticks"
+        f"{_count(len(labels), 'method')} x {_count(args.matches, 'match')}"
+        f" of {_count(args.ticks, 'tick')}"
         f" ({play} of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
         f" walking to {args.walk}{_world_text(args, config)}"
@@ -291,9 +292,12 @@ def cmd_match(args: argparse.Namespace) -> None:
         # whatever the current directory and wherever the run lies
         run_name = None if args.run is None else args.run.resolve().name
         world = _world_text(args, config, run_name)
+        # the console's first line names the walk; the figures, which travel alone, did not
+        # (a striker walking to the ball sees it three times as often)
+        walk = "" if args.walk == "waypoints" else f", walking to the {args.walk}"
         title = (
             f"{_count(args.matches, 'match')} x {play}, seed {args.seed},"
-            f" {args.action_type} head {args.step_deg:g} deg/tick{world}"
+            f" {args.action_type} head {args.step_deg:g} deg/tick{walk}{world}"
         )
         points = {
             r.method: {k: (iv.mean, iv.low, iv.high) for k, iv in r.summary().items()}

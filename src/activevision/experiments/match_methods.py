@@ -168,14 +168,18 @@ class BHumanCycle(TargetPolicy):
 
 
 class PatternPolicy(TargetPolicy):
-    """Visit a fixed list of (pan, tilt) points in turn, dwelling ``dwell`` ticks at each."""
+    """Visit a fixed list of (pan, tilt) points in turn, dwelling ``dwell`` ticks at each; a
+    point beyond the head's limits (another camera than the paper's) is looked at from the
+    nearest limit, where the head can reach it (unclipped, the head stopped at the limit,
+    never within reach of the point, and the pattern stopped there for the whole match)."""
 
     points_deg: tuple[tuple[float, float], ...] = ()
     dwell = 0
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         super().reset(n, rng)
-        self.points = np.radians(np.array(self.points_deg))
+        pan, tilt = np.radians(np.array(self.points_deg)).T
+        self.points = np.column_stack(clip_head(pan, tilt, self.config.camera))
         self.index = np.zeros(n, dtype=np.int64)
         self.waited = np.zeros(n, dtype=np.int64)
 
@@ -197,7 +201,13 @@ class BitBotsSearch(PatternPolicy):
 
     name = "bitbots_search"
     points_deg = ((-90.0, 15.0), (90.0, 15.0), (90.0, 40.0), (-90.0, 40.0))
-    recent_ticks = 3
+    recent_seconds = 1.0
+
+    def __init__(self, config: MatchConfig) -> None:
+        super().__init__(config)
+        # the ticks of a second (3 of the paper's 0.32 s): a fixed 3 ticks was 0.3 s of
+        # ticks of 0.1 s, 3 s of ticks of 1 s
+        self.recent_ticks = max(1, round(self.recent_seconds / config.tick_seconds))
 
     def targets(self, info: dict[str, np.ndarray]) -> np.ndarray:
         search = self.pattern_targets(info)
@@ -630,37 +640,13 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     """A user's strategy from ``"path/to/file.py:NAME"`` or ``"package.module:NAME"``:
     ``NAME`` is a class (or function) that takes the :class:`MatchConfig` and returns a
     :class:`MatchPolicy`. Returns its label (its ``name`` attribute, else ``NAME``) and the
-    factory; ValueError names what is wrong."""
-    import importlib
-    import importlib.util
-    import sys
-
+    factory; ValueError names what is wrong (:func:`_strategy_loader` says where the module
+    is looked for)."""
     where, sep, attr = spec.rpartition(":")
     if not sep or not where or not attr.isidentifier():
         raise ValueError(f"--strategy {spec}: write FILE.py:NAME or MODULE:NAME")
     # the package's own checks first: what the import itself raises is the user's code's
-    load: Callable[[], ModuleType]
-    if where.endswith(".py"):
-        path = Path(where)
-        if not path.is_file():
-            raise ValueError(f"--strategy {spec}: no such file {path}")
-        module_name = f"activevision_strategy_{path.stem}"
-        module_spec = importlib.util.spec_from_file_location(module_name, path)
-        if module_spec is None or module_spec.loader is None:
-            raise ValueError(f"--strategy {spec}: {path} is not a Python module")
-        found, loader = module_spec, module_spec.loader
-
-        def load() -> ModuleType:
-            module = importlib.util.module_from_spec(found)
-            sys.modules[module_name] = module  # dataclasses and pickling look modules up
-            loader.exec_module(module)
-            return module
-
-    else:
-
-        def load() -> ModuleType:
-            return importlib.import_module(where)
-
+    load = _strategy_loader(spec, where)
     try:
         module = load()
     except ImportError as error:
@@ -674,7 +660,60 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     if not callable(factory):
         raise ValueError(f"--strategy {spec}: {where} defines no class or function {attr}")
     name = getattr(factory, "name", None)
-    return (name if isinstance(name, str) and name else attr), factory
+    label = name if isinstance(name, str) and name else attr
+    if not label.isprintable():  # a newline broke the table's row, the CSV's and the legend's
+        raise ValueError(
+            f"--strategy {spec}: its label {label!r} is not one line of printable text;"
+            " give NAME a name attribute that is"
+        )
+    return label, factory
+
+
+def _strategy_loader(spec: str, where: str) -> Callable[[], ModuleType]:
+    """What imports ``where`` (a FILE.py or a MODULE) of ``--strategy spec``; ValueError for
+    a file that is not there. The file imports its own modules as ``python FILE.py`` would
+    run it: its folder is put on ``sys.path`` (at the end, where it shadows no installed
+    package); a MODULE is found in the current directory under the ``activevision`` script
+    as under ``python -m activevision``, which has it on ``sys.path``. Either stays there,
+    for the imports a strategy makes as it plays."""
+    import importlib
+    import importlib.util
+    import os
+    import sys
+
+    def importable(folder: str) -> None:
+        if folder not in sys.path:
+            sys.path.append(folder)
+
+    if not where.endswith(".py"):
+        if "/" in where or os.sep in where or Path(where).is_file():
+            # a path, or a file not named .py, was "No module named '/path/to/it'" (a
+            # folder named alone may be a package: a MODULE)
+            raise ValueError(f"--strategy {spec}: {where} is no FILE.py (nor a MODULE name)")
+
+        def load_module() -> ModuleType:
+            if "" not in sys.path:  # "": the current directory, wherever it goes (python -c)
+                importable(os.getcwd())
+            return importlib.import_module(where)
+
+        return load_module
+    path = Path(where)
+    if not path.is_file():
+        raise ValueError(f"--strategy {spec}: no such file {path}")
+    module_name = f"activevision_strategy_{path.stem}"
+    module_spec = importlib.util.spec_from_file_location(module_name, path)
+    if module_spec is None or module_spec.loader is None:
+        raise ValueError(f"--strategy {spec}: {path} is not a Python module")
+    found, loader = module_spec, module_spec.loader
+
+    def load_file() -> ModuleType:
+        importable(str(path.resolve().parent))  # `from helpers import x` beside it
+        module = importlib.util.module_from_spec(found)
+        sys.modules[module_name] = module  # dataclasses and pickling look modules up
+        loader.exec_module(module)
+        return module
+
+    return load_file
 
 
 def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> MatchPolicy:

@@ -208,7 +208,7 @@ def _match_part(match_rows: list[dict]) -> list[str]:
         "",
         f"`ActiveVisionMatch-v0`: {first['matches']} match"
         + ("" if str(first["matches"]) == "1" else "es")
-        + (f" of {first['ticks']} ticks" if first.get("ticks") else "")
+        + (_ticks_text(first["ticks"]) if first.get("ticks") else "")
         + f" from seed {first['seed']}, the"
         " same for every strategy; the robot walks, the ball is kicked about, the UKF"
         f" tracks every tick{_match_world_text(first)}. Mean [95% interval] over matches.",
@@ -325,6 +325,11 @@ def _error_text(rows: list[dict]) -> str:
     if errors == {0.0}:
         return ", exact localisation (error 0)"
     return ", localisation error " + "/".join(f"{e:g}" for e in sorted(errors)) + " m and rad"
+
+
+def _ticks_text(ticks: object) -> str:
+    """``" of 300 ticks"``, ``" of 1 tick"`` (it read "1 ticks")."""
+    return f" of {ticks} tick" + ("" if str(ticks) == "1" else "s")
 
 
 def _match_world_text(row: dict) -> str:

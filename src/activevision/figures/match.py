@@ -131,9 +131,15 @@ def _legend_inside_or_below(fig: Figure, ax: Axes) -> None:
 
 
 def _colours(n: int) -> list[tuple[float, float, float, float]]:
-    """``n`` distinct colours: matplotlib's default ten, tab20 beyond."""
-    cmap = colormaps["tab10" if n <= 10 else "tab20"]
-    return [cmap(i % cmap.N) for i in range(n)]
+    """``n`` distinct colours: matplotlib's default ten, tab20 beyond, its ten hues first
+    and their light shades after them (in tab20's order the default command's eleven
+    strategies came in pairs of one hue: ball_track and bhuman_cycle both blue,
+    entropy_greedy and entropy_track both green)."""
+    if n <= 10:
+        return [colormaps["tab10"](i) for i in range(n)]
+    cmap = colormaps["tab20"]
+    order = [*range(0, 20, 2), *range(1, 20, 2)]
+    return [cmap(order[i % 20]) for i in range(n)]
 
 
 def plot_error_over_time(
@@ -169,7 +175,8 @@ def plot_error_over_time(
         errors = np.asarray(errors, dtype=float)
         t = np.arange(1, len(errors) + 1) * tick_seconds
         mean = errors.mean(axis=1)
-        ax.plot(t, mean, lw=1.2, label=name, color=colour)
+        # one tick is one point, which a line alone does not draw
+        ax.plot(t, mean, lw=1.2, label=name, color=colour, marker="o" if len(t) == 1 else None)
         if errors.shape[1] > 1:  # one match has no interval
             half = 1.96 * errors.std(axis=1, ddof=1) / math.sqrt(errors.shape[1])
             ax.fill_between(t, mean - half, mean + half, alpha=0.2, color=colour)

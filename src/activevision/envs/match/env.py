@@ -116,8 +116,9 @@ class ActiveVisionMatchEnv(gym.Env):
     ## Info
     What the robot knows: ``belief_mean`` (3,), ``belief_cov`` (3, 3), ``entropy``,
     ``head``, ``head_move`` (rad this tick), ``ball_relative`` (robot frame, m),
-    ``ball_age`` (ticks since seen), ``declared_lost``, ``detections_accepted`` and
-    ``detections_gated`` (cumulative). What only the simulator knows: ``pose``, ``ball``,
+    ``ball_age`` (ticks since seen), ``declared_lost`` (the lost detector fired at some
+    tick of this match: it stays True after the robot recovers), ``detections_accepted``
+    and ``detections_gated`` (cumulative). What only the simulator knows: ``pose``, ``ball``,
     ``position_error`` (m), ``heading_error`` (rad), ``ball_in_view``, ``detected_mask``
     ((K,) bool: landmarks detected this tick), ``waypoint``, ``robots`` ((R, 4): the other
     robots' ``x, y, height, grey``; height 0 marks an empty slot), ``tick``.
