@@ -816,7 +816,7 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         "match.csv of another layout",
         lambda r: write_file(r / "match" / "match.csv", "a,b\n1,2\n"),
         ["report", "{run}"],
-        "match.csv is damaged",
+        "match.csv has no 'method' column",
     ),
     (
         "config.json a list, report",
@@ -860,6 +860,63 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         lambda r: (r / "evaluations.csv").write_text("step,episodes\n30,5\n"),
         ["plot", "{run}"],
         "evaluations.csv has no 'success_rate' column",
+    ),
+    # an empty log, or one of another table with no rows, was drawn as "no data yet" (exit 0):
+    # a log is made with its header, atomically, so an empty one was damaged, as --resume says
+    *[
+        (f"{name} emptied, {argv[0]}", lambda r, n=name: (r / n).write_text(""), argv, needle)
+        for name in ("metrics.csv", "episodes.csv", "evaluations.csv")
+        for argv, needle in (
+            (["plot", "{run}"], f"{name} is empty (no header row)"),
+            (["report", "{run}"], f"{name} is empty (no header row)"),
+        )
+        if (name, argv[0]) != ("episodes.csv", "report")  # report does not read it
+        and (name, argv[0]) != ("evaluations.csv", "report")
+    ],
+    (
+        "metrics.csv of another table, no rows",
+        lambda r: (r / "metrics.csv").write_text("hello,world\n"),
+        ["plot", "{run}"],
+        "metrics.csv has no 'epoch' column",
+    ),
+    (
+        "metrics.csv of another table, report",
+        lambda r: (r / "metrics.csv").write_text("hello,world\n1,2\n"),
+        ["report", "{run}"],
+        "metrics.csv has no 'epoch' column",
+    ),
+    (
+        "episodes.csv of another table, no rows",
+        lambda r: (r / "episodes.csv").write_text("hello,world\n"),
+        ["plot", "{run}"],
+        "episodes.csv has no 'episode' column",
+    ),
+    (
+        "evaluations.csv of another table, no rows",
+        lambda r: (r / "evaluations.csv").write_text("hello,world\n"),
+        ["plot", "{run}"],
+        "evaluations.csv has no 'step' column",
+    ),
+    # report left the section out of a results table emptied or cut to its header
+    *[
+        (
+            f"{table} {name}",
+            lambda r, t=table, x=text: write_file(r / t.split(".")[0] / t, x),
+            ["report", "{run}"],
+            needle,
+        )
+        for table in ("match.csv", "robustness.csv")
+        for name, text, needle in (
+            ("emptied", "", f"{table} is empty (no header row)"),
+            ("of another table", "hello,world\n", f"{table} has no 'method' column"),
+            ("cut to its header", "method,name,matches,n,seed\n", f"{table} holds no rows"),
+        )
+    ],
+    (
+        "manifest not text",
+        lambda r: (latest(r) / "manifest.json").write_bytes(b"\xff\xfe" * 50),
+        ["train", "--resume", "{run}"],
+        "step_000000030 has no readable manifest",
     ),
 ]
 
@@ -931,6 +988,26 @@ def test_an_out_that_cannot_be_written_is_refused_before_any_episode(
     assert main([*argv, "--out", "/proc/activevision-no-such/x"]) == 2
     one_clear_line("--out /proc/activevision-no-such/x: cannot create it or write in it")
     assert played == []
+
+
+@pytest.mark.parametrize("text", ["", "hello,world\n", "method,error\nrandom,0\n"])
+def test_compare_replaces_no_file_it_cannot_resume_without_overwrite(
+    tmp_path, monkeypatch, one_clear_line, text
+):
+    """A compare.csv emptied, or of another table, was read as one of no levels played and
+    replaced without --overwrite; it is refused, named and left as it was, before any
+    episode."""
+    import activevision.experiments.compare as comparison
+
+    played = []
+    monkeypatch.setattr(comparison, "evaluate_policy", lambda *a, **k: played.append(a))
+    csv_path = tmp_path / "cmp" / "compare.csv"
+    write_file(csv_path, text)
+    argv = ["compare", "--methods", "random", "--errors", "0", "--episodes", "1"]
+    assert main([*argv, "--out", str(tmp_path / "cmp")]) == 2
+    line = one_clear_line(str(csv_path), "damaged or not a file activevision wrote")
+    assert ("is empty (no header row)" if not text else "has no '") in line
+    assert csv_path.read_text() == text and played == []
 
 
 def test_a_failed_evaluation_leaves_no_folder_behind(tmp_path, monkeypatch, one_clear_line):
