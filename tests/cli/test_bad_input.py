@@ -150,6 +150,8 @@ BAD_ARGUMENTS = [
     (["train", "--resume", "{run}", "--seed", "3"], "--seed"),
     (["train", "--resume", "{run}", "--preset", "paper"], "--preset"),
     (["train", "--resume", "{run}", "--steps", "30"], "finished"),
+    # --overwrite was ignored (exit 0): a resume replaces nothing
+    (["train", "--resume", "{run}", "--overwrite"], "--overwrite cannot be combined with it"),
     (["train", "--out", "{run}"], "--resume"),
     (["train", "--out", "{run}/plots/x"], "inside the training run"),
     (["train", "--out", "{run}/plots/x", "--overwrite"], "inside the training run"),

@@ -54,6 +54,9 @@ def _resume(args: argparse.Namespace) -> Path | None:
 
     names = ("config", "preset", "seed", "set", "out", "algo")
     given = [f"--{n}" for n in names if _given(args, n)]
+    # --overwrite was ignored: a resume replaces nothing, and a run with a checkpoint is never
+    # started again over its files
+    given += ["--overwrite"] if args.overwrite else []
     if given:
         raise ValueError(
             f"--resume continues a run with its own config.json; {', '.join(given)} cannot be"
