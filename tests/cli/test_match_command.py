@@ -398,6 +398,22 @@ def test_two_strategies_of_one_name_are_refused(tmp_path, one_clear_line):
     one_clear_line("two strategies are named mirror")
 
 
+@pytest.mark.parametrize("label", ["two\nlines", "tab\there", "bell\a"])
+def test_a_strategy_label_of_more_than_one_printable_line_is_refused(
+    tmp_path, label, one_clear_line
+):
+    """A name attribute with a newline was played and written: it split the printed table's
+    row and report.md's Markdown row in two."""
+    source = MIRROR.replace('name = "mirror"', f"name = {label!r}")
+    assert repr(label) in source
+    (tmp_path / "mine.py").write_text(source)
+    out = tmp_path / "m"
+    argv = [*TINY, "--out", str(out), "--strategy", f"{tmp_path / 'mine.py'}:Mirror"]
+    assert main(argv) == 2
+    one_clear_line(f"its label {label!r} (its name attribute) must be one line of printable")
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("label", ["learned", "oracle_ball", "onnx_policy[mine]"])
 def test_a_strategy_labelled_as_a_built_in_one_is_refused(tmp_path, label, one_clear_line):
     """As ``evaluate --strategy`` refuses a built-in method's label: a row named

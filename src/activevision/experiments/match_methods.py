@@ -674,7 +674,13 @@ def load_strategy(spec: str) -> tuple[str, StrategyFactory]:
     if not callable(factory):
         raise ValueError(f"--strategy {spec}: {where} defines no class or function {attr}")
     name = getattr(factory, "name", None)
-    return (name if isinstance(name, str) and name else attr), factory
+    label = name if isinstance(name, str) and name else attr
+    if not label.isprintable():  # a newline split the printed table and report.md's rows
+        raise ValueError(
+            f"--strategy {spec}: its label {label!r} (its name attribute) must be one line of"
+            " printable characters"
+        )
+    return label, factory
 
 
 def _user_strategy(config: MatchConfig, factory: StrategyFactory | None) -> MatchPolicy:
