@@ -460,6 +460,37 @@ def test_a_refused_compare_on_ray_leaves_the_compare_csv_it_would_overwrite(
     assert (out / "compare.csv").read_bytes() == before
 
 
+def test_compare_overwrite_stopped_before_its_end_leaves_no_older_figure(
+    tmp_path, monkeypatch, capsys
+):
+    """--overwrite removed the older compare.csv but kept its compare.png: a compare that
+    stopped before it drew its own left the older figure beside the new rows (report.md
+    showed it as this compare's)."""
+    import activevision.experiments.compare as comparison
+
+    out = tmp_path / "cmp"
+    argv = ["compare", "--methods", "random", "--episodes", "1", "--out", str(out)]
+    assert main([*argv, "--errors", "0.1"]) == 0
+    assert (out / "compare.png").is_file()
+    capsys.readouterr()
+    real = comparison.evaluate_policy
+    calls = []
+
+    def second_level_fails(*args, **kwargs):
+        calls.append(1)
+        if len(calls) > 1:
+            raise ValueError("stopped")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(comparison, "evaluate_policy", second_level_fails)
+    assert main([*argv, "--errors", "0.2,0.3", "--overwrite"]) == 2
+    err = capsys.readouterr().err  # the progress bar's lines, then the error
+    assert err.splitlines()[-1] == "activevision compare: error: stopped", err
+    rows = (out / "compare.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in rows[1:]] == ["0.2"]  # the new level played, resumable
+    assert not (out / "compare.png").exists()
+
+
 def test_a_compare_folder_another_compare_writes_is_refused(tmp_path, one_clear_line, capsys):
     """Two compares into one folder would append their rows to one compare.csv."""
     from ..training.test_run_lock import held_by_another_process

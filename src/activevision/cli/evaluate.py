@@ -321,9 +321,11 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
 
 
 def _start_over(out: Path, args: argparse.Namespace) -> None:
-    """``--overwrite``: remove the compare.csv that would be resumed."""
+    """``--overwrite``: remove the compare.csv that would be resumed, and its figure (kept, a
+    compare stopped before its end left the older compare's figure beside the new rows)."""
     if args.overwrite:
         (out / "compare.csv").unlink(missing_ok=True)
+        (out / "compare.png").unlink(missing_ok=True)
 
 
 def _try_users(
