@@ -246,7 +246,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
             progress=ended,
         )
     print(f"{len(rows)} aggregated rows")
-    print(f"wrote {args.out}/trials.csv, sweep.csv" + (" and sweep.png" if rows else ""))
+    print(f"wrote {args.out}/trials.csv" + (", sweep.csv and sweep.png" if rows else ""))
     check_trials_finished(args.out)
 
 
