@@ -907,6 +907,12 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         and (name, argv[0]) != ("evaluations.csv", "report")
     ],
     (
+        "episodes.csv missing, plot",
+        lambda r: (r / "episodes.csv").unlink(),
+        ["plot", "{run}"],
+        "has no episodes.csv (its training log): nothing to plot",
+    ),
+    (
         "metrics.csv of another table, no rows",
         lambda r: (r / "metrics.csv").write_text("hello,world\n"),
         ["plot", "{run}"],

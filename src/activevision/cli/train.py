@@ -203,8 +203,9 @@ def cmd_plot(args: argparse.Namespace) -> None:
         # name what is missing: a run's config.json alone read "no config.json and metrics.csv"
         missing = [n for n in ("config.json", "metrics.csv") if not (args.run / n).is_file()]
         raise ValueError(f"{args.run} is not a training run (no {' and no '.join(missing)})")
-    if not (args.run / "metrics.csv").is_file():
-        raise ValueError(f"{args.run} has no metrics.csv (its training log): nothing to plot")
+    for log in ("metrics.csv", "episodes.csv"):  # episodes.csv: a bare "[Errno 2] ..."
+        if not (args.run / log).is_file():
+            raise ValueError(f"{args.run} has no {log} (its training log): nothing to plot")
     plots = args.run / "plots"
     if plots.exists() and not plots.is_dir():  # was "[Errno 17] File exists"
         raise OutputError(f"{plots} is a file, not a directory: plot writes its figures there")
