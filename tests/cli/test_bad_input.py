@@ -150,6 +150,24 @@ BAD_ARGUMENTS = [
     (["train", "--resume", "{run}", "--seed", "3"], "--seed"),
     (["train", "--resume", "{run}", "--preset", "paper"], "--preset"),
     (["train", "--resume", "{run}", "--steps", "30"], "finished"),
+    # an option and a --set of the same field: the option's value was taken, the --set one
+    # dropped (--set total_timesteps=5000 --steps 100 trained 100 steps)
+    (
+        ["train", "--set", "total_timesteps=5000", "--steps", "100", "--out", "{tmp}/x"],
+        "--set total_timesteps=... and --steps both set run.total_timesteps: give it with"
+        " --steps alone",
+    ),
+    (
+        ["train", "--set", "run.total_timesteps=5000", "--steps", "100", "--out", "{tmp}/x"],
+        "and --steps both set run.total_timesteps",
+    ),
+    (["train", "--set", "seed=3", "--seed", "1", "--out", "{tmp}/x"], "and --seed both set seed"),
+    (
+        ["train", "--set", "algo=dagger", "--algo", "ddqn", "--out", "{tmp}/x"],
+        "and --algo both set algo",
+    ),
+    # a sweep's trials each take one of --seeds (default 0..4)
+    (["sweep", "--set", "seed=3", "--out", "{tmp}/s"], "give it with --seeds alone"),
     # --overwrite was ignored (exit 0): a resume replaces nothing
     (["train", "--resume", "{run}", "--overwrite"], "--overwrite cannot be combined with it"),
     (["train", "--out", "{run}"], "--resume"),

@@ -163,6 +163,14 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     check_run_directory(args.out, overwrite=args.overwrite)
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     overrides = list(args.set or [])
+    _refuse_set_beside(
+        overrides,
+        {
+            "run.total_timesteps": "--steps" if args.steps is not None else "",
+            "seed": "--seed" if args.seed is not None else "",
+            "algo": "--algo" if args.algo is not None else "",
+        },
+    )
     if args.steps is not None:
         overrides.append(f"total_timesteps={args.steps}")
     if args.seed is not None:
@@ -179,6 +187,22 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             shutil.rmtree(run_dir, ignore_errors=True)  # e.g. no start found: try again freely
         raise
     return run_dir
+
+
+def _refuse_set_beside(overrides: list[str], options: Mapping[str, str]) -> None:
+    """ValueError where a ``--set`` key sets the field (full path -> option) that an option
+    given sets too: the option's value was taken and the ``--set`` one dropped silently
+    (``--set total_timesteps=5000 --steps 100`` trained 100 steps)."""
+    from activevision.training.config import field_paths, parse_overrides
+
+    paths = field_paths()
+    for key in parse_overrides(overrides):
+        path = paths.get(key, key)
+        if options.get(path):
+            raise ValueError(
+                f"--set {key}=... and {options[path]} both set {path}: give it with"
+                f" {options[path]} alone"
+            )
 
 
 def _nothing_trained(run_dir: Path) -> bool:
@@ -230,6 +254,8 @@ def cmd_sweep(args: argparse.Namespace) -> None:
 
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     grid = dict(args.grid or [])
+    # each trial's seed is one of --seeds: a --set seed was dropped
+    _refuse_set_beside(list(args.set or []), {"seed": "--seeds"})
     config = checked_base(config, parse_overrides(args.set or []), grid)
     with warnings.catch_warnings():
         # the command ends with one error line on failed trials (check_trials_finished)
