@@ -227,6 +227,36 @@ def test_bad_arguments(trained, tmp_path, capsys, argv, needle, digests, one_cle
     assert not (tmp_path / "x").exists()  # a refused training run leaves no directory
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["evaluate", "--run", "{other}", "--methods", "learned", "--episodes", "1"]
+        + ["--out", "{run}/evaluation"],
+        ["compare", "--run", "{other}", "--methods", "learned", "--errors", "0"]
+        + ["--episodes", "1", "--out", "{run}/compare"],
+        ["robustness", "--run", "{other}", "--perturbations", "clean", "--episodes", "1"]
+        + ["--out", "{run}/robustness"],
+        ["match", "--run", "{other}", "--methods", "learned", "--matches", "1", "--ticks", "2"]
+        + ["--out", "{run}/match"],
+        ["episode", "--run", "{other}", "--out", "{run}/episode.png"],
+        ["export", "{other}", "-o", "{run}/policy.onnx"],
+        ["export", "{other}", "-o", "{run}/exports/a.onnx"],
+    ],
+    ids=lambda argv: argv[0] + ("" if "-o" not in argv else argv[-1][5:]),
+)
+def test_results_of_one_run_are_not_written_inside_another(
+    trained, tmp_path, argv, digests, one_clear_line
+):
+    """``evaluate --run B --out A/evaluation`` wrote B's scores where ``report A`` reads its
+    own: the report showed B's learned policy as A's (so did compare, robustness, match and
+    episode; export put B's model where ``A`` is read as a policy folder)."""
+    other = Path(shutil.copytree(trained, tmp_path / "other"))
+    before = digests(trained)
+    assert main([a.format(run=trained, other=other) for a in argv]) == 2
+    one_clear_line(f": results of {other} inside the training run {trained} would read as its own")
+    assert digests(trained) == before
+
+
 @pytest.mark.parametrize("folder", ["checkpoints", "tensorboard"])
 @pytest.mark.parametrize(
     "argv",
