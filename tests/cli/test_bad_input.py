@@ -150,6 +150,11 @@ BAD_ARGUMENTS = [
     (["train", "--resume", "{run}", "--seed", "3"], "--seed"),
     (["train", "--resume", "{run}", "--preset", "paper"], "--preset"),
     (["train", "--resume", "{run}", "--steps", "30"], "finished"),
+    # a blank path made a folder named by spaces (an empty one was refused)
+    (
+        ["evaluate", "--out", " \t", "--methods", "scan", "--episodes", "1"],
+        "argument --out: must not be blank, got ' \\t'",
+    ),
     # an option and a --set of the same field: the option's value was taken, the --set one
     # dropped (--set total_timesteps=5000 --steps 100 trained 100 steps)
     (
