@@ -431,12 +431,26 @@ def test_plot_of_a_config_alone_names_only_the_missing_log(tmp_path, one_clear_l
     one_clear_line("(no config.json and no metrics.csv)")
 
 
-def test_plot_names_a_plots_folder_that_is_a_file(run, capsys, one_clear_line):
+def test_plot_and_train_name_a_plots_folder_that_is_a_file(
+    run, tmp_path, tiny_train, capsys, one_clear_line
+):
     shutil.rmtree(run / "plots", ignore_errors=True)
     (run / "plots").write_text("mine")
     assert main(["plot", str(run)]) == 2
     one_clear_line(f"{run / 'plots'} is a file, not a directory")
     assert (run / "plots").read_text() == "mine"
+
+    # train draws them too: it trained first, then failed on "[Errno 17] File exists"
+    shutil.rmtree(run / "checkpoints" / "step_000000060")  # something left to train
+    assert main(["train", "--resume", str(run)]) == 2
+    one_clear_line(f"{run / 'plots'} is a file, not a directory")
+    assert [p.name for p in (run / "checkpoints").iterdir()] == ["step_000000030"]
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    (fresh / "plots").write_text("mine")
+    assert main([*tiny_train, "--out", str(fresh)]) == 2
+    one_clear_line(f"{fresh / 'plots'} is a file, not a directory")
+    assert sorted(p.name for p in fresh.iterdir()) == ["plots"]
 
 
 def test_a_run_without_weights_reads_its_newest_checkpoint_or_says_which_file_it_lacks(

@@ -39,6 +39,8 @@ def cmd_train(args: argparse.Namespace) -> None:
     """Train (or resume) a DDQN + PER, DAgger or Stable-Baselines3 run."""
     from activevision.training import plot_run
 
+    # before training: the figures drawn after it failed on "[Errno 17] File exists"
+    _check_plots_folder(args.resume if args.resume is not None else args.out)
     run_dir = _resume(args) if args.resume is not None else _train_fresh(args)
     if run_dir is not None:
         print(f"figures: {plot_run(run_dir)}")
@@ -230,10 +232,16 @@ def cmd_plot(args: argparse.Namespace) -> None:
     for log in ("metrics.csv", "episodes.csv"):  # episodes.csv: a bare "[Errno 2] ..."
         if not (args.run / log).is_file():
             raise ValueError(f"{args.run} has no {log} (its training log): nothing to plot")
-    plots = args.run / "plots"
-    if plots.exists() and not plots.is_dir():  # was "[Errno 17] File exists"
-        raise OutputError(f"{plots} is a file, not a directory: plot writes its figures there")
+    _check_plots_folder(args.run)
     print(f"wrote {plot_run(args.run)}")
+
+
+def _check_plots_folder(run_dir: Path | None) -> None:
+    """OutputError where ``run_dir/plots``, where train and plot draw the run's figures,
+    is a file (``[Errno 17] File exists``, for train once it had trained)."""
+    plots = None if run_dir is None else run_dir / "plots"
+    if plots is not None and plots.exists() and not plots.is_dir():
+        raise OutputError(f"{plots} is a file, not a directory: the run's figures are drawn there")
 
 
 def cmd_sweep(args: argparse.Namespace) -> None:
