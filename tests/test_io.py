@@ -91,3 +91,22 @@ def test_read_csv_names_the_line_of_a_row_cut_short_or_run_on_and_a_file_not_tex
     write_csv(path, [{"x": "Müller", "y": "—"}])  # UTF-8 both ways, whatever the locale
     assert path.read_bytes() == "x,y\r\nMüller,—\r\n".encode()
     assert read_csv(path) == [{"x": "Müller", "y": "—"}]
+
+
+def test_read_csv_names_a_file_without_its_header_or_a_column_asked_for(tmp_path):
+    """Every CSV this package writes starts with its header: an empty file was read as a
+    table of no rows (compare resumed it as no levels played, replacing it)."""
+    from activevision.io import read_csv
+
+    path = tmp_path / "a.csv"
+    for text in ("", "\n\n"):
+        path.write_text(text)
+        with pytest.raises(ValueError, match=r"a\.csv is empty \(no header row\)"):
+            read_csv(path)
+    path.write_text("x,y\n")
+    assert read_csv(path) == [] and read_csv(path, ("y", "x")) == []
+    with pytest.raises(ValueError, match=r"a\.csv has no 'z' column"):
+        read_csv(path, ("x", "z"))  # with no rows too
+    path.write_text("x,y\n1,2\n")
+    with pytest.raises(ValueError, match=r"a\.csv has no 'z' column"):
+        read_csv(path, ("z",))

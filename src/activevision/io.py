@@ -91,20 +91,26 @@ def write_csv(path: str | os.PathLike, rows: Sequence[dict]) -> None:
             writer.writerows(rows)
 
 
-def read_csv(path: str | os.PathLike) -> list[dict[str, str]]:
+def read_csv(path: str | os.PathLike, columns: Sequence[str] = ()) -> list[dict[str, str]]:
     """A CSV file's rows as dicts keyed by its header (:func:`read_csv_lines`)."""
-    return [row for _, row in read_csv_lines(path)]
+    return [row for _, row in read_csv_lines(path, columns)]
 
 
-def read_csv_lines(path: str | os.PathLike) -> list[tuple[int, dict[str, str]]]:
+def read_csv_lines(
+    path: str | os.PathLike, columns: Sequence[str] = ()
+) -> list[tuple[int, dict[str, str]]]:
     """A CSV file's rows as dicts keyed by its header, each with the line it ends on;
-    ValueError naming the file and line where a row has more or fewer cells than the header
-    (a file cut mid-row: DictReader fills the missing cells with None, which were read on as
-    values) or the file is not CSV text."""
+    ValueError naming the file: where it has no header row (empty: every CSV this package
+    writes has one, so a file of 0 bytes was read as a table of no rows), its header lacks
+    one of ``columns`` (another file's table, whose rows were then skipped as not played
+    or not there), a row has more or fewer cells than the header (a file cut mid-row:
+    DictReader fills the missing cells with None, which were read on as values) or the file
+    is not CSV text."""
     rows = []
     try:
         with Path(path).open(encoding="utf-8", newline="") as f:
             reader = csv.DictReader(f)
+            header = reader.fieldnames or []  # None for an empty file; [] for blank lines
             # the reader's line, not a count of rows: it skips blank lines, and a quoted
             # cell may hold several
             rows = [(reader.line_num, row) for row in reader]
@@ -112,6 +118,15 @@ def read_csv_lines(path: str | os.PathLike) -> list[tuple[int, dict[str, str]]]:
         raise ValueError(
             f"{path} is damaged or not a file activevision wrote ({type(error).__name__}: {error})"
         ) from None
+    if not any(header):
+        raise ValueError(
+            f"{path} is empty (no header row): it is damaged or not a file activevision wrote"
+        )
+    missing = [column for column in columns if column not in header]
+    if missing:
+        raise ValueError(
+            f"{path} has no {missing[0]!r} column: it is damaged or not a file activevision wrote"
+        )
     for line, row in rows:
         if None in row or None in row.values():  # DictReader's marks of a row cut or run on
             raise ValueError(

@@ -150,6 +150,31 @@ BAD_ARGUMENTS = [
     (["train", "--resume", "{run}", "--seed", "3"], "--seed"),
     (["train", "--resume", "{run}", "--preset", "paper"], "--preset"),
     (["train", "--resume", "{run}", "--steps", "30"], "finished"),
+    # a blank path made a folder named by spaces (an empty one was refused)
+    (
+        ["evaluate", "--out", " \t", "--methods", "scan", "--episodes", "1"],
+        "argument --out: must not be blank, got ' \\t'",
+    ),
+    # an option and a --set of the same field: the option's value was taken, the --set one
+    # dropped (--set total_timesteps=5000 --steps 100 trained 100 steps)
+    (
+        ["train", "--set", "total_timesteps=5000", "--steps", "100", "--out", "{tmp}/x"],
+        "--set total_timesteps=... and --steps both set run.total_timesteps: give it with"
+        " --steps alone",
+    ),
+    (
+        ["train", "--set", "run.total_timesteps=5000", "--steps", "100", "--out", "{tmp}/x"],
+        "and --steps both set run.total_timesteps",
+    ),
+    (["train", "--set", "seed=3", "--seed", "1", "--out", "{tmp}/x"], "and --seed both set seed"),
+    (
+        ["train", "--set", "algo=dagger", "--algo", "ddqn", "--out", "{tmp}/x"],
+        "and --algo both set algo",
+    ),
+    # a sweep's trials each take one of --seeds (default 0..4)
+    (["sweep", "--set", "seed=3", "--out", "{tmp}/s"], "give it with --seeds alone"),
+    # --overwrite was ignored (exit 0): a resume replaces nothing
+    (["train", "--resume", "{run}", "--overwrite"], "--overwrite cannot be combined with it"),
     (["train", "--out", "{run}"], "--resume"),
     (["train", "--out", "{run}/plots/x"], "inside the training run"),
     (["train", "--out", "{run}/plots/x", "--overwrite"], "inside the training run"),
@@ -205,6 +230,36 @@ def test_bad_arguments(trained, tmp_path, capsys, argv, needle, digests, one_cle
     one_clear_line(needle.format(run=trained, tmp=tmp_path))
     assert digests(trained) == before  # nothing of the run was touched
     assert not (tmp_path / "x").exists()  # a refused training run leaves no directory
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["evaluate", "--run", "{other}", "--methods", "learned", "--episodes", "1"]
+        + ["--out", "{run}/evaluation"],
+        ["compare", "--run", "{other}", "--methods", "learned", "--errors", "0"]
+        + ["--episodes", "1", "--out", "{run}/compare"],
+        ["robustness", "--run", "{other}", "--perturbations", "clean", "--episodes", "1"]
+        + ["--out", "{run}/robustness"],
+        ["match", "--run", "{other}", "--methods", "learned", "--matches", "1", "--ticks", "2"]
+        + ["--out", "{run}/match"],
+        ["episode", "--run", "{other}", "--out", "{run}/episode.png"],
+        ["export", "{other}", "-o", "{run}/policy.onnx"],
+        ["export", "{other}", "-o", "{run}/exports/a.onnx"],
+    ],
+    ids=lambda argv: argv[0] + ("" if "-o" not in argv else argv[-1][5:]),
+)
+def test_results_of_one_run_are_not_written_inside_another(
+    trained, tmp_path, argv, digests, one_clear_line
+):
+    """``evaluate --run B --out A/evaluation`` wrote B's scores where ``report A`` reads its
+    own: the report showed B's learned policy as A's (so did compare, robustness, match and
+    episode; export put B's model where ``A`` is read as a policy folder)."""
+    other = Path(shutil.copytree(trained, tmp_path / "other"))
+    before = digests(trained)
+    assert main([a.format(run=trained, other=other) for a in argv]) == 2
+    one_clear_line(f": results of {other} inside the training run {trained} would read as its own")
+    assert digests(trained) == before
 
 
 @pytest.mark.parametrize("folder", ["checkpoints", "tensorboard"])
@@ -376,12 +431,26 @@ def test_plot_of_a_config_alone_names_only_the_missing_log(tmp_path, one_clear_l
     one_clear_line("(no config.json and no metrics.csv)")
 
 
-def test_plot_names_a_plots_folder_that_is_a_file(run, capsys, one_clear_line):
+def test_plot_and_train_name_a_plots_folder_that_is_a_file(
+    run, tmp_path, tiny_train, capsys, one_clear_line
+):
     shutil.rmtree(run / "plots", ignore_errors=True)
     (run / "plots").write_text("mine")
     assert main(["plot", str(run)]) == 2
     one_clear_line(f"{run / 'plots'} is a file, not a directory")
     assert (run / "plots").read_text() == "mine"
+
+    # train draws them too: it trained first, then failed on "[Errno 17] File exists"
+    shutil.rmtree(run / "checkpoints" / "step_000000060")  # something left to train
+    assert main(["train", "--resume", str(run)]) == 2
+    one_clear_line(f"{run / 'plots'} is a file, not a directory")
+    assert [p.name for p in (run / "checkpoints").iterdir()] == ["step_000000030"]
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    (fresh / "plots").write_text("mine")
+    assert main([*tiny_train, "--out", str(fresh)]) == 2
+    one_clear_line(f"{fresh / 'plots'} is a file, not a directory")
+    assert sorted(p.name for p in fresh.iterdir()) == ["plots"]
 
 
 def test_a_run_without_weights_reads_its_newest_checkpoint_or_says_which_file_it_lacks(
@@ -456,6 +525,37 @@ def test_a_refused_compare_on_ray_leaves_the_compare_csv_it_would_overwrite(
     assert main([*argv, "--out", str(out), "--overwrite", "--runs", str(missing)]) == 2
     one_clear_line(f"--runs {missing}: not a training run")
     assert (out / "compare.csv").read_bytes() == before
+
+
+def test_compare_overwrite_stopped_before_its_end_leaves_no_older_figure(
+    tmp_path, monkeypatch, capsys
+):
+    """--overwrite removed the older compare.csv but kept its compare.png: a compare that
+    stopped before it drew its own left the older figure beside the new rows (report.md
+    showed it as this compare's)."""
+    import activevision.experiments.compare as comparison
+
+    out = tmp_path / "cmp"
+    argv = ["compare", "--methods", "random", "--episodes", "1", "--out", str(out)]
+    assert main([*argv, "--errors", "0.1"]) == 0
+    assert (out / "compare.png").is_file()
+    capsys.readouterr()
+    real = comparison.evaluate_policy
+    calls = []
+
+    def second_level_fails(*args, **kwargs):
+        calls.append(1)
+        if len(calls) > 1:
+            raise ValueError("stopped")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(comparison, "evaluate_policy", second_level_fails)
+    assert main([*argv, "--errors", "0.2,0.3", "--overwrite"]) == 2
+    err = capsys.readouterr().err  # the progress bar's lines, then the error
+    assert err.splitlines()[-1] == "activevision compare: error: stopped", err
+    rows = (out / "compare.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in rows[1:]] == ["0.2"]  # the new level played, resumable
+    assert not (out / "compare.png").exists()
 
 
 def test_a_compare_folder_another_compare_writes_is_refused(tmp_path, one_clear_line, capsys):
@@ -816,7 +916,7 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         "match.csv of another layout",
         lambda r: write_file(r / "match" / "match.csv", "a,b\n1,2\n"),
         ["report", "{run}"],
-        "match.csv is damaged",
+        "match.csv has no 'method' column",
     ),
     (
         "config.json a list, report",
@@ -860,6 +960,69 @@ TAMPERS: list[tuple[str, Callable[[Path], None], list[str], str]] = [
         lambda r: (r / "evaluations.csv").write_text("step,episodes\n30,5\n"),
         ["plot", "{run}"],
         "evaluations.csv has no 'success_rate' column",
+    ),
+    # an empty log, or one of another table with no rows, was drawn as "no data yet" (exit 0):
+    # a log is made with its header, atomically, so an empty one was damaged, as --resume says
+    *[
+        (f"{name} emptied, {argv[0]}", lambda r, n=name: (r / n).write_text(""), argv, needle)
+        for name in ("metrics.csv", "episodes.csv", "evaluations.csv")
+        for argv, needle in (
+            (["plot", "{run}"], f"{name} is empty (no header row)"),
+            (["report", "{run}"], f"{name} is empty (no header row)"),
+        )
+        if (name, argv[0]) != ("episodes.csv", "report")  # report does not read it
+        and (name, argv[0]) != ("evaluations.csv", "report")
+    ],
+    (
+        "episodes.csv missing, plot",
+        lambda r: (r / "episodes.csv").unlink(),
+        ["plot", "{run}"],
+        "has no episodes.csv (its training log): nothing to plot",
+    ),
+    (
+        "metrics.csv of another table, no rows",
+        lambda r: (r / "metrics.csv").write_text("hello,world\n"),
+        ["plot", "{run}"],
+        "metrics.csv has no 'epoch' column",
+    ),
+    (
+        "metrics.csv of another table, report",
+        lambda r: (r / "metrics.csv").write_text("hello,world\n1,2\n"),
+        ["report", "{run}"],
+        "metrics.csv has no 'epoch' column",
+    ),
+    (
+        "episodes.csv of another table, no rows",
+        lambda r: (r / "episodes.csv").write_text("hello,world\n"),
+        ["plot", "{run}"],
+        "episodes.csv has no 'episode' column",
+    ),
+    (
+        "evaluations.csv of another table, no rows",
+        lambda r: (r / "evaluations.csv").write_text("hello,world\n"),
+        ["plot", "{run}"],
+        "evaluations.csv has no 'step' column",
+    ),
+    # report left the section out of a results table emptied or cut to its header
+    *[
+        (
+            f"{table} {name}",
+            lambda r, t=table, x=text: write_file(r / t.split(".")[0] / t, x),
+            ["report", "{run}"],
+            needle,
+        )
+        for table in ("match.csv", "robustness.csv")
+        for name, text, needle in (
+            ("emptied", "", f"{table} is empty (no header row)"),
+            ("of another table", "hello,world\n", f"{table} has no 'method' column"),
+            ("cut to its header", "method,name,matches,n,seed\n", f"{table} holds no rows"),
+        )
+    ],
+    (
+        "manifest not text",
+        lambda r: (latest(r) / "manifest.json").write_bytes(b"\xff\xfe" * 50),
+        ["train", "--resume", "{run}"],
+        "step_000000030 has no readable manifest",
     ),
 ]
 
@@ -931,6 +1094,26 @@ def test_an_out_that_cannot_be_written_is_refused_before_any_episode(
     assert main([*argv, "--out", "/proc/activevision-no-such/x"]) == 2
     one_clear_line("--out /proc/activevision-no-such/x: cannot create it or write in it")
     assert played == []
+
+
+@pytest.mark.parametrize("text", ["", "hello,world\n", "method,error\nrandom,0\n"])
+def test_compare_replaces_no_file_it_cannot_resume_without_overwrite(
+    tmp_path, monkeypatch, one_clear_line, text
+):
+    """A compare.csv emptied, or of another table, was read as one of no levels played and
+    replaced without --overwrite; it is refused, named and left as it was, before any
+    episode."""
+    import activevision.experiments.compare as comparison
+
+    played = []
+    monkeypatch.setattr(comparison, "evaluate_policy", lambda *a, **k: played.append(a))
+    csv_path = tmp_path / "cmp" / "compare.csv"
+    write_file(csv_path, text)
+    argv = ["compare", "--methods", "random", "--errors", "0", "--episodes", "1"]
+    assert main([*argv, "--out", str(tmp_path / "cmp")]) == 2
+    line = one_clear_line(str(csv_path), "damaged or not a file activevision wrote")
+    assert ("is empty (no header row)" if not text else "has no '") in line
+    assert csv_path.read_text() == text and played == []
 
 
 def test_a_failed_evaluation_leaves_no_folder_behind(tmp_path, monkeypatch, one_clear_line):

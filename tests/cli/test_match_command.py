@@ -244,8 +244,6 @@ class NoConfig:  # takes no config: not NAME(config)
         pass
 
 
-class TwoLineName(BallTrack):
-    name = "my\\nhead"  # a label on two lines: the table's row and the CSV's broke
 """
 
 
@@ -282,7 +280,6 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
         ("mine.py:Nothing", "defines no class or function Nothing"),
         ("mine.py:NoConfig", "NoConfig(config) failed"),
         ("mine.py:not_a_strategy", "no reset or act method"),
-        ("mine.py:TwoLineName", r"its label 'my\nhead' is not one line of printable text"),
         ("no_such_module_xyz:Thing", "cannot import it"),
         ("folder_xyz/:Mirror", "folder_xyz/ is no FILE.py (nor a MODULE name)"),  # a folder
         ("folder_xyz:Mirror", "folder_xyz defines no class or function Mirror"),  # a package
@@ -444,6 +441,22 @@ def test_two_strategies_of_one_name_are_refused(tmp_path, one_clear_line):
     specs = [f"{tmp_path / 'a.py'}:Mirror", f"{tmp_path / 'b.py'}:Mirror"]
     assert main([*TINY, "--out", str(tmp_path / "m"), "--strategy", *specs]) == 2
     one_clear_line("two strategies are named mirror")
+
+
+@pytest.mark.parametrize("label", ["two\nlines", "tab\there", "bell\a"])
+def test_a_strategy_label_of_more_than_one_printable_line_is_refused(
+    tmp_path, label, one_clear_line
+):
+    """A name attribute with a newline was played and written: it split the printed table's
+    row and report.md's Markdown row in two."""
+    source = MIRROR.replace('name = "mirror"', f"name = {label!r}")
+    assert repr(label) in source
+    (tmp_path / "mine.py").write_text(source)
+    out = tmp_path / "m"
+    argv = [*TINY, "--out", str(out), "--strategy", f"{tmp_path / 'mine.py'}:Mirror"]
+    assert main(argv) == 2
+    one_clear_line(f"its label {label!r} is not one line of printable text")
+    assert not out.exists()
 
 
 @pytest.mark.parametrize("label", ["learned", "oracle_ball", "onnx_policy[mine]"])

@@ -333,5 +333,5 @@ def test_the_robustness_suite_of_the_run_is_reported(tmp_path):
     assert "![robustness](robustness/robustness.png)" in write_report(run).read_text()
     # a robustness.csv of another layout is named, not a KeyError
     write_rows(run / "robustness" / "robustness.csv", [{"method": "learned", "n": 1}])
-    with pytest.raises(ValueError, match=r"robustness.csv is damaged or not a file"):
+    with pytest.raises(ValueError, match=r"robustness.csv has no 'name' column: it is damaged"):
         write_report(run)

@@ -306,6 +306,35 @@ def test_sweep_command_with_failed_trials_exits_2_after_its_outputs(tmp_path, mo
     assert calls[1]["verbose"] == 1
 
 
+def test_a_sweep_that_logged_no_epoch_leaves_no_table_or_figure(tmp_path, monkeypatch):
+    """Every trial failed before its first epoch (here: a rerun over damaged logs): sweep.csv
+    was written empty (0 bytes, no header) beside the earlier sweep's sweep.png."""
+    import contextlib
+    import importlib
+    import types
+
+    sweep_module = importlib.import_module("activevision.scaleout.sweep")
+    session = importlib.import_module("activevision.scaleout.ray_session")
+    fake_ray = types.SimpleNamespace(cluster_resources=lambda: {"CPU": 1.0})
+    monkeypatch.setattr(session, "ray_session", lambda *a, **k: contextlib.nullcontext(fake_ray))
+
+    def every_trial_fails(trials, statuses, *args):
+        for trial in trials:
+            statuses[trial["name"]].update(status="ERROR", error="RunLogError: damaged")
+
+    monkeypatch.setattr(sweep_module, "_fit", every_trial_fails)
+    out = tmp_path / "s"
+    out.mkdir()
+    (out / "sweep.csv").write_text("epoch,step\n1,30\n")  # an earlier sweep's outputs
+    (out / "sweep.png").write_bytes(b"an earlier figure")
+    with pytest.warns(RuntimeWarning, match="damaged"):
+        rows = sweep_module.sweep(TrainConfig(), [0, 1], None, out)
+    assert rows == []
+    assert sorted(p.name for p in out.iterdir() if p.is_file()) == ["trials.csv"]
+    statuses = [r["status"] for r in csv.DictReader((out / "trials.csv").open())]
+    assert statuses == ["ERROR", "ERROR"]
+
+
 def test_a_failed_ray_init_gives_the_sigterm_handler_back(monkeypatch):
     """ray.init sets its own SIGTERM handler (exit status 1) before it connects: one that
     failed (a cluster it could not join) left it in place of the caller's."""

@@ -181,6 +181,9 @@ def test_cli_overrides_of_a_nested_config_field():
     assert whole.env.camera == CameraConfig(hfov=1.2)
     with pytest.raises(ValueError, match=r"unknown TrainConfig key 'env\.camera\.fov'"):
         apply_overrides(config, ["env.camera.fov=1.2"])
+    for section in ("env", "learner", "match"):  # was "unknown TrainConfig key 'env'"
+        with pytest.raises(ValueError, match=rf"key '{section}' is a section: set its fields"):
+            apply_overrides(config, [f'{section}={{"step_deg": 4}}'])
     with pytest.raises(ValueError, match="hfov"):
         apply_overrides(config, ["env.camera.hfov=4"])
     # a field name that several configs have: the paths to choose from

@@ -22,6 +22,7 @@ from activevision.training.metrics import (
     EPISODE_FIELDS,
     EPOCH_FIELDS,
     TENSORBOARD_TAGS,
+    CsvLog,
     read_csv_columns,
 )
 from activevision.training.runs import resume, train
@@ -293,3 +294,22 @@ def test_a_log_cut_short_or_edited_is_named_by_line(tmp_path, text, needle):
     assert read_csv_columns(path)["step"][0] == 300.0 and math.isnan(
         read_csv_columns(path)["step"][1]
     )
+
+
+def test_a_log_without_its_header_or_a_column_asked_for_is_named(tmp_path):
+    """A log is made with its header: an empty one was read as a log of no rows yet."""
+    path = tmp_path / "metrics.csv"
+    path.write_text("")
+    with pytest.raises(ValueError, match=f"^{path} is empty \\(no header row\\)"):
+        read_csv_columns(path)
+    path.write_text("epoch,step\n")
+    assert read_csv_columns(path, ("step", "epoch")) == {}
+    with pytest.raises(ValueError, match=f"^{path} has no 'loss' column"):
+        read_csv_columns(path, ("epoch", "loss"))
+
+
+def test_a_new_log_starts_with_its_header_alone(tmp_path):
+    log = CsvLog(tmp_path / "m.csv", ["epoch", "step"])
+    assert (tmp_path / "m.csv").read_bytes() == b"epoch,step\r\n"
+    log.append({"epoch": 1, "step": 30})
+    assert CsvLog(tmp_path / "m.csv", ["epoch", "step"]).rows() == [{"epoch": "1", "step": "30"}]

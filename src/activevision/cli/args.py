@@ -98,6 +98,8 @@ def path(text: str) -> Path:
     command ran in."""
     if not text:
         raise argparse.ArgumentTypeError("must not be empty (the current folder is '.')")
+    if not text.strip():  # ``--out " "`` wrote into a folder named by spaces
+        raise argparse.ArgumentTypeError(f"must not be blank, got {text!r}")
     return Path(text)
 
 

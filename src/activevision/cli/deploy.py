@@ -43,9 +43,9 @@ def cmd_export(args: argparse.Namespace) -> None:
     model = model_path_of(args.out or args.run)
     outputs = [model, metadata_path_for(model)]
     if args.out is None:
-        check_outputs(own=outputs, overwrite=args.overwrite)
+        check_outputs(own=outputs, overwrite=args.overwrite, run=args.run)
     else:
-        check_outputs(named=outputs, overwrite=args.overwrite)
+        check_outputs(named=outputs, overwrite=args.overwrite, run=args.run)
     exported = export_run(args.run, model, weights=args.weights, opset=args.opset)
     print(f"wrote {exported.model_path} and {exported.metadata_path}")
 

@@ -168,7 +168,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     out = args.out or (args.run / "evaluation" if args.run else Path("evaluation"))
     files = [out / n for n in ("evaluation.csv", "episodes.csv", "evaluation.json")]
     latency_path = out / "latency.json"  # wall clock: apart, so the others are seed-exact
-    check_outputs(own=[*files, latency_path], overwrite=args.overwrite)
+    check_outputs(own=[*files, latency_path], overwrite=args.overwrite, run=args.run)
     from activevision.experiments.compare import config_at_error
     from activevision.experiments.methods import runnable_methods
 
@@ -261,7 +261,7 @@ def cmd_compare(args: argparse.Namespace) -> None:
     if is_training_run(out):  # its folder is the trainer's (and its lock the trainer's)
         raise OutputError(f"refusing to write into the training run {out}; choose another --out")
     # compare.csv is resumed, not replaced (outputs.py, rule 3): only rules 1 and 4 apply
-    check_outputs(own=[out / "compare.csv", out / "compare.png"], overwrite=True)
+    check_outputs(own=[out / "compare.csv", out / "compare.png"], overwrite=True, run=args.run)
     check_runs(args.methods or [], args.run)
     made = make_output_folder(out, None if args.out else str(out))  # rows written as played
     with removed_on_failure(made):  # a folder with rows stays, to be resumed
@@ -348,9 +348,11 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
 
 
 def _start_over(out: Path, args: argparse.Namespace) -> None:
-    """``--overwrite``: remove the compare.csv that would be resumed."""
+    """``--overwrite``: remove the compare.csv that would be resumed, and its figure (kept, a
+    compare stopped before its end left the older compare's figure beside the new rows)."""
     if args.overwrite:
         (out / "compare.csv").unlink(missing_ok=True)
+        (out / "compare.png").unlink(missing_ok=True)
 
 
 def _try_users(
@@ -376,7 +378,7 @@ def cmd_episode(args: argparse.Namespace) -> None:
     check_weights(args)
     check_run(args.run)  # before the outputs inside it
     gif = figure_and_gif(args.out)
-    check_outputs(named=[args.out, gif], overwrite=args.overwrite)
+    check_outputs(named=[args.out, gif], overwrite=args.overwrite, run=args.run)
     check_figure_path(args.out)
     from activevision.experiments.compare import config_at_error
 

@@ -207,7 +207,11 @@ def cmd_match(args: argparse.Namespace) -> None:
         raise OutputError(f"refusing to write into the training run {out}; choose another --out")
     files = [out / name for name in OUTPUT_FILES]
     paired_path = out / PAIRED_FILE
-    check_outputs(named=files + ([paired_path] if args.baseline else []), overwrite=args.overwrite)
+    check_outputs(
+        named=files + ([paired_path] if args.baseline else []),
+        overwrite=args.overwrite,
+        run=args.run,
+    )
     config = _match_config(args)
     entries = _strategies(args, config)
     methods = list(dict.fromkeys(method for _, method, _ in entries))

@@ -13,6 +13,9 @@ Rules (what a user of a research tool expects, and what keeps a run loadable):
    ``--overwrite``. (``compare`` resumes its ``compare.csv`` when it was played on the same
    episodes and seed: continuing a table is not replacing it.)
 4. An output directory that exists as a file is refused before any work.
+5. The results of one run's policy are not written inside another training run
+   (``evaluate --run A --out B/evaluation``): ``report B`` reads its folders as B's, and
+   showed A's scores as B's.
 """
 
 from __future__ import annotations
@@ -37,16 +40,21 @@ def is_training_run(directory: Path) -> bool:
 
 
 def check_outputs(
-    own: Iterable[Path] = (), named: Iterable[Path] = (), *, overwrite: bool = False
+    own: Iterable[Path] = (),
+    named: Iterable[Path] = (),
+    *,
+    overwrite: bool = False,
+    run: Path | None = None,
 ) -> None:
     """Refuse (OutputError naming the file) any output that breaks the module's rules.
 
     ``own``: fixed-name files of the command (rule 3), refused where they exist unless
     ``overwrite``; ``named``: files the user named (rule 2), the same. Both are held against
-    rules 1 and 4.
+    rules 1, 4 and 5 (``run``: the training run the command plays, its ``--run``).
     """
     paths = [Path(p) for p in own] + [Path(p) for p in named]
     for path in paths:
+        _check_run_of(path, run)
         for folder in (path.parent, *path.parent.parents):
             if folder.exists() and not folder.is_dir():
                 raise OutputError(f"{folder} is a file, not a directory: choose another --out")
@@ -66,6 +74,21 @@ def check_outputs(
     for path in paths:
         if path.exists() and not overwrite:
             raise OutputError(f"{path} exists; pass --overwrite to replace it")
+
+
+def _check_run_of(path: Path, run: Path | None) -> None:
+    """Rule 5: OutputError where ``path`` lies inside a training run other than ``run``."""
+    if run is None:
+        return
+    for folder in Path(path).absolute().parents:
+        if is_training_run(folder):
+            if folder.resolve() != Path(run).resolve():
+                raise OutputError(
+                    f"refusing to write {path}: results of {run} inside the training run"
+                    f" {folder} would read as its own (`activevision report` shows them so);"
+                    " choose another --out"
+                )
+            return
 
 
 def check_run_directory(directory: Path, *, overwrite: bool = False) -> None:

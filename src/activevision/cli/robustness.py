@@ -92,7 +92,7 @@ def _outputs(args: argparse.Namespace, method: str) -> tuple[Path, Path]:
     if is_training_run(out):
         raise OutputError(f"refusing to write into the training run {out}; choose another --out")
     files = (out / "robustness.csv", out / "robustness.png")
-    check_outputs(named=files, overwrite=args.overwrite)
+    check_outputs(named=files, overwrite=args.overwrite, run=args.run)
     return files
 
 

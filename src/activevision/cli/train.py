@@ -39,6 +39,8 @@ def cmd_train(args: argparse.Namespace) -> None:
     """Train (or resume) a DDQN + PER, DAgger or Stable-Baselines3 run."""
     from activevision.training import plot_run
 
+    # before training: the figures drawn after it failed on "[Errno 17] File exists"
+    _check_plots_folder(args.resume if args.resume is not None else args.out)
     run_dir = _resume(args) if args.resume is not None else _train_fresh(args)
     if run_dir is not None:
         print(f"figures: {plot_run(run_dir)}")
@@ -54,6 +56,9 @@ def _resume(args: argparse.Namespace) -> Path | None:
 
     names = ("config", "preset", "seed", "set", "out", "algo")
     given = [f"--{n}" for n in names if _given(args, n)]
+    # --overwrite was ignored: a resume replaces nothing, and a run with a checkpoint is never
+    # started again over its files
+    given += ["--overwrite"] if args.overwrite else []
     if given:
         raise ValueError(
             f"--resume continues a run with its own config.json; {', '.join(given)} cannot be"
@@ -160,6 +165,14 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     check_run_directory(args.out, overwrite=args.overwrite)
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     overrides = list(args.set or [])
+    _refuse_set_beside(
+        overrides,
+        {
+            "run.total_timesteps": "--steps" if args.steps is not None else "",
+            "seed": "--seed" if args.seed is not None else "",
+            "algo": "--algo" if args.algo is not None else "",
+        },
+    )
     if args.steps is not None:
         overrides.append(f"total_timesteps={args.steps}")
     if args.seed is not None:
@@ -176,6 +189,22 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             shutil.rmtree(run_dir, ignore_errors=True)  # e.g. no start found: try again freely
         raise
     return run_dir
+
+
+def _refuse_set_beside(overrides: list[str], options: Mapping[str, str]) -> None:
+    """ValueError where a ``--set`` key sets the field (full path -> option) that an option
+    given sets too: the option's value was taken and the ``--set`` one dropped silently
+    (``--set total_timesteps=5000 --steps 100`` trained 100 steps)."""
+    from activevision.training.config import field_paths, parse_overrides
+
+    paths = field_paths()
+    for key in parse_overrides(overrides):
+        path = paths.get(key, key)
+        if options.get(path):
+            raise ValueError(
+                f"--set {key}=... and {options[path]} both set {path}: give it with"
+                f" {options[path]} alone"
+            )
 
 
 def _nothing_trained(run_dir: Path) -> bool:
@@ -200,12 +229,19 @@ def cmd_plot(args: argparse.Namespace) -> None:
         # name what is missing: a run's config.json alone read "no config.json and metrics.csv"
         missing = [n for n in ("config.json", "metrics.csv") if not (args.run / n).is_file()]
         raise ValueError(f"{args.run} is not a training run (no {' and no '.join(missing)})")
-    if not (args.run / "metrics.csv").is_file():
-        raise ValueError(f"{args.run} has no metrics.csv (its training log): nothing to plot")
-    plots = args.run / "plots"
-    if plots.exists() and not plots.is_dir():  # was "[Errno 17] File exists"
-        raise OutputError(f"{plots} is a file, not a directory: plot writes its figures there")
+    for log in ("metrics.csv", "episodes.csv"):  # episodes.csv: a bare "[Errno 2] ..."
+        if not (args.run / log).is_file():
+            raise ValueError(f"{args.run} has no {log} (its training log): nothing to plot")
+    _check_plots_folder(args.run)
     print(f"wrote {plot_run(args.run)}")
+
+
+def _check_plots_folder(run_dir: Path | None) -> None:
+    """OutputError where ``run_dir/plots``, where train and plot draw the run's figures,
+    is a file (``[Errno 17] File exists``, for train once it had trained)."""
+    plots = None if run_dir is None else run_dir / "plots"
+    if plots is not None and plots.exists() and not plots.is_dir():
+        raise OutputError(f"{plots} is a file, not a directory: the run's figures are drawn there")
 
 
 def cmd_sweep(args: argparse.Namespace) -> None:
@@ -226,6 +262,8 @@ def cmd_sweep(args: argparse.Namespace) -> None:
 
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     grid = dict(args.grid or [])
+    # each trial's seed is one of --seeds: a --set seed was dropped
+    _refuse_set_beside(list(args.set or []), {"seed": "--seeds"})
     config = checked_base(config, parse_overrides(args.set or []), grid)
     with warnings.catch_warnings():
         # the command ends with one error line on failed trials (check_trials_finished)
@@ -243,7 +281,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
             progress=ended,
         )
     print(f"{len(rows)} aggregated rows")
-    print(f"wrote {args.out}/trials.csv, sweep.csv" + (" and sweep.png" if rows else ""))
+    print(f"wrote {args.out}/trials.csv" + (", sweep.csv and sweep.png" if rows else ""))
     check_trials_finished(args.out)
 
 

@@ -57,8 +57,14 @@ def config_at_error(config: EnvConfig, error: float) -> EnvConfig:
 
 def done_levels(csv_path: Path) -> list[dict]:
     """The rows of ``compare.csv`` already played; ValueError naming the line of a row cut
-    short (its method was taken as played and written back with its numbers empty)."""
-    return read_csv(csv_path) if csv_path.exists() else []
+    short (its method was taken as played and written back with its numbers empty), or the
+    file where it is empty or lacks a column a level is known by (it was taken for a CSV of
+    no levels and replaced without ``--overwrite``)."""
+    return read_csv(csv_path, RESUME_COLUMNS) if csv_path.exists() else []
+
+
+#: the columns of ``compare.csv`` that say which level a row is, and on which episodes
+RESUME_COLUMNS = ("method", "error", "episodes", "seed")
 
 
 def check_resumable(

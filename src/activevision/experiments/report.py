@@ -20,7 +20,7 @@ import csv
 import json
 import math
 import platform
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import activevision
@@ -36,11 +36,19 @@ DESCRIBING_WOULD = (
 )
 
 
-def _csv_rows(path: Path) -> list[dict]:
+def _csv_rows(path: Path, columns: Sequence[str], *, rows_written: bool = True) -> list[dict]:
     """A log's rows; ValueError naming the file and line where a row has more or fewer cells
     than the header (a log cut mid-row was reported with its last cell cut: epsilon 0 for
-    0.02, the columns after it left out), as ``activevision plot`` refuses it."""
-    return read_csv(path) if path.exists() else []
+    0.02, the columns after it left out), as ``activevision plot`` refuses it, and the file
+    where it is empty, its header lacks one of ``columns``, or, for a table written whole
+    (``rows_written``: a command's results, not a training log), it holds no rows: its
+    section was left out as if the run had none."""
+    if not path.exists():
+        return []
+    rows = read_csv(path, columns)
+    if rows_written and not rows:
+        raise ValueError(f"{path} holds no rows: it is damaged or not a file activevision wrote")
+    return rows
 
 
 @contextlib.contextmanager
@@ -108,7 +116,8 @@ def write_report(run_dir: str | Path) -> Path:
     ]
     if (run / "plots" / "training.png").exists():
         parts += ["", "![training curves](plots/training.png)"]
-    metrics = _csv_rows(run / "metrics.csv")
+    # a training log: its header alone before the first epoch
+    metrics = _csv_rows(run / "metrics.csv", ("epoch", "step"), rows_written=False)
     if metrics:
         parts += ["", "Last epoch: " + _last_epoch(metrics[-1], algo)]
     evaluation = run / "evaluation" / "evaluation.json"
@@ -135,12 +144,12 @@ def write_report(run_dir: str | Path) -> Path:
             "Animated: [episode.gif](episode.gif)",
         ]
     match_csv = run / "match" / "match.csv"
-    match_rows = _csv_rows(match_csv)
+    match_rows = _csv_rows(match_csv, ("method", "matches", "seed"))
     if match_rows:
         with _reading(match_csv):
             parts += _match_part(match_rows)
     robustness_csv = run / "robustness" / "robustness.csv"
-    robustness_rows = _csv_rows(robustness_csv)
+    robustness_rows = _csv_rows(robustness_csv, ("method", "name", "n", "seed"))
     if robustness_rows:
         with _reading(robustness_csv):
             parts += _robustness_part(robustness_rows, run / "robustness" / "robustness.png")

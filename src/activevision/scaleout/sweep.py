@@ -299,9 +299,14 @@ def sweep(
             stacklevel=2,
         )
     rows = aggregate(trials, out_dir)
-    write_csv(out_dir / "sweep.csv", rows)
     if rows:
+        write_csv(out_dir / "sweep.csv", rows)
         plot_sweep(rows, out_dir / "sweep.png")
+    else:
+        # no trial logged an epoch: sweep.csv was written empty (0 bytes, no header), beside
+        # an earlier sweep's figure, which read as this one's
+        for name in ("sweep.csv", "sweep.png"):
+            (out_dir / name).unlink(missing_ok=True)
     return rows
 
 

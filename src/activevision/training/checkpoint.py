@@ -163,8 +163,10 @@ def verify_checkpoint(
     nothing else, and every file against its size and SHA-256; CheckpointError otherwise."""
     path = Path(path)
     try:
-        manifest = json.loads((path / MANIFEST).read_text())
-    except (OSError, json.JSONDecodeError) as error:
+        manifest = json.loads((path / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError) as error:
+        # ValueError: not JSON, or not UTF-8 text (a binary file was a bare "'utf-8' codec
+        # can't decode byte", naming no file); RecursionError: nested too deep
         raise CheckpointError(f"checkpoint {path} has no readable manifest: {error}") from error
     if not isinstance(manifest, dict) or sorted(manifest) != sorted(expected_files):
         listed = sorted(manifest) if isinstance(manifest, dict) else manifest

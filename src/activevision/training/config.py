@@ -464,6 +464,12 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
     resolved: dict[str, str] = {}  # each key as given -> its full path
     for key, value in changes.items():
         path = paths.get(key.strip()) or _env_alias(key.strip())
+        if path is None and key.strip() in SECTIONS + PATH_ONLY_SECTIONS:
+            # was "unknown TrainConfig key 'env'", though env is one
+            raise ValueError(
+                f"TrainConfig key {key.strip()!r} is a section: set its fields one by one"
+                f" ({key.strip()}.FIELD=VALUE)"
+            )
         if path is None:
             twins = sorted(p for p in set(paths.values()) if p.endswith("." + key.strip()))
             if len(twins) == 1:

@@ -142,9 +142,8 @@ class CsvLog:
     def __init__(self, path: str | os.PathLike[str], fieldnames: Sequence[str]) -> None:
         self.path = Path(path)
         self.fieldnames = list(fieldnames)
-        if not self.path.exists():
-            with open(self.path, "w", newline="") as file:
-                csv.writer(file).writerow(self.fieldnames)
+        if not self.path.exists():  # atomically: a kill here left an empty file
+            self.clear()
 
     def append(self, row: Mapping[str, Any]) -> None:
         with open(self.path, "a", newline="") as file:
@@ -193,16 +192,34 @@ class RunLogError(ValueError):
 _RESTORE = ": it was damaged after the checkpoint; restore it, or train a new run"
 
 
-def read_csv_columns(path: str | os.PathLike[str]) -> dict[str, list[float]]:
-    """A CSV written by :class:`CsvLog` as float columns (empty cells become NaN)."""
+def read_csv_columns(
+    path: str | os.PathLike[str], columns: Sequence[str] = ()
+) -> dict[str, list[float]]:
+    """A CSV written by :class:`CsvLog` as float columns (empty cells become NaN); ``{}``
+    for a log of no rows yet. ValueError naming the file where it has no header row (a
+    :class:`CsvLog` is made with its header, atomically, so an empty file was damaged: it
+    was drawn as "no data yet") or the header lacks one of ``columns``, with or without
+    rows."""
     try:
         with open(path, newline="", encoding="utf-8") as file:
-            rows = list(csv.DictReader(file))
+            reader = csv.DictReader(file)
+            header = reader.fieldnames or []
+            rows = list(reader)
     except (UnicodeDecodeError, csv.Error) as error:
         raise ValueError(f"{path} is not a CSV table: {error}") from None
+    if not any(header):
+        raise ValueError(
+            f"{path} is empty (no header row): a training log starts with its header, so it"
+            " was damaged; restore it"
+        )
+    for column in columns:
+        if column not in header:
+            raise ValueError(
+                f"{path} has no {column!r} column: not a training log of activevision's"
+            )
     if not rows:
         return {}
-    columns: dict[str, list[float]] = {key: [] for key in rows[0]}
+    table: dict[str, list[float]] = {key: [] for key in rows[0]}
     for line, row in enumerate(rows, start=2):  # the header is line 1
         if None in row or None in row.values():  # DictReader's marks of a row cut or run on
             raise ValueError(
@@ -211,9 +228,9 @@ def read_csv_columns(path: str | os.PathLike[str]) -> dict[str, list[float]]:
             )
         for key, text in row.items():
             try:
-                columns[key].append(float(text) if text != "" else math.nan)
+                table[key].append(float(text) if text != "" else math.nan)
             except ValueError:
                 raise ValueError(
                     f"{path} line {line}, column {key!r}: {text!r} is not a number"
                 ) from None
-    return columns
+    return table

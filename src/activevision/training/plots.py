@@ -42,22 +42,28 @@ def plot_run(
         # checkpoint drew a match run as an episodic one (a config.json of {} was
         # "evaluations.csv has no 'success_rate' column", blaming the log)
         check_run_config_unchanged(run_dir, DRAWING_WOULD)
-    tables = {
-        "episodes": read_csv_columns(run_dir / "episodes.csv"),
-        "metrics": read_csv_columns(run_dir / "metrics.csv"),
-    }
-    evaluations_csv = run_dir / "evaluations.csv"
-    validation = read_csv_columns(evaluations_csv) if evaluations_csv.exists() else {}
-    out = Path(out_dir) if out_dir is not None else run_dir / "plots"
     config = load_config(run_dir / "config.json") if (run_dir / "config.json").exists() else None
+    match = config is not None and config.match_student
+    curves = MATCH_CURVES if match else CURVES
+    # the columns each log is drawn against, checked in its header with or without rows (an
+    # empty log, or one of another table, was drawn as "no data yet")
+    tables = {
+        source: read_csv_columns(run_dir / _LOG_FILES[source], _x_columns(curves, source))
+        for source in ("episodes", "metrics")
+    }
+    evaluations_csv = run_dir / _LOG_FILES["validation"]
+    validation = (
+        read_csv_columns(evaluations_csv, ["step", *_x_columns(curves, "validation")])
+        if evaluations_csv.exists()
+        else {}
+    )
+    out = Path(out_dir) if out_dir is not None else run_dir / "plots"
     loss_title = _LOSS_TITLES.get(config.algo, None) if config is not None else None
     if config is not None and config.algo == "dagger":
         if config.env_id == MATCH_ENV_ID and config.match.action_type == "continuous":
             loss_title = "imitation loss (squared error)"
         elif config.env_id != MATCH_ENV_ID and config.env.action_type == "continuous":
             loss_title = "imitation loss (squared error + goal cross-entropy)"
-    match = config is not None and config.match_student
-    curves = MATCH_CURVES if match else CURVES
     _check_columns(run_dir, {**tables, "validation": validation}, curves)
     return plot_training(
         tables,
@@ -73,11 +79,17 @@ def plot_run(
 _LOG_FILES = {"episodes": "episodes.csv", "metrics": "metrics.csv", "validation": "evaluations.csv"}
 
 
+def _x_columns(curves: Sequence[Curve], source: str) -> list[str]:
+    """The columns the curves of ``source`` are drawn against; a missing y column is drawn
+    as "not measured", as in older runs."""
+    return sorted({c.x for c in curves if c.source == source})
+
+
 def _check_columns(run_dir: Path, tables: dict[str, Columns], curves: Sequence[Curve]) -> None:
-    """ValueError naming the log and the column where a log with rows lacks one a figure
-    draws against (a log edited by hand or cut short was a KeyError traceback); a missing
-    y column is drawn as "not measured", as in older runs."""
-    needed = {(c.source, c.x) for c in curves}
+    """ValueError naming the log and the column where a validation log with rows lacks one
+    that the greedy validation is drawn with (a log edited by hand or cut short was a
+    KeyError traceback)."""
+    needed = set()
     if tables["validation"] and any(c.y == "success_rate" for c in curves):
         # the greedy validation drawn over the success rate, on the metrics' epoch axis
         needed |= {("validation", "step"), ("validation", "success_rate"), ("metrics", "step")}
