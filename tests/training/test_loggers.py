@@ -221,12 +221,17 @@ def test_tensorboard_logger_keeps_the_tags_and_purges_on_resume(tmp_path):
     assert found["charts/episodic_length"] == [(10, 0.5), (20, 0.5), (30, 0.5)]
     assert found["eval/success_rate"] == [(10, 0.25), (20, 0.25), (30, 0.25)]
 
+    # a checkpoint at step 20 holds what was logged at step 20 (its CSV rows too): a resume
+    # from it drops step 30 only and logs on from there (step 20 was dropped and never
+    # logged again)
     resumed = TensorBoardLogger(tmp_path / "tb")
-    resumed.start(LogPosition(step=20, epochs=1, episodes=1, validations=1))
-    resumed.record_epoch(epoch_row(20, epsilon=9.0), 20)
+    resumed.start(LogPosition(step=20, epochs=2, episodes=2, validations=2))
+    resumed.record_epoch(epoch_row(30, epsilon=9.0), 30)
     resumed.close()
     epsilon = scalars(tmp_path / "tb")["charts/epsilon"]
-    assert epsilon == [(10, float(EPOCH_FIELDS.index("epsilon"))), (20, 9.0)]  # 30 purged
+    first = float(EPOCH_FIELDS.index("epsilon"))
+    assert epsilon == [(10, first), (20, first), (30, 9.0)]
+    assert scalars(tmp_path / "tb")["eval/success_rate"] == [(10, 0.25), (20, 0.25)]
 
 
 def test_a_fresh_start_drops_the_tensorboard_curves_of_an_earlier_attempt(tmp_path):

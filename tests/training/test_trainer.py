@@ -131,6 +131,37 @@ def test_resume_gives_exactly_the_uninterrupted_result(tmp_path, fake_env_factor
         assert torch.equal(a[key], b[key]), key
 
 
+def tensorboard_scalars(log_dir) -> dict[str, list[tuple[int, float]]]:
+    """Every scalar TensorBoard shows, as it shows them (purged events left out)."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    events = EventAccumulator(str(log_dir), size_guidance={"scalars": 0})
+    events.Reload()
+    return {
+        tag: [(e.step, e.value) for e in events.Scalars(tag)]
+        for tag in events.Tags()["scalars"]
+        if tag != "charts/SPS"  # timed
+    }
+
+
+def test_a_resumed_run_shows_the_uninterrupted_curves_in_tensorboard(tmp_path, fake_env_factory):
+    # the resumed writer purged the checkpoint's own step: the epoch row and validation of
+    # step 60 were gone from TensorBoard (the CSV logs kept them)
+    config = tiny_config(tensorboard=True, eval_interval=60, eval_episodes=2)
+    straight, interrupted = tmp_path / "straight", tmp_path / "interrupted"
+    train(config, straight, fake_env_factory)
+    first = Trainer(config, interrupted, fake_env_factory)
+    first.train(steps=60)  # checkpoint at step 60, after its epoch row and validation
+    for _ in range(25):  # logged after the checkpoint, lost in a "crash"
+        first._env_step()
+    first.logger.flush()
+    first.close()
+    resume(interrupted, fake_env_factory)
+    expected = tensorboard_scalars(straight / "tensorboard")
+    assert [step for step, _ in expected["eval/success_rate"]] == [60, 120]
+    assert tensorboard_scalars(interrupted / "tensorboard") == expected
+
+
 def test_a_run_resumed_after_its_last_boundary_ends_with_the_same_final_row(
     tmp_path, fake_env_factory
 ):

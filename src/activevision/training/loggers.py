@@ -169,7 +169,8 @@ class TensorBoardLogger:
     (non-finite values skipped), :data:`EPISODE_TAGS` and :data:`VALIDATION_TAGS`.
 
     The writer (and torch's TensorBoard module, a heavy import) is made at the first record;
-    a resumed run's writer purges the events logged after the checkpoint's step.
+    a resumed run's writer purges the events logged after the checkpoint's step (those at
+    its step were logged before it was written, and are its CSV logs' last rows too).
     """
 
     def __init__(self, log_dir: str | os.PathLike[str]) -> None:
@@ -178,7 +179,9 @@ class TensorBoardLogger:
         self._writer: Any = None
 
     def start(self, resume: LogPosition | None) -> None:
-        self._purge_step = None if resume is None else resume.step
+        # TensorBoard drops the events at purge_step and after: the checkpoint's own step
+        # (its epoch row, validation, last episode) was dropped and never logged again
+        self._purge_step = None if resume is None else resume.step + 1
         if resume is None and self.log_dir.is_dir():  # an earlier attempt's curves
             for events in self.log_dir.glob(f"{EVENTS_PREFIX}*"):
                 if events.is_file():
