@@ -268,9 +268,15 @@ class TrainConfig:
     sb3: Sb3Config = field(default_factory=Sb3Config)
 
     @property
+    def on_match(self) -> bool:
+        """A run on the match env (DDQN or the match student): its episodes are matches,
+        which have no success; validation scores them as ``activevision match`` does."""
+        return self.env_id == MATCH_ENV_ID
+
+    @property
     def match_student(self) -> bool:
         """DAgger on the match env: a student of the match planner."""
-        return self.algo == "dagger" and self.env_id == MATCH_ENV_ID
+        return self.algo == "dagger" and self.on_match
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)

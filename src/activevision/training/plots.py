@@ -56,7 +56,7 @@ def plot_run(
             loss_title = "imitation loss (squared error)"
         elif config.env_id != MATCH_ENV_ID and config.env.action_type == "continuous":
             loss_title = "imitation loss (squared error + goal cross-entropy)"
-    match = config is not None and config.match_student
+    match = config is not None and config.on_match  # DDQN's too: a match has no success
     curves = MATCH_CURVES if match else CURVES
     _check_columns(run_dir, {**tables, "validation": validation}, curves)
     return plot_training(
