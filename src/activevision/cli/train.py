@@ -215,6 +215,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
         UNFINISHED_WARNING,
         check_trials_finished,
         checked_base,
+        checked_grid,
         sweep,
     )
     from activevision.training import load_config, preset
@@ -225,8 +226,9 @@ def cmd_sweep(args: argparse.Namespace) -> None:
         print(f"trial {trial['ended']}/{trial['trials']} {status}: {trial['name']}", flush=True)
 
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
-    grid = dict(args.grid or [])
-    config = checked_base(config, parse_overrides(args.set or []), grid)
+    overrides = parse_overrides(args.set or [])
+    grid = checked_grid(args.grid or [], overrides)
+    config = checked_base(config, overrides, grid)
     with warnings.catch_warnings():
         # the command ends with one error line on failed trials (check_trials_finished)
         warnings.filterwarnings("ignore", message=UNFINISHED_WARNING)

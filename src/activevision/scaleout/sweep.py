@@ -116,6 +116,37 @@ def _point_values(point: Mapping[str, Any]) -> dict[str, Any]:
     return {k: override_value(k, v) if isinstance(v, str) else v for k, v in point.items()}
 
 
+def checked_grid(
+    items: Sequence[tuple[str, Sequence[Any]]], overrides: Mapping[str, Any]
+) -> dict[str, list[Any]]:
+    """The grid of ``--grid KEY=V1,V2`` ``items``; ValueError where two of them set one
+    config value (``--grid learning_rate=1e-3 --grid learning_rate=2e-3`` swept only the
+    last: put the values in one) or one of them sets a value ``overrides`` (``--set``) sets
+    too (every trial replaced the --set value). Keys are compared by the path they name
+    (``learning_rate`` is ``learner.learning_rate``); unknown ones are left to the config's
+    own check."""
+    paths = field_paths()
+    owner: dict[str, str] = {}  # each named path -> the --grid key that set it
+    grid: dict[str, list[Any]] = {}
+    for key, values in items:
+        path = paths.get(key, key)
+        if path in owner:
+            raise ValueError(
+                f"--grid {owner[path]} and --grid {key} both set {path}: give its values in"
+                " one --grid, separated by commas"
+            )
+        owner[path] = key
+        grid[key] = list(values)
+    for key in overrides:
+        path = paths.get(key.strip(), key.strip())
+        if path in owner:
+            raise ValueError(
+                f"--set {key.strip()} and --grid {owner[path]} both set {path}: each trial"
+                " takes the grid's value; drop one of them"
+            )
+    return grid
+
+
 #: The settings that decide which other keys a run reads (``training.config``'s unread-key
 #: checks): a ``--set`` key is checked against each of their grid values.
 DECIDING_KEYS = ("algo", "env_id", "dagger.match_teacher", "dagger.act_by")
