@@ -154,6 +154,16 @@ BAD_ARGUMENTS = [
     (["train", "--out", "{run}/plots/x"], "inside the training run"),
     (["train", "--out", "{run}/plots/x", "--overwrite"], "inside the training run"),
     (["evaluate", "--run", "{tmp}", "--methods", "random"], "not a training run (no config.json)"),
+    # --steps, --seed and --algo won silently over a --set of the same value
+    (
+        ["train", "--steps", "5", "--set", "total_timesteps=9", "--out", "{tmp}/x"],
+        "--set total_timesteps and --steps both set run.total_timesteps",
+    ),
+    (["train", "--seed", "1", "--set", "seed=2", "--out", "{tmp}/x"], "--set seed and --seed"),
+    (
+        ["train", "--steps", "5", "--algo", "dagger", "--set", "algo=ddqn", "--out", "{tmp}/x"],
+        "--set algo and --algo both set algo",
+    ),
     (["sweep", "--seeds", "3..1", "--out", "{tmp}/s"], "'3..1'"),
     (["sweep", "--grid", "learning_rate", "--out", "{tmp}/s"], "KEY=V1"),
     # one key twice swept only its last values; a --set key in the grid was replaced by it

@@ -160,6 +160,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     check_run_directory(args.out, overwrite=args.overwrite)
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
     overrides = list(args.set or [])
+    _refuse_set_twice(args)
     if args.steps is not None:
         overrides.append(f"total_timesteps={args.steps}")
     if args.seed is not None:
@@ -176,6 +177,22 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             shutil.rmtree(run_dir, ignore_errors=True)  # e.g. no start found: try again freely
         raise
     return run_dir
+
+
+def _refuse_set_twice(args: argparse.Namespace) -> None:
+    """ValueError where ``--set`` sets what ``--steps``, ``--seed`` or ``--algo`` sets
+    (``--steps 500 --set total_timesteps=2000`` trained 500 steps, the --set unsaid)."""
+    from activevision.training.config import field_paths
+
+    flags = {"run.total_timesteps": "steps", "seed": "seed", "algo": "algo"}
+    paths = field_paths()
+    for item in args.set or []:
+        key = item.partition("=")[0].strip()
+        flag = flags.get(paths.get(key, key))
+        if flag is not None and getattr(args, flag) is not None:
+            raise ValueError(
+                f"--set {key} and --{flag} both set {paths.get(key, key)}: give it once"
+            )
 
 
 def _nothing_trained(run_dir: Path) -> bool:
