@@ -20,7 +20,8 @@ another node, and the driver aggregates the trials' ``metrics.csv`` from there.
 
 Outputs in ``out_dir``: ``trials.csv`` (one row per trial: status, restarts, epochs, its own
 run time), ``sweep.csv`` (per grid point and epoch: mean, std, min, max over seeds of
-:data:`METRICS`) and ``sweep.png`` (success rate vs step, mean +- std per grid point).
+:data:`METRICS`) and ``sweep.png`` (success rate vs step, mean +- std per grid point; a sweep
+of match runs: reward per match).
 """
 
 from __future__ import annotations
@@ -616,7 +617,9 @@ def aggregate(trials: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[
 
 def plot_sweep(rows: Sequence[Mapping[str, Any]], out_png: str | Path) -> None:
     """Success rate vs step, one mean curve with a +-std band per grid point (drawn by
-    :func:`activevision.figures.sweep.plot_sweep_curves`)."""
+    :func:`activevision.figures.sweep.plot_sweep_curves`); a sweep of match runs, which
+    have no success (every ``success_rate_mean`` NaN: an empty figure), draws the reward
+    per match instead."""
     from activevision.figures.sweep import plot_sweep_curves
 
     skip = {"epoch", "step", "seeds"} | {f"{m}_{s}" for m in METRICS for s in STATS}
@@ -624,7 +627,8 @@ def plot_sweep(rows: Sequence[Mapping[str, Any]], out_png: str | Path) -> None:
     for r in rows:
         label = ", ".join(f"{k}={v}" for k, v in r.items() if k not in skip) or "base config"
         curves.setdefault(label, []).append(r)
-    plot_sweep_curves(curves, out_png)
+    success = any(math.isfinite(float(r["success_rate_mean"])) for r in rows)
+    plot_sweep_curves(curves, out_png, "success_rate" if success else "episode_reward")
 
 
 STATS = ("mean", "std", "min", "max")
