@@ -260,6 +260,34 @@ def test_a_training_run_writes_todays_tensorboard_tags(tmp_path, fake_env_factor
     assert [step for step, _ in found["eval/mean_episodic_return"]] == [40, 80, 120]
 
 
+@pytest.mark.parametrize(
+    ("preset_name", "loss_tag", "chart_tags"),
+    [
+        ("paper", "losses/td_loss", {"charts/epsilon", "charts/per_beta"}),
+        ("quickstart", "losses/imitation_loss", {"charts/teacher_share"}),
+        ("sac_head", "losses/critic_loss", set()),
+        ("ppo_head", "losses/loss", set()),
+    ],
+)
+def test_each_learner_s_epoch_tags_name_what_it_logs(tmp_path, preset_name, loss_tag, chart_tags):
+    # every run wrote DDQN's tags: a DAgger run's imitation loss as losses/td_loss and its
+    # teacher's share as charts/epsilon, an SB3 learner's unused 0s as epsilon and PER beta
+    from activevision.training.presets import preset
+
+    config = preset(preset_name).replace(**{"run.tensorboard": True})
+    (logger,) = [g for g in default_loggers(config, tmp_path) if isinstance(g, TensorBoardLogger)]
+    logger.start(None)
+    logger.record_epoch(epoch_row(10), 10)
+    logger.close()
+    found = scalars(tmp_path / "tensorboard")
+    common = {"charts/success_rate", "charts/success_duration", "charts/ball_loss_duration"}
+    common |= {"charts/mean_episodic_return", "charts/episodes", "charts/SPS"}
+    assert set(found) == common | {loss_tag} | chart_tags
+    assert found[loss_tag] == [(10, float(EPOCH_FIELDS.index("loss")))]
+    if "charts/teacher_share" in chart_tags:
+        assert found["charts/teacher_share"] == [(10, float(EPOCH_FIELDS.index("epsilon")))]
+
+
 def test_a_match_runs_validation_goes_to_its_own_columns_and_tags(tmp_path):
     from activevision.training.validation import MATCH_EVALUATION_FIELDS
 
