@@ -169,6 +169,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
         overrides.append(f"algo={args.algo}")
     run_dir: Path = args.out
     config = apply_overrides(config, overrides)
+    _warn_never_validated(config)
     new_folder = not run_dir.exists()
     try:
         train(config, run_dir)
@@ -177,6 +178,19 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             shutil.rmtree(run_dir, ignore_errors=True)  # e.g. no start found: try again freely
         raise
     return run_dir
+
+
+def _warn_never_validated(config: Any) -> None:
+    """Warn where ``run.eval_interval`` is past the run's end: ``--preset quickstart --steps
+    3000`` kept the preset's interval (10,000, a quarter of its 40,000 steps), so it never
+    validated and wrote no best_policy.safetensors, unsaid."""
+    run = config.run
+    if 0 < run.total_timesteps < run.eval_interval:
+        warnings.warn(
+            f"run.eval_interval ({run.eval_interval}) is past the run's {run.total_timesteps}"
+            " steps: it never validates (no evaluations.csv rows, no best_policy.safetensors)",
+            stacklevel=2,
+        )
 
 
 def _refuse_set_twice(args: argparse.Namespace) -> None:
