@@ -181,6 +181,22 @@ BAD_ARGUMENTS = [
     (["evaluate", "--run", "{tmp}", "--methods", "random"], "not a training run (no config.json)"),
     (["sweep", "--seeds", "3..1", "--out", "{tmp}/s"], "'3..1'"),
     (["sweep", "--grid", "learning_rate", "--out", "{tmp}/s"], "KEY=V1"),
+    # one key twice swept only its last values; a --set key in the grid was replaced by it
+    (
+        ["sweep", "--grid", "learning_rate=1e-3", "--grid", "learning_rate=2e-3"]
+        + ["--out", "{tmp}/s"],
+        "--grid learning_rate and --grid learning_rate both set learner.learning_rate",
+    ),
+    (
+        ["sweep", "--grid", "learner.learning_rate=1e-3,2e-3", "--grid", "learning_rate=3e-3"]
+        + ["--out", "{tmp}/s"],
+        "--grid learner.learning_rate and --grid learning_rate both set learner.learning_rate",
+    ),
+    (
+        ["sweep", "--grid", "learning_rate=1e-3,2e-3", "--set", "learner.learning_rate=3e-3"]
+        + ["--out", "{tmp}/s"],
+        "--set learner.learning_rate and --grid learning_rate both set learner.learning_rate",
+    ),
     (["plot", "{tmp}"], "not a training run"),
     (["report", "{tmp}"], "not a training run"),
     (["nope"], "invalid choice"),

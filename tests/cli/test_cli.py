@@ -5,6 +5,9 @@ import json
 import shutil
 import subprocess
 import sys
+import warnings
+
+import pytest
 
 from activevision.cli import main
 
@@ -89,6 +92,26 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys):
     assert "--run" in capsys.readouterr().err
     assert main(["render"]) == 2  # argparse: --out is required
     assert "--out" in capsys.readouterr().err
+
+
+def test_a_run_shorter_than_its_validation_interval_says_so(tmp_path):
+    # --preset quickstart --steps 3000 kept the preset's interval (10,000 steps): the run
+    # never validated and wrote no best_policy.safetensors, and said nothing
+    base = ["train", "--steps", "100", "--set", "num_threads=1", "--set", "tensorboard=false"]
+    expected = (
+        "run.eval_interval (500) is past the run's 100 steps: it never validates (no"
+        " evaluations.csv rows, no best_policy.safetensors)"
+    )
+    with pytest.warns(UserWarning) as caught:
+        assert main([*base, "--set", "eval_interval=500", "--out", str(tmp_path / "a")]) == 0
+    assert [str(w.message) for w in caught] == [expected]
+    assert not (tmp_path / "a" / "best_policy.safetensors").exists()
+    validated = [*base, "--set", "eval_interval=100", "--set", "eval_episodes=1"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main([*validated, "--out", str(tmp_path / "b")]) == 0
+    assert not [w for w in caught if "eval_interval" in str(w.message)]
+    assert (tmp_path / "b" / "best_policy.safetensors").exists()
 
 
 def test_train_help_names_every_preset(capsys):

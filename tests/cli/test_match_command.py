@@ -187,11 +187,12 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
     argv += ["--set", "match.detection.far=0.2"]
     argv[argv.index("quickstart_ddqn")] = "match_ddqn"
     assert main(argv) == 0
-    # validated as DDQN runs are (its episodes, success rate), not as a match student
+    # validated on matches, as the match student is (a match has no success rate)
     with (run / "evaluations.csv").open() as f:
         reader = csv.DictReader(f)
-        assert len(list(reader)) == 2 and "success_rate" in (reader.fieldnames or ())
-    assert (run / "plots" / "success_rate.png").exists()
+        assert len(list(reader)) == 2 and "position_rmse" in (reader.fieldnames or ())
+    assert (run / "plots" / "validation_position_rmse.png").exists()
+    assert not (run / "plots" / "success_rate.png").exists()
     out = tmp_path / "m"
     capsys.readouterr()
     assert main([*TINY, "--out", str(out), "--run", str(run), "--methods", "learned"]) == 0

@@ -17,6 +17,7 @@ from activevision.scaleout.sweep import (
     UNFINISHED_WARNING,
     checked_base,
     grid_points,
+    plot_sweep,
     trial_config,
     trial_name,
 )
@@ -145,6 +146,29 @@ def test_aggregate_over_seeds(tmp_path):
     assert rows[1]["episode_reward_mean"] == pytest.approx(1.2)
     assert rows[0]["lr"] == 1
     assert rows[0]["ball_loss_duration_mean"] != rows[0]["ball_loss_duration_mean"]  # all NaN
+
+
+@pytest.mark.parametrize(
+    ("success", "drawn", "label"),
+    [([0.2, 0.4], [0.2, 0.4], "success rate"), (["nan", "nan"], [3.0, 5.0], "reward per match")],
+)
+def test_sweep_png_draws_the_reward_of_runs_without_a_success(
+    tmp_path, monkeypatch, success, drawn, label
+):
+    # a sweep of match runs (no success: NaN) drew an empty success-rate figure
+    import activevision.figures.sweep as figure
+
+    run_dir = tmp_path / "seed=0"
+    _metrics(run_dir, [0.2, 0.4])
+    rows = aggregate([{"seed": 0, "point": {}, "run_dir": str(run_dir)}], tmp_path)
+    for row, value, reward in zip(rows, success, [3.0, 5.0], strict=True):
+        row["success_rate_mean"], row["episode_reward_mean"] = float(value), reward
+    saved = []
+    monkeypatch.setattr(figure, "save_figure", lambda fig, *_, **__: saved.append(fig))
+    plot_sweep(rows, tmp_path / "sweep.png")
+    (ax,) = saved[0].axes
+    assert list(ax.lines[0].get_ydata()) == pytest.approx(drawn)
+    assert ax.get_ylabel() == f"{label} (mean ± std over seeds)"
 
 
 def test_an_epoch_s_step_is_the_mean_of_the_seeds_steps_whatever_their_order(tmp_path):

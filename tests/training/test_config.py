@@ -226,6 +226,28 @@ def test_the_module_prefixed_env_id_is_the_env_itself():
     assert episodic.env_id == "ActiveVision-v0"
 
 
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        ("match.action_type", "continuous", "TrainConfig.match.action_type: DDQN learns discrete"),
+        ("match.observation", "image+head", "TrainConfig.match.observation: the DDQN learner"),
+    ],
+)
+def test_a_ddqn_run_on_the_match_refuses_what_it_cannot_learn_from(key, value, message):
+    # the trainer's "need a Discrete action space, got Box(-1.0, 1.0, (2,), float32)" named
+    # no setting; the episodic env's section said what to do
+    with pytest.raises(ValueError, match=rf"^{message}.* with algo='dagger'$"):
+        apply_overrides(preset("match_ddqn"), [f"{key}={value}"])
+    if key == "match.action_type":  # the match student learns continuous moves
+        assert (
+            apply_overrides(preset("match_dagger"), [f"{key}={value}"]).match.action_type == value
+        )
+    # the match run never reads its env section: a Dict there is no reason to refuse it
+    ddqn = preset("match_ddqn").to_dict()
+    ddqn["env"]["observation"] = "image+head"
+    assert TrainConfig.from_dict(ddqn).env.observation == "image+head"
+
+
 def test_num_threads_is_bounded():
     # 100,000 torch threads was a segmentation fault of the whole process, no error line
     with pytest.raises(ValueError, match=r"RunConfig\.num_threads: must be in \[0, 1024\]"):

@@ -222,12 +222,17 @@ def test_tensorboard_logger_keeps_the_tags_and_purges_on_resume(tmp_path):
     assert found["charts/episodic_length"] == [(10, 0.5), (20, 0.5), (30, 0.5)]
     assert found["eval/success_rate"] == [(10, 0.25), (20, 0.25), (30, 0.25)]
 
+    # a checkpoint at step 20 holds what was logged at step 20 (its CSV rows too): a resume
+    # from it drops step 30 only and logs on from there (step 20 was dropped and never
+    # logged again)
     resumed = TensorBoardLogger(tmp_path / "tb")
-    resumed.start(LogPosition(step=20, epochs=1, episodes=1, validations=1))
-    resumed.record_epoch(epoch_row(20, epsilon=9.0), 20)
+    resumed.start(LogPosition(step=20, epochs=2, episodes=2, validations=2))
+    resumed.record_epoch(epoch_row(30, epsilon=9.0), 30)
     resumed.close()
     epsilon = scalars(tmp_path / "tb")["charts/epsilon"]
-    assert epsilon == [(10, float(EPOCH_FIELDS.index("epsilon"))), (20, 9.0)]  # 30 purged
+    first = float(EPOCH_FIELDS.index("epsilon"))
+    assert epsilon == [(10, first), (20, first), (30, 9.0)]
+    assert scalars(tmp_path / "tb")["eval/success_rate"] == [(10, 0.25), (20, 0.25)]
 
 
 def test_a_fresh_start_drops_the_tensorboard_curves_of_an_earlier_attempt(tmp_path):
@@ -254,6 +259,34 @@ def test_a_training_run_writes_todays_tensorboard_tags(tmp_path, fake_env_factor
     assert {"charts/episodic_return", "eval/success_rate", "charts/epsilon"} <= set(found)
     assert [step for step, _ in found["charts/epsilon"]] == [60, 120]
     assert [step for step, _ in found["eval/mean_episodic_return"]] == [40, 80, 120]
+
+
+@pytest.mark.parametrize(
+    ("preset_name", "loss_tag", "chart_tags"),
+    [
+        ("paper", "losses/td_loss", {"charts/epsilon", "charts/per_beta"}),
+        ("quickstart", "losses/imitation_loss", {"charts/teacher_share"}),
+        ("sac_head", "losses/critic_loss", set()),
+        ("ppo_head", "losses/loss", set()),
+    ],
+)
+def test_each_learner_s_epoch_tags_name_what_it_logs(tmp_path, preset_name, loss_tag, chart_tags):
+    # every run wrote DDQN's tags: a DAgger run's imitation loss as losses/td_loss and its
+    # teacher's share as charts/epsilon, an SB3 learner's unused 0s as epsilon and PER beta
+    from activevision.training.presets import preset
+
+    config = preset(preset_name).replace(**{"run.tensorboard": True})
+    (logger,) = [g for g in default_loggers(config, tmp_path) if isinstance(g, TensorBoardLogger)]
+    logger.start(None)
+    logger.record_epoch(epoch_row(10), 10)
+    logger.close()
+    found = scalars(tmp_path / "tensorboard")
+    common = {"charts/success_rate", "charts/success_duration", "charts/ball_loss_duration"}
+    common |= {"charts/mean_episodic_return", "charts/episodes", "charts/SPS"}
+    assert set(found) == common | {loss_tag} | chart_tags
+    assert found[loss_tag] == [(10, float(EPOCH_FIELDS.index("loss")))]
+    if "charts/teacher_share" in chart_tags:
+        assert found["charts/teacher_share"] == [(10, float(EPOCH_FIELDS.index("epsilon")))]
 
 
 def test_a_match_runs_validation_goes_to_its_own_columns_and_tags(tmp_path):

@@ -10,12 +10,17 @@ from activevision.figures.training import CURVES
 from activevision.training import checkpoint as ckpt
 from activevision.training.aux_targets import goal_offset
 from activevision.training.config import TrainConfig
+from activevision.training.environment import make_env
 from activevision.training.metrics import EPOCH_FIELDS, TIMING_FIELDS
 from activevision.training.plots import plot_run
 from activevision.training.policy_files import load_policy
 from activevision.training.runs import resume, train
 from activevision.training.trainer import Trainer
-from activevision.training.validation import greedy_episodes, summarise_validation
+from activevision.training.validation import (
+    MATCH_EVALUATION_FIELDS,
+    greedy_episodes,
+    summarise_validation,
+)
 
 
 def tiny_config(**changes) -> TrainConfig:
@@ -129,6 +134,37 @@ def test_resume_gives_exactly_the_uninterrupted_result(tmp_path, fake_env_factor
     a, b = load_policy(straight).state_dict(), load_policy(interrupted).state_dict()
     for key in a:
         assert torch.equal(a[key], b[key]), key
+
+
+def tensorboard_scalars(log_dir) -> dict[str, list[tuple[int, float]]]:
+    """Every scalar TensorBoard shows, as it shows them (purged events left out)."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    events = EventAccumulator(str(log_dir), size_guidance={"scalars": 0})
+    events.Reload()
+    return {
+        tag: [(e.step, e.value) for e in events.Scalars(tag)]
+        for tag in events.Tags()["scalars"]
+        if tag != "charts/SPS"  # timed
+    }
+
+
+def test_a_resumed_run_shows_the_uninterrupted_curves_in_tensorboard(tmp_path, fake_env_factory):
+    # the resumed writer purged the checkpoint's own step: the epoch row and validation of
+    # step 60 were gone from TensorBoard (the CSV logs kept them)
+    config = tiny_config(tensorboard=True, eval_interval=60, eval_episodes=2)
+    straight, interrupted = tmp_path / "straight", tmp_path / "interrupted"
+    train(config, straight, fake_env_factory)
+    first = Trainer(config, interrupted, fake_env_factory)
+    first.train(steps=60)  # checkpoint at step 60, after its epoch row and validation
+    for _ in range(25):  # logged after the checkpoint, lost in a "crash"
+        first._env_step()
+    first.logger.flush()
+    first.close()
+    resume(interrupted, fake_env_factory)
+    expected = tensorboard_scalars(straight / "tensorboard")
+    assert [step for step, _ in expected["eval/success_rate"]] == [60, 120]
+    assert tensorboard_scalars(interrupted / "tensorboard") == expected
 
 
 def test_a_run_resumed_after_its_last_boundary_ends_with_the_same_final_row(
@@ -269,6 +305,60 @@ def test_validation_keeps_the_best_weights_and_leaves_training_alone(tmp_path, f
     replay = greedy_episodes(q_values, env, seeds, (1, 60, 80))
     assert np.mean([r["success_rate"] for r in replay]) == pytest.approx(rates[best_index])
     assert plot_run(validated).stat().st_size > 10_000  # validation drawn with the success rate
+
+
+def test_a_ddqn_run_on_the_match_validates_matches_and_keeps_the_best_reward(tmp_path):
+    # a match has no success: every validation scored a success rate of 0, so the first
+    # one's weights stayed the best for the whole run, and metrics.csv logged 0% success
+    config = tiny_config(
+        env_id="ActiveVisionMatch-v0",
+        **{"match.ticks": 20},
+        total_timesteps=80,
+        epoch_steps=20,
+        checkpoint_interval=80,
+        eval_interval=20,
+        eval_episodes=2,
+        learning_rate=0.05,  # the weights change between validations
+    )
+    train(config, tmp_path)
+    rows = read_rows(tmp_path / "evaluations.csv")
+    assert list(rows[0]) == list(MATCH_EVALUATION_FIELDS)
+    rewards = [float(r["episode_reward"]) for r in rows]
+    assert len(set(rewards)) > 1  # the check below can tell the first from the best
+    best_index = int(np.argmax(rewards))
+    assert best_index > 0  # not the first validation's, which was kept before
+    assert [int(r["best"]) for r in rows] == [
+        int(reward > max(rewards[:i], default=-np.inf)) for i, reward in enumerate(rewards)
+    ]
+    meta = best_metadata(tmp_path)
+    assert meta["step"] == int(rows[best_index]["step"])
+    assert meta["validation_episode_reward"] == pytest.approx(rewards[best_index])
+    assert all(r["success_rate"] == "nan" for r in read_rows(tmp_path / "metrics.csv"))
+
+    # the last validation (of the final weights) against a loop of its own over the info
+    network = load_policy(tmp_path)
+    env = make_env(config)
+    totals, ball, squared = [], [], []
+    for i in range(2):
+        obs, _ = env.reset(seed=episode_seed(config.run.eval_seed, i))
+        done, total = False, 0.0
+        while not done:
+            with torch.no_grad():
+                q = network(torch.from_numpy(np.asarray(obs).reshape(1, 1, 120, 160)))
+            obs, reward, terminated, truncated, info = env.step(int(q.argmax()))
+            total += float(reward)
+            ball.append(float(info["ball_in_view"]))
+            squared.append(float(info["position_error"]) ** 2)
+            done = terminated or truncated
+        totals.append(total)
+    env.close()
+    assert float(rows[-1]["episode_reward"]) == pytest.approx(np.mean(totals))
+    assert float(rows[-1]["ball_in_view"]) == pytest.approx(np.mean(ball))
+    rmse = float(rows[-1]["position_rmse"])
+    assert rmse == pytest.approx(np.mean(np.sqrt(np.reshape(squared, (2, 20)).mean(axis=1))))
+    plot_run(tmp_path)
+    figures = {path.name for path in (tmp_path / "plots").glob("*.png")}
+    assert "validation_position_rmse.png" in figures and "success_rate.png" not in figures
 
 
 def test_resume_restores_validation_state(tmp_path, fake_env_factory):

@@ -181,6 +181,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
         overrides.append(f"algo={args.algo}")
     run_dir: Path = args.out
     config = apply_overrides(config, overrides)
+    _warn_never_validated(config)
     new_folder = not run_dir.exists()
     try:
         train(config, run_dir)
@@ -189,6 +190,19 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             shutil.rmtree(run_dir, ignore_errors=True)  # e.g. no start found: try again freely
         raise
     return run_dir
+
+
+def _warn_never_validated(config: Any) -> None:
+    """Warn where ``run.eval_interval`` is past the run's end: ``--preset quickstart --steps
+    3000`` kept the preset's interval (10,000, a quarter of its 40,000 steps), so it never
+    validated and wrote no best_policy.safetensors, unsaid."""
+    run = config.run
+    if 0 < run.total_timesteps < run.eval_interval:
+        warnings.warn(
+            f"run.eval_interval ({run.eval_interval}) is past the run's {run.total_timesteps}"
+            " steps: it never validates (no evaluations.csv rows, no best_policy.safetensors)",
+            stacklevel=2,
+        )
 
 
 def _refuse_set_beside(overrides: list[str], options: Mapping[str, str]) -> None:
@@ -251,6 +265,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
         UNFINISHED_WARNING,
         check_trials_finished,
         checked_base,
+        checked_grid,
         sweep,
     )
     from activevision.training import load_config, preset
@@ -261,10 +276,11 @@ def cmd_sweep(args: argparse.Namespace) -> None:
         print(f"trial {trial['ended']}/{trial['trials']} {status}: {trial['name']}", flush=True)
 
     config = load_config(args.config) if args.config else preset(args.preset or "paper")
-    grid = dict(args.grid or [])
+    overrides = parse_overrides(args.set or [])
     # each trial's seed is one of --seeds: a --set seed was dropped
     _refuse_set_beside(list(args.set or []), {"seed": "--seeds"})
-    config = checked_base(config, parse_overrides(args.set or []), grid)
+    grid = checked_grid(args.grid or [], overrides)
+    config = checked_base(config, overrides, grid)
     with warnings.catch_warnings():
         # the command ends with one error line on failed trials (check_trials_finished)
         warnings.filterwarnings("ignore", message=UNFINISHED_WARNING)

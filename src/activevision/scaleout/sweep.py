@@ -20,7 +20,8 @@ another node, and the driver aggregates the trials' ``metrics.csv`` from there.
 
 Outputs in ``out_dir``: ``trials.csv`` (one row per trial: status, restarts, epochs, its own
 run time), ``sweep.csv`` (per grid point and epoch: mean, std, min, max over seeds of
-:data:`METRICS`) and ``sweep.png`` (success rate vs step, mean +- std per grid point).
+:data:`METRICS`) and ``sweep.png`` (success rate vs step, mean +- std per grid point; a sweep
+of match runs: reward per match).
 """
 
 from __future__ import annotations
@@ -114,6 +115,37 @@ def trial_config(base: TrainConfig, seed: int, point: Mapping[str, Any]) -> Trai
 def _point_values(point: Mapping[str, Any]) -> dict[str, Any]:
     """A grid point's values, its text values parsed as ``--set``'s."""
     return {k: override_value(k, v) if isinstance(v, str) else v for k, v in point.items()}
+
+
+def checked_grid(
+    items: Sequence[tuple[str, Sequence[Any]]], overrides: Mapping[str, Any]
+) -> dict[str, list[Any]]:
+    """The grid of ``--grid KEY=V1,V2`` ``items``; ValueError where two of them set one
+    config value (``--grid learning_rate=1e-3 --grid learning_rate=2e-3`` swept only the
+    last: put the values in one) or one of them sets a value ``overrides`` (``--set``) sets
+    too (every trial replaced the --set value). Keys are compared by the path they name
+    (``learning_rate`` is ``learner.learning_rate``); unknown ones are left to the config's
+    own check."""
+    paths = field_paths()
+    owner: dict[str, str] = {}  # each named path -> the --grid key that set it
+    grid: dict[str, list[Any]] = {}
+    for key, values in items:
+        path = paths.get(key, key)
+        if path in owner:
+            raise ValueError(
+                f"--grid {owner[path]} and --grid {key} both set {path}: give its values in"
+                " one --grid, separated by commas"
+            )
+        owner[path] = key
+        grid[key] = list(values)
+    for key in overrides:
+        path = paths.get(key.strip(), key.strip())
+        if path in owner:
+            raise ValueError(
+                f"--set {key.strip()} and --grid {owner[path]} both set {path}: each trial"
+                " takes the grid's value; drop one of them"
+            )
+    return grid
 
 
 #: The settings that decide which other keys a run reads (``training.config``'s unread-key
@@ -590,7 +622,9 @@ def aggregate(trials: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[
 
 def plot_sweep(rows: Sequence[Mapping[str, Any]], out_png: str | Path) -> None:
     """Success rate vs step, one mean curve with a +-std band per grid point (drawn by
-    :func:`activevision.figures.sweep.plot_sweep_curves`)."""
+    :func:`activevision.figures.sweep.plot_sweep_curves`); a sweep of match runs, which
+    have no success (every ``success_rate_mean`` NaN: an empty figure), draws the reward
+    per match instead."""
     from activevision.figures.sweep import plot_sweep_curves
 
     skip = {"epoch", "step", "seeds"} | {f"{m}_{s}" for m in METRICS for s in STATS}
@@ -598,7 +632,8 @@ def plot_sweep(rows: Sequence[Mapping[str, Any]], out_png: str | Path) -> None:
     for r in rows:
         label = ", ".join(f"{k}={v}" for k, v in r.items() if k not in skip) or "base config"
         curves.setdefault(label, []).append(r)
-    plot_sweep_curves(curves, out_png)
+    success = any(math.isfinite(float(r["success_rate_mean"])) for r in rows)
+    plot_sweep_curves(curves, out_png, "success_rate" if success else "episode_reward")
 
 
 STATS = ("mean", "std", "min", "max")

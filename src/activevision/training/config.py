@@ -268,9 +268,15 @@ class TrainConfig:
     sb3: Sb3Config = field(default_factory=Sb3Config)
 
     @property
+    def on_match(self) -> bool:
+        """A run on the match env (DDQN or the match student): its episodes are matches,
+        which have no success; validation scores them as ``activevision match`` does."""
+        return self.env_id == MATCH_ENV_ID
+
+    @property
     def match_student(self) -> bool:
         """DAgger on the match env: a student of the match planner."""
-        return self.algo == "dagger" and self.env_id == MATCH_ENV_ID
+        return self.algo == "dagger" and self.on_match
 
     def __post_init__(self) -> None:
         check_dataclass_fields(self)
@@ -324,17 +330,21 @@ class TrainConfig:
                 f" buffer, so at most replay.buffer_size ({self.replay.buffer_size}), got"
                 f" {self.learner.batch_size}"
             )
-        if self.algo == "ddqn" and self.env.action_type == "continuous":
+        # the run's own world: on the match these were "need a Discrete action space, got
+        # Box(...)" and "need a uint8 Box observation space, got Dict(...)" from the trainer
+        section, world = ("match", self.match) if self.on_match else ("env", self.env)
+        others = "algo='dagger'" if self.on_match else "algo='dagger', 'sac', 'td3' or 'ppo'"
+        if self.algo == "ddqn" and world.action_type == "continuous":
             raise ValueError(
-                "TrainConfig.env.action_type: DDQN learns discrete actions; train continuous"
-                " head control with algo='dagger', 'sac', 'td3' or 'ppo'"
+                f"TrainConfig.{section}.action_type: DDQN learns discrete actions; train"
+                f" continuous head control with {others}"
             )
         if self.algo in SB3_ALGORITHMS:
             self._check_sb3()
-        if self.algo == "ddqn" and self.env.observation != "image":
+        if self.algo == "ddqn" and world.observation != "image":
             raise ValueError(
-                "TrainConfig.env.observation: the DDQN learner takes images only; train Dict"
-                " observations with algo='dagger', 'sac', 'td3' or 'ppo'"
+                f"TrainConfig.{section}.observation: the DDQN learner takes images only; train"
+                f" Dict observations with {others}"
             )
 
     def _check_match_dagger(self) -> None:

@@ -49,6 +49,31 @@ VALIDATION_TAGS = {
 }
 
 
+#: the loss's tag of each learner (``metrics.csv``'s ``loss``: a DAgger run's is its
+#: imitation loss, an SB3 learner's its critic's or PPO's total, never a TD loss)
+LOSS_TAGS = {
+    "ddqn": "losses/td_loss",
+    "dagger": "losses/imitation_loss",
+    "sac": "losses/critic_loss",
+    "td3": "losses/critic_loss",
+    "ppo": "losses/loss",
+}
+
+
+def epoch_tags(algo: str) -> dict[str, str]:
+    """The TensorBoard tag of each epoch column a run of ``algo`` measures: DDQN's are
+    :data:`metrics.TENSORBOARD_TAGS`; a DAgger run's ``epsilon`` is the teacher's share, and
+    the columns that hold unused 0s (PER's beta but in DDQN, epsilon in SB3's) get none."""
+    tags = {**TENSORBOARD_TAGS, "loss": LOSS_TAGS.get(algo, TENSORBOARD_TAGS["loss"])}
+    if algo in LOSS_TAGS and algo != "ddqn":
+        del tags["beta"]
+        if algo == "dagger":
+            tags["epsilon"] = "charts/teacher_share"
+        else:
+            del tags["epsilon"]
+    return tags
+
+
 @dataclass(frozen=True)
 class LogPosition:
     """How far a checkpoint's logs go: records of each kind logged, and the step."""
@@ -165,27 +190,31 @@ class CsvLogger:
 
 
 class TensorBoardLogger:
-    """TensorBoard scalars in ``log_dir``: epoch columns under ``metrics.TENSORBOARD_TAGS``
-    (non-finite values skipped), :data:`EPISODE_TAGS` and :data:`VALIDATION_TAGS`.
+    """TensorBoard scalars in ``log_dir``: epoch columns under :func:`epoch_tags` of the run's
+    ``algo`` (non-finite values skipped), :data:`EPISODE_TAGS` and :data:`VALIDATION_TAGS`.
 
     The writer (and torch's TensorBoard module, a heavy import) is made at the first record;
-    a resumed run's writer purges the events logged after the checkpoint's step.
+    a resumed run's writer purges the events logged after the checkpoint's step (those at
+    its step were logged before it was written, and are its CSV logs' last rows too).
     """
 
-    def __init__(self, log_dir: str | os.PathLike[str]) -> None:
+    def __init__(self, log_dir: str | os.PathLike[str], algo: str = "ddqn") -> None:
         self.log_dir = Path(log_dir)
+        self.epoch_tags = epoch_tags(algo)
         self._purge_step: int | None = None
         self._writer: Any = None
 
     def start(self, resume: LogPosition | None) -> None:
-        self._purge_step = None if resume is None else resume.step
+        # TensorBoard drops the events at purge_step and after: the checkpoint's own step
+        # (its epoch row, validation, last episode) was dropped and never logged again
+        self._purge_step = None if resume is None else resume.step + 1
         if resume is None and self.log_dir.is_dir():  # an earlier attempt's curves
             for events in self.log_dir.glob(f"{EVENTS_PREFIX}*"):
                 if events.is_file():
                     events.unlink()
 
     def record_epoch(self, row: Record, step: int) -> None:
-        for key, tag in TENSORBOARD_TAGS.items():
+        for key, tag in self.epoch_tags.items():
             if math.isfinite(row[key]):
                 self._add(tag, row[key], step)
 
@@ -219,12 +248,13 @@ def default_loggers(config: TrainConfig, run_dir: str | os.PathLike[str]) -> lis
     """The CSV logs, and TensorBoard's with ``config.run.tensorboard`` (SB3's ``configure``)."""
     loggers: list[Logger] = [CsvLogger(run_dir, evaluation_fields(config))]
     if config.run.tensorboard:
-        loggers.append(TensorBoardLogger(Path(run_dir) / TENSORBOARD_DIR))
+        loggers.append(TensorBoardLogger(Path(run_dir) / TENSORBOARD_DIR, config.algo))
     return loggers
 
 
 __all__ = [
     "EPISODE_TAGS",
+    "LOSS_TAGS",
     "VALIDATION_TAGS",
     "CsvLogger",
     "LogPosition",
@@ -232,4 +262,5 @@ __all__ = [
     "LoggerGroup",
     "TensorBoardLogger",
     "default_loggers",
+    "epoch_tags",
 ]

@@ -43,7 +43,7 @@ def plot_run(
         # "evaluations.csv has no 'success_rate' column", blaming the log)
         check_run_config_unchanged(run_dir, DRAWING_WOULD)
     config = load_config(run_dir / "config.json") if (run_dir / "config.json").exists() else None
-    match = config is not None and config.match_student
+    match = config is not None and config.on_match  # DDQN's too: a match has no success
     curves = MATCH_CURVES if match else CURVES
     # the columns each log is drawn against, checked in its header with or without rows (an
     # empty log, or one of another table, was drawn as "no data yet")

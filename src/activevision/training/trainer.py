@@ -19,6 +19,7 @@ and actions, as Gymnasium environments should be.
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Sequence
@@ -49,7 +50,12 @@ from activevision.training.metrics import (
 from activevision.training.policy_files import BestWeights, network_metadata, write_policy
 from activevision.training.progress import postfix, progress_bar
 from activevision.training.run_lock import RunLock
-from activevision.training.validation import greedy_episodes, summarise_validation
+from activevision.training.validation import (
+    evaluation_fields,
+    greedy_episodes,
+    summarise_validation,
+    validation_score,
+)
 
 
 class Trainer:
@@ -255,6 +261,8 @@ class Trainer:
         """Log the finished episode (``info``: its last); the next step starts another."""
         self.episode += 1
         length = len(self._episode_actions)
+        if self.config.on_match:  # a match has no success (as the match student logs it)
+            info = {"success_rate": math.nan}
         record = episode_record(self.episode, self.step, self._episode_reward, length, info)
         self.logger.record_episode(record, self.step)
         self.epoch_log.episodes.append(record)
@@ -281,13 +289,18 @@ class Trainer:
         if self._eval_env is None:
             self._eval_env = self.env_factory()
         seeds = [episode_seed(run.eval_seed, i) for i in range(run.eval_episodes)]
-        records = greedy_episodes(self.learner.q_values, self._eval_env, seeds, self.obs_shape)
-        row = summarise_validation(self.step, records, self.best.score)
+        match = self.config.match if self.config.on_match else None
+        records = greedy_episodes(
+            self.learner.q_values, self._eval_env, seeds, self.obs_shape, match=match
+        )
+        fields, score = evaluation_fields(self.config), validation_score(self.config)
+        row = summarise_validation(self.step, records, self.best.score, fields, score)
         self.logger.record_validation(row, self.step)
         self._validations_logged += 1
         if row["best"]:
-            self.best.keep(self.learner.online, self.step, row["success_rate"])
-            self.best.write(self.run_dir, network_metadata(self.learner.online, self.step))
+            self.best.keep(self.learner.online, self.step, row[score])
+            metadata = network_metadata(self.learner.online, self.step)
+            self.best.write(self.run_dir, metadata, score)
         return row
 
     def close(self) -> None:

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from activevision.envs.match.config import MatchConfig
+from activevision.envs.match.scores import MatchScores
 from activevision.training.config import TrainConfig
 from activevision.training.metrics import episode_record, nan_mean
 
@@ -35,15 +37,16 @@ MATCH_EVALUATION_FIELDS = (
 
 
 def evaluation_fields(config: TrainConfig) -> tuple[str, ...]:
-    """The ``evaluations.csv`` columns of a run of ``config``: a match student's, or the
-    episodes' (every other run, a DDQN run on the match included)."""
-    return MATCH_EVALUATION_FIELDS if config.match_student else EVALUATION_FIELDS
+    """The ``evaluations.csv`` columns of a run of ``config``: a match run's (DDQN or the
+    match student), or the episodes'."""
+    return MATCH_EVALUATION_FIELDS if config.on_match else EVALUATION_FIELDS
 
 
 def validation_score(config: TrainConfig) -> str:
-    """The column that picks a run's best weights: a match student's mean reward (a match
-    has no success), else the success rate."""
-    return "episode_reward" if config.match_student else "success_rate"
+    """The column that picks a run's best weights: a match run's mean reward (a match has
+    no success: a DDQN run on the match kept its first validation's weights, all scoring a
+    success rate of 0), else the success rate."""
+    return "episode_reward" if config.on_match else "success_rate"
 
 
 def greedy_episodes(
@@ -52,23 +55,33 @@ def greedy_episodes(
     seeds: list[int],
     obs_shape: tuple[int, ...],
     max_steps: int = 10_000,
+    match: MatchConfig | None = None,
 ) -> list[dict[str, float]]:
-    """Play one greedy episode from each seed; one ``episodes.csv``-style record each.
+    """Play one greedy episode from each seed; one ``episodes.csv``-style record each, or
+    with ``match`` (the config of ``env``, ActiveVisionMatch-v0) one match's total
+    ``reward`` and the metrics of :mod:`activevision.envs.match.scores`.
 
     ``max_steps`` guards against environments without a time limit.
     """
     records = []
     for number, seed in enumerate(seeds):
         obs, info = env.reset(seed=int(seed))
+        scores = None if match is None else MatchScores(match.ticks, 1, match.tick_seconds)
         reward_sum, length = 0.0, 0
         while length < max_steps:
             action = int(np.argmax(q_values(np.asarray(obs, np.uint8).reshape(obs_shape))))
             obs, reward, terminated, truncated, info = env.step(action)
             reward_sum += float(reward)
             length += 1
+            if scores is not None:
+                scores.add(info, np.array([float(reward)]))
             if terminated or truncated:
                 break
-        records.append(episode_record(number, length, reward_sum, length, info))
+        if scores is None:
+            records.append(episode_record(number, length, reward_sum, length, info))
+        else:
+            per_match = {name: float(value[0]) for name, value in scores.per_match().items()}
+            records.append({"reward": reward_sum, **per_match})
     return records
 
 
