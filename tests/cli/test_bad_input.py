@@ -197,6 +197,8 @@ BAD_ARGUMENTS = [
         + ["--out", "{tmp}/s"],
         "--set learner.learning_rate and --grid learning_rate both set learner.learning_rate",
     ),
+    (["train", "--config", "{tmp}/nope.json", "--out", "{tmp}/x"], "nope.json: no such file"),
+    (["sweep", "--config", "{tmp}", "--out", "{tmp}/s"], ": not a file"),
     (["plot", "{tmp}"], "not a training run"),
     (["report", "{tmp}"], "not a training run"),
     (["nope"], "invalid choice"),

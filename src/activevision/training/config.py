@@ -19,6 +19,7 @@ import os
 import typing
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from activevision.envs.config import MAX_VECTOR_ENVS, EnvConfig
@@ -731,7 +732,10 @@ def save_config(config: TrainConfig, path: str | os.PathLike[str]) -> None:
 
 
 def load_config(path: str | os.PathLike[str]) -> TrainConfig:
-    """Read a config written by :func:`save_config` (ValueError on unknown or invalid keys)."""
+    """Read a config written by :func:`save_config` (ValueError on unknown or invalid keys,
+    and naming a path that is no file: it was a bare "[Errno 2]" line)."""
+    if not Path(path).is_file():
+        raise ValueError(f"{path}: {'not a file' if Path(path).exists() else 'no such file'}")
     values = read_json(path)
     if not isinstance(values, dict):
         raise ValueError(f"{path} must hold a JSON object")
