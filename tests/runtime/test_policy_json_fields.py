@@ -44,7 +44,17 @@ def edited(changes: dict) -> dict:
         ({"observation": REMOVED}, "'observation'"),
         ({"observation": 5}, "'observation'"),
         ({"observation": "image"}, "'observation'"),  # but it takes a vector
-        ({"observation": "image+head+pose+nonsense"}, "'observation'"),
+        ({"observation": "image+head+pose+nonsense"}, "'observation' must be one of"),
+        # vector inputs that are not the observation's: an env built for the observation
+        # (evaluate, robustness) would feed another layout than the controller builds
+        ({"vector_keys": ["head", "pose", "pose_error"]}, "'vector_keys' ['head', 'pose',"),
+        ({"observation": "image+head+belief"}, "inputs of 'observation' 'image+head+belief'"),
+        ({"action_history": 2}, "with 'action_history' 2: ['head', 'pose', 'pose_error',"),
+        ({"vector_keys": [*SHIPPED["vector_keys"], "actions"]}, "'action_history' 0"),
+        (
+            {"observation": "image", "vector_keys": [], "action_history": 1},
+            "'action_history' is 1 but 'observation' 'image' takes none",
+        ),
         ({"step_deg": "3"}, "'step_deg'"),
         ({"step_deg": True}, "'step_deg'"),
         ({"step_deg": 5.0}, "'step_deg' 5"),  # not the table's moves

@@ -33,7 +33,7 @@ from gymnasium import spaces
 
 from activevision.envs.config import EnvConfig
 from activevision.envs.simulation import EpisodeBatch
-from activevision.runtime.metadata import VECTOR_BOUND, VECTOR_KEY_SIZES
+from activevision.runtime.metadata import VECTOR_BOUND, VECTOR_KEY_SIZES, observation_vector_keys
 
 IMAGE_KEY = "image"
 #: Size of each vector key (``"actions"`` is per remembered action): the runtime's table,
@@ -48,12 +48,7 @@ Observation = np.ndarray | dict[str, np.ndarray]
 
 def vector_keys(cfg: EnvConfig) -> tuple[str, ...]:
     """The Dict observation's vector keys, in the order networks concatenate them."""
-    if cfg.observation == "image":
-        return ()
-    parts = cfg.observation.split("+")
-    keys = ("head",) + (("pose", "pose_error") if "pose" in parts else ())
-    keys += ("proposal",) if "proposal" in parts else ()
-    return keys + (("actions",) if cfg.action_history else ())
+    return observation_vector_keys(cfg.observation, cfg.action_history)
 
 
 def observes_within(cfg: EnvConfig, given: EnvConfig) -> bool:

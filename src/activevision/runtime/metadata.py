@@ -55,7 +55,9 @@ names the file and the key: ``opset``, ``input_name``, ``input_dtype`` (``"uint8
 side and ``MAX_STACK`` frames, a training config's bounds; the ``camera`` record's size
 too), the action table and names, the head limits and ``model_sha256`` (every export has
 written them), and ``vector_input_name`` and
-``observation`` where ``vector_keys`` lists inputs. Keys older files lack keep a default:
+``observation`` where ``vector_keys`` lists inputs; ``vector_keys`` must be the observation's
+inputs (:data:`OBSERVATION_VECTOR_KEYS`), with ``"actions"`` last exactly when
+``action_history`` > 0. Keys older files lack keep a default:
 ``observation`` ``"image"`` and no ``vector_keys`` (files from before vector inputs),
 ``camera`` and ``world`` None, ``action_type`` ``"discrete"``, ``act_by`` ``"action"``.
 ``step_deg`` and ``action_set`` (the env's discrete moves; ``export_onnx`` alone writes
@@ -130,6 +132,17 @@ VECTOR_KEY_SIZES = {
     "proposal": 5,
     "actions": 1,
 }
+#: The vector inputs each observation gives, in the order above ("actions" follows any of
+#: them when a policy remembers its moves): the episodic env's observations
+#: (envs.observations) and the match env's (envs.match.observations), which build theirs
+#: from this table, so that HeadController builds the same layout on the robot.
+OBSERVATION_VECTOR_KEYS: dict[str, tuple[str, ...]] = {
+    "image": (),
+    "image+head": ("head",),
+    "image+head+pose": ("head", "pose", "pose_error"),
+    "image+head+pose+proposal": ("head", "pose", "pose_error", "proposal"),
+    "image+head+belief": ("head", "pose", "belief", "ball"),
+}
 #: Every vector input is clipped to +-this, the bound of the envs' observation spaces (m,
 #: rad, s): what lies beyond it (a prior pose or error scale over 10, a belief std or ball
 #: age over 10) is fed as the bound, in the envs and on the robot alike.
@@ -183,6 +196,12 @@ def _action_table_deg(step_deg: float, action_set: str) -> np.ndarray:
     d = math.degrees(math.radians(s) * math.sqrt(2) / 2)
     moves = [(0, 0), (s, 0), (-s, 0), (0, -s), (0, s), (d, -d), (d, d), (-d, -d), (-d, d)]
     return np.asarray(moves[: _ACTION_SET_SIZES[action_set]], dtype=np.float64)
+
+
+def observation_vector_keys(observation: str, action_history: int) -> tuple[str, ...]:
+    """The vector inputs of ``observation`` (a key of :data:`OBSERVATION_VECTOR_KEYS`), with
+    ``"actions"`` last when the policy remembers ``action_history > 0`` moves."""
+    return OBSERVATION_VECTOR_KEYS[observation] + (("actions",) if action_history else ())
 
 
 def vector_key_size(key: str, n_actions: int, action_history: int) -> int:
@@ -654,27 +673,30 @@ class _MetadataReader:
         return tuple(keys)
 
     def observation(self) -> str:
-        """What the policy observes: "image" plus its vector inputs ("image+head+pose...");
-        files from before vector inputs lack it (and ``vector_keys``): "image"."""
-        keys = self.values.get("vector_keys", [])
+        """What the policy observes, a key of :data:`OBSERVATION_VECTOR_KEYS`; its vector
+        inputs must be ``vector_keys`` (with ``"actions"`` where ``action_history`` > 0: an
+        env builds that layout from the observation, the controller from the keys). Files
+        from before vector inputs lack it (and ``vector_keys``): "image"."""
+        keys = self.vector_keys()
         value = self.values.get("observation")
         if value is None:
             if keys:
-                raise self.fail(f"'vector_keys' lists {keys!r} but 'observation' is missing")
+                raise self.fail(f"'vector_keys' lists {list(keys)!r} but 'observation' is missing")
             return "image"
-        parts = value.split("+") if isinstance(value, str) else []
-        if (
-            not parts
-            or parts[0] != "image"
-            or any(p not in VECTOR_KEY_SIZES or p not in keys for p in parts[1:])
-            or (len(parts) == 1) != (not keys)
-        ):
+        if not isinstance(value, str) or value not in OBSERVATION_VECTOR_KEYS:
             raise self.fail(
-                f"'observation' must be 'image' or 'image+' its vector inputs"
-                f" ({'+'.join(k for k in keys if k != 'actions') or 'none'} by 'vector_keys'),"
-                f" got {value!r}"
+                f"'observation' must be one of {list(OBSERVATION_VECTOR_KEYS)}, got {value!r}"
             )
-        return str(value)
+        history = self.count("action_history", MAX_ACTION_HISTORY)
+        if value == "image" and history:
+            raise self.fail(f"'action_history' is {history} but 'observation' 'image' takes none")
+        want = observation_vector_keys(value, history)
+        if keys != want:
+            raise self.fail(
+                f"'vector_keys' {list(keys)} are not the inputs of 'observation' {value!r} with"
+                f" 'action_history' {history}: {list(want)}"
+            )
+        return value
 
     def vector_input_name(self) -> str | None:
         """The graph's vector input: required where ``vector_keys`` lists inputs."""

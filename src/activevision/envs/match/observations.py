@@ -21,7 +21,10 @@ from gymnasium import spaces
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.observations import in_space_order
-from activevision.runtime.metadata import VECTOR_BOUND  # every vector is clipped to +-this
+from activevision.runtime.metadata import (  # every vector is clipped to +-VECTOR_BOUND
+    OBSERVATION_VECTOR_KEYS,
+    VECTOR_BOUND,
+)
 
 IMAGE_KEY = "image"
 VECTOR_SIZES = {"head": 2, "pose": 4, "belief": 3, "ball": 3}
@@ -31,9 +34,7 @@ Observation = np.ndarray | dict[str, np.ndarray]
 
 def vector_keys(cfg: MatchConfig) -> tuple[str, ...]:
     """The Dict observation's vector keys, in the order networks concatenate them."""
-    if cfg.observation == "image":
-        return ()
-    return ("head",) + (("pose", "belief", "ball") if "belief" in cfg.observation else ())
+    return OBSERVATION_VECTOR_KEYS[cfg.observation]
 
 
 def image_space(cfg: MatchConfig) -> spaces.Box:
