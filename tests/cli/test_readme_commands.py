@@ -1,5 +1,6 @@
-"""Every ``activevision ...`` command in the README's shell blocks parses: a flag renamed or
-removed in the code fails here, not in a new user's terminal."""
+"""Every ``activevision ...`` command in the shell blocks of the README and the docs pages
+parses: a flag renamed or removed in the code fails here, not in a new user's terminal. Every
+relative link of those pages points at a file that exists (and an anchor at a heading)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,8 @@ import pytest
 
 from activevision.cli import build_parser
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+ROOT = Path(__file__).resolve().parents[2]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
 def fenced_blocks(text: str, languages: tuple[str, ...]) -> list[str]:
@@ -44,10 +46,10 @@ def readme_commands(text: str) -> list[list[str]]:
     return commands
 
 
-COMMANDS = readme_commands(README.read_text(encoding="utf-8"))
+COMMANDS = [argv for page in PAGES for argv in readme_commands(page.read_text(encoding="utf-8"))]
 
 
-def test_the_readme_has_its_commands():
+def test_the_pages_have_their_commands():
     # the parser above finds them: train, evaluate, match, robustness... (45 when written)
     assert len(COMMANDS) >= 40
     assert {argv[0] for argv in COMMANDS} >= {"train", "evaluate", "match", "robustness", "export"}
@@ -67,11 +69,12 @@ def test_a_stale_flag_would_fail():
     assert readme_commands(python) == []
 
 
-#: The README's Python examples that run on their own (the rest need a robot: a camera,
+#: The pages' Python examples that run on their own (the rest need a robot: a camera,
 #: a neck, its localisation).
-ENV_EXAMPLES = [
-    b for b in fenced_blocks(README.read_text(encoding="utf-8"), ("python",)) if "gym.make" in b
+PYTHON_BLOCKS = [
+    b for page in PAGES for b in fenced_blocks(page.read_text(encoding="utf-8"), ("python",))
 ]
+ENV_EXAMPLES = [b for b in PYTHON_BLOCKS if "gym.make" in b]
 
 
 @pytest.mark.parametrize("example", ENV_EXAMPLES, ids=lambda b: b.split("gym.make")[1][:30])
@@ -79,7 +82,7 @@ def test_readme_env_example_runs(example):
     import gymnasium
 
     namespace: dict[str, object] = {"gym": gymnasium}  # one example continues another's imports
-    exec(compile(example, str(README), "exec"), namespace)
+    exec(compile(example, "<docs example>", "exec"), namespace)
     env = namespace["env"]
     obs, _ = env.reset(seed=0)  # type: ignore[attr-defined]
     assert env.observation_space.contains(obs)  # type: ignore[attr-defined]
@@ -96,7 +99,7 @@ def test_the_quick_start_example_prints_the_same_every_run(capsys):
     finals = []
     for _ in range(2):
         namespace: dict[str, object] = {"gym": gymnasium}
-        exec(compile(ENV_EXAMPLES[0], str(README), "exec"), namespace)
+        exec(compile(ENV_EXAMPLES[0], "<docs example>", "exec"), namespace)
         finals.append((capsys.readouterr().out, namespace["obs"].tobytes()))  # type: ignore[attr-defined]
         namespace["env"].close()  # type: ignore[attr-defined]
     assert finals[0] == finals[1]
@@ -107,11 +110,9 @@ def test_the_readme_has_its_env_examples():
     assert len(ENV_EXAMPLES) == 3
 
 
-#: The README's Python examples for a robot: the controller in its loop, the plan it is
-#: given and the camera check; they run here with stand-ins for the robot's parts.
-ROBOT_EXAMPLES = [
-    b for b in fenced_blocks(README.read_text(encoding="utf-8"), ("python",)) if "gym.make" not in b
-]
+#: The pages' Python examples for a robot (docs/robot.md): the controller in its loop, the
+#: plan it is given and the camera check; they run here with stand-ins for the robot's parts.
+ROBOT_EXAMPLES = [b for b in PYTHON_BLOCKS if "gym.make" not in b]
 
 
 class StandIns:
@@ -166,19 +167,19 @@ def test_the_readme_robot_examples_run(tmp_path: Path, monkeypatch: pytest.Monke
     exported = export_onnx(QNetwork(9).eval(), tmp_path / "deploy" / "policy.onnx", metadata)
     robot = StandIns()
     namespace: dict[str, object] = {"robot": robot, "camera": robot, "neck": robot}
-    exec(compile(loop, str(README), "exec"), namespace)
+    exec(compile(loop, "<docs example>", "exec"), namespace)
     assert robot.moves == 3
 
     shipped = HeadController(pretrained_policy_path())
-    assert shipped.inputs == ("pose", "pose_error", "proposal")  # as the README says
+    assert shipped.inputs == ("pose", "pose_error", "proposal")  # as docs/robot.md says
     namespace.update(controller=shipped, localisation=robot, ball_xy=np.array([0.5, -0.5]))
-    exec(compile(plan, str(README), "exec"), namespace)
+    exec(compile(plan, "<docs example>", "exec"), namespace)
     assert namespace["command"].action == -1  # type: ignore[attr-defined]  # a continuous move
 
     for path in (exported.model_path, exported.metadata_path):
         (tmp_path / path.name).write_bytes(path.read_bytes())
     with pytest.warns(CameraMismatchWarning) as warned:
-        exec(compile(camera_check, str(README), "exec"), namespace)
+        exec(compile(camera_check, "<docs example>", "exec"), namespace)
     assert len(warned) == 1  # one warning, listing each difference
 
 
@@ -196,10 +197,35 @@ def test_heading_anchor_is_githubs():
     )
 
 
-def test_every_link_within_the_readme_finds_its_heading():
-    text = README.read_text()
-    outside = "\n".join(re.split(r"^```.*?^```", text, flags=re.S | re.M))  # no code
-    anchors = {heading_anchor(h) for h in re.findall(r"^#{1,6} (.+)$", outside, flags=re.M)}
-    links = set(re.findall(r"\]\(#([^)]+)\)", text))
-    assert len(links) >= 15  # the contents line and the cross-references
-    assert sorted(links - anchors) == []
+def page_anchors(page: Path) -> set[str]:
+    """The anchors of ``page``'s headings (those outside its code blocks)."""
+    text = page.read_text(encoding="utf-8")
+    outside = "\n".join(re.split(r"^```.*?^```", text, flags=re.S | re.M))
+    return {heading_anchor(h) for h in re.findall(r"^#{1,6} (.+)$", outside, flags=re.M)}
+
+
+def test_the_readme_links_every_docs_page():
+    links = set(re.findall(r"\]\((docs/[^)#]+\.md)\)", PAGES[0].read_text(encoding="utf-8")))
+    assert links == {f"docs/{page.name}" for page in PAGES[1:]} and len(links) >= 10
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_relative_link_of_a_page_finds_its_file_and_heading(page):
+    """Links to a heading (``#anchor``, ``other.md#anchor``) and to files (figures, examples,
+    other pages), as GitHub resolves them: relative to the page."""
+    links = re.findall(r"\]\(([^)\s]+)\)", page.read_text(encoding="utf-8"))
+    broken = []
+    for link in links:
+        if link.startswith(("http://", "https://")):
+            continue
+        path, _, anchor = link.partition("#")
+        target = (page.parent / path).resolve() if path else page
+        if not target.is_file() or (anchor and anchor not in page_anchors(target)):
+            broken.append(link)
+    assert links and broken == []
+
+
+def test_a_broken_link_would_fail(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("# Here\n\n[ok](#here) [gone](#there)\n")
+    assert page_anchors(page) == {"here"}

@@ -390,7 +390,7 @@ def add_parsers(sub: Any) -> None:
         "--ball-bounces-off-us",
         action="store_true",
         help="the ball bounces off our robot's body, as off the others' (default: it rolls"
-        " through our robot, as in the README's figures)",
+        " through our robot, as in docs/match.md's figures)",
     )
     p.add_argument(
         "--detection",

@@ -120,7 +120,7 @@ class ActiveVisionEnv(gym.Env):
     landmark ids, K the field's landmark count), ``success_rate`` (|observed ∩ desired| /
     |desired|), ``success``, ``ball_lost``, ``steps_to_success`` and ``ball_lost_step`` (the
     constructor's ``max_episode_steps`` if it did not happen: 20, or -1 for none; ``make``'s
-    limit does not reach the env, see the README's known limitations), ``episode_score``
+    limit does not reach the env, see docs/design.md's known limitations), ``episode_score``
     (the release's: 1 success, 0 ball lost, else the success rate), ``head``, ``pose``,
     ``believed_pose``, ``ball``, ``step``; with a prior pose in the observation also
     ``prior_pose`` and ``prior_error``. Every value

@@ -462,7 +462,7 @@ class HeadController:
                 f"frames of {width}x{height} px (aspect {width / height:.3f}) are stretched to"
                 f" the policy's {meta.image_width}x{meta.image_height} input (aspect"
                 f" {trained:.3f}): the policy may not transfer. Crop the frames to that aspect"
-                " ratio, or train for the robot's camera (README: On a robot)",
+                " ratio, or train for the robot's camera (docs/robot.md)",
                 CameraMismatchWarning,
                 stacklevel=_caller_level(),  # the caller of act, q_values or observe
             )

@@ -5,9 +5,9 @@ gave before, and moves greedily towards the view with the most evidence.
 The sum is a naive-Bayes filter over the goal (each frame's prediction taken as independent
 evidence about one fixed goal), the episode's memory: a frame that makes another view look
 a little better no longer turns the head around, so the swinging between two neighbouring
-views of a memoryless greedy policy ends (README: 11-16% of episodes at e >= 1 with the
-action head, 0% with goal evidence). NumPy only: the trainer (batched), the evaluator and
-:class:`~activevision.runtime.HeadController` on a robot run this same code.
+views of a memoryless greedy policy ends (docs/learned-head-control.md: 11-16% of episodes
+at e >= 1 with the action head, 0% with goal evidence). NumPy only: the trainer (batched),
+the evaluator and :class:`~activevision.runtime.HeadController` on a robot run this same code.
 """
 
 from __future__ import annotations
@@ -115,7 +115,7 @@ class GoalEvidence:
         switch_margin: hysteresis (nats): once a slot has a goal, another view takes over
             only when its evidence leads by at least this much. 0: always the best-supported
             view. Frames that keep favouring whichever view the head is not at can then no
-            longer swing it between the two (README: continuous head control).
+            longer swing it between the two (docs/continuous-control.md).
         frame: what the goal logits name (:data:`GoalFrame`): with ``"camera"`` each view's
             log-probability is the head's, read at the view's offset from the head, and
             renormalised over the views.

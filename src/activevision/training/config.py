@@ -171,18 +171,18 @@ class DaggerConfig:
     #: what the goal head names (``runtime.goal_evidence.GoalFrame``): "body", the 40 views
     #: (head angles); "camera", the goal's offset from where the head points now, which an
     #: image shows without the head angles (7 x 19 offsets, soft bilinear labels), read
-    #: back as views with the head's angles when acting (README: learned head control) (T)
+    #: back as views with the head's angles when acting (docs/learned-head-control.md) (T)
     goal_frame: GoalFrame = "body"
     #: each minibatch draws its states' prior poses again at their episodes' error scales,
     #: with Algorithm 1's proposal from them (an augmentation: the student cannot recognise
     #: a stored episode by its one prior draw, and so learns what a prior of that error
-    #: tells; README: learned head control) (T)
+    #: tells; docs/learned-head-control.md) (T)
     redraw_prior: bool = False
     #: each minibatch draws its states' looks again from ``env.appearance`` (every factor,
     #: the pattern key and, with ``neutral_share``, whether the state is seen clean; its head
     #: move and frame counter stay): the teacher's label does not depend on the look, so
     #: every state is learned under many appearances instead of the one it was visited in
-    #: (README: robustness) (T)
+    #: (docs/randomised-world.md) (T)
     redraw_look: bool = False
     #: a run directory (its newest policy) or a policy file whose student weights this run
     #: starts from instead of a random initialisation: fine-tuning, e.g. a clean-world
@@ -197,7 +197,7 @@ class DaggerConfig:
     #: view, 22.6 for the default camera: the ball centred, as the glance_track strategy) (T)
     glance_track_margin_deg: float = field(default=90.0, metadata=_range(0.0, 90.0))
     #: on the match env: the entropy_track teacher keeps the ball this many degrees inside the
-    #: image (README: the match section) (T)
+    #: image (docs/match.md) (T)
     track_margin_deg: float = field(default=5.0, metadata=_range(0.0, 29.0))
 
     def __post_init__(self) -> None:

@@ -74,8 +74,8 @@ def dagger(
         observation=observation,
         prior_error_range=prior_error_range,
         # some episodes with an exact prior (half by default): without them a student
-        # trained across 0-2 m/rad never learns to follow a prior it can trust (README: 33%
-        # against 97% goal reached at e = 0)
+        # trained across 0-2 m/rad never learns to follow a prior it can trust
+        # (docs/learned-head-control.md: 33% against 97% goal reached at e = 0)
         prior_exact_share=exact_share if prior_error_range is not None else 0.0,
         action_history=2 if observation != "image" and action_type == "discrete" else 0,
         action_type=action_type,
@@ -102,7 +102,7 @@ def dagger(
 
 def match_dagger(total_timesteps: int, action_type: ActionType = "discrete") -> TrainConfig:
     """DAgger on the match env with ``entropy_track`` (margin 5 degrees) as the teacher, in
-    the weaker-detector world of the README's match table (0.6 near, 0.15 at range, 20%
+    the weaker-detector world of the match table of docs/match.md (0.6 near, 0.15 at range, 20%
     false detections per tick: where the strategies differ in localisation): 16 matches a
     round, 150 updates of 256 re-rendered states after each, the paper's 3-degree head
     (``action_type="continuous"``: any move of up to 3 degrees per axis); validated four
@@ -246,9 +246,9 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         "the paper's DDQN on the match env's image (ActiveVisionMatch-v0)",
     ),
     # DAgger on the match (training.match_dagger): entropy_track teaches what the robot knows
-    # (image, head, belief, ball model) in the weaker-detector world (README: the match)
+    # (image, head, belief, ball model) in the weaker-detector world (docs/match.md)
     # 307,200 ticks (512 matches), ~10 minutes each on a 2-core CPU; half that trains
-    # students 1-2 mm worse (README: the match)
+    # students 1-2 mm worse (docs/match.md)
     "match_dagger": (
         lambda: match_dagger(307_200),
         "DAgger on the match env, entropy_track as the teacher (weaker detector)",
@@ -263,7 +263,7 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         " the ball is out of reach",
     ),
     # DAgger with the oracle as teacher (training.dagger), one preset per observation; each
-    # fits in 30 minutes on a 2-core CPU (README: learned head control)
+    # fits in 30 minutes on a 2-core CPU (docs/learned-head-control.md)
     "dagger_image": (
         lambda: dagger("image", 400_000),
         "DAgger on the image alone (the paper's input)",
@@ -273,7 +273,7 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     # episode takes about a third of the steps; 200,000 steps make about as many updates as
     # dagger_head's 400,000; goal-evidence hysteresis of 3 nats, as dagger_prior_continuous;
     # the goal named in the camera's frame: 96.0% / 87.3% against 94.0% / 81.2% naming views
-    # (README: continuous head control)
+    # (docs/continuous-control.md)
     "dagger_head_continuous": (
         lambda: with_switch_margin(
             dagger("image+head", 200_000, action_type="continuous", goal_frame="camera"), 3.0
@@ -283,7 +283,7 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     ),
     # the image alone names the goal's offset from the view it shows (the camera's frame)
     # far better than the view itself, which also needs the head's pan: 95.9% / 87.0%
-    # against 82.4% / 45.0% (README: learned head control)
+    # against 82.4% / 45.0% (docs/learned-head-control.md)
     "dagger_image_continuous": (
         lambda: with_switch_margin(
             dagger("image", 200_000, action_type="continuous", goal_frame="camera"), 3.0
@@ -300,14 +300,14 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     # 100,000 steps and half exact: 85-88% success rate at e > 0, where the image + head
     # policy alone gets 94%: the student recognised episodes by their prior); a new goal
     # needs 3 nats more evidence than the current one (chosen on validation episodes:
-    # without it 3% of the episodes at e = 1 end swinging; README: continuous head control)
+    # without it 3% of the episodes at e = 1 end swinging; docs/continuous-control.md)
     "dagger_prior_continuous": (
         lambda: prior_continuous(400_000),
         "dagger_prior with continuous moves of up to 10 degrees a step, priors redrawn, the"
         " goal named in the camera's frame",
     ),
-    # Stable-Baselines3's continuous learners on dagger_head_continuous's task (README:
-    # continuous head control); each fits in 30 minutes on a 2-core CPU
+    # Stable-Baselines3's continuous learners on dagger_head_continuous's task
+    # (docs/continuous-control.md); each fits in 30 minutes on a 2-core CPU
     "sac_head": (lambda: stable_baselines("sac", 60_000), "SB3 SAC, continuous moves"),
     "td3_head": (lambda: stable_baselines("td3", 60_000), "SB3 TD3, continuous moves"),
     "ppo_head": (
@@ -316,15 +316,15 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     ),
     # dagger_prior in a randomised world: appearance at the robust ranges and 0-4 other
     # robots, 200,000 steps (a randomised frame costs ~3x a clean one to render: ~30 minutes
-    # on a 2-core CPU; README: a randomised world and robustness)
+    # on a 2-core CPU; docs/randomised-world.md)
     "dagger_robust": (
         lambda: dagger("image+head+pose+proposal", 200_000, (0.0, 2.0), robust=True),
         "dagger_prior with randomised appearance and 0-4 other robots",
     ),
     # dagger_prior_continuous in dagger_robust's randomised world with a quarter of the
     # episodes clean, wider carpet and hall textures and every state's look drawn again for
-    # each minibatch, 400,000 steps (39 minutes on a 2-core CPU; the shipped policy; README:
-    # a randomised world and robustness: half the episodes clean took it from 92.3% / 77.5%
+    # each minibatch, 400,000 steps (39 minutes on a 2-core CPU; the shipped policy;
+    # docs/randomised-world.md: half the episodes clean took it from 92.3% / 77.5%
     # to 94.4% / 83.3% at e = 1 in the paper's world, the wider textures its goal reached
     # under grain 25 from 52% to 68%, the redrawn looks to 95.9% / 88.6% and every
     # robustness row as high or higher, a quarter clean with them to 96.9% / 90.5% and

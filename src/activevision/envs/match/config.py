@@ -67,7 +67,7 @@ class BallConfig:
     kick_speed: tuple[float, float] = (0.5, 2.5)  #: initial speed of a kick (m/s), uniform
     #: the ball bounces off our own robot's body too, as off the others' (keeping
     #: ``others.ball_restitution``; a robot walking into it pushes it). Off by default: the
-    #: README's match figures were measured with the ball rolling through our robot.
+    #: docs/match.md's figures were measured with the ball rolling through our robot.
     bounces_off_own_robot: bool = False
 
     def __post_init__(self) -> None:

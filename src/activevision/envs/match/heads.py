@@ -100,10 +100,10 @@ def entropy_track_targets(
     return targets
 
 
-DEFAULT_TRACK_MARGIN_DEG = 5.0  #: entropy_track's margin (README: the match section)
+DEFAULT_TRACK_MARGIN_DEG = 5.0  #: entropy_track's margin (docs/match.md)
 #: glance_track's position std (m) above which it localises, and how far (deg) beyond the
 #: head's reach the ball model must lie for it to look anywhere: chosen on validation
-#: matches (seeds 3000-3049, weaker detector; README: the match section)
+#: matches (seeds 3000-3049, weaker detector; docs/match.md)
 DEFAULT_GLANCE_STD_M = 0.10
 DEFAULT_GLANCE_REACH_DEG = 30.0
 #: the info keys Algorithm 1 plans from: the robot's belief and ball model
