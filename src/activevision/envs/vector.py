@@ -3,6 +3,7 @@ of one :class:`EpisodeBatch`, rendered, stepped and searched in batched calls.""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -41,6 +42,9 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
     ``desired_mask`` and ``observed_mask``): the very arrays ``SyncVectorEnv`` and
     ``AsyncVectorEnv`` stack from single envs. Actions must lie in the action space (integers;
     with ``action_type="continuous"`` an (N, 2) float array in [-1, 1]).
+    ``get_attr``, ``set_attr`` and ``call`` act as ``SyncVectorEnv``'s (see
+    :class:`SlotVectorEnv`); ``call`` runs ``render`` and ``entropy_regret`` per
+    sub-environment.
     """
 
     def __init__(
@@ -118,6 +122,12 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         infos = self._infos()
         self._needs_reset = terminated | truncated
         return self._observe(), reward, terminated, truncated, infos
+
+    def _slot_methods(self) -> dict[str, Callable[..., Any]]:
+        def entropy_regret(i: int) -> float:
+            return float(self.sim.entropy_regret(np.array([i]))[0])
+
+        return {**super()._slot_methods(), "entropy_regret": entropy_regret}
 
     def _picture(self, i: int) -> np.ndarray:
         from activevision.envs.view import episode_panel  # imports matplotlib: only here
