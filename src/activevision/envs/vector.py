@@ -10,7 +10,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from activevision.envs.actions import head_action_space
-from activevision.envs.config import MAX_VECTOR_ENVS, EnvConfig, check_count, resolve_config
+from activevision.envs.config import EnvConfig, resolve_config
 from activevision.envs.observations import (
     Observation,
     ObservationBuilder,
@@ -21,6 +21,7 @@ from activevision.envs.simulation import EpisodeBatch
 from activevision.envs.slots import SlotVectorEnv, check_autoreset_mode
 from activevision.envs.time_limit import never, resolve_limit
 from activevision.localisation import LocalisationConfig
+from activevision.registration import check_num_envs
 
 
 class ActiveVisionVectorEnv(SlotVectorEnv):
@@ -57,7 +58,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         autoreset_mode: AutoresetMode | str | None = None,
         **config_overrides: Any,
     ) -> None:
-        num_envs = check_count("num_envs", num_envs, MAX_VECTOR_ENVS)
+        num_envs = check_num_envs(num_envs)  # before the batch is allocated
         check_autoreset_mode(autoreset_mode)
         self.config = config = resolve_config(config, config_overrides)
         # gymnasium.make_vec passes its max_episode_steps as given (20, the registration's,

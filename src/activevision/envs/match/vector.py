@@ -9,7 +9,6 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from activevision.envs.actions import head_action_space
-from activevision.envs.config import MAX_VECTOR_ENVS, check_count
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.env import resolve_match_config
 from activevision.envs.match.observations import (
@@ -22,6 +21,7 @@ from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.match.view import match_panel
 from activevision.envs.slots import SlotVectorEnv, check_autoreset_mode
 from activevision.envs.time_limit import resolve_limit
+from activevision.registration import check_num_envs
 
 
 class ActiveVisionMatchVectorEnv(SlotVectorEnv):
@@ -45,7 +45,7 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
         autoreset_mode: AutoresetMode | str | None = None,
         **config_overrides: Any,
     ) -> None:
-        num_envs = check_count("num_envs", num_envs, MAX_VECTOR_ENVS)
+        num_envs = check_num_envs(num_envs)  # before the batch is allocated
         check_autoreset_mode(autoreset_mode)
         self.config = config = resolve_match_config(config, config_overrides)
         # the match truncates itself after config.ticks; a time limit may end it sooner
