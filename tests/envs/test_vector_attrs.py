@@ -110,3 +110,42 @@ def test_call_refuses_a_method_it_cannot_run_per_sub_environment() -> None:
         with pytest.raises(AttributeError, match=repr(name)):
             env.call(name)
     env.close()
+
+
+@pytest.mark.parametrize(
+    ("env_id", "limit"), [(IDS[0], {"max_episode_steps": 2}), (IDS[1], {"ticks": 2})]
+)
+def test_rgb_array_list_collects_the_pictures_sync_collects(env_id: str, limit: dict) -> None:
+    """``render_mode="rgb_array_list"`` (Gymnasium's ``RenderCollection``, which ``make``
+    and so the sync mode apply): the native env refused it ("expects one of ['rgb_array']"),
+    so ``make_vec`` with it worked in sync mode only. Each sub-environment's pictures since
+    its last reset or render, an autoreset starting the list again, a partial reset too."""
+    envs = {
+        mode: gym.make_vec(
+            env_id, num_envs=2, vectorization_mode=mode, render_mode="rgb_array_list", **limit
+        )
+        for mode in ("sync", "vector_entry_point")
+    }
+    got: dict[str, list[Any]] = {mode: [] for mode in envs}
+    for mode, env in envs.items():
+        env.reset(seed=5)
+        for t in range(4):  # the episodes end after 2 steps: the next step autoresets
+            env.step(np.array([1, 3]))
+            if t == 1:
+                got[mode].append(env.render())
+        env.reset(options={"reset_mask": np.array([False, True])})
+        got[mode].append(env.call("render"))
+        got[mode].append(env.render())  # popped: empty lists
+        got[mode].append(env.get_attr("render_mode"))
+        got[mode].append(env.metadata["render_modes"])
+        env.close()
+    want = got["sync"]
+    assert [[len(frames) for frames in r] for r in want[:3]] == [[3, 3], [2, 1], [0, 0]]
+    for g, w in zip(got["vector_entry_point"], want, strict=True):
+        assert len(g) == len(w)
+        for a, b in zip(g, w, strict=True):
+            if isinstance(b, list) and b and isinstance(b[0], np.ndarray):
+                assert len(a) == len(b)
+                assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+            else:
+                assert a == b

@@ -38,7 +38,7 @@ class SlotVectorEnv(VectorEnv):
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
     #: what ``get_attr("metadata")`` reports: a sub-environment's, the single env's metadata
-    single_metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 3}
+    _SINGLE_METADATA: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 3}
     #: the vector env's own names, which no sub-environment has (``get_attr`` refuses them)
     _VECTOR_ONLY: ClassVar[frozenset[str]] = frozenset(
         {
@@ -64,8 +64,17 @@ class SlotVectorEnv(VectorEnv):
         frame_shape: tuple[int, ...],
         render_mode: str | None = None,
     ) -> None:
-        check_render_mode(render_mode, self.metadata["render_modes"])
+        modes = self.metadata["render_modes"]
+        # "rgb_array_list" as gymnasium.make (and so the sync and async modes) take it, by
+        # Gymnasium's RenderCollection: each sub-environment's pictures since the last render
+        check_render_mode(render_mode, [*modes, *(f"{m}_list" for m in modes)])
         self.render_mode = render_mode
+        self.single_metadata = self._SINGLE_METADATA
+        if render_mode is not None and render_mode.endswith("_list"):
+            # as RenderCollection reports its modes (SyncVectorEnv's metadata is its env's)
+            self.metadata = {**self.metadata, "render_modes": [*modes, render_mode]}
+            self.single_metadata = {**self._SINGLE_METADATA, "render_modes": [*modes, render_mode]}
+        self._frame_lists: list[list[np.ndarray]] = [[] for _ in range(num_envs)]
         self.num_envs = num_envs
         self.single_observation_space = observation_space
         self.single_action_space = action_space
@@ -110,13 +119,34 @@ class SlotVectorEnv(VectorEnv):
         """Each sub-environment's generator, as ``SyncVectorEnv`` reports its envs'."""
         return tuple(self._rngs)
 
-    def render(self) -> tuple[np.ndarray, ...] | None:
+    def render(self) -> tuple[Any, ...] | None:
         """With ``render_mode="rgb_array"``: each sub-environment's picture, as its single
-        env's ``render()`` draws it (what ``SyncVectorEnv.render`` returns); None
-        otherwise."""
-        if self.render_mode != "rgb_array":
+        env's ``render()`` draws it (what ``SyncVectorEnv.render`` returns); with
+        ``"rgb_array_list"`` each sub-environment's list of pictures since its last reset or
+        render, as Gymnasium's ``RenderCollection`` collects them (an autoreset starts the
+        list again); None otherwise."""
+        if self.render_mode not in ("rgb_array", "rgb_array_list"):
             return None
-        return tuple(self._picture(i) for i in range(self.num_envs))
+        return tuple(self._render_slot(i) for i in range(self.num_envs))
+
+    def _render_slot(self, i: int) -> Any:
+        """Sub-environment ``i``'s ``render()``."""
+        if self.render_mode == "rgb_array":
+            return self._picture(i)
+        if self.render_mode == "rgb_array_list":
+            frames, self._frame_lists[i] = self._frame_lists[i], []
+            return frames
+        return None
+
+    def _collect_frames(self, restarted: np.ndarray, stepped: np.ndarray) -> None:
+        """With ``render_mode="rgb_array_list"``: the pictures after a reset or step, as
+        ``RenderCollection`` keeps them (a reset starts a sub-environment's list again)."""
+        if self.render_mode != "rgb_array_list":
+            return
+        for i in restarted:
+            self._frame_lists[i] = [self._picture(i)]
+        for i in stepped:
+            self._frame_lists[i].append(self._picture(i))
 
     def _picture(self, i: int) -> np.ndarray:
         raise NotImplementedError
@@ -129,7 +159,7 @@ class SlotVectorEnv(VectorEnv):
     def _slot_methods(self) -> dict[str, Callable[..., Any]]:
         """Single-env methods that ``call`` runs per sub-environment: ``f(i, *args,
         **kwargs)``. Subclasses add theirs."""
-        return {"render": lambda i: self._picture(i) if self.render_mode == "rgb_array" else None}
+        return {"render": self._render_slot}
 
     def _slot_attr(self, name: str, i: int) -> Any:
         """Sub-environment ``i``'s attribute ``name``, as its single env reports it."""

@@ -86,6 +86,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         # a reset sub-environment's whole frame stack is its first frame; the others keep
         # theirs (a state renders the same image each time)
         self._frames[slots] = self.sim.render(slots)[:, None]
+        self._collect_frames(slots, slots[:0])
         return self._observe(), self._with_masks(self._info_arrays(), mask)
 
     def _observe(self) -> Observation:
@@ -120,6 +121,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
             self.sim.reset(started, [self._rngs[i] for i in started])
             self._observations.start(started)
         self._render(started)
+        self._collect_frames(started, np.flatnonzero(stepping))
         infos = self._infos()
         self._needs_reset = terminated | truncated
         return self._observe(), reward, terminated, truncated, infos

@@ -68,7 +68,9 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
         mask = self._reset_mask(seed, options)
         slots = np.flatnonzero(mask)
         self.sim.reset(slots, [self._rngs[i] for i in slots])
-        return self._observe(), self._with_masks(self.sim.info_arrays(), mask)
+        observation = self._observe()
+        self._collect_frames(slots, slots[:0])
+        return observation, self._with_masks(self.sim.info_arrays(), mask)
 
     def step(
         self, actions: np.ndarray
@@ -81,7 +83,9 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
             self.sim.reset(started, [self._rngs[i] for i in started])
         terminated = np.zeros(self.num_envs, dtype=bool)
         self._needs_reset = truncated.copy()
-        return self._observe(), reward, terminated, truncated, self._infos()
+        observation = self._observe()
+        self._collect_frames(started, np.flatnonzero(~resetting))
+        return observation, reward, terminated, truncated, self._infos()
 
     def _observe(self) -> Observation:
         self.sim.render(out=self._frames[:, 0])
