@@ -149,3 +149,11 @@ def test_rgb_array_list_collects_the_pictures_sync_collects(env_id: str, limit: 
                 assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
             else:
                 assert a == b
+
+
+def test_get_attr_of_what_only_sync_sub_environments_have_says_why() -> None:
+    env = gym.make_vec("ActiveVision-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    with pytest.raises(AttributeError, match=r"slots of one batch, with no 'unwrapped'"):
+        env.get_attr("unwrapped")
+    assert env.unwrapped is env  # the vector env's own, as VectorEnv documents
+    env.close()

@@ -173,7 +173,14 @@ class SlotVectorEnv(VectorEnv):
         }
         if name in per_slot:
             return per_slot[name]()
-        if name in self._VECTOR_ONLY or not hasattr(self, name):
+        if name in self._VECTOR_ONLY:
+            # e.g. "unwrapped": SyncVectorEnv's sub-environments are env objects, ours are
+            # slots of one batch
+            raise AttributeError(
+                f"{type(self).__name__}: its sub-environments are slots of one batch, with no"
+                f" {name!r} of their own (vectorization_mode='sync' makes env objects)"
+            )
+        if not hasattr(self, name):
             raise AttributeError(
                 f"{type(self).__name__}: its sub-environments have no attribute {name!r}"
             )
