@@ -118,3 +118,60 @@ def test_an_image_too_small_after_its_average_names_the_camera_and_the_downsampl
     with pytest.raises(ValueError, match=r"^image 120x160 averaged 4 x 4 is 30x40, too small"):
         StudentFeatures(paper, downsample=4)
     assert StudentFeatures(paper, downsample=3).trunk.hidden(torch.zeros(1, 1, 120, 160)).shape
+
+
+def test_normalize_images_false_reaches_the_trunk_as_the_default_does():
+    """``policy_kwargs=dict(normalize_images=False)``: SB3 hands the uint8 image over
+    unscaled and tells only its own extractors, so the trunk read 0-255 as if it were
+    [0, 1], 255 times too bright, without a word. Passed to the extractor too, the image is
+    scaled there: the very features of the default; passed to one of the two, the first
+    batch is a ValueError naming the other."""
+    env = gym.make("ActiveVision-v0", action_type="continuous")
+    obs, _ = env.reset(seed=3)
+    models = {
+        "default": _student_model(PPO, env),
+        "both": _student_model(
+            PPO,
+            env,
+            {"normalize_images": False, "features_extractor_kwargs": {"normalize_images": False}},
+        ),
+        "policy only": _student_model(PPO, env, {"normalize_images": False}),
+        "extractor only": _student_model(
+            PPO, env, {"features_extractor_kwargs": {"normalize_images": False}}
+        ),
+    }
+    weights = models["default"].policy.state_dict()
+    features = {}
+    for name, model in models.items():
+        model.policy.load_state_dict(weights)
+        policy = model.policy
+        tensor = policy.obs_to_tensor(obs)[0]
+        if name in ("policy only", "extractor only"):
+            other = "features_extractor_kwargs" if name == "policy only" else "policy_kwargs"
+            with pytest.raises(ValueError, match=rf"^StudentFeatures: .*pass {other}="):
+                policy.extract_features(tensor, policy.features_extractor)
+            with pytest.raises(ValueError, match=r"^StudentFeatures: "):  # and so learn()
+                model.learn(8)
+            continue
+        with torch.no_grad():
+            features[name] = policy.extract_features(tensor, policy.features_extractor)
+    assert torch.equal(features["both"], features["default"])
+    assert features["default"].abs().sum() > 0
+
+
+def test_normalize_images_false_reads_a_float_image_already_in_0_1():
+    env = gym.wrappers.TransformObservation(
+        gym.make("ActiveVision-v0"),
+        lambda o: (o / 255).astype(np.float32),
+        gym.spaces.Box(0, 1, (1, 120, 160), np.float32),
+    )
+    read = StudentFeatures(env.observation_space, normalize_images=False)
+    uint8 = StudentFeatures(gym.make("ActiveVision-v0").observation_space)
+    read.load_state_dict(uint8.state_dict())
+    image = torch.as_tensor(env.reset(seed=1)[0])[None]
+    with torch.no_grad():
+        assert torch.allclose(read(image), uint8(image), atol=1e-6)
+    with pytest.raises(ValueError, match=r"^normalize_images: expects True or False"):
+        StudentFeatures(env.observation_space, normalize_images="no")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"^need the env's uint8 image"):
+        StudentFeatures(env.observation_space)  # a float image with SB3's default: refused

@@ -1,5 +1,6 @@
 import csv
 
+import gymnasium as gym
 import numpy as np
 import pytest
 import torch
@@ -423,3 +424,19 @@ def test_auxiliary_goal_task_needs_head_and_goal_in_info():
         goal_offset({"head": np.array([0.5, 0.2]), "goal_viewpoint": np.array([-0.1, 0.6])}),
         [-0.6, 0.4],
     )
+
+
+@pytest.mark.parametrize(
+    ("env_id", "need"),
+    [("CartPole-v1", "need a uint8 Box observation space"), ("Pendulum-v1", "need a Discrete")],
+)
+def test_a_custom_env_id_the_ddqn_cannot_learn_is_named(tmp_path, env_id, need):
+    """``env_id=CartPole-v1`` (vector observations) was "need a uint8 Box observation space,
+    got Box(...)", naming neither the field nor the env; an env_factory's env is named as
+    such. Nothing is written."""
+    config = TrainConfig(env_id=env_id)
+    with pytest.raises(ValueError, match=rf"^TrainConfig.env_id '{env_id}': {need}"):
+        Trainer(config, tmp_path / "run")
+    with pytest.raises(ValueError, match=rf"^env_factory's env: {need}"):
+        Trainer(config, tmp_path / "run", env_factory=lambda: gym.make(env_id))
+    assert not (tmp_path / "run").exists()

@@ -32,13 +32,24 @@ class StudentFeatures(BaseFeaturesExtractor):
     [0, 1] by SB3), or a Dict of that image and float vectors, concatenated in
     ``vector_keys`` order (the order ``envs.observations`` lays them out). With a Dict
     holding vectors, ``vector_keys`` must name those read (``()``: the image alone); a key
-    the space lacks, or one named for a bare image, is a ValueError."""
+    the space lacks, or one named for a bare image, is a ValueError.
+
+    ``normalize_images`` must be the policy's (SB3 passes that flag to its own extractors
+    only): with ``policy_kwargs=dict(normalize_images=False)`` SB3 hands the uint8 image
+    over unscaled, so pass ``features_extractor_kwargs=dict(normalize_images=False)`` too;
+    the extractor then scales it itself, and the trunk reads [0, 1] either way (as the
+    exported policy does). With ``normalize_images=False`` the image may also be a float Box
+    already in [0, 1] (a user's normalising wrapper), read as it is. The first batch tells
+    whether the two flags disagree (an image over 1 where SB3 should have scaled it, one of
+    fractions k/255 where it should not have): a ValueError naming both, not a trunk reading
+    pixels 255 times too bright or too dark."""
 
     def __init__(
         self,
         observation_space: gym.Space[Any],
         vector_keys: tuple[str, ...] | None = None,
         downsample: int = 2,
+        normalize_images: bool = True,
     ) -> None:
         if isinstance(observation_space, gym.spaces.Dict):
             keys = sorted(k for k in observation_space.spaces if k != IMAGE_KEY)
@@ -76,12 +87,16 @@ class StudentFeatures(BaseFeaturesExtractor):
             image_space, sizes = observation_space, []
         if image_space.shape is None or len(image_space.shape) != 3 or image_space.shape[0] != 1:
             raise ValueError(f"need a (1, H, W) image observation, got {image_space}")
+        if not isinstance(normalize_images, bool):
+            raise ValueError(f"normalize_images: expects True or False, got {normalize_images!r}")
         # SB3 scales only a uint8 image to [0, 1]: a float image (DtypeObservation, a
         # user's cast) reached the trunk as 0-255 and was read as if scaled, 255 times too
         # bright, without a word (and a policy trained so exports to a runtime that scales)
-        if getattr(image_space, "dtype", None) != np.uint8:
+        uint8 = getattr(image_space, "dtype", None) == np.uint8
+        if not uint8 and (normalize_images or not _unit_box(image_space)):
             raise ValueError(
                 "need the env's uint8 image (SB3 scales it to [0, 1]; the trunk reads that),"
+                " or with normalize_images=False a float image in [0, 1],"
                 f" got dtype {getattr(image_space, 'dtype', None)}: {image_space}"
             )
         height, width = image_space.shape[1:]
@@ -89,6 +104,11 @@ class StudentFeatures(BaseFeaturesExtractor):
         super().__init__(observation_space, features_dim=trunk.sizes[2])
         self.vector_keys = tuple(vector_keys)
         self.trunk = trunk
+        self.normalize_images = normalize_images
+        # a uint8 image SB3 leaves unscaled is divided here as SB3 divides it
+        self._divide = uint8 and not normalize_images
+        self._uint8 = uint8
+        self._checked = False  # whether a batch has shown the flags agree
 
     def forward(self, observations: Any) -> torch.Tensor:
         if isinstance(observations, dict):
@@ -100,7 +120,36 @@ class StudentFeatures(BaseFeaturesExtractor):
             )
         else:
             image, vector = observations, None
+        if not self._checked and self._uint8:
+            self._check_scale(image)
+        if self._divide:
+            image = image.float() / 255.0
         return self.trunk.hidden(image, vector)
+
+    def _check_scale(self, image: torch.Tensor) -> None:
+        """ValueError unless the first batch's uint8 image came as ``normalize_images``
+        says: scaled by SB3 (nothing over 1) or as it was (whole numbers 0-255)."""
+        if self.normalize_images and bool((image > 1.0).any()):
+            raise ValueError(
+                "StudentFeatures: the image came unscaled (values up to 255), as with"
+                " policy_kwargs normalize_images=False: pass"
+                " features_extractor_kwargs=dict(normalize_images=False) too"
+            )
+        if not self.normalize_images and bool((image != image.round()).any()):
+            raise ValueError(
+                "StudentFeatures: normalize_images=False, but the image came scaled to [0, 1]:"
+                " pass policy_kwargs=dict(normalize_images=False) too"
+            )
+        self._checked = True
+
+
+def _unit_box(space: gym.Space[Any]) -> bool:
+    """Whether ``space`` is a float Box within [0, 1] (an image already normalised)."""
+    return (
+        isinstance(space, gym.spaces.Box)
+        and np.issubdtype(space.dtype, np.floating)
+        and bool(np.all(space.low >= 0) and np.all(space.high <= 1))
+    )
 
 
 def actor_network(model: Any, n_actions: int) -> StudentNetwork:

@@ -14,6 +14,7 @@ from activevision.envs.actions import ActionType
 from activevision.envs.robots import RobotsConfig
 from activevision.geometry import CameraConfig, FieldSpec, field_preset
 from activevision.geometry.field import FIELD_PRESETS
+from activevision.registration import MAX_VECTOR_ENVS as _MAX_VECTOR_ENVS
 from activevision.rendering.appearance import AppearanceConfig
 from activevision.runtime.metadata import MAX_ACTION_HISTORY
 from activevision.typecheck import (
@@ -32,11 +33,9 @@ OBSERVATION_KINDS: tuple[str, ...] = typing.get_args(ObservationKind)
 #: The most images an observation stacks (P: 1; Atari's DQN: 4): a larger number (a typo,
 #: 10**12) is refused naming the field, not a MemoryError allocating the stack.
 MAX_FRAME_STACK = 64
-#: The most sub-environments a native vector env (``num_envs``) steps together: far beyond
-#: any batch of this package (DAgger's 64 episodes, a match comparison's 50 matches), yet
-#: small enough that a typo (10**12) is refused naming ``num_envs``, not numpy's MemoryError
-#: allocating the batch's arrays.
-MAX_VECTOR_ENVS = 65_536
+#: The most sub-environments a native vector env (``num_envs``) steps together
+#: (``registration.MAX_VECTOR_ENVS``, where ``make_vec`` checks it for every mode).
+MAX_VECTOR_ENVS = _MAX_VECTOR_ENVS
 #: The most rejection-sampling draws for one episode start (``max_start_draws``): the
 #: default 1,000 finds a start in a few; a million take seconds where no start exists.
 MAX_START_DRAWS = 1_000_000

@@ -4,7 +4,9 @@ Gymnasium's default autoreset (``NEXT_STEP``)."""
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+from collections.abc import Callable
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -19,13 +21,40 @@ from activevision.envs.seeding import reseed_generators
 
 class SlotVectorEnv(VectorEnv):
     """Spaces, per-slot generators, the frame buffer and the info masks of a native vector
-    env; subclasses build their simulation and call :meth:`_set_up_slots`."""
+    env; subclasses build their simulation and call :meth:`_set_up_slots`.
+
+    ``get_attr``, ``set_attr`` and ``call`` follow ``SyncVectorEnv``'s: ``get_attr(name)``
+    is a tuple of each sub-environment's value (``np_random``, ``np_random_seed``, the
+    single ``observation_space``, ``action_space``, ``metadata`` and ``spec``; any other
+    attribute, the config or one set with ``set_attr``, is shared, the same for each);
+    ``call("render")`` draws each sub-environment's picture (subclasses name their other
+    per-sub-environment methods); ``set_attr`` takes one value or ``num_envs`` of them, all
+    equal but for ``np_random`` (one generator each), since the sub-environments share
+    every other attribute."""
 
     metadata = {
         "render_modes": ["rgb_array"],
         "render_fps": 3,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
+    #: what ``get_attr("metadata")`` reports: a sub-environment's, the single env's metadata
+    _SINGLE_METADATA: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 3}
+    #: the vector env's own names, which no sub-environment has (``get_attr`` refuses them)
+    _VECTOR_ONLY: ClassVar[frozenset[str]] = frozenset(
+        {
+            "num_envs",
+            "single_observation_space",
+            "single_action_space",
+            "unwrapped",
+            "reset",
+            "step",
+            "close",
+            "close_extras",
+            "call",
+            "get_attr",
+            "set_attr",
+        }
+    )
 
     def _set_up_slots(
         self,
@@ -35,8 +64,17 @@ class SlotVectorEnv(VectorEnv):
         frame_shape: tuple[int, ...],
         render_mode: str | None = None,
     ) -> None:
-        check_render_mode(render_mode, self.metadata["render_modes"])
+        modes = self.metadata["render_modes"]
+        # "rgb_array_list" as gymnasium.make (and so the sync and async modes) take it, by
+        # Gymnasium's RenderCollection: each sub-environment's pictures since the last render
+        check_render_mode(render_mode, [*modes, *(f"{m}_list" for m in modes)])
         self.render_mode = render_mode
+        self.single_metadata = self._SINGLE_METADATA
+        if render_mode is not None and render_mode.endswith("_list"):
+            # as RenderCollection reports its modes (SyncVectorEnv's metadata is its env's)
+            self.metadata = {**self.metadata, "render_modes": [*modes, render_mode]}
+            self.single_metadata = {**self._SINGLE_METADATA, "render_modes": [*modes, render_mode]}
+        self._frame_lists: list[list[np.ndarray]] = [[] for _ in range(num_envs)]
         self.num_envs = num_envs
         self.single_observation_space = observation_space
         self.single_action_space = action_space
@@ -81,16 +119,139 @@ class SlotVectorEnv(VectorEnv):
         """Each sub-environment's generator, as ``SyncVectorEnv`` reports its envs'."""
         return tuple(self._rngs)
 
-    def render(self) -> tuple[np.ndarray, ...] | None:
+    def render(self) -> tuple[Any, ...] | None:
         """With ``render_mode="rgb_array"``: each sub-environment's picture, as its single
-        env's ``render()`` draws it (what ``SyncVectorEnv.render`` returns); None
-        otherwise."""
-        if self.render_mode != "rgb_array":
+        env's ``render()`` draws it (what ``SyncVectorEnv.render`` returns); with
+        ``"rgb_array_list"`` each sub-environment's list of pictures since its last reset or
+        render, as Gymnasium's ``RenderCollection`` collects them (an autoreset starts the
+        list again); None otherwise."""
+        if self.render_mode not in ("rgb_array", "rgb_array_list"):
             return None
-        return tuple(self._picture(i) for i in range(self.num_envs))
+        return tuple(self._render_slot(i) for i in range(self.num_envs))
+
+    def _render_slot(self, i: int) -> Any:
+        """Sub-environment ``i``'s ``render()``."""
+        if self.render_mode == "rgb_array":
+            return self._picture(i)
+        if self.render_mode == "rgb_array_list":
+            frames, self._frame_lists[i] = self._frame_lists[i], []
+            return frames
+        return None
+
+    def _collect_frames(self, restarted: np.ndarray, stepped: np.ndarray) -> None:
+        """With ``render_mode="rgb_array_list"``: the pictures after a reset or step, as
+        ``RenderCollection`` keeps them (a reset starts a sub-environment's list again)."""
+        if self.render_mode != "rgb_array_list":
+            return
+        for i in restarted:
+            self._frame_lists[i] = [self._picture(i)]
+        for i in stepped:
+            self._frame_lists[i].append(self._picture(i))
 
     def _picture(self, i: int) -> np.ndarray:
         raise NotImplementedError
+
+    # Gymnasium's VectorEnv API for sub-environment attributes (SyncVectorEnv's semantics):
+    # the sub-environments are slots of one batch, so a name is either one of the per-slot
+    # names below or an attribute that every sub-environment shares (the config, the
+    # render mode, one a user set), reported once per sub-environment.
+
+    def _slot_methods(self) -> dict[str, Callable[..., Any]]:
+        """Single-env methods that ``call`` runs per sub-environment: ``f(i, *args,
+        **kwargs)``. Subclasses add theirs."""
+        return {"render": self._render_slot}
+
+    def _slot_attr(self, name: str, i: int) -> Any:
+        """Sub-environment ``i``'s attribute ``name``, as its single env reports it."""
+        per_slot: dict[str, Callable[[], Any]] = {
+            "np_random": lambda: self._rngs[i],
+            "np_random_seed": lambda: self._seeds[i],
+            "observation_space": lambda: self.single_observation_space,
+            "action_space": lambda: self.single_action_space,
+            "metadata": lambda: self.single_metadata,
+            "spec": self._single_spec,
+        }
+        if name in per_slot:
+            return per_slot[name]()
+        if name in self._VECTOR_ONLY:
+            # e.g. "unwrapped": SyncVectorEnv's sub-environments are env objects, ours are
+            # slots of one batch
+            raise AttributeError(
+                f"{type(self).__name__}: its sub-environments are slots of one batch, with no"
+                f" {name!r} of their own (vectorization_mode='sync' makes env objects)"
+            )
+        if not hasattr(self, name):
+            raise AttributeError(
+                f"{type(self).__name__}: its sub-environments have no attribute {name!r}"
+            )
+        return getattr(self, name)
+
+    def _single_spec(self) -> Any:
+        """A sub-environment's spec, as ``make_vec``'s sync mode makes them: the vector
+        env's without ``num_envs``, ``vectorization_mode`` and ``max_episode_steps`` among
+        the keywords (the last is ``make``'s, and so the spec's ``max_episode_steps``)."""
+        spec = self.spec
+        if spec is None:
+            return None
+        kwargs = dict(spec.kwargs)
+        kwargs.pop("num_envs", None)
+        kwargs.pop("vectorization_mode", None)
+        limit = kwargs.pop("max_episode_steps", spec.max_episode_steps)
+        return dataclasses.replace(spec, kwargs=kwargs, max_episode_steps=limit)
+
+    def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
+        """``SyncVectorEnv.call``: each sub-environment's method ``name`` called with
+        ``args`` and ``kwargs`` (``render``, and the single env's own methods listed in the
+        class docstring), or its attribute ``name`` when that is no method."""
+        methods = self._slot_methods()
+        if name in methods:
+            return tuple(methods[name](i, *args, **kwargs) for i in range(self.num_envs))
+        values = self.get_attr(name)
+        if any(callable(v) for v in values):
+            raise AttributeError(
+                f"{type(self).__name__}.call: runs the sub-environments' methods"
+                f" {sorted(methods)}, not {name!r} (vectorization_mode='sync' runs any)"
+            )
+        return values
+
+    def get_attr(self, name: str) -> tuple[Any, ...]:
+        """``SyncVectorEnv.get_attr``: each sub-environment's attribute ``name``."""
+        return tuple(self._slot_attr(name, i) for i in range(self.num_envs))
+
+    def set_attr(self, name: str, values: list[Any] | tuple[Any, ...] | Any) -> None:
+        """``SyncVectorEnv.set_attr``: one value for every sub-environment, or a list or
+        tuple of ``num_envs`` values. ``np_random`` takes a generator per sub-environment;
+        any other attribute is shared by the sub-environments, so its values must be equal
+        (a ValueError otherwise), and the vector env's own names are refused."""
+        if not isinstance(values, list | tuple):
+            values = [values] * self.num_envs
+        if len(values) != self.num_envs:
+            raise ValueError(
+                "Values must be a list or tuple with length equal to the number of"
+                f" environments. Got `{len(values)}` values for {self.num_envs} environments."
+            )
+        if name == "np_random":
+            for rng in values:
+                if not isinstance(rng, np.random.Generator):
+                    raise ValueError(f"set_attr: np_random expects Generators, got {rng!r}")
+            self._rngs = list(values)
+            self._seeds = [-1] * self.num_envs  # as gymnasium.Env's np_random setter
+            return
+        if name in self._VECTOR_ONLY or name in (
+            "np_random_seed",
+            "spec",
+            "metadata",
+            "observation_space",
+            "action_space",
+        ):
+            raise AttributeError(f"{type(self).__name__}.set_attr: {name!r} cannot be set")
+        if not all(_same(value, values[0]) for value in values[1:]):
+            raise ValueError(
+                f"{type(self).__name__}.set_attr: the sub-environments share {name!r}, so"
+                " they take one value (vectorization_mode='sync' takes one each), got"
+                f" {list(values)!r}"
+            )
+        setattr(self, name, values[0])
 
     def _with_masks(
         self, infos: dict[str, Any], present: np.ndarray | None = None
@@ -107,6 +268,18 @@ class SlotVectorEnv(VectorEnv):
             infos[key] = values
             infos[f"_{key}"] = present.copy()  # one array a key, as Sync gives
         return infos
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Whether ``a`` and ``b`` are one value (arrays compared element by element)."""
+    if a is b:
+        return True
+    if type(a) is not type(b):
+        return False
+    try:
+        return bool(np.array_equal(a, b)) if isinstance(a, np.ndarray) else bool(a == b)
+    except (TypeError, ValueError):
+        return False
 
 
 def check_autoreset_mode(mode: object) -> None:

@@ -3,13 +3,14 @@ of one :class:`EpisodeBatch`, rendered, stepped and searched in batched calls.""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from activevision.envs.actions import head_action_space
-from activevision.envs.config import MAX_VECTOR_ENVS, EnvConfig, check_count, resolve_config
+from activevision.envs.config import EnvConfig, resolve_config
 from activevision.envs.observations import (
     Observation,
     ObservationBuilder,
@@ -20,6 +21,7 @@ from activevision.envs.simulation import EpisodeBatch
 from activevision.envs.slots import SlotVectorEnv, check_autoreset_mode
 from activevision.envs.time_limit import never, resolve_limit
 from activevision.localisation import LocalisationConfig
+from activevision.registration import check_num_envs
 
 
 class ActiveVisionVectorEnv(SlotVectorEnv):
@@ -41,6 +43,9 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
     ``desired_mask`` and ``observed_mask``): the very arrays ``SyncVectorEnv`` and
     ``AsyncVectorEnv`` stack from single envs. Actions must lie in the action space (integers;
     with ``action_type="continuous"`` an (N, 2) float array in [-1, 1]).
+    ``get_attr``, ``set_attr`` and ``call`` act as ``SyncVectorEnv``'s (see
+    :class:`SlotVectorEnv`); ``call`` runs ``render`` and ``entropy_regret`` per
+    sub-environment.
     """
 
     def __init__(
@@ -53,7 +58,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         autoreset_mode: AutoresetMode | str | None = None,
         **config_overrides: Any,
     ) -> None:
-        num_envs = check_count("num_envs", num_envs, MAX_VECTOR_ENVS)
+        num_envs = check_num_envs(num_envs)  # before the batch is allocated
         check_autoreset_mode(autoreset_mode)
         self.config = config = resolve_config(config, config_overrides)
         # gymnasium.make_vec passes its max_episode_steps as given (20, the registration's,
@@ -81,6 +86,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         # a reset sub-environment's whole frame stack is its first frame; the others keep
         # theirs (a state renders the same image each time)
         self._frames[slots] = self.sim.render(slots)[:, None]
+        self._collect_frames(slots, slots[:0])
         return self._observe(), self._with_masks(self._info_arrays(), mask)
 
     def _observe(self) -> Observation:
@@ -115,9 +121,16 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
             self.sim.reset(started, [self._rngs[i] for i in started])
             self._observations.start(started)
         self._render(started)
+        self._collect_frames(started, np.flatnonzero(stepping))
         infos = self._infos()
         self._needs_reset = terminated | truncated
         return self._observe(), reward, terminated, truncated, infos
+
+    def _slot_methods(self) -> dict[str, Callable[..., Any]]:
+        def entropy_regret(i: int) -> float:
+            return float(self.sim.entropy_regret(np.array([i]))[0])
+
+        return {**super()._slot_methods(), "entropy_regret": entropy_regret}
 
     def _picture(self, i: int) -> np.ndarray:
         from activevision.envs.view import episode_panel  # imports matplotlib: only here

@@ -94,8 +94,13 @@ class Trainer:
         self.env_factory = env_factory or (lambda: make_env(config))
         self.env = self.env_factory()
         self._eval_env: gym.Env | None = None  # built at the first validation
-        self.n_actions = discrete_actions(self.env)
-        self.obs_shape = chw_shape(self.env.observation_space)
+        try:
+            self.n_actions = discrete_actions(self.env)
+            self.obs_shape = chw_shape(self.env.observation_space)
+        except ValueError as error:  # a custom env_id's env: say which, not a bare "need ..."
+            self.env.close()
+            source = "env_factory's env" if env_factory else f"TrainConfig.env_id {config.env_id!r}"
+            raise ValueError(f"{source}: {error}") from None
         aux_size = aux_dim(self.aux_target, self.env, config.seed)
         # one trainer a run, from before its first write (a resume holds it already)
         self._lock: RunLock | None = None

@@ -9,7 +9,6 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from activevision.envs.actions import head_action_space
-from activevision.envs.config import MAX_VECTOR_ENVS, check_count
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.env import resolve_match_config
 from activevision.envs.match.observations import (
@@ -22,6 +21,7 @@ from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.match.view import match_panel
 from activevision.envs.slots import SlotVectorEnv, check_autoreset_mode
 from activevision.envs.time_limit import resolve_limit
+from activevision.registration import check_num_envs
 
 
 class ActiveVisionMatchVectorEnv(SlotVectorEnv):
@@ -45,7 +45,7 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
         autoreset_mode: AutoresetMode | str | None = None,
         **config_overrides: Any,
     ) -> None:
-        num_envs = check_count("num_envs", num_envs, MAX_VECTOR_ENVS)
+        num_envs = check_num_envs(num_envs)  # before the batch is allocated
         check_autoreset_mode(autoreset_mode)
         self.config = config = resolve_match_config(config, config_overrides)
         # the match truncates itself after config.ticks; a time limit may end it sooner
@@ -68,7 +68,9 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
         mask = self._reset_mask(seed, options)
         slots = np.flatnonzero(mask)
         self.sim.reset(slots, [self._rngs[i] for i in slots])
-        return self._observe(), self._with_masks(self.sim.info_arrays(), mask)
+        observation = self._observe()
+        self._collect_frames(slots, slots[:0])
+        return observation, self._with_masks(self.sim.info_arrays(), mask)
 
     def step(
         self, actions: np.ndarray
@@ -81,7 +83,9 @@ class ActiveVisionMatchVectorEnv(SlotVectorEnv):
             self.sim.reset(started, [self._rngs[i] for i in started])
         terminated = np.zeros(self.num_envs, dtype=bool)
         self._needs_reset = truncated.copy()
-        return self._observe(), reward, terminated, truncated, self._infos()
+        observation = self._observe()
+        self._collect_frames(started, np.flatnonzero(~resetting))
+        return observation, reward, terminated, truncated, self._infos()
 
     def _observe(self) -> Observation:
         self.sim.render(out=self._frames[:, 0])
