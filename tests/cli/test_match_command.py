@@ -161,6 +161,10 @@ def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
         (["match", "--methods", "random", "--clip-method", "ball_track"], "--clip-method"),
         (["match", "--methods", "random", "--baseline", "ball_track"], "--baseline"),
         (["match", "--methods", "random", "--baseline", "random"], "--baseline"),
+        # an empty name (a shell variable left unset) was the default, unsaid
+        (["match", "--methods", "random", "--clip-method", ""], "--clip-method"),
+        (["match", "--methods", "random", "--clip-method", " "], "--clip-method"),
+        (["match", "--methods", "random", "--baseline", ""], "--baseline"),
         (["match", "--track-margin", "30"], "--track-margin"),
         (["match", "--methods", "random", "--track-margin", "5"], "--track-margin"),
         (["match", "--methods", "random", "--model", "README.md"], "--model"),

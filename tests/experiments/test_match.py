@@ -577,3 +577,29 @@ def test_play_matches_names_a_clip_match_past_the_matches():
         play_matches("random", SMALL, 2, seed=3, clip_match=2)
     with pytest.raises(ValueError, match=r"^matches: expects a positive integer, got 0$"):
         play_matches("random", SMALL, 0, seed=3)
+
+
+def test_two_strategy_files_of_one_name_are_two_modules(tmp_path, monkeypatch):
+    """``a/mine.py`` and ``b/mine.py`` were both the module ``activevision_strategy_mine``:
+    the second replaced the first in ``sys.modules``, where pickling and dataclasses look a
+    class's module up, so the first's class was found as the second's."""
+    import pickle
+    import sys
+
+    from activevision.experiments.match_methods import load_strategy
+
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    for folder, pan in (("a", 0.1), ("b", 0.2)):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "mine.py").write_text(
+            f"class Mine:\n    name = 'mine_{folder}'\n    pan = {pan}\n"
+            "    def __init__(self, config=None):\n        pass\n"
+        )
+    first = load_strategy(f"{tmp_path / 'a' / 'mine.py'}:Mine")[1]
+    second = load_strategy(f"{tmp_path / 'b' / 'mine.py'}:Mine")[1]
+    assert first.__module__ != second.__module__
+    assert sys.modules[first.__module__].Mine is first
+    assert pickle.loads(pickle.dumps(first())).pan == 0.1
+    assert pickle.loads(pickle.dumps(second())).pan == 0.2
+    # the same file loaded again is the same module's name
+    assert load_strategy(f"{tmp_path / 'a' / 'mine.py'}:Mine")[1].__module__ == first.__module__

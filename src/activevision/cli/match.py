@@ -18,6 +18,7 @@ from activevision.cli.args import (
     choice_list,
     float_in,
     int_in,
+    name,
     path,
     positive_int,
     seed,
@@ -216,7 +217,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     entries = _strategies(args, config)
     methods = list(dict.fromkeys(method for _, method, _ in entries))
     labels = [label for label, _, _ in entries]
-    clip_method = args.clip_method or labels[0]
+    clip_method = labels[0] if args.clip_method is None else args.clip_method
     if clip_method not in labels:
         raise ValueError(f"--clip-method {clip_method} is not among: {', '.join(labels)}")
     if args.baseline is not None and args.baseline not in labels:
@@ -428,10 +429,14 @@ def add_parsers(sub: Any) -> None:
         " each, named entropy_track[DEGdeg]",
     )
     p.add_argument(
-        "--clip-method", help="the strategy shown in match_clip.gif (default: the first)"
+        "--clip-method",
+        type=name,
+        metavar="NAME",
+        help="the strategy shown in match_clip.gif (default: the first)",
     )
     p.add_argument(
         "--baseline",
+        type=name,
         metavar="NAME",
         help="also print and write (match_paired.csv) every other strategy's difference from"
         " this one, match by match on the same seeds, with 95%% intervals",

@@ -55,6 +55,7 @@ can run them -- and bound what a learned strategy could reach from the same head
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import inspect
 import math
 from collections.abc import Callable, Iterator
@@ -700,7 +701,11 @@ def _strategy_loader(spec: str, where: str) -> Callable[[], ModuleType]:
     path = Path(where)
     if not path.is_file():
         raise ValueError(f"--strategy {spec}: no such file {path}")
-    module_name = f"activevision_strategy_{path.stem}"
+    # one module per file: two files of one name in different folders were one module,
+    # the second's replacing the first's in sys.modules (where pickling and dataclasses
+    # look a class's module up)
+    digest = hashlib.sha256(str(path.resolve()).encode()).hexdigest()[:12]
+    module_name = f"activevision_strategy_{path.stem}_{digest}"
     module_spec = importlib.util.spec_from_file_location(module_name, path)
     if module_spec is None or module_spec.loader is None:
         raise ValueError(f"--strategy {spec}: {path} is not a Python module")
