@@ -3,6 +3,7 @@ matches, the metrics are what they say, and the strategies aim where they claim.
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
 
@@ -315,6 +316,47 @@ def test_bhuman_cycle_narrows_when_walking():
     for t in range(60):  # walking 0.2 m/s: 0.064 m per tick
         target = policy.targets(info_for([[0.0, 0.3]], ball, [[0.064 * t, 0.0, 0.0]]))
     assert math.degrees(abs(target[0, 0])) == pytest.approx(15.0, abs=0.5)
+
+
+@pytest.mark.parametrize("tick_seconds", [0.16, 0.08])
+def test_bhuman_cycle_estimates_its_speed_in_seconds_not_ticks(tick_seconds):
+    """The walking speed's average kept 0.8 of its value per tick: with ticks of 0.16 s it
+    reacted twice as fast as with the paper's 0.32 s. Now, walking at 0.1 m/s from rest,
+    the estimate after the same seconds is the same at every tick length: 0.1 (1 - 0.8^(t /
+    0.32 s)), as the paper's tick gives it."""
+
+    def estimates(tick):
+        policy = BHumanCycle(MatchConfig(tick_seconds=tick))
+        policy.reset(1, np.random.default_rng(0))
+        per_tick = round(1.28 / tick)  # 1.28 s of walking
+        for t in range(per_tick + 1):
+            policy.targets(info_for([[0.0, 0.3]], [[2.0, 0.0]], [[0.1 * tick * t, 0.0, 0.0]]))
+        return float(policy.speed[0])
+
+    expected = 0.1 * (1 - 0.8 ** (1.28 / 0.32))
+    assert estimates(0.32) == pytest.approx(expected, rel=1e-9)
+    assert estimates(tick_seconds) == pytest.approx(expected, rel=1e-9)
+    # the paper's tick: exactly 0.8 and 0.2, as the README's tables were measured with
+    policy = BHumanCycle(MatchConfig())
+    assert (policy.keep_per_tick, policy.gain_per_tick) == (0.8, 0.2)
+
+
+@pytest.mark.parametrize(("tick_seconds", "ticks_at_a_point"), [(0.32, 3), (0.16, 6), (0.08, 12)])
+def test_the_six_point_look_dwells_for_seconds_not_ticks(tick_seconds, ticks_at_a_point):
+    """NUbots' look held the head 3 ticks at each point whatever a tick lasted (0.96 s of the
+    paper's ticks, 0.48 s of ticks of 0.16 s); now 0.96 s at every tick length."""
+    policy = NUbots6Point(MatchConfig(tick_seconds=tick_seconds))
+    policy.reset(1, np.random.default_rng(0))
+    head = np.radians([[60.0, 15.0]])  # at the first point
+    targets = []
+    for _ in range(3 * ticks_at_a_point + 1):
+        target = policy.targets(info_for(head, [[1.0, 0.0]]))
+        head = target.copy()  # a head that arrives at once
+        targets.append(tuple(np.round(np.degrees(target[0]))))
+    runs = [len(list(run)) for _, run in itertools.groupby(targets)]
+    # the first point's run lacks the tick the head arrived in; then each is held in full
+    assert runs[1:3] == [ticks_at_a_point] * 2
+    assert ticks_at_a_point * tick_seconds == pytest.approx(0.96)
 
 
 def test_entropy_track_keeps_the_ball_inside_its_margin():
