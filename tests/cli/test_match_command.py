@@ -679,3 +679,55 @@ def test_a_match_run_of_a_neck_that_barely_tilts_plays_episodes(tmp_path):
     assert (env.camera.tilt_min, env.camera.tilt_max) == (0.5, 0.9)
     low, high = env.start_tilt_range_deg
     assert (low, high) == pytest.approx((np.degrees(0.5), np.degrees(0.9)))
+
+
+def test_set_changes_the_matches_world_and_says_so(tmp_path, capsys):
+    """``--set`` reaches every MatchConfig field no option sets: a faster tick and a wider
+    camera (the command named no camera, and the tick only through --run), recorded in the
+    CSV's columns; a field no column records goes to its ``settings`` column, which a
+    default world's file has none of, and the report names it."""
+    from activevision.experiments.match import world_differences
+
+    out = tmp_path / "m"
+    argv = [*TINY, "--out", str(out), "--set", "tick_seconds=0.16", "--set", "camera.hfov=1.2"]
+    assert main([*argv, "--set", "match.tracker.gate=9"]) == 0
+    printed = capsys.readouterr().out
+    assert "per 0.16 s" in printed and "(1.44 s of play)" in printed
+    assert "--set tick_seconds=0.16 camera.hfov=1.2 match.tracker.gate=9" in printed
+    with (out / "match.csv").open() as f:
+        row = next(csv.DictReader(f))
+    assert float(row["tick_s"]) == 0.16
+    assert float(row["hfov_deg"]) == pytest.approx(68.755, abs=1e-3)
+    assert row["settings"] == "tracker.gate=9.0"
+    assert world_differences(row)[-1] == "--set tracker.gate=9.0"
+    assert main([*TINY, "--out", str(tmp_path / "plain")]) == 0
+    with (tmp_path / "plain" / "match.csv").open() as f:
+        assert "settings" not in next(csv.DictReader(f))
+
+
+@pytest.mark.parametrize(
+    ("setting", "needle"),
+    [
+        ("ticks=5", "give it with --ticks"),
+        ("match.step_deg=6", "give it with --step-deg"),
+        ("detection.far=0.2", "give it with --detection"),
+        ("walk.target=ball", "give it with --walk"),
+        ("reward.kind=error", "scores no reward"),  # the command reads none
+        ("observation=image+head", "observation"),
+        ("nope=1", "has no field 'nope'"),
+        ("camera.nope=1", "camera has no field 'nope'"),
+        ("tick_seconds.x=1", "tick_seconds is a value"),
+        ("tick_seconds=0", "tick_seconds"),  # the config's own range
+        ("tick_seconds", "key=value"),
+    ],
+)
+def test_a_bad_set_is_one_clear_line(tmp_path, setting, needle, one_clear_line):
+    assert main([*TINY, "--out", str(tmp_path / "m"), "--set", setting]) == 2
+    one_clear_line("--set", needle)
+    assert not (tmp_path / "m").exists()
+
+
+def test_set_camera_beside_a_run_is_refused(trained, tmp_path, one_clear_line):
+    argv = [*TINY, "--methods", "learned", "--run", str(trained), "--out", str(tmp_path / "m")]
+    assert main([*argv, "--set", "camera.hfov=1.2"]) == 2
+    one_clear_line("--set camera", "trained for")

@@ -66,10 +66,12 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
         if args.detection is None:
             text += f" (the one {args.run if run is None else run} was trained with)"
     camera = config.camera.differences()
-    if camera:  # only a run's: the command line names no camera
+    if camera and trained_camera(args):  # a run's (--set camera... is refused beside --run)
         text += f", camera {camera} (the one {args.run if run is None else run} was trained with)"
     if args.ball_bounces_off_us:
         text += ", the ball bouncing off our robot"
+    if args.set:  # each as given: the camera, the tick, the tracker...
+        text += ", --set " + " ".join(args.set)
     return text
 
 
@@ -98,14 +100,67 @@ def _run_world(run: Path | None) -> tuple[DetectionConfig | None, CameraConfig |
     return None, run_config.env.camera
 
 
+#: the match's settings an option of its own sets: ``--set`` refuses them, naming it
+OPTION_PATHS = {
+    "ticks": "--ticks",
+    "step_deg": "--step-deg",
+    "max_move_deg": "--step-deg",
+    "action_type": "--action-type",
+    "walk.target": "--walk",
+    "walk": "--walk (and --set walk.FIELD=VALUE for the others)",
+    "robots.count": "--robots",
+    "others.speed": "--robot-speed",
+    "ball.bounces_off_own_robot": "--ball-bounces-off-us",
+    "detection.near": "--detection",
+    "detection.far": "--detection",
+    "detection.false_rate": "--detection",
+    "detection": "--detection (and --set detection.ball_noise=VALUE)",
+    "robots": "--robots (and --set robots.FIELD=VALUE for the others)",
+    "others": "--robot-speed (and --set others.FIELD=VALUE for the others)",
+    "ball": "--ball-bounces-off-us (and --set ball.FIELD=VALUE for the others)",
+}
+#: the settings ``match`` reads nothing of: why ``--set`` refuses them
+UNREAD_PATHS = {
+    "reward": "activevision match scores no reward (what a head is scored by is its table);"
+    " the reward is what a training run learns: activevision train --set match.reward.FIELD=...",
+    "observation": "every strategy takes the image and the info it needs whatever the"
+    " observation; it is what a training run's network takes (activevision train --set"
+    " match.observation=...)",
+}
+
+
+def match_settings(items: list[str] | None) -> dict[str, Any]:
+    """``--set KEY=VALUE`` items as ``{path: value}`` (a leading ``match.`` dropped; values
+    JSON where they parse, as ``train --set``). ValueError for an item that is no KEY=VALUE,
+    or a key that an option sets (:data:`OPTION_PATHS`) or that ``match`` never reads
+    (:data:`UNREAD_PATHS`)."""
+    from activevision.training.config import parse_overrides
+
+    settings: dict[str, Any] = {}
+    try:
+        changes = parse_overrides(items or [])
+    except ValueError as error:
+        raise ValueError(f"--set: {error}") from None
+    for key, value in changes.items():
+        path = key.removeprefix("match.")
+        first = path.split(".")[0]
+        if path in OPTION_PATHS:
+            raise ValueError(f"--set {key}: give it with {OPTION_PATHS[path]}")
+        if first in UNREAD_PATHS:
+            raise ValueError(f"--set {key}: {UNREAD_PATHS[first]}")
+        settings[path] = value
+    return settings
+
+
 def _match_config(args: argparse.Namespace) -> MatchConfig:
-    """The matches the command line asks for."""
+    """The matches the command line asks for: its options, then ``--set``."""
     from activevision.envs.match.config import (
         BallConfig,
         DetectionConfig,
         MatchConfig,
         OthersConfig,
         WalkConfig,
+        with_paths,
     )
     from activevision.envs.robots import RobotsConfig
     from activevision.geometry import CameraConfig
@@ -124,7 +179,13 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
             )
     else:  # a run on the match plays the world it was trained for
         detection = trained or DetectionConfig()
-    return MatchConfig(
+    settings = match_settings(args.set)
+    if trained_camera(args) and any(p.split(".")[0] == "camera" for p in settings):
+        raise ValueError(
+            f"--set camera...: --run {args.run} plays through the camera it was trained for"
+            " (its network takes that camera's image)"
+        )
+    config = MatchConfig(
         ticks=args.ticks,
         step_deg=args.step_deg,
         action_type=args.action_type,
@@ -136,6 +197,17 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
         detection=detection,
         camera=camera or CameraConfig(),
     )
+    if not settings:
+        return config
+    try:
+        return with_paths(config, settings)
+    except ValueError as error:
+        raise ValueError(f"--set {error}") from None
+
+
+def trained_camera(args: argparse.Namespace) -> bool:
+    """Whether ``--run`` names a training run, whose camera the matches play through."""
+    return args.run is not None and (args.run / "config.json").is_file()
 
 
 def _strategies(
@@ -351,7 +423,12 @@ def add_parsers(sub: Any) -> None:
         help="strategies to play (default: all; learned with --run): " + " ".join(_method_names()),
     )
     p.add_argument("--matches", type=int_in(1, MAX_MATCHES), default=50)
-    p.add_argument("--ticks", type=positive_int, default=600, help="ticks per match (0.32 s each)")
+    p.add_argument(
+        "--ticks",
+        type=positive_int,
+        default=600,
+        help="ticks per match (0.32 s each; --set tick_seconds=S for another tick)",
+    )
     p.add_argument("--seed", type=seed, default=0, help="match i plays seed SEED + i")
     p.add_argument(
         "--step-deg",
@@ -416,6 +493,15 @@ def add_parsers(sub: Any) -> None:
         help="your own strategies, played beside --methods: NAME(config) in FILE.py (or"
         " MODULE:NAME) returns an object with reset(n, rng) and act(obs, info)"
         " (examples/uncertainty_glance.py)",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="set any other field of the matches' MatchConfig by its path, as train --set"
+        " match.KEY does: tick_seconds=0.16, camera.hfov=1.2, walk.speed=0.3,"
+        " tracker.gate=9.21, detection.ball_noise=0.1; values are JSON. Those an option sets"
+        " (--ticks, --step-deg, --detection...) are refused, naming it",
     )
     p.add_argument("--run", type=path, help="a training run for the learned strategy")
     add_weights(p)

@@ -405,9 +405,62 @@ WORLD_COLUMNS: dict[str, WorldColumn] = {
 }
 
 
+#: the MatchConfig fields that ``match.csv``'s other columns record (``camera.*`` too)
+_RECORDED = frozenset(
+    {
+        "ticks",
+        "action_type",
+        "step_deg",
+        "max_move_deg",
+        "robots.count",
+        "detection.near",
+        "detection.far",
+        "detection.false_rate",
+        "detection.ball_noise",
+        "walk.target",
+        "walk.speed",
+        "walk.turn_rate",
+        "others.speed",
+        "others.ball_restitution",
+        "ball.deceleration",
+        "ball.kick_rate",
+        "ball.kick_speed",
+        "ball.bounces_off_own_robot",
+        "tick_seconds",
+    }
+)
+
+
+def other_settings(config: MatchConfig) -> str:
+    """The fields of ``config`` that differ from ``MatchConfig()``'s and that no other
+    ``match.csv`` column records, as ``activevision match --set`` takes them
+    (``tracker.gate=9.21 walk.reach=0.5``; values JSON); empty where there are none."""
+    import json
+
+    from activevision.typecheck import config_to_dict
+
+    def leaves(values: dict[str, object], prefix: str = "") -> dict[str, object]:
+        flat: dict[str, object] = {}
+        for key, value in values.items():
+            if isinstance(value, dict):
+                flat.update(leaves(value, f"{prefix}{key}."))
+            else:
+                flat[f"{prefix}{key}"] = value
+        return flat
+
+    mine, default = leaves(config_to_dict(config)), leaves(config_to_dict(MatchConfig()))
+    return " ".join(
+        f"{path}={json.dumps(value, separators=(',', ':'))}"
+        for path, value in mine.items()
+        if value != default[path] and path not in _RECORDED and not path.startswith("camera.")
+    )
+
+
 def world_columns(config: MatchConfig) -> dict[str, object]:
     """``match.csv``'s world columns of ``config``: the head's moves, the other robots, the
-    detector, then :data:`WORLD_COLUMNS`."""
+    detector, then :data:`WORLD_COLUMNS`, then ``settings`` (:func:`other_settings`) where
+    there are any (a default world's file has no such column)."""
+    settings = other_settings(config)
     return {
         "action_type": config.action_type,
         "step_deg": (  # the most the head moves per tick and axis
@@ -418,6 +471,7 @@ def world_columns(config: MatchConfig) -> dict[str, object]:
         "detect_far": config.detection.far,
         "false_detections": config.detection.false_rate,
         **{name: column.read(config) for name, column in WORLD_COLUMNS.items()},
+        **({"settings": settings} if settings else {}),
     }
 
 
@@ -432,6 +486,8 @@ def world_differences(row: dict[str, str]) -> list[str]:
         if value is None or value == "" or _same_text(value, str(defaults[name])):
             continue
         phrases.append(column.phrase(value))
+    if row.get("settings"):
+        phrases.append(f"--set {row['settings']}")
     return phrases
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -19,7 +20,13 @@ from activevision.geometry import CameraConfig, FieldSpec
 from activevision.localisation.config import UKFConfig
 from activevision.localisation.tracking import TrackerConfig
 from activevision.rendering.appearance import AppearanceConfig
-from activevision.typecheck import check_dataclass_fields, in_range, replace_fields
+from activevision.typecheck import (
+    check_dataclass_fields,
+    config_from_dict,
+    config_to_dict,
+    in_range,
+    replace_fields,
+)
 
 #: What the agent observes: the image, plus the head angles, plus the belief (mean,
 #: uncertainty) and the robot's ball model (``envs.match.observations``).
@@ -208,3 +215,27 @@ class MatchConfig:
     def replace(self, **changes: Any) -> MatchConfig:
         """A copy with ``changes``; an unknown name is a ValueError naming the fields."""
         return replace_fields(self, changes)
+
+
+def with_paths(config: MatchConfig, changes: Mapping[str, Any]) -> MatchConfig:
+    """``config`` with values set by dotted path: ``{"tick_seconds": 0.16, "camera.hfov":
+    1.2, "reward.kind": "error"}`` (a leading ``match.``, as a training run's ``--set``
+    spells it, is allowed); a nested config may be given whole as an object of its fields
+    (``{"camera": {"hfov": 1.2}}``, the others taking their defaults). ValueError names an
+    unknown path with the fields where it went wrong, or a bad value (the config's own
+    checks)."""
+    nested = config_to_dict(config)
+    for key, value in changes.items():
+        parts = key.strip().removeprefix("match.").split(".")
+        target: Any = nested
+        for depth, part in enumerate(parts):
+            where = ".".join(parts[:depth]) or "MatchConfig"
+            if not isinstance(target, dict):
+                raise ValueError(f"{key}: {where} is a value, not a config with fields")
+            if part not in target:
+                raise ValueError(f"{key}: {where} has no field {part!r}; known: {sorted(target)}")
+            if depth == len(parts) - 1:
+                target[part] = value
+            else:
+                target = target[part]
+    return config_from_dict(MatchConfig, nested)
