@@ -731,3 +731,42 @@ def test_set_camera_beside_a_run_is_refused(trained, tmp_path, one_clear_line):
     argv = [*TINY, "--methods", "learned", "--run", str(trained), "--out", str(tmp_path / "m")]
     assert main([*argv, "--set", "camera.hfov=1.2"]) == 2
     one_clear_line("--set camera", "trained for")
+
+
+def test_kidnapped_matches_report_what_followed(tmp_path, capsys):
+    """--kidnap-ticks kidnaps our robot in every match; the console and match.csv say how
+    many kidnaps left it lost, how often the lost detector fired, how often and how soon
+    the error was back under 0.5 m; a world without kidnaps writes none of those columns."""
+    out = tmp_path / "m"
+    argv = ["match", "--matches", "3", "--ticks", "60", "--methods", "ball_track", "random"]
+    assert main([*argv, "--kidnap-ticks", "10", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "kidnapped in tick 10, carried 1-2 m, turned up to 0.8 rad" in printed
+    assert "lost alarm" in printed and "back < 0.5 m" in printed
+    with (out / "match.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    for row in rows:
+        assert row["kidnaps"] == "3" and row["kidnap_ticks"] == "10"
+        lost = int(row["kidnaps_lost"])
+        assert 1 <= lost <= 3
+        low, high = float(row["kidnap_recovered_low"]), float(row["kidnap_recovered_high"])
+        assert 0 <= low <= float(row["kidnap_recovered"]) <= high <= 1
+    assert main([*TINY, "--out", str(tmp_path / "plain")]) == 0
+    with (tmp_path / "plain" / "match.csv").open() as f:
+        assert not any(key.startswith("kidnap") for key in next(csv.DictReader(f)))
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["--kidnap-ticks", "40"], "past the match's 9 ticks"),
+        (["--kidnap-ticks", "0"], "--kidnap-ticks"),
+        (["--kidnap", "-1"], "--kidnap"),
+        (["--set", "kidnap.turn=0.5"], "give --kidnap or --kidnap-ticks"),
+        (["--set", "kidnap.rate=1"], "give it with --kidnap"),
+        (["--kidnap", "1", "--set", "kidnap.distance=[3,1]"], "ordered"),
+    ],
+)
+def test_a_bad_kidnap_is_one_clear_line(tmp_path, argv, needle, one_clear_line):
+    assert main([*TINY, "--out", str(tmp_path / "m"), *argv]) == 2
+    one_clear_line(needle)

@@ -12,7 +12,7 @@ import pytest
 
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import track_grid
-from activevision.experiments.evaluate import Interval
+from activevision.experiments.evaluate import Interval, wilson_interval
 from activevision.experiments.match import (
     MATCH_METRICS,
     MatchClip,
@@ -645,3 +645,55 @@ def test_two_strategy_files_of_one_name_are_two_modules(tmp_path, monkeypatch):
     assert pickle.loads(pickle.dumps(second())).pan == 0.2
     # the same file loaded again is the same module's name
     assert load_strategy(f"{tmp_path / 'a' / 'mine.py'}:Mine")[1].__module__ == first.__module__
+
+
+def test_kidnap_events_follow_each_kidnap_to_the_next_or_the_end():
+    """Hand-made ticks of two matches (errors, kidnaps, alarms), against what each kidnap
+    should read: match 0 kidnapped in ticks 1 and 5 (the first back under 0.5 m 2 ticks
+    later with an alarm; the second lost to the end), match 1 in tick 2 (carried 0.3 m: not
+    lost, back at once, no alarm needed)."""
+    from activevision.envs.match.scores import MatchScores
+    from activevision.experiments.match import kidnap_summary
+
+    errors = np.array(
+        [
+            [0.1, 0.1],
+            [1.5, 0.1],  # tick 1: match 0 kidnapped
+            [1.0, 0.3],  # tick 2: match 1 kidnapped (0.3 m)
+            [0.4, 0.1],
+            [0.3, 0.1],
+            [2.0, 0.1],  # tick 5: match 0 again
+            [1.9, 0.1],
+            [1.8, 0.1],
+        ]
+    )
+    kidnapped = np.zeros_like(errors, dtype=bool)
+    kidnapped[[1, 5], 0] = kidnapped[2, 1] = True
+    alarm = np.zeros_like(kidnapped)
+    alarm[2, 0] = alarm[4, 1] = True
+    scores = MatchScores(8, 2, 0.32)
+    for t in range(8):
+        info = {
+            "position_error": errors[t],
+            "heading_error": np.zeros(2),
+            "ball_in_view": np.zeros(2, bool),
+            "entropy": np.zeros(2),
+            "head_move": np.zeros((2, 2)),
+            "kidnapped": kidnapped[t],
+            "lost_alarm": alarm[t],
+        }
+        scores.add(info, np.zeros(2))
+    events = scores.kidnaps()
+    assert events.match.tolist() == [0, 0, 1] and events.tick.tolist() == [1, 5, 2]
+    assert events.lost.tolist() == [True, True, False]
+    assert events.detected.tolist() == [True, False, True]
+    assert events.recovery_ticks.tolist() == [2, -1, 0]
+    summary = kidnap_summary(events, 0.32)
+    # over the 2 kidnaps that left it lost: 1 detected, 1 back, after 2 ticks of 0.32 s
+    assert summary["kidnap_detected"] == wilson_interval(1, 2)
+    assert summary["kidnap_recovered"] == wilson_interval(1, 2)
+    assert summary["recovery_s"].mean == pytest.approx(0.64)
+    # a match without kidnapping has no events, not an empty list of them
+    plain = MatchScores(8, 2, 0.32)
+    plain.add({k: v for k, v in info.items() if k not in ("kidnapped", "lost_alarm")}, np.zeros(2))
+    assert plain.kidnaps() is None

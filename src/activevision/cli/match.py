@@ -56,6 +56,7 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
     detector 0.6/0.15/0.2"``, or nothing; ``run`` names the run a detector came from
     (default: ``--run`` as given)."""
     from activevision.envs.match.config import DetectionConfig
+    from activevision.experiments.match import kidnap_text
 
     text = ""
     if args.robots:
@@ -72,6 +73,9 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
         text += ", the ball bouncing off our robot"
     if args.set:  # each as given: the camera, the tick, the tracker...
         text += ", --set " + " ".join(args.set)
+    kidnap = kidnap_text(config)
+    if kidnap:
+        text += f", {kidnap}"
     return text
 
 
@@ -118,6 +122,9 @@ OPTION_PATHS = {
     "robots": "--robots (and --set robots.FIELD=VALUE for the others)",
     "others": "--robot-speed (and --set others.FIELD=VALUE for the others)",
     "ball": "--ball-bounces-off-us (and --set ball.FIELD=VALUE for the others)",
+    "kidnap.rate": "--kidnap",
+    "kidnap.ticks": "--kidnap-ticks",
+    "kidnap": "--kidnap or --kidnap-ticks (and --set kidnap.distance=[LOW,HIGH], kidnap.turn=RAD)",
 }
 #: the settings ``match`` reads nothing of: why ``--set`` refuses them
 UNREAD_PATHS = {
@@ -157,6 +164,7 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
     from activevision.envs.match.config import (
         BallConfig,
         DetectionConfig,
+        KidnapConfig,
         MatchConfig,
         OthersConfig,
         WalkConfig,
@@ -180,6 +188,12 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
     else:  # a run on the match plays the world it was trained for
         detection = trained or DetectionConfig()
     settings = match_settings(args.set)
+    kidnap = KidnapConfig(rate=args.kidnap, ticks=tuple(args.kidnap_ticks or ()))
+    late = [t for t in kidnap.ticks if t > args.ticks]
+    if late:
+        raise ValueError(f"--kidnap-ticks {late[0]}: past the match's {args.ticks} ticks (--ticks)")
+    if not kidnap.enabled and any(p.split(".")[0] == "kidnap" for p in settings):
+        raise ValueError("--set kidnap...: says how a kidnap goes; give --kidnap or --kidnap-ticks")
     if trained_camera(args) and any(p.split(".")[0] == "camera" for p in settings):
         raise ValueError(
             f"--set camera...: --run {args.run} plays through the camera it was trained for"
@@ -196,6 +210,7 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
         ball=BallConfig(bounces_off_own_robot=args.ball_bounces_off_us),
         detection=detection,
         camera=camera or CameraConfig(),
+        kidnap=kidnap,
     )
     if not settings:
         return config
@@ -299,12 +314,15 @@ def cmd_match(args: argparse.Namespace) -> None:
     made = make_output_folder(out)  # before the matches: one that cannot be made fails now
     import numpy as np
 
+    from activevision.envs.match.scores import LOST_M
     from activevision.experiments.match import (
         NAME_WIDTH,
         compare_matches,
         csv_rows,
         format_difference,
+        format_kidnaps,
         format_result,
+        kidnap_header,
         paired_differences,
         paired_rows,
         pareto_front,
@@ -342,6 +360,15 @@ def cmd_match(args: argparse.Namespace) -> None:
                 f"{format_result(r, width)}   ({r.seconds:.0f} s)", flush=True
             ),
         )
+    if config.kidnap.enabled:
+        print(
+            f"after each kidnap that left the robot lost (error >= {LOST_M:g} m), until the"
+            " next or the match's end: the lost detector fired, the error back under"
+            f" {LOST_M:g} m, and the seconds it took (mean over those back) [95% intervals]:"
+        )
+        print(kidnap_header(width))
+        for result in results:
+            print(format_kidnaps(result, config.tick_seconds, width))
     references = privileged_methods() & set(methods)
     front = pareto_front(results, references)
     print(f"Pareto front (position RMSE vs ball in view): {', '.join(front)}")
@@ -469,6 +496,23 @@ def add_parsers(sub: Any) -> None:
         action="store_true",
         help="the ball bounces off our robot's body, as off the others' (default: it rolls"
         " through our robot, as in the README's figures)",
+    )
+    p.add_argument(
+        "--kidnap",
+        type=float_in(0, 60, "per minute"),
+        default=0.0,
+        metavar="PER_MIN",
+        help="kidnap our robot at random, seeded ticks, PER_MIN times per minute of play on"
+        " average: carried 1-2 m and turned up to 0.8 rad, its belief told nothing (--set"
+        " kidnap.distance=[LOW,HIGH] kidnap.turn=RAD); a table follows of what came after:"
+        " the lost alarm, the error back under 0.5 m and how soon",
+    )
+    p.add_argument(
+        "--kidnap-ticks",
+        type=positive_int,
+        nargs="+",
+        metavar="TICK",
+        help="kidnap our robot in these ticks of every match too (1: the first)",
     )
     p.add_argument(
         "--detection",

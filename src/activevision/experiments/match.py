@@ -27,10 +27,10 @@ import numpy as np
 
 from activevision.envs.config import MAX_VECTOR_ENVS, check_count
 from activevision.envs.match.config import MatchConfig
-from activevision.envs.match.scores import MatchScores
+from activevision.envs.match.scores import LOST_M, KidnapEvents, MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.envs.seeding import check_seed
-from activevision.experiments.evaluate import Interval, mean_interval
+from activevision.experiments.evaluate import Interval, mean_interval, wilson_interval
 from activevision.experiments.match_methods import (
     USER_STRATEGY,
     StrategyFactory,
@@ -92,6 +92,8 @@ class MethodResult:
     error_curve: np.ndarray  #: (ticks, M) position error per tick and match
     clip: MatchClip
     seconds: float
+    #: every kidnap and what followed it (``MatchConfig.kidnap`` on; None: off)
+    kidnaps: KidnapEvents | None = None
 
     def summary(self) -> dict[str, Interval]:
         """Mean and 95% interval over matches of every metric, within the values it can take
@@ -149,7 +151,7 @@ def play_matches(
         clip.add(info, clip_match)
     env.close()
     seconds = time.perf_counter() - start
-    return MethodResult(name, scores.per_match(), scores.position, clip, seconds)
+    return MethodResult(name, scores.per_match(), scores.position, clip, seconds, scores.kidnaps())
 
 
 @contextlib.contextmanager
@@ -268,6 +270,54 @@ def compare_matches(
 
 
 NAME_WIDTH = 18  #: the method column's width, unless a name needs more
+
+#: what follows the kidnaps (``--kidnap``), over the kidnaps that left the robot lost: name
+#: -> (column header, format)
+KIDNAP_METRICS = {
+    "kidnap_detected": ("lost alarm", "{:.0%}"),
+    "kidnap_recovered": (f"back < {LOST_M:g} m", "{:.0%}"),
+    "recovery_s": ("seconds to it", "{:.1f}"),
+}
+
+
+def kidnap_summary(events: KidnapEvents, tick_seconds: float) -> dict[str, Interval]:
+    """What followed the kidnaps that left the robot lost (its error at least
+    :data:`~activevision.envs.match.scores.LOST_M` at the end of the kidnap's tick), each
+    followed until the match's next kidnap or its end: the share after which the lost
+    detector fired (``kidnap_detected``) and the share after which the error came back
+    under the threshold (``kidnap_recovered``), each with its 95% Wilson interval over those
+    kidnaps (each counted as one trial, wherever it happened), and the seconds until it did
+    (``recovery_s``, over the recovered ones: the others are left out, so a strategy that
+    recovers less often can read faster; mean and normal 95% interval, at least 0). NaN
+    where no kidnap left the robot lost."""
+    lost = events.lost
+    n = int(lost.sum())
+    back = events.recovery_ticks[lost & events.recovered]
+    return {
+        "kidnap_detected": wilson_interval(int((events.detected & lost).sum()), n),
+        "kidnap_recovered": wilson_interval(len(back), n),
+        "recovery_s": mean_interval((back * tick_seconds).tolist(), bounds=(0.0, math.inf)),
+    }
+
+
+def kidnap_header(width: int = NAME_WIDTH) -> str:
+    cols = "".join(f"{header:>22}" for header, _ in KIDNAP_METRICS.values())
+    return f"{'method':<{width}}{'kidnaps (lost)':>16}{cols}"
+
+
+def format_kidnaps(result: MethodResult, tick_seconds: float, width: int = NAME_WIDTH) -> str:
+    """One row of the kidnap table: the kidnaps (those that left the robot lost) and each
+    of :data:`KIDNAP_METRICS` with its 95% interval."""
+    events = result.kidnaps
+    if events is None:
+        raise ValueError(f"{result.method}: its matches had no kidnapping")
+    summary = kidnap_summary(events, tick_seconds)
+    cells = []
+    for name, (_, fmt) in KIDNAP_METRICS.items():
+        iv = summary[name]
+        cells.append(f"{fmt.format(iv.mean)} [{fmt.format(iv.low)},{fmt.format(iv.high)}]")
+    count = f"{len(events.tick)} ({int(events.lost.sum())})"
+    return f"{result.method:<{width}}{count:>16}" + _cells(cells)
 
 
 def table_header(width: int = NAME_WIDTH) -> str:
@@ -405,7 +455,8 @@ WORLD_COLUMNS: dict[str, WorldColumn] = {
 }
 
 
-#: the MatchConfig fields that ``match.csv``'s other columns record (``camera.*`` too)
+#: the MatchConfig fields that ``match.csv``'s other columns record (``camera.*`` and
+#: ``kidnap.*`` too)
 _RECORDED = frozenset(
     {
         "ticks",
@@ -452,7 +503,9 @@ def other_settings(config: MatchConfig) -> str:
     return " ".join(
         f"{path}={json.dumps(value, separators=(',', ':'))}"
         for path, value in mine.items()
-        if value != default[path] and path not in _RECORDED and not path.startswith("camera.")
+        if value != default[path]
+        and path not in _RECORDED
+        and not path.startswith(("camera.", "kidnap."))
     )
 
 
@@ -472,7 +525,37 @@ def world_columns(config: MatchConfig) -> dict[str, object]:
         "false_detections": config.detection.false_rate,
         **{name: column.read(config) for name, column in WORLD_COLUMNS.items()},
         **({"settings": settings} if settings else {}),
+        **(kidnap_columns(config) if config.kidnap.enabled else {}),
     }
+
+
+def kidnap_columns(config: MatchConfig) -> dict[str, object]:
+    """``match.csv``'s record of the kidnapping (``MatchConfig.kidnap``), written where it
+    is on: per minute, the ticks named, how far (m, LOW-HIGH) and how much it turns (rad)."""
+    kidnap = config.kidnap
+    return {
+        "kidnap_rate": kidnap.rate,
+        "kidnap_ticks": " ".join(str(t) for t in kidnap.ticks),
+        "kidnap_distance": "-".join(f"{v:g}" for v in kidnap.distance),
+        "kidnap_turn": kidnap.turn,
+    }
+
+
+def kidnap_text(config: MatchConfig) -> str:
+    """The kidnapping in words: ``"kidnapped 1/min and in tick 200, carried 1-2 m, turned up
+    to 0.8 rad"``; empty where it is off."""
+    kidnap = config.kidnap
+    if not kidnap.enabled:
+        return ""
+    when = [f"{kidnap.rate:g}/min"] if kidnap.rate else []
+    if kidnap.ticks:
+        ticks = ", ".join(str(t) for t in kidnap.ticks)
+        when.append(f"in tick{'s' if len(kidnap.ticks) > 1 else ''} {ticks}")
+    low, high = kidnap.distance
+    return (
+        f"kidnapped {' and '.join(when)}, carried {low:g}-{high:g} m, turned up to"
+        f" {kidnap.turn:g} rad"
+    )
 
 
 def world_differences(row: dict[str, str]) -> list[str]:
@@ -488,6 +571,14 @@ def world_differences(row: dict[str, str]) -> list[str]:
         phrases.append(column.phrase(value))
     if row.get("settings"):
         phrases.append(f"--set {row['settings']}")
+    if row.get("kidnap_rate") not in (None, ""):
+        ticks = row.get("kidnap_ticks") or ""
+        when = [f"{_float_text(row['kidnap_rate'])}/min"] if float(row["kidnap_rate"]) else []
+        when += [f"in ticks {ticks}"] if ticks else []
+        phrases.append(
+            f"our robot kidnapped {' and '.join(when)}, carried {row.get('kidnap_distance')} m,"
+            f" turned up to {_float_text(row.get('kidnap_turn') or '0')} rad"
+        )
     return phrases
 
 
@@ -522,6 +613,13 @@ def csv_rows(
             row[name] = iv.mean
             row[f"{name}_low"] = iv.low
             row[f"{name}_high"] = iv.high
+        if r.kidnaps is not None:  # kidnapping on: what followed (none of it otherwise)
+            row["kidnaps"] = len(r.kidnaps.tick)
+            row["kidnaps_lost"] = int(r.kidnaps.lost.sum())
+            for name, iv in kidnap_summary(r.kidnaps, config.tick_seconds).items():
+                row[name] = iv.mean
+                row[f"{name}_low"] = iv.low
+                row[f"{name}_high"] = iv.high
         rows.append(row)
     return rows
 

@@ -147,6 +147,44 @@ class MatchRewardConfig:
         check_dataclass_fields(self)
 
 
+@dataclass(frozen=True)
+class KidnapConfig:
+    """Kidnapping: our robot is picked up and put down elsewhere without its belief being
+    told (a referee's removal and return, a robot carried off after a fall), in each tick
+    with probability ``rate`` per minute of play times the tick's length and in each of
+    ``ticks`` (1: the first tick). The chance is drawn from a generator spawned from the
+    match's own, which leaves the match's draws as they were: the same seed, the same
+    kidnaps, and until the first the same match as without them. A kidnap carries the robot
+    ``distance`` m (uniform between the two) in a uniform direction, stopped at the walk's
+    margin inside the field lines (near the lines the carry is shorter), and turns it by up
+    to ``turn`` rad either way (uniform); its odometry reports none of it. Off by default;
+    the README's kidnap check (teleported 2 m along, 1 m across, turned 0.8 rad) lies
+    within the defaults' reach."""
+
+    #: kidnaps per minute of play (0: none at random)
+    rate: float = field(default=0.0, metadata=in_range(0.0, 60.0))
+    #: kidnapped in these ticks too (1 = the first), e.g. ``(200,)``
+    ticks: tuple[int, ...] = ()
+    #: how far (m) a kidnap carries the robot, uniform LOW-HIGH
+    distance: tuple[float, float] = (1.0, 2.0)
+    #: how far (rad) it turns the robot, uniform in [-turn, turn]
+    turn: float = field(default=0.8, metadata=in_range(0.0, math.pi))
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+        lo, hi = self.distance
+        if not 0 <= lo <= hi <= 20:
+            raise ValueError(f"KidnapConfig.distance: must lie in [0, 20] m, ordered, got {lo, hi}")
+        if any(t < 1 for t in self.ticks):
+            raise ValueError(f"KidnapConfig.ticks: ticks count from 1, got {self.ticks!r}")
+        object.__setattr__(self, "ticks", tuple(sorted(set(self.ticks))))
+
+    @property
+    def enabled(self) -> bool:
+        """Whether any kidnap can happen."""
+        return self.rate > 0 or bool(self.ticks)
+
+
 def _match_ukf() -> UKFConfig:
     # A match starts from a known kick-off position (initial std 10 cm, 3 deg). A walking
     # KidSize humanoid's odometry is poor: feet slip on artificial turf, so its error is a
@@ -191,6 +229,8 @@ class MatchConfig:
     robots: RobotsConfig = dataclasses.field(default_factory=RobotsConfig)
     #: how they move (standing still by default) and what the ball does when it meets one
     others: OthersConfig = dataclasses.field(default_factory=OthersConfig)
+    #: our robot carried elsewhere unbeknown to its belief (off by default)
+    kidnap: KidnapConfig = dataclasses.field(default_factory=KidnapConfig)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "field", field_spec(self.field, "MatchConfig.field"))
