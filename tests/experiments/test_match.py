@@ -124,6 +124,35 @@ def test_intervals_stay_within_what_each_metric_can_take():
     assert summary["entropy"].low < -6.0  # mean -2.5, half-width 6.86 x 1.96
 
 
+def test_a_share_s_interval_never_narrows_as_it_leaves_0():
+    """A share 0 in each of 50 matches read 0.0% [0.0, 7.1] (Wilson's 0 of 50), and the same
+    share with one match lost for 3 ticks of 600 read [0.0, 0.1]: more loss, a narrower
+    interval. One rule now, the normal approximation from the spread over matches (the
+    ball in view's and every metric's): 0 in every match reads [0, 0], and each match lost
+    for longer widens it, by the formula's own numbers."""
+    uppers = []
+    for lost_ticks in (0, 3, 30, 300):
+        lost = np.zeros(50)
+        lost[0] = lost_ticks / 600
+        per_match = {name: np.full(50, 0.5) for name in MATCH_METRICS}
+        per_match["lost_share"] = lost
+        interval = MethodResult("a", per_match, np.zeros((1, 50)), MatchClip(), 0.0).summary()[
+            "lost_share"
+        ]
+        half = 1.959964 * lost.std(ddof=1) / np.sqrt(50)
+        assert (interval.low, interval.high) == pytest.approx(
+            (max(0.0, lost.mean() - half), lost.mean() + half), abs=1e-9
+        )
+        uppers.append(interval.high)
+    assert uppers[0] == 0.0 and uppers == sorted(uppers) and len(set(uppers)) == 4
+    # the ball in view, which varies, keeps its interval to the digit
+    ball = np.linspace(0.2, 0.5, 50)
+    per_match = {name: np.full(50, 0.5) for name in MATCH_METRICS} | {"ball_in_view": ball}
+    got = MethodResult("a", per_match, np.zeros((1, 50)), MatchClip(), 0.0).summary()
+    half = 1.959964 * ball.std(ddof=1) / np.sqrt(50)
+    assert got["ball_in_view"].high == pytest.approx(ball.mean() + half, rel=1e-6)
+
+
 def fake(method: str, rmse: float, ball: float) -> MethodResult:
     per_match = {name: np.zeros(4) for name in MATCH_METRICS}
     per_match["position_rmse"] = np.full(4, rmse)
@@ -216,13 +245,13 @@ def test_paired_differences_by_hand():
     row = paired_rows(differences, "b", 4, 7)[0]
     assert (row["method"], row["baseline"], row["seed"]) == ("a", "b", 7)
     assert row["ball_in_view_diff_low"] == pytest.approx(0.15 - half, rel=1e-5)
-    # neither ever lost: no difference seen in 4 matches is not a certain 0 (it printed
-    # [0.0, 0.0]); at most Wilson's upper end of 0/4 of the matches differ, each by at most 1
+    # neither ever lost: no difference in any match, by the rule of every other difference
+    # (match_interval); it was Wilson's +-0.49 over these 4 matches, where one match of
+    # difference read narrower
     a.per_match["lost_share"][:] = 0.0
     b.per_match["lost_share"][:] = 0.0
     lost = paired_differences([a, b], "b")["a"]["lost_share"]
-    w = 1.959964**2 / (4 + 1.959964**2)
-    assert (lost.mean, lost.low, lost.high) == pytest.approx((0.0, -w, w), rel=1e-5)
+    assert (lost.mean, lost.low, lost.high) == (0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match="baseline 'c'"):
         paired_differences([a, b], "c")
 

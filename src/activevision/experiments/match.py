@@ -3,7 +3,8 @@ RoboCup team cares about (``activevision match``).
 
 Per match (:mod:`activevision.envs.match.scores`), then mean and 95% interval over
 matches: position and heading RMSE, the share of ticks lost (error above 0.5 m) and with the
-ball in view, the mean entropy and the head's travel.
+ball in view, the mean entropy and the head's travel; every interval, shares' too, is the
+normal approximation from the spread over matches (:func:`match_interval`).
 
 Match ``i`` of every method is reset with seed ``seed + i``: the same start, ball and walk
 draws. Strategies only change where the head looks, and so what is detected. So two methods
@@ -96,13 +97,25 @@ class MethodResult:
     kidnaps: KidnapEvents | None = None
 
     def summary(self) -> dict[str, Interval]:
-        """Mean and 95% interval over matches of every metric, within the values it can take
-        (:data:`METRIC_BOUNDS`: two matches' heading RMSEs of 0.2 and 5.7 deg read [-0.05,
-        5.97] unbounded)."""
+        """Mean and 95% interval over matches of every metric (:func:`match_interval`)."""
         return {
-            name: mean_interval(values.tolist(), bounds=METRIC_BOUNDS[name])
+            name: match_interval(values, METRIC_BOUNDS[name])
             for name, values in self.per_match.items()
         }
+
+
+def match_interval(values: np.ndarray, bounds: tuple[float, float] | None) -> Interval:
+    """The mean of per-match ``values`` and its 95% interval, by one rule for every metric,
+    share or not: the normal approximation from the spread over matches, cut to ``bounds``
+    (:data:`METRIC_BOUNDS`: two matches' heading RMSEs of 0.2 and 5.7 deg read [-0.05,
+    5.97] unbounded). Values the same in every match (a robot never lost) show no spread:
+    their interval is the value itself. (Until 2026-12-05 a share 0 in every match took the
+    Wilson interval of 0 out of the matches, [0, 7.1%] over 50, while a share 0 in all but
+    one took the normal one, [0, 0.2%] for a few ticks lost: more loss, a narrower
+    interval. How many matches a never-lost robot vouches for is a statement about
+    matches, not ticks: none of 50 lost puts the share of matches ever lost below 7.1%, by
+    Wilson's interval; the README says so beside its table.)"""
+    return mean_interval(values.tolist(), bounds=bounds, vouch_when_equal=False)
 
 
 def play_matches(
@@ -628,17 +641,16 @@ def paired_differences(
     results: Sequence[MethodResult], baseline: str
 ) -> dict[str, dict[str, Interval]]:
     """Per method other than ``baseline``: each metric's mean difference ``method -
-    baseline`` over the same matches, with the 95% interval of the per-match differences (a
-    share's differences lie within [-1, 1]: two methods that never differ on it get the
-    interval of no difference seen in that many matches, not a certain 0)."""
+    baseline`` over the same matches, with the 95% interval of the per-match differences
+    (:func:`match_interval`; a share's differences lie within [-1, 1]; two methods that
+    never differ on it read 0 [0, 0], as two that never differ on any other metric)."""
     base = next((r for r in results if r.method == baseline), None)
     if base is None:
         raise ValueError(f"the baseline {baseline!r} is not among the methods played")
     return {
         r.method: {
-            name: mean_interval(
-                (values - base.per_match[name]).tolist(),
-                bounds=(-1.0, 1.0) if name in SHARES else None,
+            name: match_interval(
+                values - base.per_match[name], (-1.0, 1.0) if name in SHARES else None
             )
             for name, values in r.per_match.items()
         }
