@@ -255,3 +255,28 @@ def test_an_error_curve_of_one_tick_is_drawn(monkeypatch):
     one, many = (fig.axes[0].lines[0] for fig in drawn)
     assert one.get_marker() not in (None, "", "None") and one.get_xdata().tolist() == [0.32]
     assert many.get_marker() in (None, "", "None")  # a curve: a line, as before
+
+
+def test_plot_pareto_s_legend_rows_are_as_full_as_each_other(monkeypatch):
+    # 11 strategies in the 9 columns that fitted: two columns of two, then seven of one
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    names = [
+        "ball_track",
+        "bhuman_cycle",
+        "bitbots_search",
+        "nubots_6point",
+        "entropy_greedy",
+        "entropy_track (front)",
+        "glance_track (front)",
+        "onnx_policy",
+        "random",
+        "oracle_ball (privileged)",
+        "oracle_entropy (privileged)",
+    ]
+    plot_pareto({name: POINT for name in names}, [], "x", "t")
+    columns = drawn[0].legends[0]._ncols
+    rows = -(-len(names) // columns)
+    assert rows > 1 and columns == -(-len(names) // rows)  # 6 + 5, not 9 + 2

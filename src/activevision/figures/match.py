@@ -147,7 +147,10 @@ def _legend_below(fig: Figure, ax: Axes) -> None:
     handles, labels = ax.get_legend_handles_labels()
     style: dict[str, Any] = {"loc": "outside lower center", "fontsize": 7, "frameon": False}
     columns, labels = fit_legend(fig, handles, labels, len(labels), **style)
-    fig.legend(handles, labels, ncol=columns, **style)
+    # rows as full as each other: 11 strategies in 9 columns filled two columns of two
+    # and a row of seven; in 6 they are rows of 6 and 5 (no wider than what fits)
+    rows = math.ceil(len(labels) / columns)
+    fig.legend(handles, labels, ncol=math.ceil(len(labels) / rows), **style)
 
 
 def _colours(n: int) -> list[tuple[float, float, float, float]]:
