@@ -686,7 +686,7 @@ def test_set_changes_the_matches_world_and_says_so(tmp_path, capsys):
     camera (the command named no camera, and the tick only through --run), recorded in the
     CSV's columns; a field no column records goes to its ``settings`` column, which a
     default world's file has none of, and the report names it."""
-    from activevision.experiments.match import world_differences
+    from activevision.experiments.match_world import world_differences
 
     out = tmp_path / "m"
     argv = [*TINY, "--out", str(out), "--set", "tick_seconds=0.16", "--set", "camera.hfov=1.2"]

@@ -178,7 +178,7 @@ def test_match_csv_records_the_walk_the_other_robots_speed_and_the_ball():
     import dataclasses
 
     from activevision.envs.match.config import BallConfig, OthersConfig, WalkConfig
-    from activevision.experiments.match import WORLD_COLUMNS, world_differences
+    from activevision.experiments.match_world import WORLD_COLUMNS, world_differences
 
     world = SMALL.replace(
         walk=WalkConfig(target="ball", speed=0.3, turn_rate=0.8),

@@ -56,7 +56,7 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
     detector 0.6/0.15/0.2"``, or nothing; ``run`` names the run a detector came from
     (default: ``--run`` as given)."""
     from activevision.envs.match.config import DetectionConfig
-    from activevision.experiments.match import kidnap_text
+    from activevision.experiments.match_world import kidnap_text
 
     text = ""
     if args.robots:
