@@ -703,6 +703,12 @@ def test_set_changes_the_matches_world_and_says_so(tmp_path, capsys):
     assert main([*TINY, "--out", str(tmp_path / "plain")]) == 0
     with (tmp_path / "plain" / "match.csv").open() as f:
         assert "settings" not in next(csv.DictReader(f))
+    # a detector set so, with no run: it named "the one None was trained with"
+    argv = [*TINY, "--out", str(tmp_path / "noise"), "--set", "detection.ball_noise=0.1"]
+    capsys.readouterr()
+    assert main(argv) == 0
+    printed = capsys.readouterr().out.splitlines()[0]
+    assert "None" not in printed and "ball noise 0.1 of its range" in printed
 
 
 @pytest.mark.parametrize(

@@ -64,7 +64,7 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
         text += f", {args.robots} other robot{'s' if args.robots > 1 else ''} {moving}"
     if config.detection != DetectionConfig():
         text += f", detector {detector_text(config.detection)}"
-        if args.detection is None:
+        if args.detection is None and args.run is not None:  # else --set's, named below
             text += f" (the one {args.run if run is None else run} was trained with)"
     camera = config.camera.differences()
     if camera and trained_camera(args):  # a run's (--set camera... is refused beside --run)
