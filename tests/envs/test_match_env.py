@@ -450,3 +450,12 @@ def test_a_bad_kidnap_is_refused(values, message):
     with pytest.raises(ValueError, match=message):
         KidnapConfig(**values)
     assert not KidnapConfig().enabled and KidnapConfig(ticks=(3, 3, 1)).ticks == (1, 3)
+
+
+def test_gym_make_takes_a_kidnap_as_json_and_its_spec_makes_the_same_env():
+    env = gym.make("ActiveVisionMatch-v0", kidnap={"ticks": [2]}, ticks=4)
+    env.reset(seed=0)
+    flags = [env.step(0)[4]["kidnapped"] for _ in range(3)]
+    assert flags == [False, True, False]
+    again = gym.make(gym.envs.registration.EnvSpec.from_json(env.spec.to_json()))
+    assert again.unwrapped.config.kidnap == KidnapConfig(ticks=(2,))
