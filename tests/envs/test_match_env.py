@@ -14,6 +14,7 @@ from activevision.envs import EnvConfig
 from activevision.envs.match.config import (
     BallConfig,
     DetectionConfig,
+    KidnapConfig,
     MatchConfig,
     OthersConfig,
     WalkConfig,
@@ -25,6 +26,7 @@ from activevision.envs.match.simulation import MatchBatch
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.envs.robots import RobotsConfig
 from activevision.geometry import field_landmarks
+from activevision.geometry.angles import wrap_angle
 from activevision.geometry.field import FieldSpec
 from activevision.localisation import hx_range_bearing
 from activevision.rendering.appearance import AppearanceConfig
@@ -363,3 +365,97 @@ def test_a_striker_aims_short_of_the_ball():
         distance = np.hypot(*(ball - mean[i, :2]))
         expected = mean[i, :2] + (ball - mean[i, :2]) * (distance - 0.4) / distance
         np.testing.assert_allclose(sim.waypoint[i], expected, atol=1e-12)
+
+
+def _kidnap_pair(m: int, kidnap: KidnapConfig, ticks: int, seed: int = 40):
+    """The same ``m`` matches without and with ``kidnap``, played ``ticks`` ticks with the
+    same random head moves; yields after each tick."""
+    sims = [MatchBatch(MatchConfig(), m), MatchBatch(MatchConfig(kidnap=kidnap), m)]
+    for sim in sims:
+        sim.reset(np.arange(m), [np.random.default_rng(seed + i) for i in range(m)])
+    moves = np.random.default_rng(seed)
+    for t in range(1, ticks + 1):
+        actions = moves.integers(9, size=m)
+        for sim in sims:
+            sim.step(actions)
+        yield t, sims
+
+
+def test_a_kidnap_carries_the_robot_unbeknown_to_its_belief():
+    """Kidnapped in tick 5 (KidnapConfig.ticks): until then the very same matches as
+    without it (its draws come from a generator of its own); in tick 5 every robot is
+    carried 1-2 m (less where the field's margin stops it) and turned by at most 0.8 rad,
+    while its belief, which nothing told, stays where the same match's belief is. The
+    infos say so in that tick only; a world without kidnapping has no such keys."""
+    m = 8
+    for t, (plain, kidnapped) in _kidnap_pair(m, KidnapConfig(ticks=(5,)), 6):
+        if t < 5:
+            np.testing.assert_array_equal(plain.pose, kidnapped.pose)
+            np.testing.assert_array_equal(plain.mean, kidnapped.mean)
+            assert not kidnapped.kidnapped.any()
+        if t == 5:
+            assert kidnapped.kidnapped.all()
+            info = kidnapped.info_arrays()
+            assert info["kidnapped"].all() and "kidnapped" not in plain.info_arrays()
+            assert "lost_alarm" in info and "lost_alarm" not in plain.info_arrays()
+            moved = kidnapped.pose - plain.pose
+            carried = np.hypot(moved[:, 0], moved[:, 1])
+            # each then took the same commanded step (its belief's), turned: at most 2 x 6.4 cm
+            hx, hy = 4.5 - 0.5, 3.0 - 0.5
+            at_margin = (np.abs(kidnapped.pose[:, 0]) > hx - 0.07) | (
+                np.abs(kidnapped.pose[:, 1]) > hy - 0.07
+            )
+            assert np.all(((carried > 1 - 0.13) & (carried < 2 + 0.13)) | at_margin), carried
+            assert (~at_margin).sum() >= m // 2
+            assert np.all(np.abs(wrap_angle(moved[:, 2])) <= 0.8 + 1e-9)
+            # the belief was told nothing: it moved as the same match's, give or take what
+            # one tick's detections (from elsewhere) made of it
+            assert np.abs(kidnapped.mean[:, :2] - plain.mean[:, :2]).max() < 0.3
+            assert np.all(kidnapped.position_error() > plain.position_error())
+        if t == 6:
+            assert not kidnapped.kidnapped.any()
+
+
+def test_kidnaps_at_a_rate_come_as_often_as_it_says_and_by_the_seed():
+    """``rate`` kidnaps per minute of play: 6 per minute of ticks of 0.32 s is a chance of
+    0.032 a tick, so 32 matches of 300 ticks hold about 307 (binomial std 17); the same
+    seeds the same kidnaps."""
+    kidnap = KidnapConfig(rate=6.0)
+    counts = []
+    for _ in range(2):
+        sim = MatchBatch(MatchConfig(kidnap=kidnap), 32)
+        sim.reset(np.arange(32), [np.random.default_rng(7 + i) for i in range(32)])
+        ticks = []
+        for _ in range(300):
+            sim.step(np.zeros(32, dtype=np.int64))
+            ticks.append(sim.kidnapped.copy())
+        counts.append(np.array(ticks))
+    np.testing.assert_array_equal(counts[0], counts[1])
+    expected = 32 * 300 * 6.0 * 0.32 / 60
+    std = (32 * 300 * 0.032 * 0.968) ** 0.5
+    assert abs(counts[0].sum() - expected) < 5 * std, counts[0].sum()
+
+
+@pytest.mark.parametrize(
+    ("values", "message"),
+    [
+        ({"distance": (2.0, 1.0)}, "ordered"),
+        ({"distance": (1.0, 30.0)}, r"\[0, 20\]"),
+        ({"ticks": (0,)}, "count from 1"),
+        ({"rate": -1.0}, "rate"),
+        ({"turn": 4.0}, "turn"),
+    ],
+)
+def test_a_bad_kidnap_is_refused(values, message):
+    with pytest.raises(ValueError, match=message):
+        KidnapConfig(**values)
+    assert not KidnapConfig().enabled and KidnapConfig(ticks=(3, 3, 1)).ticks == (1, 3)
+
+
+def test_gym_make_takes_a_kidnap_as_json_and_its_spec_makes_the_same_env():
+    env = gym.make("ActiveVisionMatch-v0", kidnap={"ticks": [2]}, ticks=4)
+    env.reset(seed=0)
+    flags = [env.step(0)[4]["kidnapped"] for _ in range(3)]
+    assert flags == [False, True, False]
+    again = gym.make(gym.envs.registration.EnvSpec.from_json(env.spec.to_json()))
+    assert again.unwrapped.config.kidnap == KidnapConfig(ticks=(2,))

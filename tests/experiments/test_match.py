@@ -3,6 +3,7 @@ matches, the metrics are what they say, and the strategies aim where they claim.
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
 
@@ -11,7 +12,7 @@ import pytest
 
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import track_grid
-from activevision.experiments.evaluate import Interval
+from activevision.experiments.evaluate import Interval, wilson_interval
 from activevision.experiments.match import (
     MATCH_METRICS,
     MatchClip,
@@ -123,6 +124,35 @@ def test_intervals_stay_within_what_each_metric_can_take():
     assert summary["entropy"].low < -6.0  # mean -2.5, half-width 6.86 x 1.96
 
 
+def test_a_share_s_interval_never_narrows_as_it_leaves_0():
+    """A share 0 in each of 50 matches read 0.0% [0.0, 7.1] (Wilson's 0 of 50), and the same
+    share with one match lost for 3 ticks of 600 read [0.0, 0.1]: more loss, a narrower
+    interval. One rule now, the normal approximation from the spread over matches (the
+    ball in view's and every metric's): 0 in every match reads [0, 0], and each match lost
+    for longer widens it, by the formula's own numbers."""
+    uppers = []
+    for lost_ticks in (0, 3, 30, 300):
+        lost = np.zeros(50)
+        lost[0] = lost_ticks / 600
+        per_match = {name: np.full(50, 0.5) for name in MATCH_METRICS}
+        per_match["lost_share"] = lost
+        interval = MethodResult("a", per_match, np.zeros((1, 50)), MatchClip(), 0.0).summary()[
+            "lost_share"
+        ]
+        half = 1.959964 * lost.std(ddof=1) / np.sqrt(50)
+        assert (interval.low, interval.high) == pytest.approx(
+            (max(0.0, lost.mean() - half), lost.mean() + half), abs=1e-9
+        )
+        uppers.append(interval.high)
+    assert uppers[0] == 0.0 and uppers == sorted(uppers) and len(set(uppers)) == 4
+    # the ball in view, which varies, keeps its interval to the digit
+    ball = np.linspace(0.2, 0.5, 50)
+    per_match = {name: np.full(50, 0.5) for name in MATCH_METRICS} | {"ball_in_view": ball}
+    got = MethodResult("a", per_match, np.zeros((1, 50)), MatchClip(), 0.0).summary()
+    half = 1.959964 * ball.std(ddof=1) / np.sqrt(50)
+    assert got["ball_in_view"].high == pytest.approx(ball.mean() + half, rel=1e-6)
+
+
 def fake(method: str, rmse: float, ball: float) -> MethodResult:
     per_match = {name: np.zeros(4) for name in MATCH_METRICS}
     per_match["position_rmse"] = np.full(4, rmse)
@@ -148,7 +178,7 @@ def test_match_csv_records_the_walk_the_other_robots_speed_and_the_ball():
     import dataclasses
 
     from activevision.envs.match.config import BallConfig, OthersConfig, WalkConfig
-    from activevision.experiments.match import WORLD_COLUMNS, world_differences
+    from activevision.experiments.match_world import WORLD_COLUMNS, world_differences
 
     world = SMALL.replace(
         walk=WalkConfig(target="ball", speed=0.3, turn_rate=0.8),
@@ -215,13 +245,13 @@ def test_paired_differences_by_hand():
     row = paired_rows(differences, "b", 4, 7)[0]
     assert (row["method"], row["baseline"], row["seed"]) == ("a", "b", 7)
     assert row["ball_in_view_diff_low"] == pytest.approx(0.15 - half, rel=1e-5)
-    # neither ever lost: no difference seen in 4 matches is not a certain 0 (it printed
-    # [0.0, 0.0]); at most Wilson's upper end of 0/4 of the matches differ, each by at most 1
+    # neither ever lost: no difference in any match, by the rule of every other difference
+    # (match_interval); it was Wilson's +-0.49 over these 4 matches, where one match of
+    # difference read narrower
     a.per_match["lost_share"][:] = 0.0
     b.per_match["lost_share"][:] = 0.0
     lost = paired_differences([a, b], "b")["a"]["lost_share"]
-    w = 1.959964**2 / (4 + 1.959964**2)
-    assert (lost.mean, lost.low, lost.high) == pytest.approx((0.0, -w, w), rel=1e-5)
+    assert (lost.mean, lost.low, lost.high) == (0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match="baseline 'c'"):
         paired_differences([a, b], "c")
 
@@ -315,6 +345,47 @@ def test_bhuman_cycle_narrows_when_walking():
     for t in range(60):  # walking 0.2 m/s: 0.064 m per tick
         target = policy.targets(info_for([[0.0, 0.3]], ball, [[0.064 * t, 0.0, 0.0]]))
     assert math.degrees(abs(target[0, 0])) == pytest.approx(15.0, abs=0.5)
+
+
+@pytest.mark.parametrize("tick_seconds", [0.16, 0.08])
+def test_bhuman_cycle_estimates_its_speed_in_seconds_not_ticks(tick_seconds):
+    """The walking speed's average kept 0.8 of its value per tick: with ticks of 0.16 s it
+    reacted twice as fast as with the paper's 0.32 s. Now, walking at 0.1 m/s from rest,
+    the estimate after the same seconds is the same at every tick length: 0.1 (1 - 0.8^(t /
+    0.32 s)), as the paper's tick gives it."""
+
+    def estimates(tick):
+        policy = BHumanCycle(MatchConfig(tick_seconds=tick))
+        policy.reset(1, np.random.default_rng(0))
+        per_tick = round(1.28 / tick)  # 1.28 s of walking
+        for t in range(per_tick + 1):
+            policy.targets(info_for([[0.0, 0.3]], [[2.0, 0.0]], [[0.1 * tick * t, 0.0, 0.0]]))
+        return float(policy.speed[0])
+
+    expected = 0.1 * (1 - 0.8 ** (1.28 / 0.32))
+    assert estimates(0.32) == pytest.approx(expected, rel=1e-9)
+    assert estimates(tick_seconds) == pytest.approx(expected, rel=1e-9)
+    # the paper's tick: exactly 0.8 and 0.2, as the README's tables were measured with
+    policy = BHumanCycle(MatchConfig())
+    assert (policy.keep_per_tick, policy.gain_per_tick) == (0.8, 0.2)
+
+
+@pytest.mark.parametrize(("tick_seconds", "ticks_at_a_point"), [(0.32, 3), (0.16, 6), (0.08, 12)])
+def test_the_six_point_look_dwells_for_seconds_not_ticks(tick_seconds, ticks_at_a_point):
+    """NUbots' look held the head 3 ticks at each point whatever a tick lasted (0.96 s of the
+    paper's ticks, 0.48 s of ticks of 0.16 s); now 0.96 s at every tick length."""
+    policy = NUbots6Point(MatchConfig(tick_seconds=tick_seconds))
+    policy.reset(1, np.random.default_rng(0))
+    head = np.radians([[60.0, 15.0]])  # at the first point
+    targets = []
+    for _ in range(3 * ticks_at_a_point + 1):
+        target = policy.targets(info_for(head, [[1.0, 0.0]]))
+        head = target.copy()  # a head that arrives at once
+        targets.append(tuple(np.round(np.degrees(target[0]))))
+    runs = [len(list(run)) for _, run in itertools.groupby(targets)]
+    # the first point's run lacks the tick the head arrived in; then each is held in full
+    assert runs[1:3] == [ticks_at_a_point] * 2
+    assert ticks_at_a_point * tick_seconds == pytest.approx(0.96)
 
 
 def test_entropy_track_keeps_the_ball_inside_its_margin():
@@ -577,3 +648,81 @@ def test_play_matches_names_a_clip_match_past_the_matches():
         play_matches("random", SMALL, 2, seed=3, clip_match=2)
     with pytest.raises(ValueError, match=r"^matches: expects a positive integer, got 0$"):
         play_matches("random", SMALL, 0, seed=3)
+
+
+def test_two_strategy_files_of_one_name_are_two_modules(tmp_path, monkeypatch):
+    """``a/mine.py`` and ``b/mine.py`` were both the module ``activevision_strategy_mine``:
+    the second replaced the first in ``sys.modules``, where pickling and dataclasses look a
+    class's module up, so the first's class was found as the second's."""
+    import pickle
+    import sys
+
+    from activevision.experiments.match_methods import load_strategy
+
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    for folder, pan in (("a", 0.1), ("b", 0.2)):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "mine.py").write_text(
+            f"class Mine:\n    name = 'mine_{folder}'\n    pan = {pan}\n"
+            "    def __init__(self, config=None):\n        pass\n"
+        )
+    first = load_strategy(f"{tmp_path / 'a' / 'mine.py'}:Mine")[1]
+    second = load_strategy(f"{tmp_path / 'b' / 'mine.py'}:Mine")[1]
+    assert first.__module__ != second.__module__
+    assert sys.modules[first.__module__].Mine is first
+    assert pickle.loads(pickle.dumps(first())).pan == 0.1
+    assert pickle.loads(pickle.dumps(second())).pan == 0.2
+    # the same file loaded again is the same module's name
+    assert load_strategy(f"{tmp_path / 'a' / 'mine.py'}:Mine")[1].__module__ == first.__module__
+
+
+def test_kidnap_events_follow_each_kidnap_to_the_next_or_the_end():
+    """Hand-made ticks of two matches (errors, kidnaps, alarms), against what each kidnap
+    should read: match 0 kidnapped in ticks 1 and 5 (the first back under 0.5 m 2 ticks
+    later with an alarm; the second lost to the end), match 1 in tick 2 (carried 0.3 m: not
+    lost, back at once, no alarm needed)."""
+    from activevision.envs.match.scores import MatchScores
+    from activevision.experiments.match import kidnap_summary
+
+    errors = np.array(
+        [
+            [0.1, 0.1],
+            [1.5, 0.1],  # tick 1: match 0 kidnapped
+            [1.0, 0.3],  # tick 2: match 1 kidnapped (0.3 m)
+            [0.4, 0.1],
+            [0.3, 0.1],
+            [2.0, 0.1],  # tick 5: match 0 again
+            [1.9, 0.1],
+            [1.8, 0.1],
+        ]
+    )
+    kidnapped = np.zeros_like(errors, dtype=bool)
+    kidnapped[[1, 5], 0] = kidnapped[2, 1] = True
+    alarm = np.zeros_like(kidnapped)
+    alarm[2, 0] = alarm[4, 1] = True
+    scores = MatchScores(8, 2, 0.32)
+    for t in range(8):
+        info = {
+            "position_error": errors[t],
+            "heading_error": np.zeros(2),
+            "ball_in_view": np.zeros(2, bool),
+            "entropy": np.zeros(2),
+            "head_move": np.zeros((2, 2)),
+            "kidnapped": kidnapped[t],
+            "lost_alarm": alarm[t],
+        }
+        scores.add(info, np.zeros(2))
+    events = scores.kidnaps()
+    assert events.match.tolist() == [0, 0, 1] and events.tick.tolist() == [1, 5, 2]
+    assert events.lost.tolist() == [True, True, False]
+    assert events.detected.tolist() == [True, False, True]
+    assert events.recovery_ticks.tolist() == [2, -1, 0]
+    summary = kidnap_summary(events, 0.32)
+    # over the 2 kidnaps that left it lost: 1 detected, 1 back, after 2 ticks of 0.32 s
+    assert summary["kidnap_detected"] == wilson_interval(1, 2)
+    assert summary["kidnap_recovered"] == wilson_interval(1, 2)
+    assert summary["recovery_s"].mean == pytest.approx(0.64)
+    # a match without kidnapping has no events, not an empty list of them
+    plain = MatchScores(8, 2, 0.32)
+    plain.add({k: v for k, v in info.items() if k not in ("kidnapped", "lost_alarm")}, np.zeros(2))
+    assert plain.kidnaps() is None

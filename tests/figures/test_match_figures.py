@@ -119,32 +119,61 @@ def test_plot_pareto_keeps_the_legend_of_long_names_inside_the_figure(monkeypatc
     }
     plot_pareto(points, names[:2], "x", "t")
     assert _legends_fit(drawn[0])
-    # ordinary names keep their legend inside the left panel
     plot_pareto({"a": POINT, "b": {**POINT, "ball_in_view": (0.3, 0.2, 0.4)}}, ["a"], "x", "t")
-    assert drawn[1].axes[0].get_legend() is not None and not drawn[1].legends
     assert _legends_fit(drawn[1])
 
 
-def test_plot_pareto_checking_its_legend_leaves_a_fitting_figure_the_same_bytes(
-    tmp_path, monkeypatch
-):
-    # the check lays the figure out once before it is saved: a legend that fits must come
-    # out as the plain legend inside the panel did, byte for byte
-    points = {
-        f"method_{i}": {
-            "ball_in_view": (0.3 + 0.05 * i, 0.28 + 0.05 * i, 0.32 + 0.05 * i),
-            "position_rmse": POINT["position_rmse"],
-        }
-        for i in range(6)
-    }
-    checked, plain = tmp_path / "checked.png", tmp_path / "plain.png"
-    plot_pareto(points, ["method_5"], checked, "t", references=["method_0"])
+@pytest.mark.parametrize("count", [2, 11])
+def test_plot_pareto_s_legend_lies_outside_the_panels(monkeypatch, count):
+    """The legend sat inside the left panel wherever it fitted there, over the whiskers of
+    the default command's eleven strategies; now it lies below both panels, on none."""
+    drawn = []
     monkeypatch.setattr(
-        "activevision.figures.match._legend_inside_or_below",
-        lambda fig, ax: ax.legend(fontsize=7),
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
     )
-    plot_pareto(points, ["method_5"], plain, "t", references=["method_0"])
-    assert checked.read_bytes() == plain.read_bytes()
+    points = {
+        f"strategy_{i}": {
+            "ball_in_view": (0.2 + 0.02 * i, 0.15 + 0.02 * i, 0.25 + 0.02 * i),
+            "position_rmse": (0.07 + 0.001 * i, 0.065 + 0.001 * i, 0.075 + 0.001 * i),
+        }
+        for i in range(count)
+    }
+    plot_pareto(points, [f"strategy_{count - 1}"], "x", "t", references=["strategy_0"])
+    fig = drawn[0]
+    assert _legends_fit(fig)
+    assert not any(ax.get_legend() for ax in fig.axes) and len(fig.legends) == 1
+    legend = fig.legends[0].get_window_extent()
+    for ax in fig.axes:
+        assert not legend.overlaps(ax.get_window_extent())
+    assert len(fig.legends[0].get_texts()) == count
+
+
+def test_plot_pareto_of_no_ball_in_view_starts_its_axis_at_0(monkeypatch):
+    """Every strategy at 0% ball in view (a camera that never sees it): the axis ran to
+    -1% in the zoom and -0.4% in the whole, a share that cannot be; now both start at 0,
+    and the points on that edge are drawn whole (clipped beyond it, not at it)."""
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    points = {
+        f"m{i}": {
+            "ball_in_view": (0.0, 0.0, 0.071),
+            "position_rmse": (0.1 + 0.01 * i, 0.09 + 0.01 * i, 0.11 + 0.01 * i),
+        }
+        for i in range(3)
+    }
+    plot_pareto(points, ["m0"], "x", "t")
+    fig = drawn[0]
+    fig.draw_without_rendering()
+    for ax in fig.axes:
+        assert ax.get_xlim()[0] == 0.0 and ax.get_ylim()[0] >= 0.0
+        marker = next(line for line in ax.lines if line.get_marker() == "o")  # m0's, at 0
+        clip = marker.get_clip_box()  # matplotlib keeps a rectangle as the clip box
+        assert clip.x0 < ax.get_window_extent().x0  # reaches beyond the edge at 0
+    # points away from 0 keep the axes as they were
+    plot_pareto({"a": POINT}, ["a"], "x", "t")
+    assert drawn[1].axes[0].get_xlim()[0] > 30
 
 
 def test_plot_pareto_of_one_match_says_it_has_no_whiskers(monkeypatch):
@@ -226,3 +255,28 @@ def test_an_error_curve_of_one_tick_is_drawn(monkeypatch):
     one, many = (fig.axes[0].lines[0] for fig in drawn)
     assert one.get_marker() not in (None, "", "None") and one.get_xdata().tolist() == [0.32]
     assert many.get_marker() in (None, "", "None")  # a curve: a line, as before
+
+
+def test_plot_pareto_s_legend_rows_are_as_full_as_each_other(monkeypatch):
+    # 11 strategies in the 9 columns that fitted: two columns of two, then seven of one
+    drawn = []
+    monkeypatch.setattr(
+        "activevision.figures.match.save_figure", lambda fig, path, dpi: drawn.append(fig)
+    )
+    names = [
+        "ball_track",
+        "bhuman_cycle",
+        "bitbots_search",
+        "nubots_6point",
+        "entropy_greedy",
+        "entropy_track (front)",
+        "glance_track (front)",
+        "onnx_policy",
+        "random",
+        "oracle_ball (privileged)",
+        "oracle_entropy (privileged)",
+    ]
+    plot_pareto({name: POINT for name in names}, [], "x", "t")
+    columns = drawn[0].legends[0]._ncols
+    rows = -(-len(names) // columns)
+    assert rows > 1 and columns == -(-len(names) // rows)  # 6 + 5, not 9 + 2

@@ -103,6 +103,15 @@ def path(text: str) -> Path:
     return Path(text)
 
 
+def name(text: str) -> str:
+    """A strategy's name (``--clip-method``, ``--baseline``): not empty nor blank. An empty
+    one (a shell variable left unset: ``--clip-method "$M"``) was taken as no option, and the
+    default played silently in its place."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expects a strategy's name, got {text!r}")
+    return text
+
+
 def positive_int(text: str) -> int:
     """An integer >= 1 (episodes, steps, chunk sizes)."""
     value = _integer(text)

@@ -18,6 +18,7 @@ from activevision.cli.args import (
     choice_list,
     float_in,
     int_in,
+    name,
     path,
     positive_int,
     seed,
@@ -55,6 +56,7 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
     detector 0.6/0.15/0.2"``, or nothing; ``run`` names the run a detector came from
     (default: ``--run`` as given)."""
     from activevision.envs.match.config import DetectionConfig
+    from activevision.experiments.match_world import kidnap_text
 
     text = ""
     if args.robots:
@@ -62,13 +64,18 @@ def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None =
         text += f", {args.robots} other robot{'s' if args.robots > 1 else ''} {moving}"
     if config.detection != DetectionConfig():
         text += f", detector {detector_text(config.detection)}"
-        if args.detection is None:
+        if args.detection is None and args.run is not None:  # else --set's, named below
             text += f" (the one {args.run if run is None else run} was trained with)"
     camera = config.camera.differences()
-    if camera:  # only a run's: the command line names no camera
+    if camera and trained_camera(args):  # a run's (--set camera... is refused beside --run)
         text += f", camera {camera} (the one {args.run if run is None else run} was trained with)"
     if args.ball_bounces_off_us:
         text += ", the ball bouncing off our robot"
+    if args.set:  # each as given: the camera, the tick, the tracker...
+        text += ", --set " + " ".join(args.set)
+    kidnap = kidnap_text(config)
+    if kidnap:
+        text += f", {kidnap}"
     return text
 
 
@@ -97,14 +104,71 @@ def _run_world(run: Path | None) -> tuple[DetectionConfig | None, CameraConfig |
     return None, run_config.env.camera
 
 
+#: the match's settings an option of its own sets: ``--set`` refuses them, naming it
+OPTION_PATHS = {
+    "ticks": "--ticks",
+    "step_deg": "--step-deg",
+    "max_move_deg": "--step-deg",
+    "action_type": "--action-type",
+    "walk.target": "--walk",
+    "walk": "--walk (and --set walk.FIELD=VALUE for the others)",
+    "robots.count": "--robots",
+    "others.speed": "--robot-speed",
+    "ball.bounces_off_own_robot": "--ball-bounces-off-us",
+    "detection.near": "--detection",
+    "detection.far": "--detection",
+    "detection.false_rate": "--detection",
+    "detection": "--detection (and --set detection.ball_noise=VALUE)",
+    "robots": "--robots (and --set robots.FIELD=VALUE for the others)",
+    "others": "--robot-speed (and --set others.FIELD=VALUE for the others)",
+    "ball": "--ball-bounces-off-us (and --set ball.FIELD=VALUE for the others)",
+    "kidnap.rate": "--kidnap",
+    "kidnap.ticks": "--kidnap-ticks",
+    "kidnap": "--kidnap or --kidnap-ticks (and --set kidnap.distance=[LOW,HIGH], kidnap.turn=RAD)",
+}
+#: the settings ``match`` reads nothing of: why ``--set`` refuses them
+UNREAD_PATHS = {
+    "reward": "activevision match scores no reward (what a head is scored by is its table);"
+    " the reward is what a training run learns: activevision train --set match.reward.FIELD=...",
+    "observation": "every strategy takes the image and the info it needs whatever the"
+    " observation; it is what a training run's network takes (activevision train --set"
+    " match.observation=...)",
+}
+
+
+def match_settings(items: list[str] | None) -> dict[str, Any]:
+    """``--set KEY=VALUE`` items as ``{path: value}`` (a leading ``match.`` dropped; values
+    JSON where they parse, as ``train --set``). ValueError for an item that is no KEY=VALUE,
+    or a key that an option sets (:data:`OPTION_PATHS`) or that ``match`` never reads
+    (:data:`UNREAD_PATHS`)."""
+    from activevision.training.config import parse_overrides
+
+    settings: dict[str, Any] = {}
+    try:
+        changes = parse_overrides(items or [])
+    except ValueError as error:
+        raise ValueError(f"--set: {error}") from None
+    for key, value in changes.items():
+        path = key.removeprefix("match.")
+        first = path.split(".")[0]
+        if path in OPTION_PATHS:
+            raise ValueError(f"--set {key}: give it with {OPTION_PATHS[path]}")
+        if first in UNREAD_PATHS:
+            raise ValueError(f"--set {key}: {UNREAD_PATHS[first]}")
+        settings[path] = value
+    return settings
+
+
 def _match_config(args: argparse.Namespace) -> MatchConfig:
-    """The matches the command line asks for."""
+    """The matches the command line asks for: its options, then ``--set``."""
     from activevision.envs.match.config import (
         BallConfig,
         DetectionConfig,
+        KidnapConfig,
         MatchConfig,
         OthersConfig,
         WalkConfig,
+        with_paths,
     )
     from activevision.envs.robots import RobotsConfig
     from activevision.geometry import CameraConfig
@@ -123,7 +187,19 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
             )
     else:  # a run on the match plays the world it was trained for
         detection = trained or DetectionConfig()
-    return MatchConfig(
+    settings = match_settings(args.set)
+    kidnap = KidnapConfig(rate=args.kidnap, ticks=tuple(args.kidnap_ticks or ()))
+    late = [t for t in kidnap.ticks if t > args.ticks]
+    if late:
+        raise ValueError(f"--kidnap-ticks {late[0]}: past the match's {args.ticks} ticks (--ticks)")
+    if not kidnap.enabled and any(p.split(".")[0] == "kidnap" for p in settings):
+        raise ValueError("--set kidnap...: says how a kidnap goes; give --kidnap or --kidnap-ticks")
+    if trained_camera(args) and any(p.split(".")[0] == "camera" for p in settings):
+        raise ValueError(
+            f"--set camera...: --run {args.run} plays through the camera it was trained for"
+            " (its network takes that camera's image)"
+        )
+    config = MatchConfig(
         ticks=args.ticks,
         step_deg=args.step_deg,
         action_type=args.action_type,
@@ -134,7 +210,19 @@ def _match_config(args: argparse.Namespace) -> MatchConfig:
         ball=BallConfig(bounces_off_own_robot=args.ball_bounces_off_us),
         detection=detection,
         camera=camera or CameraConfig(),
+        kidnap=kidnap,
     )
+    if not settings:
+        return config
+    try:
+        return with_paths(config, settings)
+    except ValueError as error:
+        raise ValueError(f"--set {error}") from None
+
+
+def trained_camera(args: argparse.Namespace) -> bool:
+    """Whether ``--run`` names a training run, whose camera the matches play through."""
+    return args.run is not None and (args.run / "config.json").is_file()
 
 
 def _strategies(
@@ -216,7 +304,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     entries = _strategies(args, config)
     methods = list(dict.fromkeys(method for _, method, _ in entries))
     labels = [label for label, _, _ in entries]
-    clip_method = args.clip_method or labels[0]
+    clip_method = labels[0] if args.clip_method is None else args.clip_method
     if clip_method not in labels:
         raise ValueError(f"--clip-method {clip_method} is not among: {', '.join(labels)}")
     if args.baseline is not None and args.baseline not in labels:
@@ -226,12 +314,15 @@ def cmd_match(args: argparse.Namespace) -> None:
     made = make_output_folder(out)  # before the matches: one that cannot be made fails now
     import numpy as np
 
+    from activevision.envs.match.scores import LOST_M
     from activevision.experiments.match import (
         NAME_WIDTH,
         compare_matches,
         csv_rows,
         format_difference,
+        format_kidnaps,
         format_result,
+        kidnap_header,
         paired_differences,
         paired_rows,
         pareto_front,
@@ -269,6 +360,15 @@ def cmd_match(args: argparse.Namespace) -> None:
                 f"{format_result(r, width)}   ({r.seconds:.0f} s)", flush=True
             ),
         )
+    if config.kidnap.enabled:
+        print(
+            f"after each kidnap that left the robot lost (error >= {LOST_M:g} m), until the"
+            " next or the match's end: the lost detector fired, the error back under"
+            f" {LOST_M:g} m, and the seconds it took (mean over those back) [95% intervals]:"
+        )
+        print(kidnap_header(width))
+        for result in results:
+            print(format_kidnaps(result, config.tick_seconds, width))
     references = privileged_methods() & set(methods)
     front = pareto_front(results, references)
     print(f"Pareto front (position RMSE vs ball in view): {', '.join(front)}")
@@ -350,7 +450,12 @@ def add_parsers(sub: Any) -> None:
         help="strategies to play (default: all; learned with --run): " + " ".join(_method_names()),
     )
     p.add_argument("--matches", type=int_in(1, MAX_MATCHES), default=50)
-    p.add_argument("--ticks", type=positive_int, default=600, help="ticks per match (0.32 s each)")
+    p.add_argument(
+        "--ticks",
+        type=positive_int,
+        default=600,
+        help="ticks per match (0.32 s each; --set tick_seconds=S for another tick)",
+    )
     p.add_argument("--seed", type=seed, default=0, help="match i plays seed SEED + i")
     p.add_argument(
         "--step-deg",
@@ -393,6 +498,23 @@ def add_parsers(sub: Any) -> None:
         " through our robot, as in docs/match.md's figures)",
     )
     p.add_argument(
+        "--kidnap",
+        type=float_in(0, 60, "per minute"),
+        default=0.0,
+        metavar="PER_MIN",
+        help="kidnap our robot at random, seeded ticks, PER_MIN times per minute of play on"
+        " average: carried 1-2 m and turned up to 0.8 rad, its belief told nothing (--set"
+        " kidnap.distance=[LOW,HIGH] kidnap.turn=RAD); a table follows of what came after:"
+        " the lost alarm, the error back under 0.5 m and how soon",
+    )
+    p.add_argument(
+        "--kidnap-ticks",
+        type=positive_int,
+        nargs="+",
+        metavar="TICK",
+        help="kidnap our robot in these ticks of every match too (1: the first)",
+    )
+    p.add_argument(
         "--detection",
         nargs=3,
         type=float_in(0, 1),
@@ -416,6 +538,15 @@ def add_parsers(sub: Any) -> None:
         " MODULE:NAME) returns an object with reset(n, rng) and act(obs, info)"
         " (examples/uncertainty_glance.py)",
     )
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="set any other field of the matches' MatchConfig by its path, as train --set"
+        " match.KEY does: tick_seconds=0.16, camera.hfov=1.2, walk.speed=0.3,"
+        " tracker.gate=9.21, detection.ball_noise=0.1; values are JSON. Those an option sets"
+        " (--ticks, --step-deg, --detection...) are refused, naming it",
+    )
     p.add_argument("--run", type=path, help="a training run for the learned strategy")
     add_weights(p)
     p.add_argument(
@@ -428,10 +559,14 @@ def add_parsers(sub: Any) -> None:
         " each, named entropy_track[DEGdeg]",
     )
     p.add_argument(
-        "--clip-method", help="the strategy shown in match_clip.gif (default: the first)"
+        "--clip-method",
+        type=name,
+        metavar="NAME",
+        help="the strategy shown in match_clip.gif (default: the first)",
     )
     p.add_argument(
         "--baseline",
+        type=name,
         metavar="NAME",
         help="also print and write (match_paired.csv) every other strategy's difference from"
         " this one, match by match on the same seeds, with 95%% intervals",

@@ -3,7 +3,8 @@ RoboCup team cares about (``activevision match``).
 
 Per match (:mod:`activevision.envs.match.scores`), then mean and 95% interval over
 matches: position and heading RMSE, the share of ticks lost (error above 0.5 m) and with the
-ball in view, the mean entropy and the head's travel.
+ball in view, the mean entropy and the head's travel; every interval, shares' too, is the
+normal approximation from the spread over matches (:func:`match_interval`).
 
 Match ``i`` of every method is reset with seed ``seed + i``: the same start, ball and walk
 draws. Strategies only change where the head looks, and so what is detected. So two methods
@@ -27,10 +28,10 @@ import numpy as np
 
 from activevision.envs.config import MAX_VECTOR_ENVS, check_count
 from activevision.envs.match.config import MatchConfig
-from activevision.envs.match.scores import MatchScores
+from activevision.envs.match.scores import LOST_M, KidnapEvents, MatchScores
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
 from activevision.envs.seeding import check_seed
-from activevision.experiments.evaluate import Interval, mean_interval
+from activevision.experiments.evaluate import Interval, mean_interval, wilson_interval
 from activevision.experiments.match_methods import (
     USER_STRATEGY,
     StrategyFactory,
@@ -38,6 +39,7 @@ from activevision.experiments.match_methods import (
     make_match_policy,
     user_errors,
 )
+from activevision.experiments.match_world import world_columns
 
 #: per-match metrics, in table order: name -> (column header, format)
 MATCH_METRICS = {
@@ -92,15 +94,29 @@ class MethodResult:
     error_curve: np.ndarray  #: (ticks, M) position error per tick and match
     clip: MatchClip
     seconds: float
+    #: every kidnap and what followed it (``MatchConfig.kidnap`` on; None: off)
+    kidnaps: KidnapEvents | None = None
 
     def summary(self) -> dict[str, Interval]:
-        """Mean and 95% interval over matches of every metric, within the values it can take
-        (:data:`METRIC_BOUNDS`: two matches' heading RMSEs of 0.2 and 5.7 deg read [-0.05,
-        5.97] unbounded)."""
+        """Mean and 95% interval over matches of every metric (:func:`match_interval`)."""
         return {
-            name: mean_interval(values.tolist(), bounds=METRIC_BOUNDS[name])
+            name: match_interval(values, METRIC_BOUNDS[name])
             for name, values in self.per_match.items()
         }
+
+
+def match_interval(values: np.ndarray, bounds: tuple[float, float] | None) -> Interval:
+    """The mean of per-match ``values`` and its 95% interval, by one rule for every metric,
+    share or not: the normal approximation from the spread over matches, cut to ``bounds``
+    (:data:`METRIC_BOUNDS`: two matches' heading RMSEs of 0.2 and 5.7 deg read [-0.05,
+    5.97] unbounded). Values the same in every match (a robot never lost) show no spread:
+    their interval is the value itself. (Until 2026-12-05 a share 0 in every match took the
+    Wilson interval of 0 out of the matches, [0, 7.1%] over 50, while a share 0 in all but
+    one took the normal one, [0, 0.2%] for a few ticks lost: more loss, a narrower
+    interval. How many matches a never-lost robot vouches for is a statement about
+    matches, not ticks: none of 50 lost puts the share of matches ever lost below 7.1%, by
+    Wilson's interval; the README says so beside its table.)"""
+    return mean_interval(values.tolist(), bounds=bounds, vouch_when_equal=False)
 
 
 def play_matches(
@@ -149,7 +165,7 @@ def play_matches(
         clip.add(info, clip_match)
     env.close()
     seconds = time.perf_counter() - start
-    return MethodResult(name, scores.per_match(), scores.position, clip, seconds)
+    return MethodResult(name, scores.per_match(), scores.position, clip, seconds, scores.kidnaps())
 
 
 @contextlib.contextmanager
@@ -269,6 +285,54 @@ def compare_matches(
 
 NAME_WIDTH = 18  #: the method column's width, unless a name needs more
 
+#: what follows the kidnaps (``--kidnap``), over the kidnaps that left the robot lost: name
+#: -> (column header, format)
+KIDNAP_METRICS = {
+    "kidnap_detected": ("lost alarm", "{:.0%}"),
+    "kidnap_recovered": (f"back < {LOST_M:g} m", "{:.0%}"),
+    "recovery_s": ("seconds to it", "{:.1f}"),
+}
+
+
+def kidnap_summary(events: KidnapEvents, tick_seconds: float) -> dict[str, Interval]:
+    """What followed the kidnaps that left the robot lost (its error at least
+    :data:`~activevision.envs.match.scores.LOST_M` at the end of the kidnap's tick), each
+    followed until the match's next kidnap or its end: the share after which the lost
+    detector fired (``kidnap_detected``) and the share after which the error came back
+    under the threshold (``kidnap_recovered``), each with its 95% Wilson interval over those
+    kidnaps (each counted as one trial, wherever it happened), and the seconds until it did
+    (``recovery_s``, over the recovered ones: the others are left out, so a strategy that
+    recovers less often can read faster; mean and normal 95% interval, at least 0). NaN
+    where no kidnap left the robot lost."""
+    lost = events.lost
+    n = int(lost.sum())
+    back = events.recovery_ticks[lost & events.recovered]
+    return {
+        "kidnap_detected": wilson_interval(int((events.detected & lost).sum()), n),
+        "kidnap_recovered": wilson_interval(len(back), n),
+        "recovery_s": mean_interval((back * tick_seconds).tolist(), bounds=(0.0, math.inf)),
+    }
+
+
+def kidnap_header(width: int = NAME_WIDTH) -> str:
+    cols = "".join(f"{header:>22}" for header, _ in KIDNAP_METRICS.values())
+    return f"{'method':<{width}}{'kidnaps (lost)':>16}{cols}"
+
+
+def format_kidnaps(result: MethodResult, tick_seconds: float, width: int = NAME_WIDTH) -> str:
+    """One row of the kidnap table: the kidnaps (those that left the robot lost) and each
+    of :data:`KIDNAP_METRICS` with its 95% interval."""
+    events = result.kidnaps
+    if events is None:
+        raise ValueError(f"{result.method}: its matches had no kidnapping")
+    summary = kidnap_summary(events, tick_seconds)
+    cells = []
+    for name, (_, fmt) in KIDNAP_METRICS.items():
+        iv = summary[name]
+        cells.append(f"{fmt.format(iv.mean)} [{fmt.format(iv.low)},{fmt.format(iv.high)}]")
+    count = f"{len(events.tick)} ({int(events.lost.sum())})"
+    return f"{result.method:<{width}}{count:>16}" + _cells(cells)
+
 
 def table_header(width: int = NAME_WIDTH) -> str:
     cols = "".join(f"{header:>22}" for header, _ in MATCH_METRICS.values())
@@ -290,157 +354,6 @@ def format_result(result: MethodResult, width: int = NAME_WIDTH) -> str:
         iv = summary[name]
         cells.append(f"{fmt.format(iv.mean)} [{fmt.format(iv.low)},{fmt.format(iv.high)}]")
     return f"{result.method:<{width}}" + _cells(cells)
-
-
-def _float_text(value: str) -> str:
-    return f"{float(value):g}"
-
-
-@dataclass(frozen=True)
-class WorldColumn:
-    """A ``match.csv`` column recording one setting of the world the strategies were scored
-    in: ``read`` takes it from the MatchConfig, ``meaning`` says what it is (and its unit),
-    ``phrase`` words a value other than the default's for ``report.md`` (from the CSV's
-    text)."""
-
-    read: Callable[[MatchConfig], object]
-    meaning: str
-    phrase: Callable[[str], str]
-
-
-#: ``match.csv``'s world columns after ``action_type, step_deg, robots, detect_near,
-#: detect_far, false_detections`` (the head's moves, the other robots' count, the detector):
-#: how our robot walks, the other robots' speed, the ball, the tick, the ball detector.
-#: ``report.md`` names those that differ from ``MatchConfig()``'s.
-WORLD_COLUMNS: dict[str, WorldColumn] = {
-    "walk": WorldColumn(
-        lambda c: c.walk.target,
-        "where our robot walks: waypoints or ball (--walk; walk.target)",
-        lambda v: f"our robot walking to the {v}",
-    ),
-    "walk_speed": WorldColumn(
-        lambda c: c.walk.speed,
-        "our robot's forward speed, m/s (walk.speed)",
-        lambda v: f"our robot walking at {_float_text(v)} m/s",
-    ),
-    "turn_rate": WorldColumn(
-        lambda c: c.walk.turn_rate,
-        "our robot's turn rate, rad/s (walk.turn_rate)",
-        lambda v: f"our robot turning at {_float_text(v)} rad/s",
-    ),
-    "robot_speed": WorldColumn(
-        lambda c: c.others.speed,
-        "the other robots' walking speed, m/s; 0: they stand (--robot-speed; others.speed)",
-        lambda v: f"the other robots walking at {_float_text(v)} m/s",
-    ),
-    "ball_decel": WorldColumn(
-        lambda c: c.ball.deceleration,
-        "the ball's rolling deceleration, m/s^2 (ball.deceleration)",
-        lambda v: f"the ball slowing by {_float_text(v)} m/s²",
-    ),
-    "kick_rate": WorldColumn(
-        lambda c: c.ball.kick_rate,
-        "kicks per tick (ball.kick_rate)",
-        lambda v: f"{_float_text(v)} kicks per tick",
-    ),
-    "kick_speed": WorldColumn(
-        lambda c: "-".join(f"{v:g}" for v in c.ball.kick_speed),
-        "a kick's initial speed, m/s, uniform LOW-HIGH (ball.kick_speed)",
-        lambda v: f"kicks of {v} m/s",
-    ),
-    "bounce_us": WorldColumn(
-        lambda c: c.ball.bounces_off_own_robot,
-        "the ball bounces off our robot too, True/False (--ball-bounces-off-us;"
-        " ball.bounces_off_own_robot)",
-        lambda v: (
-            "the ball bouncing off our robot"
-            if v == "True"
-            else "the ball rolling through our robot"
-        ),
-    ),
-    "restitution": WorldColumn(
-        lambda c: c.others.ball_restitution,
-        "the share of its speed towards a robot the ball keeps in a bounce"
-        " (others.ball_restitution)",
-        lambda v: f"the ball keeping {_float_text(v)} of its speed off a robot",
-    ),
-    "tick_s": WorldColumn(
-        lambda c: c.tick_seconds,
-        "seconds a tick (tick_seconds)",
-        lambda v: f"ticks of {_float_text(v)} s",
-    ),
-    "ball_noise": WorldColumn(
-        lambda c: c.detection.ball_noise,
-        "the ball detector's noise, a fraction of the ball's range (detection.ball_noise)",
-        lambda v: f"ball detections off by {_float_text(v)} of their range",
-    ),
-    # the camera: a run trained for a robot's own plays its matches through it
-    "camera_px": WorldColumn(
-        lambda c: f"{c.camera.width}x{c.camera.height}",
-        "the camera's image, WIDTHxHEIGHT px (camera.width, camera.height)",
-        lambda v: f"a {v} px camera",
-    ),
-    "hfov_deg": WorldColumn(
-        lambda c: round(math.degrees(c.camera.hfov), 4),
-        "the camera's horizontal field of view, degrees (camera.hfov, in rad)",
-        lambda v: f"a {_float_text(v)}° field of view",
-    ),
-    "camera_height": WorldColumn(
-        lambda c: c.camera.camera_height,
-        "the camera's height above the carpet, m (camera.camera_height)",
-        lambda v: f"the camera {_float_text(v)} m high",
-    ),
-    "head_range_deg": WorldColumn(
-        lambda c: " ".join(
-            f"{math.degrees(low):.4g}..{math.degrees(high):.4g}"
-            for low, high in (
-                (c.camera.pan_min, c.camera.pan_max),
-                (c.camera.tilt_min, c.camera.tilt_max),
-            )
-        ),
-        "the head's pan and tilt ranges, degrees, PAN_LOW..PAN_HIGH TILT_LOW..TILT_HIGH"
-        " (camera.pan_min ... camera.tilt_max, in rad)",
-        lambda v: f"the head panning {v.split()[0]}° and tilting {v.split()[-1]}°",
-    ),
-}
-
-
-def world_columns(config: MatchConfig) -> dict[str, object]:
-    """``match.csv``'s world columns of ``config``: the head's moves, the other robots, the
-    detector, then :data:`WORLD_COLUMNS`."""
-    return {
-        "action_type": config.action_type,
-        "step_deg": (  # the most the head moves per tick and axis
-            config.step_deg if config.action_type == "discrete" else max(config.max_move_deg)
-        ),
-        "robots": "-".join(str(n) for n in sorted(set(config.robots.count))),
-        "detect_near": config.detection.near,
-        "detect_far": config.detection.far,
-        "false_detections": config.detection.false_rate,
-        **{name: column.read(config) for name, column in WORLD_COLUMNS.items()},
-    }
-
-
-def world_differences(row: dict[str, str]) -> list[str]:
-    """The phrases of a ``match.csv`` row's :data:`WORLD_COLUMNS` whose value is not the
-    default world's (``MatchConfig()``), in column order; none for a file written before
-    they were recorded."""
-    defaults = world_columns(MatchConfig())
-    phrases = []
-    for name, column in WORLD_COLUMNS.items():
-        value = row.get(name)
-        if value is None or value == "" or _same_text(value, str(defaults[name])):
-            continue
-        phrases.append(column.phrase(value))
-    return phrases
-
-
-def _same_text(a: str, b: str) -> bool:
-    """Two CSV cells alike: equal numbers (``0.20`` and ``0.2``), else equal text."""
-    try:
-        return float(a) == float(b)
-    except ValueError:
-        return a == b
 
 
 def csv_rows(
@@ -466,6 +379,13 @@ def csv_rows(
             row[name] = iv.mean
             row[f"{name}_low"] = iv.low
             row[f"{name}_high"] = iv.high
+        if r.kidnaps is not None:  # kidnapping on: what followed (none of it otherwise)
+            row["kidnaps"] = len(r.kidnaps.tick)
+            row["kidnaps_lost"] = int(r.kidnaps.lost.sum())
+            for name, iv in kidnap_summary(r.kidnaps, config.tick_seconds).items():
+                row[name] = iv.mean
+                row[f"{name}_low"] = iv.low
+                row[f"{name}_high"] = iv.high
         rows.append(row)
     return rows
 
@@ -474,17 +394,16 @@ def paired_differences(
     results: Sequence[MethodResult], baseline: str
 ) -> dict[str, dict[str, Interval]]:
     """Per method other than ``baseline``: each metric's mean difference ``method -
-    baseline`` over the same matches, with the 95% interval of the per-match differences (a
-    share's differences lie within [-1, 1]: two methods that never differ on it get the
-    interval of no difference seen in that many matches, not a certain 0)."""
+    baseline`` over the same matches, with the 95% interval of the per-match differences
+    (:func:`match_interval`; a share's differences lie within [-1, 1]; two methods that
+    never differ on it read 0 [0, 0], as two that never differ on any other metric)."""
     base = next((r for r in results if r.method == baseline), None)
     if base is None:
         raise ValueError(f"the baseline {baseline!r} is not among the methods played")
     return {
         r.method: {
-            name: mean_interval(
-                (values - base.per_match[name]).tolist(),
-                bounds=(-1.0, 1.0) if name in SHARES else None,
+            name: match_interval(
+                values - base.per_match[name], (-1.0, 1.0) if name in SHARES else None
             )
             for name, values in r.per_match.items()
         }

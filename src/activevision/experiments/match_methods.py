@@ -55,6 +55,7 @@ can run them -- and bound what a learned strategy could reach from the same head
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import inspect
 import math
 from collections.abc import Callable, Iterator
@@ -137,10 +138,21 @@ class BallTrack(TargetPolicy):
 
 class BHumanCycle(TargetPolicy):
     """Pan to and fro around the ball: +-45 deg standing, narrowed linearly to +-15 deg at
-    full walking speed (speed from the belief's motion), tilt on the ball."""
+    full walking speed (speed from the belief's motion, an exponential average that keeps
+    ``keep`` of its value per ``keep_seconds``, whatever a tick lasts), tilt on the ball."""
 
     name = "bhuman_cycle"
     wide, narrow = math.radians(45.0), math.radians(15.0)
+    #: the speed estimate keeps 0.8 of its value per 0.32 s (a time constant of 1.43 s): 0.8
+    #: per tick was 0.8 per 0.16 s of ticks of 0.16 s, reacting twice as fast
+    keep, keep_seconds = 0.8, 0.32
+
+    def __init__(self, config: MatchConfig) -> None:
+        super().__init__(config)
+        # exactly 0.8 and 0.2 at ticks of 0.32 s (the README's figures): the gain rounded
+        # to 12 decimals, as 1 - 0.8 is 0.19999999999999996 in floating point
+        self.keep_per_tick = self.keep ** (config.tick_seconds / self.keep_seconds)
+        self.gain_per_tick = round(1.0 - self.keep_per_tick, 12)
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         super().reset(n, rng)
@@ -152,7 +164,7 @@ class BHumanCycle(TargetPolicy):
         mean = info["belief_mean"]
         if self.last_mean is not None:
             moved = np.hypot(*(mean[:, :2] - self.last_mean[:, :2]).T) / self.config.tick_seconds
-            self.speed = 0.8 * self.speed + 0.2 * moved
+            self.speed = self.keep_per_tick * self.speed + self.gain_per_tick * moved
         self.last_mean = mean.copy()
         full = max(self.config.walk.speed, 1e-6)
         amplitude = self.wide - (self.wide - self.narrow) * np.clip(self.speed / full, 0, 1)
@@ -168,13 +180,20 @@ class BHumanCycle(TargetPolicy):
 
 
 class PatternPolicy(TargetPolicy):
-    """Visit a fixed list of (pan, tilt) points in turn, dwelling ``dwell`` ticks at each; a
-    point beyond the head's limits (another camera than the paper's) is looked at from the
-    nearest limit, where the head can reach it (unclipped, the head stopped at the limit,
-    never within reach of the point, and the pattern stopped there for the whole match)."""
+    """Visit a fixed list of (pan, tilt) points in turn, holding the head at each for
+    ``hold_seconds`` (counting the tick it arrives; at least that tick), whatever a tick
+    lasts; a point beyond the head's limits (another camera than the paper's) is looked at
+    from the nearest limit, where the head can reach it (unclipped, the head stopped at the
+    limit, never within reach of the point, and the pattern stopped there for the whole
+    match)."""
 
     points_deg: tuple[tuple[float, float], ...] = ()
-    dwell = 0
+    hold_seconds = 0.0
+
+    def __init__(self, config: MatchConfig) -> None:
+        super().__init__(config)
+        #: the ticks it waits at a point after the one it arrives in
+        self.dwell = max(0, round(self.hold_seconds / config.tick_seconds) - 1)
 
     def reset(self, n: int, rng: np.random.Generator) -> None:
         super().reset(n, rng)
@@ -225,7 +244,8 @@ class NUbots6Point(PatternPolicy):
         (0.0, 45.0),
         (60.0, 45.0),
     )
-    dwell = 2
+    #: 0.96 s at each point: 3 ticks of 0.32 s (it was 3 ticks at every tick length)
+    hold_seconds = 0.96
 
 
 class EntropyGreedy(TargetPolicy):
@@ -700,7 +720,11 @@ def _strategy_loader(spec: str, where: str) -> Callable[[], ModuleType]:
     path = Path(where)
     if not path.is_file():
         raise ValueError(f"--strategy {spec}: no such file {path}")
-    module_name = f"activevision_strategy_{path.stem}"
+    # one module per file: two files of one name in different folders were one module,
+    # the second's replacing the first's in sys.modules (where pickling and dataclasses
+    # look a class's module up)
+    digest = hashlib.sha256(str(path.resolve()).encode()).hexdigest()[:12]
+    module_name = f"activevision_strategy_{path.stem}_{digest}"
     module_spec = importlib.util.spec_from_file_location(module_name, path)
     if module_spec is None or module_spec.loader is None:
         raise ValueError(f"--strategy {spec}: {path} is not a Python module")

@@ -344,9 +344,9 @@ def _ticks_text(ticks: object) -> str:
 def _match_world_text(row: dict) -> str:
     """The world ``match.csv``'s row records: the head's moves, the other robots and the
     detector, then the walk, the other robots' speed, the ball... where they differ from
-    the default world (``experiments.match.WORLD_COLUMNS``; ``""`` for a file written
+    the default world (``experiments.match_world.WORLD_COLUMNS``; ``""`` for a file written
     before it recorded the world, nothing more for one written before those columns)."""
-    from activevision.experiments.match import world_differences
+    from activevision.experiments.match_world import world_differences
 
     if not row.get("false_detections"):
         return ""

@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 import numbers
 import os
-import warnings
 from collections.abc import Collection, Mapping, Sequence
 from typing import Any
 
@@ -15,7 +14,7 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.patches import Circle, Ellipse, Polygon
+from matplotlib.patches import Circle, Ellipse, Polygon, Rectangle
 
 from activevision.figures.canvas import (
     figure_to_rgb,
@@ -39,6 +38,9 @@ __all__ = [
 
 #: dots per inch of the Pareto figure
 PARETO_DPI = 120
+
+#: how far (a share of the panel) a point on an edge at 0 is drawn beyond it, whole
+EDGE_SPILL = 0.02
 
 #: a method's point and whiskers: (mean, low, high) of each axis
 Point = Mapping[str, tuple[float, float, float]]
@@ -70,10 +72,11 @@ def plot_pareto(
     on_front = sorted(
         (100 * points[n]["ball_in_view"][0], points[n]["position_rmse"][0]) for n in front
     )
+    markers: dict[Axes, list[Any]] = {whole: [], zoom: []}
     for ax in (whole, zoom):
         for colour, (name, p) in zip(colours, points.items(), strict=True):
             bx, by = p["ball_in_view"], p["position_rmse"]
-            ax.errorbar(
+            drawn = ax.errorbar(
                 100 * bx[0],
                 by[0],
                 xerr=[[100 * (bx[0] - bx[1])], [100 * (bx[2] - bx[0])]],
@@ -85,6 +88,7 @@ def plot_pareto(
                 label=name
                 + (" (front)" if name in front else " (privileged)" if name in references else ""),
             )
+            markers[ax].extend(drawn.get_children())
         if len(on_front) > 1:
             ax.plot(*zip(*on_front, strict=True), color="grey", lw=1, ls="--", zorder=0)
         ax.set_xlabel("ball in view (% of ticks)  ->  better")
@@ -101,6 +105,8 @@ def plot_pareto(
     pad_x, pad_y = max(1.0, 0.1 * (max(xs) - min(xs))), max(1e-3, 0.1 * (max(ys) - min(ys)))
     zoom.set_xlim(min(xs) - pad_x, max(xs) + pad_x)
     zoom.set_ylim(min(ys) - pad_y, max(ys) + pad_y)
+    for ax in (whole, zoom):
+        _within_what_can_be(ax, markers[ax])
     # one match has no interval (NaN ends): its whiskers are missing, and the title says so
     # (on a line of its own: a title of the world beside it ran past the figure's edge)
     ends = [v for p in points.values() for k in ("ball_in_view", "position_rmse") for v in p[k][1:]]
@@ -109,25 +115,42 @@ def plot_pareto(
         fontsize=9,
         wrap=True,  # a long world (robots, detector) ran past the figure's edges
     )
-    _legend_inside_or_below(fig, whole)
+    _legend_below(fig, whole)
     save_figure(fig, path, dpi=PARETO_DPI)
 
 
-def _legend_inside_or_below(fig: Figure, ax: Axes) -> None:
-    """``ax``'s legend inside it where it fits, else below the panels in as many columns as
-    fit the figure's width (long or many method names ran past the figure's edges)."""
-    legend = ax.legend(fontsize=7)
-    with warnings.catch_warnings():  # a legend too large collapses the layout: moved below
-        warnings.filterwarnings("ignore", "constrained_layout not applied", UserWarning)
-        fig.draw_without_rendering()  # the layout and the legend's place
-    inside, box = legend.get_window_extent(), ax.get_window_extent()
-    if box.x0 <= inside.x0 and inside.x1 <= box.x1 and box.y0 <= inside.y0 and inside.y1 <= box.y1:
+def _within_what_can_be(ax: Axes, markers: list[Any]) -> None:
+    """``ax``'s limits cut to what the axes can take, ball in view within 0-100% and a
+    position RMSE at least 0 (every point at 0% ball in view ran the axis to -1%, of a share
+    that cannot be below 0). A point on an edge at 0 is drawn whole, not cut in half by it:
+    the points' ``markers`` (each an errorbar's artists) are clipped to the panel widened by
+    :data:`EDGE_SPILL` beyond such an edge (nothing else can lie there)."""
+    left, right = ax.get_xlim()
+    ax.set_xlim(max(left, 0.0), min(right, 100.0))
+    bottom, top = ax.get_ylim()
+    ax.set_ylim(max(bottom, 0.0), top)
+    spill_x = EDGE_SPILL if ax.get_xlim()[0] == 0.0 else 0.0
+    spill_y = EDGE_SPILL if ax.get_ylim()[0] == 0.0 else 0.0
+    if not spill_x and not spill_y:
         return
-    legend.remove()
+    box = Rectangle(
+        (-spill_x, -spill_y), 1 + spill_x, 1 + spill_y, transform=ax.transAxes, visible=False
+    )
+    for artist in markers:
+        artist.set_clip_path(box)
+
+
+def _legend_below(fig: Figure, ax: Axes) -> None:
+    """``ax``'s legend below the panels, outside them, in as many columns as fit the
+    figure's width (long or many method names ran past the figure's edges; inside the
+    panel, with many strategies, it hid their whiskers)."""
     handles, labels = ax.get_legend_handles_labels()
     style: dict[str, Any] = {"loc": "outside lower center", "fontsize": 7, "frameon": False}
     columns, labels = fit_legend(fig, handles, labels, len(labels), **style)
-    fig.legend(handles, labels, ncol=columns, **style)
+    # rows as full as each other: 11 strategies in 9 columns filled two columns of two
+    # and a row of seven; in 6 they are rows of 6 and 5 (no wider than what fits)
+    rows = math.ceil(len(labels) / columns)
+    fig.legend(handles, labels, ncol=math.ceil(len(labels) / rows), **style)
 
 
 def _colours(n: int) -> list[tuple[float, float, float, float]]:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -19,7 +20,13 @@ from activevision.geometry import CameraConfig, FieldSpec
 from activevision.localisation.config import UKFConfig
 from activevision.localisation.tracking import TrackerConfig
 from activevision.rendering.appearance import AppearanceConfig
-from activevision.typecheck import check_dataclass_fields, in_range, replace_fields
+from activevision.typecheck import (
+    check_dataclass_fields,
+    config_from_dict,
+    config_to_dict,
+    in_range,
+    replace_fields,
+)
 
 #: What the agent observes: the image, plus the head angles, plus the belief (mean,
 #: uncertainty) and the robot's ball model (``envs.match.observations``).
@@ -140,6 +147,44 @@ class MatchRewardConfig:
         check_dataclass_fields(self)
 
 
+@dataclass(frozen=True)
+class KidnapConfig:
+    """Kidnapping: our robot is picked up and put down elsewhere without its belief being
+    told (a referee's removal and return, a robot carried off after a fall), in each tick
+    with probability ``rate`` per minute of play times the tick's length and in each of
+    ``ticks`` (1: the first tick). The chance is drawn from a generator spawned from the
+    match's own, which leaves the match's draws as they were: the same seed, the same
+    kidnaps, and until the first the same match as without them. A kidnap carries the robot
+    ``distance`` m (uniform between the two) in a uniform direction, stopped at the walk's
+    margin inside the field lines (near the lines the carry is shorter), and turns it by up
+    to ``turn`` rad either way (uniform); its odometry reports none of it. Off by default;
+    the README's kidnap check (teleported 2 m along, 1 m across, turned 0.8 rad) lies
+    within the defaults' reach."""
+
+    #: kidnaps per minute of play (0: none at random)
+    rate: float = field(default=0.0, metadata=in_range(0.0, 60.0))
+    #: kidnapped in these ticks too (1 = the first), e.g. ``(200,)``
+    ticks: tuple[int, ...] = ()
+    #: how far (m) a kidnap carries the robot, uniform LOW-HIGH
+    distance: tuple[float, float] = (1.0, 2.0)
+    #: how far (rad) it turns the robot, uniform in [-turn, turn]
+    turn: float = field(default=0.8, metadata=in_range(0.0, math.pi))
+
+    def __post_init__(self) -> None:
+        check_dataclass_fields(self)
+        lo, hi = self.distance
+        if not 0 <= lo <= hi <= 20:
+            raise ValueError(f"KidnapConfig.distance: must lie in [0, 20] m, ordered, got {lo, hi}")
+        if any(t < 1 for t in self.ticks):
+            raise ValueError(f"KidnapConfig.ticks: ticks count from 1, got {self.ticks!r}")
+        object.__setattr__(self, "ticks", tuple(sorted(set(self.ticks))))
+
+    @property
+    def enabled(self) -> bool:
+        """Whether any kidnap can happen."""
+        return self.rate > 0 or bool(self.ticks)
+
+
 def _match_ukf() -> UKFConfig:
     # A match starts from a known kick-off position (initial std 10 cm, 3 deg). A walking
     # KidSize humanoid's odometry is poor: feet slip on artificial turf, so its error is a
@@ -184,6 +229,8 @@ class MatchConfig:
     robots: RobotsConfig = dataclasses.field(default_factory=RobotsConfig)
     #: how they move (standing still by default) and what the ball does when it meets one
     others: OthersConfig = dataclasses.field(default_factory=OthersConfig)
+    #: our robot carried elsewhere unbeknown to its belief (off by default)
+    kidnap: KidnapConfig = dataclasses.field(default_factory=KidnapConfig)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "field", field_spec(self.field, "MatchConfig.field"))
@@ -208,3 +255,27 @@ class MatchConfig:
     def replace(self, **changes: Any) -> MatchConfig:
         """A copy with ``changes``; an unknown name is a ValueError naming the fields."""
         return replace_fields(self, changes)
+
+
+def with_paths(config: MatchConfig, changes: Mapping[str, Any]) -> MatchConfig:
+    """``config`` with values set by dotted path: ``{"tick_seconds": 0.16, "camera.hfov":
+    1.2, "reward.kind": "error"}`` (a leading ``match.``, as a training run's ``--set``
+    spells it, is allowed); a nested config may be given whole as an object of its fields
+    (``{"camera": {"hfov": 1.2}}``, the others taking their defaults). ValueError names an
+    unknown path with the fields where it went wrong, or a bad value (the config's own
+    checks)."""
+    nested = config_to_dict(config)
+    for key, value in changes.items():
+        parts = key.strip().removeprefix("match.").split(".")
+        target: Any = nested
+        for depth, part in enumerate(parts):
+            where = ".".join(parts[:depth]) or "MatchConfig"
+            if not isinstance(target, dict):
+                raise ValueError(f"{key}: {where} is a value, not a config with fields")
+            if part not in target:
+                raise ValueError(f"{key}: {where} has no field {part!r}; known: {sorted(target)}")
+            if depth == len(parts) - 1:
+                target[part] = value
+            else:
+                target = target[part]
+    return config_from_dict(MatchConfig, nested)

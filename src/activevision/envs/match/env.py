@@ -79,6 +79,17 @@ class ActiveVisionMatchEnv(gym.Env):
     6. the robot's ball model takes the ball's measured position when it is in view, and is
        carried along by odometry when it is not.
 
+    With kidnapping on (:class:`KidnapConfig`, ``kidnap``; off by default), before step 1
+    of a tick our robot may be carried elsewhere, its belief and odometry told nothing: in
+    each tick with probability ``kidnap.rate`` per minute of play (seeded, from a generator
+    spawned from the match's own: until the first kidnap, the same match) and in each tick
+    of ``kidnap.ticks`` (1 = the first), ``distance`` m (1-2, uniform) in a uniform
+    direction, stopped at the walk's margin inside the field, and turned by up to ``turn``
+    rad (0.8) either way. The lost detector (step 5) is what may notice; ``activevision
+    match --kidnap`` scores how often it does and how soon the error is back under 0.5 m.
+    (Among other robots a kidnap may put ours within ``robots.min_spacing`` of one, as no
+    walk does.)
+
     Other robots (``robots``; none by default) are placed as in the episodic env and hide
     the landmarks and the ball behind them (the sight line from the camera passes through
     a robot's body or head: :mod:`activevision.geometry.occlusion`). With
@@ -121,7 +132,10 @@ class ActiveVisionMatchEnv(gym.Env):
     and ``detections_gated`` (cumulative). What only the simulator knows: ``pose``, ``ball``,
     ``position_error`` (m), ``heading_error`` (rad), ``ball_in_view``, ``detected_mask``
     ((K,) bool: landmarks detected this tick), ``waypoint``, ``robots`` ((R, 4): the other
-    robots' ``x, y, height, grey``; height 0 marks an empty slot), ``tick``.
+    robots' ``x, y, height, grey``; height 0 marks an empty slot), ``tick``. With
+    kidnapping on only (the default world's infos are what they were): ``kidnapped`` (our
+    robot was carried elsewhere this tick: simulator only) and ``lost_alarm`` (the lost
+    detector fired this tick: the robot knows).
 
     ## Arguments
     ``gymnasium.make("ActiveVisionMatch-v0", config=MatchConfig(...))`` or any

@@ -61,6 +61,7 @@ class MatchState(NamedTuple):
     reward: np.ndarray  #: (N,)
     robots: np.ndarray  #: (N, R, 4) the other robots (x, y, height, grey); height 0: none
     detour: np.ndarray  #: (N,) int64 ticks left walking to a detour waypoint, not the ball
+    lost_alarm: np.ndarray  #: (N,) bool: the lost detector fired this tick
 
 
 class MatchParams(NamedTuple):
@@ -339,6 +340,7 @@ def sense_kernel(
         s.accepted[n] += stats.accepted[n]
         s.gated[n] += stats.gated[n]
         s.declared_lost[n] |= stats.declared_lost[n]
+        s.lost_alarm[n] = stats.declared_lost[n]
         # the ball model: measured when seen, else carried along by odometry
         seen = ball_in_image(s.ball[n, 0], s.ball[n, 1], p.ball_radius, pose[0], pose[1], rot, cam)
         seen = seen and not ball_hidden[j]

@@ -49,6 +49,19 @@ _EXTRA_UNIFORMS = 10
 _GIVE_WAY_UNIFORMS = 2
 #: normals per tick besides the 2 K measurement draws: odometry (3), ball detector (2)
 _EXTRA_NORMALS = 5
+#: uniforms per match per tick with kidnapping on, from the match's kidnap generator:
+#: whether (1), how far, which way and how much it turns (3)
+_KIDNAP_UNIFORMS = 4
+
+
+def _child(rng: np.random.Generator) -> np.random.Generator:
+    """A generator of its own for ``rng``'s match, spawned from its seed sequence (which
+    draws nothing from ``rng``: its stream stays as it was); one without a seed sequence
+    (made from a bare state) gives its child's seed from its stream instead."""
+    try:
+        return rng.spawn(1)[0]
+    except TypeError:
+        return np.random.default_rng(int(rng.integers(2**63)))
 
 
 class MatchBatch:
@@ -89,6 +102,15 @@ class MatchBatch:
         self.robot_waypoints = np.zeros((num_envs, cfg.robots.max_count, 2))
         #: ticks left on a detour from the walk to the ball (kernels.move_kernel)
         self.detour = np.zeros(num_envs, dtype=np.int64)
+        #: the lost detector fired this tick; our robot was kidnapped this tick
+        self.lost_alarm = np.zeros(num_envs, dtype=bool)
+        self.kidnapped = np.zeros(num_envs, dtype=bool)
+        #: kidnapping (MatchConfig.kidnap): its draws per tick come from a child of each
+        #: match's generator, which leaves the match's own draws as they were: a kidnapped
+        #: match is the same match as without it until its first kidnap
+        self._kidnaps = cfg.kidnap.enabled
+        self._kidnap_draws = np.zeros((num_envs, _KIDNAP_UNIFORMS))
+        self._kidnap_rngs: list[np.random.Generator] = [np.random.default_rng(0)] * num_envs
         #: whether the other robots walk (then they draw their waypoints every tick)
         self._others_walk = cfg.robots.max_count > 0 and cfg.others.speed > 0
         self.hidden = np.zeros((num_envs, k), dtype=bool)
@@ -136,6 +158,7 @@ class MatchBatch:
                 self.reward,
                 self.robots,
                 self.detour,
+                self.lost_alarm,
             )
         )
         carpet = field.carpet_half_extent
@@ -195,6 +218,8 @@ class MatchBatch:
         std = np.array(cfg.tracker.ukf.initial_std)
         for j, slot in enumerate(np.asarray(indices, dtype=np.int64)):
             rng = self._rngs[slot] = rngs[j]
+            if self._kidnaps:
+                self._kidnap_rngs[slot] = _child(rng)
             u = rng.random(9)
             self.pose[slot] = (hx * (2 * u[0] - 1), hy * (2 * u[1] - 1), np.pi * (2 * u[2] - 1))
             self.ball[slot] = (
@@ -233,6 +258,8 @@ class MatchBatch:
         self.accepted[idx] = 0
         self.gated[idx] = 0
         self.declared_lost[idx] = False
+        self.lost_alarm[idx] = False
+        self.kidnapped[idx] = False
         self.detected[idx] = False
         if cfg.appearance.enabled:
             self.tone[idx] = tone_curves(self.looks[idx])
@@ -266,6 +293,8 @@ class MatchBatch:
             return reward
         idx = np.ascontiguousarray(idx, dtype=np.int64)
         self._draw(idx)
+        if self._kidnaps:
+            self._kidnap(idx)
         uniforms, normals = self._uniforms[idx], self._normals[idx]
         targets = np.ascontiguousarray(np.column_stack([pan, tilt]), dtype=np.float64)
         start = self.ball[idx]  # where the balls begin the tick: bounces test their path
@@ -363,6 +392,29 @@ class MatchBatch:
             rng = self._rngs[i]
             rng.random(out=self._uniforms[i])
             rng.standard_normal(out=self._normals[i])
+            if self._kidnaps:
+                self._kidnap_rngs[i].random(out=self._kidnap_draws[i])
+
+    def _kidnap(self, idx: np.ndarray) -> None:
+        """Kidnap our robot in the matches of ``idx`` whose draw or tick says so
+        (:class:`~activevision.envs.match.config.KidnapConfig`), before the tick's moves:
+        carried and turned, its belief and odometry told nothing."""
+        cfg, kidnap = self.cfg, self.cfg.kidnap
+        u = self._kidnap_draws[idx]
+        chance = kidnap.rate * cfg.tick_seconds / 60.0
+        now = (u[:, 0] < chance) | np.isin(self.tick[idx] + 1, kidnap.ticks)
+        self.kidnapped[idx] = now
+        if not now.any():
+            return
+        slots, u = idx[now], u[now]
+        low, high = kidnap.distance
+        distance, heading = low + (high - low) * u[:, 1], 2 * np.pi * u[:, 2]
+        hx, hy = cfg.field.half_length - cfg.walk.margin, cfg.field.half_width - cfg.walk.margin
+        pose = self.pose[slots]
+        pose[:, 0] = np.clip(pose[:, 0] + distance * np.cos(heading), -hx, hx)
+        pose[:, 1] = np.clip(pose[:, 1] + distance * np.sin(heading), -hy, hy)
+        pose[:, 2] = wrap_angle(pose[:, 2] + kidnap.turn * (2 * u[:, 3] - 1))
+        self.pose[slots] = pose
 
     def _ball_hidden(self, idx: np.ndarray) -> np.ndarray:
         """Whether another robot stands between each camera of ``idx`` and its ball."""
@@ -466,4 +518,10 @@ class MatchBatch:
             "waypoint": self.waypoint.copy(),
             "robots": self.robots.copy(),
             "tick": self.tick.copy(),
+            # with kidnapping on only: the default world's infos stay what they were
+            **(
+                {"kidnapped": self.kidnapped.copy(), "lost_alarm": self.lost_alarm.copy()}
+                if self._kidnaps
+                else {}
+            ),
         }
