@@ -30,6 +30,7 @@ from activevision.cli.outputs import (
     make_output_folder,
     removed_on_failure,
 )
+from activevision.text import counted
 
 if TYPE_CHECKING:
     from activevision.envs.match.config import DetectionConfig, MatchConfig
@@ -44,11 +45,6 @@ def _method_names() -> tuple[str, ...]:
     from activevision.experiments.match_methods import match_method_names
 
     return match_method_names()
-
-
-def _count(n: int, noun: str) -> str:
-    """``n`` and the noun, plural unless one ("1 match", "2 matches"; it read "1 matches")."""
-    return f"{n} {noun}" + ("" if n == 1 else "es" if noun.endswith("ch") else "s")
 
 
 def _world_text(args: argparse.Namespace, config: MatchConfig, run: str | None = None) -> str:
@@ -337,8 +333,8 @@ def cmd_match(args: argparse.Namespace) -> None:
     play = f"{seconds / 60:.1f} min" if seconds >= 60 else f"{seconds:.3g} s"
     head = f"{args.step_deg:g} deg" + (" per axis" if args.action_type == "continuous" else "")
     print(
-        f"{_count(len(labels), 'method')} x {_count(args.matches, 'match')}"
-        f" of {_count(args.ticks, 'tick')}"
+        f"{counted(len(labels), 'method')} x {counted(args.matches, 'match')}"
+        f" of {counted(args.ticks, 'tick')}"
         f" ({play} of play), seeds {args.seed}..{args.seed + args.matches - 1},"
         f" {args.action_type} head moves of up to {head} per {config.tick_seconds:g} s,"
         f" walking to {args.walk}{_world_text(args, config)}"
@@ -400,7 +396,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         # (a striker walking to the ball sees it three times as often)
         walk = "" if args.walk == "waypoints" else f", walking to the {args.walk}"
         title = (
-            f"{_count(args.matches, 'match')} x {play}, seed {args.seed},"
+            f"{counted(args.matches, 'match')} x {play}, seed {args.seed},"
             f" {args.action_type} head {args.step_deg:g} deg/tick{walk}{world}"
         )
         points = {

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import activevision
 from activevision.io import read_csv, read_json, write_text
+from activevision.text import counted
 from activevision.training.checkpoint import checkpoint_step, list_checkpoints
 from activevision.training.config import MATCH_ENV_ID
 from activevision.training.state import check_run_config_unchanged
@@ -215,9 +216,8 @@ def _match_part(match_rows: list[dict]) -> list[str]:
         "",
         "## Head control through whole matches",
         "",
-        f"`ActiveVisionMatch-v0`: {first['matches']} match"
-        + ("" if str(first["matches"]) == "1" else "es")
-        + (_ticks_text(first["ticks"]) if first.get("ticks") else "")
+        f"`ActiveVisionMatch-v0`: {counted(first['matches'], 'match')}"
+        + (f" of {counted(first['ticks'], 'tick')}" if first.get("ticks") else "")
         + f" from seed {first['seed']}, the"
         " same for every strategy; the robot walks, the ball is kicked about, the UKF"
         f" tracks every tick{_match_world_text(first)}. Mean [95% interval] over matches.",
@@ -334,11 +334,6 @@ def _error_text(rows: list[dict]) -> str:
     if errors == {0.0}:
         return ", exact localisation (error 0)"
     return ", localisation error " + "/".join(f"{e:g}" for e in sorted(errors)) + " m and rad"
-
-
-def _ticks_text(ticks: object) -> str:
-    """``" of 300 ticks"``, ``" of 1 tick"`` (it read "1 ticks")."""
-    return f" of {ticks} tick" + ("" if str(ticks) == "1" else "s")
 
 
 def _match_world_text(row: dict) -> str:

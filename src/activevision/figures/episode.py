@@ -23,6 +23,7 @@ from activevision.figures.canvas import (
 from activevision.figures.scene import view_figure
 from activevision.figures.topview import draw_topview, landmark_key
 from activevision.geometry import CameraConfig, FieldSpec, LandmarkSet
+from activevision.text import counted
 
 
 @dataclass(frozen=True)
@@ -71,10 +72,10 @@ def _outcome(trace: EpisodeTrace) -> str:
     """The row's label: the steps counted from the trace (an episode of another time limit
     than 20 said "no success in 20 steps"; one step was "1 steps")."""
     steps = len(trace.snapshots) - 1
-    counted = f"{steps} step" + ("" if steps == 1 else "s")
+    steps_text = counted(steps, "step")
     if trace.success:
-        return f"success in {counted}"
-    return "ball lost" if trace.ball_lost else f"no success in {counted}"
+        return f"success in {steps_text}"
+    return "ball lost" if trace.ball_lost else f"no success in {steps_text}"
 
 
 #: the suptitle's top this far below the figure's top edge, in inches: at matplotlib's
