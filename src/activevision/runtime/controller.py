@@ -19,7 +19,13 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from activevision.runtime.goal_evidence import GoalEvidence, goal_output_count, policy_actions
+from activevision.runtime.decision import (
+    OneHeadGoal,
+    clipped_move,
+    continuous_move,
+    greedy_action,
+)
+from activevision.runtime.goal_evidence import GoalEvidence, goal_output_count
 from activevision.runtime.metadata import (
     CAMERA_TOLERANCES,
     VECTOR_BOUND,
@@ -107,6 +113,10 @@ def _thread_count(num_threads: object) -> int:
             f"num_threads must be a positive integer up to {MAX_THREADS}, got {num_threads!r}"
         )
     return int(num_threads)
+
+
+#: the inputs of :meth:`HeadController.act` a policy may need, besides frame and head angles
+_OPTIONAL_INPUTS = ("pose", "pose_error", "proposal", "belief", "ball")
 
 
 class HeadController:
@@ -210,21 +220,36 @@ class HeadController:
         self._history = np.full(meta.action_history, -1, dtype=np.int64)
         self._outputs = [meta.output_name]
         self._evidence: GoalEvidence | None = None
+        self._goal: OneHeadGoal | None = None
         if meta.act_by == "goal":
             assert meta.goal_output_name is not None and meta.goal_views is not None
             self._outputs.append(meta.goal_output_name)
             self._evidence = GoalEvidence(
                 1, meta.goal_views, meta.action_table, meta.goal_switch_margin, meta.goal_frame
             )
+            self._goal = OneHeadGoal(self._evidence)
         self._table = [(float(dp), float(dt)) for dp, dt in meta.action_table]
         # policy.json's reader requires max_move_deg with continuous actions
         continuous = meta.action_type == "continuous"
         self._max_move = np.asarray(meta.max_move) if continuous else None
+        self._reach: tuple[float, float] | None = None
+        if self._max_move is not None:
+            self._reach = (float(self._max_move[0]), float(self._max_move[1]))
+        # the inputs act takes (pose, ...) and, for each, whether this policy needs it
+        self._needs = {name: name in meta.vector_keys for name in _OPTIONAL_INPUTS}
         self.last_q_values: np.ndarray | None = None
         self.last_goal_logits: np.ndarray | None = None
         # the frame size last checked against the policy's aspect ratio, None once warned
         self._frame_size: tuple[int, int] | None = (0, 0)
         self._angles_warned = False  # a HeadAngleWarning was given
+        limits = meta.head_limits
+        # the head angles beyond which a HeadAngleWarning is given (_check_head_angles)
+        self._angle_bounds = (
+            limits.pan_min - HEAD_LIMIT_MARGIN,
+            limits.pan_max + HEAD_LIMIT_MARGIN,
+            limits.tilt_min - HEAD_LIMIT_MARGIN,
+            limits.tilt_max + HEAD_LIMIT_MARGIN,
+        )
         robot = self.robot_camera
         # the robot's neck limits (camera=), which bound the targets beside the policy's
         self._robot_limits = (
@@ -343,21 +368,26 @@ class HeadController:
             self._check_head_angles(pan, tilt)
         self._fill_vector(pan, tilt, pose, proposal, pose_error, belief, ball)
         scores = self.q_values(frame, color_order)
-        goal_logits = self.last_goal_logits
         # the argmax action or the continuous move; with goal evidence, the move towards
-        # the goal view with the most evidence so far
-        chosen = policy_actions(
-            scores[None],
-            None if goal_logits is None else goal_logits[None],
-            np.array([[pan, tilt]]),
-            self._max_move,
-            self._evidence,
-        )[0]
-        if self._max_move is not None:
+        # the goal view with the most evidence so far: policy_actions' numbers for one head
+        # (activevision.runtime.decision)
+        goal = None
+        if self._goal is not None:
+            assert self.last_goal_logits is not None  # an output of every goal policy
+            goal = self._goal.target(self.last_goal_logits, pan, tilt)
+        if self._reach is not None:
             action = -1
-            d_pan, d_tilt = (float(v) for v in chosen * self._max_move)
+            if goal is None:
+                move = clipped_move(scores)
+            else:
+                move = continuous_move(pan, tilt, goal, self._reach)
+            d_pan, d_tilt = move[0] * self._reach[0], move[1] * self._reach[1]
         else:
-            action = int(chosen)
+            if goal is None:
+                action = int(np.argmax(scores))
+            else:
+                assert self._evidence is not None
+                action = greedy_action(pan, tilt, goal, self._evidence.table)
             if len(self._history):
                 self._history[:-1] = self._history[1:]
                 self._history[-1] = action
@@ -379,61 +409,68 @@ class HeadController:
     ) -> None:
         """The vector input, laid out as ``activevision.envs.observations`` (and
         ``envs.match.observations``) build it."""
-        keys = self.metadata.vector_keys
-        given = (
-            ("pose", pose),
-            ("pose_error", pose_error),
-            ("proposal", proposal),
-            ("belief", belief),
-            ("ball", ball),
+        self._check_given(
+            pose=pose, pose_error=pose_error, proposal=proposal, belief=belief, ball=ball
         )
-        for name, value in given:
-            if name in keys and value is None:
-                raise ValueError(
-                    f"this policy ({self.metadata.observation!r}) needs {name}=...; see"
-                    " HeadController.act"
-                )
-            if name not in keys and value is not None:
-                raise ValueError(
-                    f"this policy ({self.metadata.observation!r}) takes no {name}; it was"
-                    f" trained on {', '.join(('image', *keys))}"
-                )
-        parts: list[np.ndarray] = []
-        for key in keys:
+        # Python floats, not small arrays: the same numbers (each is copied or comes from
+        # one IEEE operation) at a fraction of the time
+        values: list[float] = []
+        for key in self.metadata.vector_keys:
             if key == "head":
-                parts.append(np.array([pan, tilt]))
+                values += (pan, tilt)
             elif key == "pose":
-                x, y, theta = _on_the_field("pose", _finite_vector("pose", pose, 3))
-                parts.append(np.array([x, y, math.cos(theta), math.sin(theta)]))
+                x, y, theta = _on_the_field("pose", _finite_numbers("pose", pose, 3))
+                values += (x, y, math.cos(theta), math.sin(theta))
             elif key == "pose_error":
-                parts.append(_non_negative("pose_error", _finite_vector(key, pose_error, 1)))
+                values += _non_negative("pose_error", _finite_numbers(key, pose_error, 1))
             elif key in ("belief", "ball"):
                 # the match env's bound on its vectors (stds, ball age in seconds)
-                known = _finite_vector(key, belief if key == "belief" else ball, 3)
+                known = _finite_numbers(key, belief if key == "belief" else ball, 3)
                 if key == "belief":
                     _non_negative("belief", known)
                 else:
                     _on_the_field("ball", known)
-                parts.append(known)
+                values += known
             elif key == "proposal":
-                parts.append(self._proposal(proposal, pan, tilt))
+                values += self._proposal(proposal, pan, tilt)
             else:
-                onehot = np.zeros((len(self._history), self.n_actions))
-                seen = self._history >= 0
-                onehot[np.flatnonzero(seen), self._history[seen]] = 1.0
-                parts.append(onehot.reshape(-1))
-        if parts:
+                values += self._onehot_history()
+        if values:
             # the envs' observation bound on every entry (envs.observations and
-            # envs.match.observations clip theirs the same way)
-            self._vector[0] = np.clip(np.concatenate(parts), -VECTOR_BOUND, VECTOR_BOUND)
+            # envs.match.observations clip theirs the same way), as np.clip
+            self._vector[0] = [min(max(v, -VECTOR_BOUND), VECTOR_BOUND) for v in values]
 
     # ------------------------------------------------------------------ internals
-    def _proposal(self, proposal: Any, pan: float, tilt: float) -> np.ndarray:
+    def _check_given(self, **given: object) -> None:
+        """ValueError for an input (``pose=...``) the policy needs and was not given, or
+        was given and does not take (in the order of act's arguments)."""
+        for name, value in given.items():
+            if self._needs[name] and value is None:
+                raise ValueError(
+                    f"this policy ({self.metadata.observation!r}) needs {name}=...; see"
+                    " HeadController.act"
+                )
+            if not self._needs[name] and value is not None:
+                keys = self.metadata.vector_keys
+                raise ValueError(
+                    f"this policy ({self.metadata.observation!r}) takes no {name}; it was"
+                    f" trained on {', '.join(('image', *keys))}"
+                )
+
+    def _onehot_history(self) -> list[float]:
+        """The remembered actions, one-hot, oldest first (none yet: all 0)."""
+        onehot = [0.0] * (len(self._history) * self.n_actions)
+        for slot, action in enumerate(self._history.tolist()):
+            if action >= 0:
+                onehot[slot * self.n_actions + action] = 1.0
+        return onehot
+
+    def _proposal(self, proposal: Any, pan: float, tilt: float) -> tuple[float, ...]:
         """The proposal's part of the vector; one found well outside the head limits warns
         (once, as the head angles do)."""
         vector = _proposal_vector(proposal, pan, tilt)
         if vector[4] and not self._angles_warned:
-            self._check_head_angles(float(vector[0]), float(vector[1]), "proposal")
+            self._check_head_angles(vector[0], vector[1], "proposal")
         return vector
 
     def _check_camera(self) -> None:
@@ -470,6 +507,9 @@ class HeadController:
     def _check_head_angles(self, pan: float, tilt: float, what: str = "head angle") -> None:
         """One HeadAngleWarning for a head angle (or the proposal's, ``what``) more than
         HEAD_LIMIT_MARGIN outside the policy's head limits (the first such; none after it)."""
+        low_pan, high_pan, low_tilt, high_tilt = self._angle_bounds
+        if low_pan <= pan <= high_pan and low_tilt <= tilt <= high_tilt:  # the usual case
+            return
         limits = self.metadata.head_limits
         for name, angle in (("pan", pan), ("tilt", tilt)):
             low, high = getattr(limits, f"{name}_min"), getattr(limits, f"{name}_max")
@@ -626,16 +666,43 @@ def _finite_vector(name: str, value: Any, size: int) -> np.ndarray:
     return array
 
 
+#: Python's exact float types and the ints every float64 holds exactly, which
+#: :func:`_finite_numbers` reads without NumPy
+_PLAIN_FLOATS = (float, np.float64)
+_EXACT_INT = 2**53
+
+
+def _finite_numbers(name: str, value: Any, size: int) -> list[float]:
+    """:func:`_finite_vector` as a list of floats: a tuple or list of ``size`` finite
+    Python floats (or small ints), or one for ``size`` 1, read directly; anything else
+    through :func:`_finite_vector`, which refuses what it must."""
+    if size == 1 and not isinstance(value, tuple | list | np.ndarray):
+        items: Any = (value,)
+    elif isinstance(value, tuple | list) and len(value) == size:
+        items = value
+    else:
+        return _finite_vector(name, value, size).tolist()  # type: ignore[no-any-return]
+    numbers: list[float] = []
+    for item in items:
+        kind = type(item)
+        if kind is int and -_EXACT_INT <= item <= _EXACT_INT:
+            item = float(item)
+        elif kind not in _PLAIN_FLOATS or not math.isfinite(item):
+            return _finite_vector(name, value, size).tolist()  # type: ignore[no-any-return]
+        numbers.append(float(item))
+    return numbers
+
+
 #: The largest x or y (m) a pose or a ball position given to ``act`` may have: far beyond any
 #: RoboCup field (the largest is 14 x 9 m) and any localisation error the policies are scored
 #: at (10 m), yet below millimetres for all but a robot within 5 cm of the centre spot.
 FIELD_BOUND_M = 50.0
 
 
-def _on_the_field(name: str, values: np.ndarray) -> np.ndarray:
+def _on_the_field(name: str, values: list[float]) -> list[float]:
     """``values``, or ValueError: an x or y (its first two) beyond FIELD_BOUND_M, which the
     network would see clipped to 10 m, a place the robot is not (millimetres given)."""
-    x, y = float(values[0]), float(values[1])
+    x, y = values[0], values[1]
     if max(abs(x), abs(y)) > FIELD_BOUND_M:
         raise ValueError(
             f"{name} x, y must be metres (within +-{FIELD_BOUND_M:g}), got ({x:g}, {y:g})"
@@ -644,16 +711,14 @@ def _on_the_field(name: str, values: np.ndarray) -> np.ndarray:
     return values
 
 
-def _non_negative(name: str, values: np.ndarray) -> np.ndarray:
+def _non_negative(name: str, values: list[float]) -> list[float]:
     """``values``, or ValueError: a standard deviation below 0."""
-    if (values < 0).any():
-        raise ValueError(
-            f"{name} must be standard deviations >= 0 (m and rad), got {values.tolist()}"
-        )
+    if any(v < 0 for v in values):
+        raise ValueError(f"{name} must be standard deviations >= 0 (m and rad), got {values}")
     return values
 
 
-def _proposal_vector(proposal: Any, pan: float, tilt: float) -> np.ndarray:
+def _proposal_vector(proposal: Any, pan: float, tilt: float) -> tuple[float, ...]:
     """(pan, tilt, d_pan, d_tilt, found); a (nan, nan) proposal is "none found"."""
     try:
         raw_pan, raw_tilt = proposal
@@ -661,15 +726,17 @@ def _proposal_vector(proposal: Any, pan: float, tilt: float) -> np.ndarray:
     except (TypeError, ValueError) as error:
         raise ValueError(f"proposal must be (pan, tilt) radians, got {proposal!r}") from error
     if math.isnan(p_pan) and math.isnan(p_tilt):
-        return np.zeros(5)
+        return (0.0, 0.0, 0.0, 0.0, 0.0)
     if not (math.isfinite(p_pan) and math.isfinite(p_tilt)):
         raise ValueError(f"proposal must be finite, or (nan, nan) for none, got {proposal!r}")
     # radians within +-pi, as the head angles (no degrees, no True for 1 rad)
     p_pan, p_tilt = _finite_angle("proposal pan", raw_pan), _finite_angle("proposal tilt", raw_tilt)
-    return np.array([p_pan, p_tilt, p_pan - pan, p_tilt - tilt, 1.0])
+    return (p_pan, p_tilt, p_pan - pan, p_tilt - tilt, 1.0)
 
 
 def _finite_angle(name: str, value: float) -> float:
+    if type(value) is float and -math.pi <= value <= math.pi:  # the usual case, at once
+        return value
     if isinstance(value, bool | np.bool_ | str | bytes):  # float() would take them
         raise ValueError(f"{name} must be a number of radians, got {value!r}")
     try:

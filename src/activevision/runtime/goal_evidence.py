@@ -6,8 +6,9 @@ The sum is a naive-Bayes filter over the goal (each frame's prediction taken as 
 evidence about one fixed goal), the episode's memory: a frame that makes another view look
 a little better no longer turns the head around, so the swinging between two neighbouring
 views of a memoryless greedy policy ends (docs/learned-head-control.md: 11-16% of episodes
-at e >= 1 with the action head, 0% with goal evidence). NumPy only: the trainer (batched),
-the evaluator and :class:`~activevision.runtime.HeadController` on a robot run this same code.
+at e >= 1 with the action head, 0% with goal evidence). NumPy only: the trainer (batched)
+and the evaluator run this code; :class:`~activevision.runtime.HeadController` on a robot
+runs its one-head form (:mod:`activevision.runtime.decision`), which gives the same bytes.
 """
 
 from __future__ import annotations
@@ -186,8 +187,9 @@ def policy_actions(
     (``max_move``: pan, tilt rad) its move (M, 2) clipped to [-1, 1]. With ``evidence`` and
     ``goal_logits`` (M, V): the move towards the view its summed goal evidence picks for
     slots ``slots`` (default: the first M) instead: a move of the evidence's action table,
-    or the continuous move straight there. The trainer, the evaluator and the robot runtime
-    all act through this function."""
+    or the continuous move straight there. The trainer and the evaluator act through this
+    function, the robot runtime through its one-head form with the same numbers
+    (:mod:`activevision.runtime.decision`)."""
     if evidence is not None and goal_logits is not None:
         rows = np.arange(len(heads)) if slots is None else slots
         target = evidence.target(goal_logits, rows, heads)

@@ -43,13 +43,14 @@ from numba import njit
 ColorOrder = Literal["rgb", "bgr"]
 
 
-def _compiled(function: Callable[..., Any]) -> Any:
+def compiled(function: Callable[..., Any]) -> Any:
     """``function`` compiled by numba (``nogil``), its machine code cached on disk where numba
     can write (beside the package, in ``~/.cache`` or ``NUMBA_CACHE_DIR``). A read-only
     install run by a user without a writable home (a robot's service account) has no such
     place, and numba's ``cache=True`` then refuses the import ("cannot cache function ...:
     no locator available"): there the kernel is compiled afresh at each start instead, when
-    the :class:`FramePreprocessor` is made (about a second), not in a decision."""
+    the :class:`FramePreprocessor` (or :class:`~activevision.runtime.decision.OneHeadGoal`)
+    is made (about a second), not in a decision."""
     try:
         return njit(cache=True, nogil=True)(function)
     except RuntimeError:
@@ -168,6 +169,10 @@ class FramePreprocessor:
         self.height = int(height)
         self.width = int(width)
         self._plans: dict[tuple[int, int], _ResizePlan] = {}
+        # luma weights by colour order, and scaled by a block's pixel count: made once (a
+        # decision spent microseconds on each)
+        self._luma = {order: luma_weights(order) for order in ("rgb", "bgr")}
+        self._scales: dict[tuple[str, int, int], np.ndarray] = {}
         # compile (or load from numba's cache) now, not in the robot's first decision
         block_mean_kernel(
             np.zeros((1, 1, 3), np.uint8), 1, 1, np.ones(3, np.float32), np.empty((1, 1), np.uint8)
@@ -183,14 +188,19 @@ class FramePreprocessor:
             color_order: channel order of 3-channel frames, "rgb" or "bgr".
             out: optional (height, width) uint8 array to write into.
         """
-        weights = luma_weights(color_order)
+        weights = self._luma.get(color_order) if isinstance(color_order, str) else None
+        if weights is None:
+            weights = luma_weights(color_order)  # refuses a colour order not rgb or bgr
         frame = check_frame(frame)
         if out is None:
             out = np.empty((self.height, self.width), dtype=np.uint8)
         plan = self._plan(frame.shape[0], frame.shape[1])
         channels = frame.shape[2]
         if plan.factor_y:
-            scale = weights / np.float32(plan.factor_y * plan.factor_x)
+            scale = self._scales.get((color_order, plan.factor_y, plan.factor_x))
+            if scale is None:
+                scale = weights / np.float32(plan.factor_y * plan.factor_x)
+                self._scales[(color_order, plan.factor_y, plan.factor_x)] = scale
             block_mean_kernel(np.ascontiguousarray(frame), plan.factor_y, plan.factor_x, scale, out)
             return out
         grey = frame[:, :, 0].astype(np.float32) if channels == 1 else _luma(frame, weights)
@@ -241,7 +251,7 @@ def _luma(frame: np.ndarray, weights: np.ndarray) -> np.ndarray:
     return grey
 
 
-@_compiled
+@compiled
 def block_mean_kernel(
     frame: np.ndarray, fy: int, fx: int, scale: np.ndarray, out: np.ndarray
 ) -> None:
