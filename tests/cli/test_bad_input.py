@@ -118,7 +118,10 @@ BAD_ARGUMENTS = [
         ],
         "redraw_look",
     ),
-    (["train", "--set", "ticks=1", "--out", "{tmp}/x"], "give its full path, match.ticks"),
+    (
+        ["train", "--set", "ticks=1", "--out", "{tmp}/x"],
+        "give its full path: match.kidnap.ticks, match.ticks",
+    ),
     # a key the run's algo never reads: it was stored in config.json and ignored
     (
         ["train", "--set", "dagger.num_envs=8", "--out", "{tmp}/x"],

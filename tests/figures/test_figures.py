@@ -15,7 +15,12 @@ import activevision
 
 SRC = Path(activevision.__file__).parent
 #: what figures/ may import from the package: it sits just above geometry
-FIGURES_MAY_IMPORT = ("activevision.geometry", "activevision.io", "activevision.figures")
+FIGURES_MAY_IMPORT = (
+    "activevision.geometry",
+    "activevision.io",
+    "activevision.text",
+    "activevision.figures",
+)
 
 
 def _imports(path: Path) -> list[str]:

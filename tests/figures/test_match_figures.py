@@ -189,18 +189,6 @@ def test_plot_pareto_of_one_match_says_it_has_no_whiskers(monkeypatch):
     assert titles == ["1 match x 19.2 s\none match: no 95% whiskers", "2 matches x 19.2 s"]
 
 
-def test_match_counts_one_match_and_one_method_in_the_singular():
-    # the figures' titles and the printed header read "1 methods x 1 matches"
-    from activevision.cli.match import _count
-
-    assert [_count(1, "match"), _count(2, "match"), _count(1, "method")] == [
-        "1 match",
-        "2 matches",
-        "1 method",
-    ]
-    assert _count(11, "method") == "11 methods"
-
-
 def test_a_long_title_of_the_match_figures_stays_inside_them(monkeypatch):
     # the world of moving robots and a detector ran past both edges of the figure ("2 " and
     # "bands: 95% intervals" cut off)
