@@ -181,6 +181,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
         overrides.append(f"algo={args.algo}")
     run_dir: Path = args.out
     config = apply_overrides(config, overrides)
+    _refuse_aux_without_target(config)
     _warn_never_validated(config)
     new_folder = not run_dir.exists()
     try:
@@ -190,6 +191,17 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             shutil.rmtree(run_dir, ignore_errors=True)  # e.g. no start found: try again freely
         raise
     return run_dir
+
+
+def _refuse_aux_without_target(config: Any) -> None:
+    """ValueError where ``learner.aux_goal_weight`` is set for an env without a goal view
+    (``--preset match_ddqn --set aux_goal_weight=1``): the trainer's own error told a
+    command-line user to pass a Python function."""
+    from activevision.training.aux_targets import no_default_aux_target
+
+    why = no_default_aux_target(config)
+    if why:
+        raise ValueError(f"{why}: leave it at 0 on this env")
 
 
 def _warn_never_validated(config: Any) -> None:
@@ -281,6 +293,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     _refuse_set_beside(list(args.set or []), {"seed": "--seeds"})
     grid = checked_grid(args.grid or [], overrides)
     config = checked_base(config, overrides, grid)
+    _refuse_aux_without_target(config)
     with warnings.catch_warnings():
         # the command ends with one error line on failed trials (check_trials_finished)
         warnings.filterwarnings("ignore", message=UNFINISHED_WARNING)
