@@ -16,7 +16,7 @@ from activevision.training.config import (
     load_config,
     save_config,
 )
-from activevision.training.presets import PRESET_NAMES, preset
+from activevision.training.presets import PRESET_NAMES, preset, scaled_intervals
 
 
 def test_paper_defaults_and_release_preset():
@@ -556,3 +556,39 @@ def test_values_another_setting_leaves_unread_are_refused_in_any_order():
     # what a preset carries is not refused: quickstart's prior range on the image and head
     head = apply_overrides(preset("quickstart"), ["env.observation=image+head"])
     assert head.env.prior_error_range == (0.0, 2.0)
+
+
+def test_a_shortened_preset_keeps_its_intervals_as_shares_of_its_run():
+    """``--preset quickstart --steps 3000`` kept the 10,000-step validation interval and
+    never validated; the preset's intervals scale with the run (hand-computed values)."""
+    quick = preset("quickstart")  # 40,000 steps: validation every 10,000, checkpoints never
+    assert scaled_intervals(quick, quick.replace(total_timesteps=3000)) == {
+        "run.eval_interval": 750
+    }
+    assert scaled_intervals(quick, quick.replace(total_timesteps=400_000)) == {
+        "run.eval_interval": 100_000
+    }
+    paper = preset("paper")  # 30,000 steps, checkpoints every 3,000 in 300-step epochs
+    assert paper.run.eval_interval == 0
+    assert scaled_intervals(paper, paper) == {}  # at its own steps: the same config
+    assert scaled_intervals(paper, paper.replace(total_timesteps=15_000)) == {
+        "run.checkpoint_interval": 1500
+    }
+    # 200 steps, rounded to a whole epoch; 450 -> 1.5 epochs, rounded up
+    assert scaled_intervals(paper, paper.replace(total_timesteps=2000)) == {
+        "run.checkpoint_interval": 300
+    }
+    assert scaled_intervals(paper, paper.replace(total_timesteps=4500)) == {
+        "run.checkpoint_interval": 600
+    }
+    assert scaled_intervals(paper, paper.replace(total_timesteps=100)) == {
+        "run.checkpoint_interval": 300
+    }
+    prior = preset("dagger_prior")  # 400,000: validation 100,000, checkpoints 50,000
+    assert scaled_intervals(prior, prior.replace(total_timesteps=100_000)) == {
+        "run.eval_interval": 25_000,
+        "run.checkpoint_interval": 15_000,  # 12,500: 2.5 epochs of 5,000, rounded up
+    }
+    # what the user set is kept
+    shorter = quick.replace(total_timesteps=3000, eval_interval=2000)
+    assert scaled_intervals(quick, shorter, keep={"run.eval_interval"}) == {}
