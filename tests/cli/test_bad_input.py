@@ -147,6 +147,45 @@ BAD_ARGUMENTS = [
         ],
         "'match_teacher' (dagger.match_teacher) is never read by an algo='dagger' run",
     ),
+    # an auxiliary goal head on the match, which has no goal view: the trainer's error told a
+    # command-line user to pass Trainer(..., aux_target=f)
+    (
+        ["train", "--preset", "match_ddqn", "--set", "aux_goal_weight=1", "--out", "{tmp}/x"],
+        "learner.aux_goal_weight=1.0 adds a head regressing the goal view's offset from the"
+        " head, which only ActiveVision-v0's episodes have (goal_offset); env_id"
+        " 'ActiveVisionMatch-v0' has none: leave it at 0 on this env",
+    ),
+    # values another setting of the run leaves unread: stored in config.json and ignored
+    (
+        ["train", "--set", "env.prior_error_range=[0,1]", "--out", "{tmp}/x"],
+        "'env.prior_error_range' is never read by this run: only an observation with a prior"
+        " pose reads it (env.observation='image+head+pose' or 'image+head+pose+proposal');"
+        " this run observes 'image'",
+    ),
+    (
+        ["train", "--preset", "dagger_head", "--set", "prior_grid=[0.5,10]"] + ["--out", "{tmp}/x"],
+        "'prior_grid' (env.prior_grid) is never read by this run: only an observation with a"
+        " prior pose",
+    ),
+    (
+        ["train", "--preset", "dagger_prior", "--set", "env.prior_error_range=null"]
+        + ["--set", "env.prior_exact_share=0.3", "--out", "{tmp}/x"],
+        "'env.prior_exact_share' is never read by this run: it is the share of exact priors",
+    ),
+    (
+        ["train", "--preset", "dagger_head", "--set", "max_move_deg=[5,5]", "--out", "{tmp}/x"],
+        "'max_move_deg' (env.max_move_deg) is never read by this run: only continuous moves",
+    ),
+    (
+        ["train", "--set", "eval_episodes=50", "--out", "{tmp}/x"],
+        "'eval_episodes' (run.eval_episodes) is never read by this run: only validation reads"
+        " it, and this run never validates (run.eval_interval=0",
+    ),
+    (
+        ["train", "--preset", "ppo_head", "--set", "eval_interval=0"]
+        + ["--set", "run.eval_seed=7", "--out", "{tmp}/x"],
+        "'run.eval_seed' is never read by this run: only validation reads it",
+    ),
     (["train", "--config", "{tmp}/none.json", "--out", "{tmp}/x"], "none.json"),
     (["train", "--resume", "{tmp}/missing"], "missing: not a training run (no config.json)"),
     (["train", "--resume", "{run}", "--set", "learning_rate=1e-3"], "--set"),

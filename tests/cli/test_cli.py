@@ -79,8 +79,11 @@ def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     # The trained run exports to ONNX for the robot runtime.
     assert main(["export", str(out), "-o", str(tmp_path / "policy.onnx")]) == 0
     assert (tmp_path / "policy.json").exists()
-    # Best weights exist only for runs trained with validation: a clear error otherwise.
-    assert main(["evaluate", "--run", str(out), "--methods", "learned", "--weights", "best"]) == 2
+    # The preset validates a quarter into its run, and so does one of 600 steps (its
+    # interval scaled to 150): it kept best weights.
+    assert json.loads((out / "config.json").read_text())["run"]["eval_interval"] == 150
+    best = ["evaluate", "--run", str(out), "--methods", "learned", "--weights", "best"]
+    assert main([*best, "--episodes", "2", "--out", str(tmp_path / "best")]) == 0
 
 
 def test_bad_input_is_one_clear_line(tmp_path, capsys):
@@ -112,6 +115,32 @@ def test_a_run_shorter_than_its_validation_interval_says_so(tmp_path):
         assert main([*validated, "--out", str(tmp_path / "b")]) == 0
     assert not [w for w in caught if "eval_interval" in str(w.message)]
     assert (tmp_path / "b" / "best_policy.safetensors").exists()
+
+
+def test_a_preset_run_for_other_steps_keeps_its_intervals_as_shares(tmp_path, capsys):
+    """``--preset paper --steps 60`` kept the 3,000-step checkpoint interval of its 30,000
+    steps (``quickstart --steps 3000`` its 10,000-step validation): it checkpointed only at
+    the end. The interval is scaled with the run, and the line says so."""
+    from activevision.training.checkpoint import checkpoint_name
+
+    base = ["train", "--steps", "60", "--set", "epoch_steps=30", "--set", "learning_starts=20"]
+    base += ["--set", "batch_size=8", "--set", "buffer_size=500", "--set", "tensorboard=false"]
+    assert main([*base, "--out", str(tmp_path / "a")]) == 0
+    assert (
+        "--steps 60: preset paper's run.checkpoint_interval 3000 -> 30 (the same shares of the"
+        " run as of its 30000 steps; --set them to choose)"
+    ) in capsys.readouterr().out.splitlines()
+    assert (
+        json.loads((tmp_path / "a" / "config.json").read_text())["run"]["checkpoint_interval"] == 30
+    )
+    written = sorted(p.name for p in (tmp_path / "a" / "checkpoints").iterdir())
+    assert written == sorted([checkpoint_name(30), checkpoint_name(60)])
+    # the user's own interval is kept, and nothing said
+    assert main([*base, "--set", "checkpoint_interval=60", "--out", str(tmp_path / "b")]) == 0
+    assert "--steps 60:" not in capsys.readouterr().out
+    assert (
+        json.loads((tmp_path / "b" / "config.json").read_text())["run"]["checkpoint_interval"] == 60
+    )
 
 
 def test_train_help_names_every_preset(capsys):

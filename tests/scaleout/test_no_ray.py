@@ -114,6 +114,22 @@ def test_a_set_key_is_checked_against_each_grid_algo_and_env():
         )
 
 
+def test_a_set_key_is_checked_against_each_grid_observation_and_validation():
+    """The settings that leave prior-pose, continuous-move and validation keys unread
+    decide per grid point too: a --set key holds where every trial reads it."""
+    from activevision.training import preset
+
+    prior = {"env.prior_error_range": [0.0, 1.0], "algo": "dagger"}
+    poses = {"env.observation": ["image+head+pose", "image+head+pose+proposal"]}
+    assert checked_base(preset("paper"), prior, poses).env.prior_error_range == (0.0, 1.0)
+    with pytest.raises(ValueError, match="only an observation with a prior pose reads it"):
+        checked_base(preset("paper"), prior, {"env.observation": ["image", "image+head+pose"]})
+    episodes = {"eval_episodes": 50}
+    assert checked_base(preset("paper"), episodes, {"eval_interval": [1000, 3000]})
+    with pytest.raises(ValueError, match="this run never validates"):
+        checked_base(preset("paper"), episodes, {"eval_interval": [0, 1000]})
+
+
 def _metrics(run_dir: Path, success: list[float], epoch_steps: int = 300) -> None:
     run_dir.mkdir(parents=True)
     with (run_dir / "metrics.csv").open("w", newline="") as f:

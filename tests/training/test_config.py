@@ -16,7 +16,7 @@ from activevision.training.config import (
     load_config,
     save_config,
 )
-from activevision.training.presets import PRESET_NAMES, preset
+from activevision.training.presets import PRESET_NAMES, preset, scaled_intervals
 
 
 def test_paper_defaults_and_release_preset():
@@ -487,9 +487,11 @@ def test_a_match_students_validation_fits_one_vector_env():
     with pytest.raises(ValueError, match=r"run\.eval_episodes: .*at most 65536, got 65537"):
         apply_overrides(preset("match_dagger"), ["eval_episodes=65537"])
     assert apply_overrides(preset("match_dagger"), ["eval_episodes=65536"])
-    # without validation, or on the episodes (their own batch, not the vector env), any count
-    assert apply_overrides(preset("match_dagger"), ["eval_episodes=65537", "eval_interval=0"])
+    # on the episodes (their own batch, not the vector env), any count
     assert apply_overrides(preset("quickstart"), ["eval_episodes=65537"])
+    # without validation the count is never read: refused as such
+    with pytest.raises(ValueError, match=r"'eval_episodes' .* this run never validates"):
+        apply_overrides(preset("match_dagger"), ["eval_episodes=65537", "eval_interval=0"])
 
 
 def test_ddqn_minibatch_fits_the_replay_buffer():
@@ -513,3 +515,80 @@ def test_from_dict_of_a_non_object_names_it(values):
     """A config.json holding null or a list was a TypeError of the legacy-key check."""
     with pytest.raises(ValueError, match=r"expects an object of TrainConfig fields"):
         TrainConfig.from_dict(values)  # type: ignore[arg-type]
+
+
+def test_values_another_setting_leaves_unread_are_refused_in_any_order():
+    """A prior pose's settings on an observation without one, continuous moves' size with
+    discrete actions and validation's episodes without validation were stored in
+    config.json and never used."""
+    with pytest.raises(ValueError, match=r"'env\.prior_error_range' is never read by this run"):
+        apply_overrides(preset("paper"), ["env.prior_error_range=[0,1]"])
+    with pytest.raises(ValueError, match="this run observes 'image\\+head'"):
+        apply_overrides(preset("dagger_head"), ["prior_exact_share=0.5"])
+    with pytest.raises(ValueError, match="this run does not set"):
+        apply_overrides(
+            preset("dagger_head"), ["observation=image+head+pose", "prior_exact_share=1"]
+        )
+    with pytest.raises(ValueError, match="only continuous moves are scaled by it"):
+        apply_overrides(preset("dagger_image"), ["max_move_deg=[5,5]"])
+    with pytest.raises(ValueError, match="this run never validates"):
+        apply_overrides(preset("paper"), ["eval_seed=3"])
+    with pytest.raises(ValueError, match=r"only env\.success_mode=tolerance ends an episode by"):
+        apply_overrides(preset("paper"), ["success_tolerance_deg=5", "success_mode=landmarks"])
+    assert apply_overrides(preset("paper"), ["success_tolerance_deg=5"])
+    # the setting that makes them read, in the same overrides and in either order
+    config = apply_overrides(
+        preset("dagger_head"),
+        [
+            "prior_exact_share=0.5",
+            "prior_grid=[0.5,10]",
+            "env.prior_error_range=[0,2]",
+            "env.observation=image+head+pose",
+        ],
+    )
+    assert (config.env.prior_exact_share, config.env.prior_grid) == (0.5, (0.5, 10))
+    config = apply_overrides(
+        preset("dagger_image"), ["max_move_deg=[5,5]", "action_type=continuous"]
+    )
+    assert config.env.max_move_deg == (5, 5)
+    config = apply_overrides(preset("paper"), ["eval_episodes=7", "eval_interval=600"])
+    assert (config.run.eval_episodes, config.run.eval_interval) == (7, 600)
+    # what a preset carries is not refused: quickstart's prior range on the image and head
+    head = apply_overrides(preset("quickstart"), ["env.observation=image+head"])
+    assert head.env.prior_error_range == (0.0, 2.0)
+
+
+def test_a_shortened_preset_keeps_its_intervals_as_shares_of_its_run():
+    """``--preset quickstart --steps 3000`` kept the 10,000-step validation interval and
+    never validated; the preset's intervals scale with the run (hand-computed values)."""
+    quick = preset("quickstart")  # 40,000 steps: validation every 10,000, checkpoints never
+    assert scaled_intervals(quick, quick.replace(total_timesteps=3000)) == {
+        "run.eval_interval": 750
+    }
+    assert scaled_intervals(quick, quick.replace(total_timesteps=400_000)) == {
+        "run.eval_interval": 100_000
+    }
+    paper = preset("paper")  # 30,000 steps, checkpoints every 3,000 in 300-step epochs
+    assert paper.run.eval_interval == 0
+    assert scaled_intervals(paper, paper) == {}  # at its own steps: the same config
+    assert scaled_intervals(paper, paper.replace(total_timesteps=15_000)) == {
+        "run.checkpoint_interval": 1500
+    }
+    # 200 steps, rounded to a whole epoch; 450 -> 1.5 epochs, rounded up
+    assert scaled_intervals(paper, paper.replace(total_timesteps=2000)) == {
+        "run.checkpoint_interval": 300
+    }
+    assert scaled_intervals(paper, paper.replace(total_timesteps=4500)) == {
+        "run.checkpoint_interval": 600
+    }
+    assert scaled_intervals(paper, paper.replace(total_timesteps=100)) == {
+        "run.checkpoint_interval": 300
+    }
+    prior = preset("dagger_prior")  # 400,000: validation 100,000, checkpoints 50,000
+    assert scaled_intervals(prior, prior.replace(total_timesteps=100_000)) == {
+        "run.eval_interval": 25_000,
+        "run.checkpoint_interval": 15_000,  # 12,500: 2.5 epochs of 5,000, rounded up
+    }
+    # what the user set is kept
+    shorter = quick.replace(total_timesteps=3000, eval_interval=2000)
+    assert scaled_intervals(quick, shorter, keep={"run.eval_interval"}) == {}

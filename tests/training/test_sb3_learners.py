@@ -36,6 +36,10 @@ def tiny(algo: str, observation: str = "image+head", steps: int = 400, **extra) 
         if algo == "ppo"
         else {"replay.buffer_size": 1000, "learner.learning_starts": 50}
     )
+    # validation's episodes only where the run validates (else never read: refused)
+    validation = {"run.eval_interval": 200, "run.eval_episodes": 6}
+    if extra.get("run.eval_interval", 200) == 0:
+        validation = {}
     return TrainConfig().replace(
         **{
             "algo": algo,
@@ -43,8 +47,7 @@ def tiny(algo: str, observation: str = "image+head", steps: int = 400, **extra) 
             "env.observation": observation,
             "run.total_timesteps": steps,
             "run.epoch_steps": 100,
-            "run.eval_interval": 200,
-            "run.eval_episodes": 6,
+            **validation,
             "run.checkpoint_interval": 200,
             "run.tensorboard": False,
             "learner.batch_size": 16,

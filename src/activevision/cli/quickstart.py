@@ -43,10 +43,13 @@ def check_quickstart_run(args: argparse.Namespace) -> None:
     """ValueError unless the run in ``args.out`` is this quickstart's (the preset, seed and
     steps asked for): resuming another would run and overwrite that run's evaluations."""
     from activevision.training import load_config, preset
+    from activevision.training.presets import scaled_intervals
 
-    want = preset("quickstart").replace(seed=args.seed)
-    if args.steps is not None:
+    base = preset("quickstart")
+    want = base.replace(seed=args.seed)
+    if args.steps is not None:  # as train --steps does: the intervals scaled with the run
         want = want.replace(total_timesteps=args.steps)
+        want = want.replace(**scaled_intervals(base, want))
     have = load_config(args.out / "config.json")
     if replace(have, run=replace(have.run, progress_bar=want.run.progress_bar)) != want:
         steps = f", {args.steps} steps" if args.steps is not None else ""

@@ -163,7 +163,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             " start it over"
         )
     check_run_directory(args.out, overwrite=args.overwrite)
-    config = load_config(args.config) if args.config else preset(args.preset or "paper")
+    base = load_config(args.config) if args.config else preset(args.preset or "paper")
     overrides = list(args.set or [])
     _refuse_set_beside(
         overrides,
@@ -180,7 +180,10 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     if args.algo is not None:
         overrides.append(f"algo={args.algo}")
     run_dir: Path = args.out
-    config = apply_overrides(config, overrides)
+    config = apply_overrides(base, overrides)
+    if args.config is None and args.steps is not None:
+        config = _scale_preset_intervals(args.preset or "paper", base, config, args.set or [])
+    _refuse_aux_without_target(config)
     _warn_never_validated(config)
     new_folder = not run_dir.exists()
     try:
@@ -190,6 +193,43 @@ def _train_fresh(args: argparse.Namespace) -> Path:
             shutil.rmtree(run_dir, ignore_errors=True)  # e.g. no start found: try again freely
         raise
     return run_dir
+
+
+def _scale_preset_intervals(name: str, base: Any, config: Any, sets: list[str]) -> Any:
+    """``config`` (preset ``name``, ``base``, with ``--steps`` and ``sets``) with the preset's
+    validation and checkpoint intervals as the same shares of the ``--steps`` run, where
+    ``--set`` does not name them (``presets.scaled_intervals``), said in one line:
+    ``--preset quickstart --steps 3000`` kept the 10,000-step interval and never
+    validated."""
+    from activevision.training.config import field_paths, parse_overrides
+    from activevision.training.presets import scaled_intervals
+
+    paths = field_paths()
+    given = {paths.get(key, key) for key in parse_overrides(sets)}
+    changes = scaled_intervals(base, config, keep=given)
+    if not changes:
+        return config
+    told = ", ".join(
+        f"{path} {getattr(base.run, path.removeprefix('run.'))} -> {value}"
+        for path, value in changes.items()
+    )
+    print(
+        f"--steps {config.run.total_timesteps}: preset {name}'s {told} (the same shares of the"
+        f" run as of its {base.run.total_timesteps} steps; --set them to choose)",
+        flush=True,
+    )
+    return config.replace(**changes)
+
+
+def _refuse_aux_without_target(config: Any) -> None:
+    """ValueError where ``learner.aux_goal_weight`` is set for an env without a goal view
+    (``--preset match_ddqn --set aux_goal_weight=1``): the trainer's own error told a
+    command-line user to pass a Python function."""
+    from activevision.training.aux_targets import no_default_aux_target
+
+    why = no_default_aux_target(config)
+    if why:
+        raise ValueError(f"{why}: leave it at 0 on this env")
 
 
 def _warn_never_validated(config: Any) -> None:
@@ -281,6 +321,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     _refuse_set_beside(list(args.set or []), {"seed": "--seeds"})
     grid = checked_grid(args.grid or [], overrides)
     config = checked_base(config, overrides, grid)
+    _refuse_aux_without_target(config)
     with warnings.catch_warnings():
         # the command ends with one error line on failed trials (check_trials_finished)
         warnings.filterwarnings("ignore", message=UNFINISHED_WARNING)

@@ -150,7 +150,17 @@ def checked_grid(
 
 #: The settings that decide which other keys a run reads (``training.config``'s unread-key
 #: checks): a ``--set`` key is checked against each of their grid values.
-DECIDING_KEYS = ("algo", "env_id", "dagger.match_teacher", "dagger.act_by")
+DECIDING_KEYS = (
+    "algo",
+    "env_id",
+    "dagger.match_teacher",
+    "dagger.act_by",
+    "env.observation",
+    "env.action_type",
+    "env.prior_error_range",
+    "env.success_mode",
+    "run.eval_interval",
+)
 
 
 def checked_base(

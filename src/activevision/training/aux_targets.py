@@ -60,9 +60,22 @@ def resolve_aux_target(config: TrainConfig, aux_target: AuxTarget | None) -> Aux
     if is_active_vision(config.env_id):
         return goal_offset
     raise ValueError(
-        f"learner.aux_goal_weight={config.learner.aux_goal_weight} needs an auxiliary target,"
-        f" and env_id {config.env_id!r} has no default (only {ENV_ID} has: goal_offset): pass"
-        " Trainer(..., aux_target=f) with f(info) -> float vector, or set aux_goal_weight=0"
+        f"{no_default_aux_target(config)}: pass Trainer(..., aux_target=f) with f(info) ->"
+        " float vector, or set aux_goal_weight=0"
+    )
+
+
+def no_default_aux_target(config: TrainConfig) -> str:
+    """Why ``config``'s ``learner.aux_goal_weight`` has no auxiliary target to regress
+    without a function of the caller's ("" when it has one, or is 0): the command line's
+    refusal (it cannot pass a function), and the start of the library's."""
+    weight = config.learner.aux_goal_weight
+    if not weight or is_active_vision(config.env_id):
+        return ""
+    return (
+        f"learner.aux_goal_weight={weight} adds a head regressing the goal view's offset from"
+        f" the head, which only {ENV_ID}'s episodes have (goal_offset); env_id"
+        f" {config.env_id!r} has none"
     )
 
 
@@ -91,5 +104,6 @@ __all__ = [
     "aux_vector",
     "goal_offset",
     "is_active_vision",
+    "no_default_aux_target",
     "resolve_aux_target",
 ]

@@ -641,11 +641,15 @@ def _unread_by(algo: object, path: str, on_match: bool = False) -> str:
 
 def _unread_given(config: TrainConfig, path: str) -> str:
     """Why ``config``'s run never reads the value at ``path`` because of another of its
-    values ("" when it does): a DAgger key that one match teacher, or one way of acting,
-    reads and the run's does not (``_unread_by`` has the algo's and the env's)."""
+    values ("" when it does): the prior pose's settings where the observation has no prior
+    pose, continuous moves' size with discrete actions, the success tolerance where success
+    is by landmarks, validation's episodes where the run never validates, and a DAgger key
+    that one match teacher, or one way of acting, reads and the run's does not
+    (``_unread_by`` has the algo's and the env's)."""
+    unread = _unread_env(config.env, path) or _unread_run(config.run, path)
+    if unread or config.algo != "dagger":
+        return unread
     dag = config.dagger
-    if config.algo != "dagger":
-        return ""
     if path == "dagger.switch_margin" and dag.act_by != "goal":
         return (
             "only a student acting by its goal head reads it (the goal evidence's hysteresis,"
@@ -660,6 +664,47 @@ def _unread_given(config: TrainConfig, path: str) -> str:
         return (
             f"only the {teacher} teacher reads it (dagger.match_teacher={teacher}); this run's"
             f" teacher is {dag.match_teacher}"
+        )
+    return ""
+
+
+#: the episodic env's settings of the prior pose, which only a Dict observation with the
+#: prior pose (``EnvConfig.observes_prior``) draws (``envs.simulation``)
+_PRIOR_KEYS = ("env.prior_error_range", "env.prior_exact_share", "env.prior_grid")
+
+
+def _unread_env(env: EnvConfig, path: str) -> str:
+    """Why a run on ``env`` (ActiveVision-v0) never reads the ``env`` value at ``path``
+    because of another of its values ("" when it does)."""
+    if path in _PRIOR_KEYS and not env.observes_prior:
+        return (
+            "only an observation with a prior pose reads it (env.observation='image+head+pose'"
+            f" or 'image+head+pose+proposal'); this run observes {env.observation!r}"
+        )
+    if path == "env.prior_exact_share" and env.prior_error_range is None:
+        return (
+            "it is the share of exact priors among those drawn with env.prior_error_range,"
+            " which this run does not set (its prior is the believed pose)"
+        )
+    if path == "env.max_move_deg" and env.action_type != "continuous":
+        return (
+            "only continuous moves are scaled by it (env.action_type=continuous); this run's"
+            " discrete moves are env.step_deg"
+        )
+    if path == "env.success_tolerance_deg" and env.success_mode != "tolerance":
+        return (
+            "only env.success_mode=tolerance ends an episode by it; this run's success is"
+            f" {env.success_mode!r} (every landmark of the goal view in view)"
+        )
+    return ""
+
+
+def _unread_run(run: RunConfig, path: str) -> str:
+    """Why a run of ``run`` never reads the ``run`` value at ``path`` ("" when it does)."""
+    if path in ("run.eval_episodes", "run.eval_seed") and not run.eval_interval:
+        return (
+            "only validation reads it, and this run never validates (run.eval_interval=0;"
+            " set run.eval_interval=N to validate every N steps)"
         )
     return ""
 

@@ -69,6 +69,7 @@ from activevision.training.cpu import configure_torch_cpu, training_device
 from activevision.training.loggers import Logger
 from activevision.training.metrics import episode_record
 from activevision.training.policy_files import load_policy_and_metadata
+from activevision.training.progress import advance, postfix, progress_bar
 from activevision.training.student_runs import StudentRun
 
 MAX_EPISODE_STEPS = 20  #: the registration's time limit
@@ -244,27 +245,35 @@ class ImitationRun(StudentRun):
         rows: list[dict[str, float]] = []
         logged_last_round = True  # nothing played since the last row
         rate = 0.0
-        while self.step < target:
-            before, t0 = self.step, time.perf_counter()
-            self._rollout()
-            for _ in range(self.config.dagger.updates_per_rollout):
-                self.epoch_log.losses.append(self._update())
-            rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
-            logged_last_round = self.step // run.epoch_steps > before // run.epoch_steps
-            if logged_last_round:
-                # epsilon: the teacher's share in the round just played
-                rows.append(self.finish_epoch(self._round_share, rate))
-            if run.eval_interval and self.step // run.eval_interval > before // run.eval_interval:
-                self.validate()
-            interval = run.checkpoint_interval
-            if interval and self.step // interval > before // interval and self.step < target:
-                self.save_checkpoint()
-        if self.step >= run.total_timesteps and not logged_last_round:
-            # the run ends between two boundaries: its last rounds get their row (a run
-            # shorter than epoch_steps left metrics.csv empty)
-            rows.append(self.finish_epoch(self._round_share, rate, final=True))
-        self.save_checkpoint()
-        self.logger.flush()
+        progress = progress_bar(self.config, self.step, target)
+        try:
+            while self.step < target:
+                before, t0 = self.step, time.perf_counter()
+                self._rollout()
+                for _ in range(self.config.dagger.updates_per_rollout):
+                    self.epoch_log.losses.append(self._update())
+                rate = (self.step - before) / max(time.perf_counter() - t0, 1e-9)
+                advance(progress, self.step)
+                logged_last_round = self.step // run.epoch_steps > before // run.epoch_steps
+                if logged_last_round:
+                    # epsilon: the teacher's share in the round just played
+                    rows.append(self.finish_epoch(self._round_share, rate))
+                    progress.set_postfix(postfix(rows[-1], "dagger"), refresh=False)
+                if run.eval_interval and self.step // run.eval_interval > (
+                    before // run.eval_interval
+                ):
+                    self.validate()
+                interval = run.checkpoint_interval
+                if interval and self.step // interval > before // interval and self.step < target:
+                    self.save_checkpoint()
+            if self.step >= run.total_timesteps and not logged_last_round:
+                # the run ends between two boundaries: its last rounds get their row (a run
+                # shorter than epoch_steps left metrics.csv empty)
+                rows.append(self.finish_epoch(self._round_share, rate, final=True))
+            self.save_checkpoint()
+        finally:
+            progress.close()
+            self.logger.flush()
         return rows
 
     def _rollout(self) -> None:

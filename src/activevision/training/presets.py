@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 
 from activevision.envs.actions import ActionType
 from activevision.envs.config import EnvConfig, ObservationKind
@@ -342,6 +342,37 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
 }
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
 PRESET_HELP: dict[str, str] = {name: text for name, (_, text) in _PRESETS.items()}
+
+
+#: a run's intervals that a preset sets for the length of its own run: a preset cut short
+#: (or run longer) with ``train --steps`` keeps them as the same shares of the run
+SCALED_INTERVALS = ("run.eval_interval", "run.checkpoint_interval")
+
+
+def scaled_intervals(
+    base: TrainConfig, config: TrainConfig, keep: Collection[str] = ()
+) -> dict[str, int]:
+    """The changes (dotted path -> value) that give ``config``, a run of preset ``base``
+    with another ``run.total_timesteps``, the preset's validation and checkpoint intervals
+    as the same shares of its run (``quickstart``'s 10,000 of 40,000 steps: 750 of a
+    3,000-step run); none for the paths in ``keep`` (the user's own), nor for an interval
+    the preset leaves at 0. A checkpoint interval stays a multiple of ``run.epoch_steps``, at
+    least one epoch; a validation interval is at least one step."""
+    total, steps, run = base.run.total_timesteps, config.run.total_timesteps, config.run
+    changes: dict[str, int] = {}
+    for path in SCALED_INTERVALS:
+        name = path.removeprefix("run.")
+        interval = int(getattr(base.run, name))
+        if path in keep or not interval or steps == total:
+            continue
+        if name == "checkpoint_interval":  # rounded to whole epochs
+            unit = run.epoch_steps
+            value = max(1, (2 * interval * steps + total * unit) // (2 * total * unit)) * unit
+        else:
+            value = max(1, (2 * interval * steps + total) // (2 * total))
+        if value != getattr(run, name):
+            changes[path] = value
+    return changes
 
 
 def preset(name: str) -> TrainConfig:

@@ -50,6 +50,7 @@ from activevision.training.cpu import configure_torch_cpu, training_device
 from activevision.training.dagger import play_greedy
 from activevision.training.environment import make_env
 from activevision.training.loggers import Logger
+from activevision.training.progress import advance, postfix, progress_bar
 from activevision.training.student_runs import StudentRun
 
 #: the SB3 logger key each learner's loss is read from (``metrics.csv``'s ``loss``)
@@ -155,21 +156,25 @@ class Sb3Trainer(StudentRun):
         rollout (``n_steps * num_envs``), so it may pass the target by less than one."""
         total = self.config.run.total_timesteps
         target = total if steps is None else min(self.step + steps, total)
-        callback = _RunCallback(self)
-        if self.step < target:
-            self.model.learn(
-                total_timesteps=target - self.step,
-                callback=callback,
-                reset_num_timesteps=False,
-                progress_bar=False,
-            )
-            if self.step >= total and callback.epoch_start[0] < self.step:
-                # the run ends between two epoch_steps boundaries: its last steps get their
-                # row (a run shorter than epoch_steps left metrics.csv empty)
-                self.record_updates()
-                callback.rows.append(self.finish_epoch(0.0, callback.rate(), final=True))
-        self.save_checkpoint()  # after the last update (a mid-run one may hold this step)
-        self.logger.flush()
+        progress = progress_bar(self.config, self.step, target)
+        callback = _RunCallback(self, progress)
+        try:
+            if self.step < target:
+                self.model.learn(
+                    total_timesteps=target - self.step,
+                    callback=callback,
+                    reset_num_timesteps=False,
+                    progress_bar=False,  # SB3's own bar needs rich; the run's is tqdm's
+                )
+                if self.step >= total and callback.epoch_start[0] < self.step:
+                    # the run ends between two epoch_steps boundaries: its last steps get
+                    # their row (a run shorter than epoch_steps left metrics.csv empty)
+                    self.record_updates()
+                    callback.rows.append(self.finish_epoch(0.0, callback.rate(), final=True))
+            self.save_checkpoint()  # after the last update (a mid-run one may hold this step)
+        finally:
+            progress.close()
+            self.logger.flush()
         return callback.rows
 
     def record_updates(self) -> None:
@@ -248,9 +253,10 @@ class _RunCallback(BaseCallback):
     A checkpoint falls due on a step but is written when the rollout ends: SB3 stores a
     step's transitions only after the step's callback, and updates only after the rollout."""
 
-    def __init__(self, trainer: Sb3Trainer) -> None:
+    def __init__(self, trainer: Sb3Trainer, progress: Any) -> None:
         super().__init__()
         self.trainer = trainer
+        self.progress = progress  # the run's tqdm bar (disabled off a terminal)
         self.rows: list[dict[str, float]] = []
         n = trainer.config.sb3.num_envs
         self.returns, self.lengths = np.zeros(n), np.zeros(n, dtype=np.int64)
@@ -280,8 +286,10 @@ class _RunCallback(BaseCallback):
             trainer.record_episode(float(self.returns[i]), int(self.lengths[i]), infos[i])
         self.returns[dones], self.lengths[dones] = 0.0, 0
         step, before = trainer.step, trainer.step - len(rewards)
+        advance(self.progress, step)
         if step // run.epoch_steps > before // run.epoch_steps:
             self.rows.append(trainer.finish_epoch(0.0, self.rate()))
+            self.progress.set_postfix(postfix(self.rows[-1], trainer.config.algo), refresh=False)
             self.epoch_start = (step, time.perf_counter())
         if run.eval_interval and step // run.eval_interval > before // run.eval_interval:
             trainer.validate()
