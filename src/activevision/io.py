@@ -166,10 +166,35 @@ def read_csv_lines(
     return rows
 
 
+class DuplicateKeyError(ValueError):
+    """A JSON object that names one key twice (:func:`loads_json`)."""
+
+
+def _unique_pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """``json``'s object_pairs_hook refusing a key named twice: ``json.loads`` keeps the
+    last value and drops the first without a word (a config's ``"seed": 1`` written over by
+    a forgotten ``"seed": 2`` further down)."""
+    values: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in values:
+            raise DuplicateKeyError(f"duplicate key {key!r}")
+        values[key] = value
+    return values
+
+
+def loads_json(text: str | bytes) -> Any:
+    """``json.loads`` that refuses an object with a key named twice (DuplicateKeyError, a
+    ValueError naming the key), for every JSON file a user could write or edit."""
+    return json.loads(text, object_pairs_hook=_unique_pairs)
+
+
 def read_json(path: str | os.PathLike) -> Any:
-    """A JSON file's value; ValueError naming the file if it is not valid JSON."""
+    """A JSON file's value; ValueError naming the file if it is not valid JSON (or names a
+    key twice in one object)."""
     try:
-        return json.loads(Path(path).read_text(encoding="utf-8"))
+        return loads_json(Path(path).read_text(encoding="utf-8"))
+    except DuplicateKeyError as error:
+        raise ValueError(f"{path}: {error} (each key may appear once)") from None
     except (ValueError, RecursionError) as error:
         # ValueError: JSONDecodeError, UnicodeDecodeError, or an integer of more digits than
         # Python converts; RecursionError: arrays or objects nested too deep for the decoder

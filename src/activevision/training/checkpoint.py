@@ -37,7 +37,7 @@ from safetensors import SafetensorError
 from safetensors.torch import load_file, safe_open
 from safetensors.torch import save as serialise_tensors
 
-from activevision.io import fsync_path
+from activevision.io import fsync_path, loads_json
 
 CHECKPOINTS_DIR = "checkpoints"
 MANIFEST = "manifest.json"
@@ -163,7 +163,7 @@ def verify_checkpoint(
     nothing else, and every file against its size and SHA-256; CheckpointError otherwise."""
     path = Path(path)
     try:
-        manifest = json.loads((path / MANIFEST).read_text(encoding="utf-8"))
+        manifest = loads_json((path / MANIFEST).read_text(encoding="utf-8"))
     except (OSError, ValueError, RecursionError) as error:
         # ValueError: not JSON, or not UTF-8 text (a binary file was a bare "'utf-8' codec
         # can't decode byte", naming no file); RecursionError: nested too deep
