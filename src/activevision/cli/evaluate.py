@@ -106,8 +106,14 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
     from activevision.training.config import load_config
 
     policies: dict[str, HeadPolicy] = {}
+    given: dict[Path, Path] = {}  # each run's folder -> how --runs named it first
     for run in args.runs or []:
         check_run(run, "--runs")
+        if run.resolve() in given:  # the same folder twice ("rename one directory" said)
+            first = given[run.resolve()]
+            named = f"{run}" if first == run else f"{first} and {run}"
+            raise ValueError(f"--runs names the run {named} twice: give each run once")
+        given[run.resolve()] = run
         # every run plays in the comparison's env (--run's, or the shipped policy's where
         # it plays): an image of another size or stack was a traceback in the first step,
         # another camera or other moves a silently different policy

@@ -155,6 +155,11 @@ def _strategies(
 
     models: list[Path] = list(dict.fromkeys(args.model or ()))
     for model in models:
+        if model.is_dir():  # was "no such file"
+            raise ValueError(
+                f"--model {model} is a directory: name the .onnx model in it"
+                f" (e.g. {model / 'policy.onnx'})"
+            )
         if not model.is_file():
             raise ValueError(f"--model {model}: no such file")
     if args.run is not None and not (args.run / "config.json").is_file():
