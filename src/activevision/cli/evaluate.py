@@ -168,6 +168,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         summary_rows,
     )
     from activevision.io import nan_as_null, write_csv, write_json
+    from activevision.training.policy_files import scored_run
 
     check_weights(args)
     check_run(args.run)  # before the outputs inside it
@@ -243,6 +244,8 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
                     "episodes": args.episodes,
                     "seed": args.seed,
                     "weights": args.weights,  # of --run's learned policy: final or best validated
+                    # the run scored (its config's and weights' digests), for report's check
+                    "run": None if args.run is None else scored_run(args.run, args.weights),
                 }
             ),
         )
