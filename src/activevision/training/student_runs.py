@@ -54,6 +54,8 @@ class StudentRun:
         try:
             self._lock = None if resuming else RunLock(self.run_dir)
             ckpt.remove_stale_writes(self.run_dir)
+            if not resuming:  # before config.json is written: it tells an earlier attempt
+                ckpt.remove_earlier_outputs(self.run_dir)
             self.episode = 0
             self.epoch_log = EpochAccumulator()
             self.best = BestWeights()
