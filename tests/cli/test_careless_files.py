@@ -1,0 +1,151 @@
+"""A careless user's files: a config with a key written twice, the wrong file passed where
+a policy goes, a run named twice, a file where a run's folder goes, results copied between
+runs, a run started over beside an earlier attempt's outputs, a log read while written."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from activevision.cli import main
+
+
+@pytest.fixture
+def run(trained, tmp_path) -> Path:
+    """A private copy of the tiny run, free to be tampered with."""
+    return Path(shutil.copytree(trained, tmp_path / "run"))
+
+
+def test_a_config_with_a_key_written_twice_is_refused(tmp_path, tiny_train, one_clear_line):
+    """The last value was trained, the first dropped unsaid (``--set`` values alike)."""
+    config = tmp_path / "dup.json"
+    config.write_text('{"seed": 1, "run": {"total_timesteps": 60}, "seed": 2}')
+    assert main(["train", "--config", str(config), "--out", str(tmp_path / "r")]) == 2
+    one_clear_line(str(config), "duplicate key 'seed'")
+    assert not (tmp_path / "r").exists()
+    camera = 'env.camera={"hfov": 1.0, "hfov": 1.2}'
+    assert main([*tiny_train, "--set", camera, "--out", str(tmp_path / "r")]) == 2
+    one_clear_line("env.camera", "duplicate key 'hfov'")
+
+
+@pytest.mark.parametrize(
+    ("sets", "needle"),
+    [
+        (["seed=1", "seed=2"], "--set seed=1 and --set seed=2 both set seed: give it once"),
+        (["learning_rate=1e-3", "learner.learning_rate=1e-4"], "both set learner.learning_rate"),
+    ],
+)
+def test_a_field_set_twice_is_refused(tmp_path, sets, needle, one_clear_line):
+    """A command line repeated with one value changed trained the later value, unsaid."""
+    argv = ["train", "--preset", "quickstart", "--out", str(tmp_path / "r")]
+    assert main([*argv, *(arg for s in sets for arg in ("--set", s))]) == 2
+    one_clear_line(needle)
+    assert not (tmp_path / "r").exists()
+
+
+def test_demo_of_a_file_that_is_no_policy_says_so(tmp_path, one_clear_line):
+    """It named a missing ``f.json``, a file the user never meant."""
+    table = tmp_path / "f.csv"
+    table.write_text("a,b\n")
+    assert main(["demo", "--policy", str(table), "--out", str(tmp_path / "d.png")]) == 2
+    line = one_clear_line(f"{table} is not a policy file")
+    assert "f.json" not in line
+
+
+def test_a_run_named_twice_is_said_to_be_named_twice(run, tmp_path, monkeypatch, one_clear_line):
+    """``--runs r r`` said "rename one directory"."""
+    monkeypatch.chdir(run.parent)
+    out = ["--episodes", "1", "--out", str(tmp_path / "ev")]
+    assert main(["evaluate", "--runs", "run", "./run/", *out]) == 2
+    line = one_clear_line("--runs names the run run twice")
+    assert "rename" not in line
+    assert main(["compare", "--runs", str(run), f"{run}/", "--errors", "0", *out]) == 2
+    one_clear_line(f"--runs names the run {run} twice")
+    assert not (tmp_path / "ev").exists()
+
+
+@pytest.mark.parametrize("folder", ["tensorboard", "checkpoints"])
+def test_a_file_where_a_run_writes_a_folder_is_named_before_training(
+    tmp_path, tiny_train, folder, one_clear_line
+):
+    """``--overwrite`` went on and ended on ``[Errno 17] File exists`` once the config and
+    logs were written (a run that then asked for --overwrite again). --overwrite replaces
+    files by files, as every command's does: the file is named, and kept."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / folder).write_text("mine")
+    argv = [*tiny_train[:-4], "--set", "tensorboard=true", "--out", str(out), "--overwrite"]
+    assert main(argv) == 2
+    one_clear_line(f"{out / folder} is a file, not a directory")
+    assert [p.name for p in out.iterdir()] == [folder]
+    assert (out / folder).read_text() == "mine"
+
+
+def test_report_refuses_results_of_another_run_or_of_no_run(run, trained, tmp_path, capsys):
+    evaluate = ["evaluate", "--methods", "learned", "random", "--episodes", "1"]
+    assert main([*evaluate, "--run", str(run)]) == 0
+    evaluation = run / "evaluation" / "evaluation.json"
+    data = json.loads(evaluation.read_text())
+    weights = run / "policy.safetensors"
+    assert data["run"] == {
+        "config_sha256": hashlib.sha256((run / "config.json").read_bytes()).hexdigest(),
+        "weights_sha256": hashlib.sha256(weights.read_bytes()).hexdigest(),
+    }
+    assert main(["report", str(run)]) == 0
+    capsys.readouterr()
+    # another run's weights (as another run's evaluation copied in records them)
+    evaluation.write_text(json.dumps({**data, "run": {**data["run"], "weights_sha256": "0" * 64}}))
+    assert main(["report", str(run), "--overwrite"]) == 2
+    assert "scored another run's weights" in capsys.readouterr().err
+    # an evaluate without --run: the paper's env, no learned policy of this run
+    assert (
+        main(
+            [
+                "evaluate",
+                "--methods",
+                "random",
+                "--episodes",
+                "1",
+                "--out",
+                str(run / "evaluation"),
+                "--overwrite",
+            ]
+        )
+        == 0
+    )
+    capsys.readouterr()
+    assert main(["report", str(run), "--overwrite"]) == 2
+    assert "written by an evaluate without --run" in capsys.readouterr().err
+    # a file from before the record is read as before
+    data.pop("run")
+    evaluation.write_text(json.dumps(data))
+    assert main(["report", str(run), "--overwrite"]) == 0
+
+
+def test_plot_of_a_run_writing_its_last_row_leaves_that_row_out_and_says_so(run, capsys):
+    """A row cut inside its last cell has all its cells: ``0.12`` of ``0.1234`` was drawn
+    as a value. A run still training may be writing it: drawn without it, with a note."""
+    metrics = run / "metrics.csv"
+    whole = metrics.read_bytes()
+    assert whole.endswith(b"\r\n")
+    last = whole[:-2].rsplit(b"\n", 1)[1]
+    metrics.write_bytes(whole + last[: len(last) // 2])
+    with pytest.warns(UserWarning, match=r"metrics\.csv: its last line has no end of line"):
+        assert main(["plot", str(run)]) == 0
+
+
+def test_a_folder_where_a_file_goes_is_named_as_a_folder(tmp_path, monkeypatch, one_clear_line):
+    """``--strategy dir.py:NAME`` and ``match --model FOLDER`` said "no such file"."""
+    monkeypatch.chdir(tmp_path)
+    Path("mine.py").mkdir()
+    argv = ["evaluate", "--methods", "random", "--episodes", "1", "--out", "ev"]
+    assert main([*argv, "--strategy", "mine.py:Mirror"]) == 2
+    one_clear_line("mine.py is a directory, not a file")
+    Path("export").mkdir()
+    assert main(["match", "--methods", "onnx_policy", "--model", "export", "--out", "m"]) == 2
+    one_clear_line("--model export is a directory", "export/policy.onnx")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["export", "mine.py"]
