@@ -526,15 +526,23 @@ def _tune_dirname(trial: Any) -> str:
 
 def _metrics_rows(run_dir: Path) -> list[dict[str, str]]:
     """A trial's ``metrics.csv`` rows (none before its first epoch), read as the rest of the
-    package reads its CSVs: a row cut short or inside its last cell is a ValueError naming
-    the file (csv.DictReader counted it: a cut ``0.12`` of ``0.1234`` went into the
-    statistics as that epoch's value, missing cells as a TypeError)."""
-    from activevision.io import read_csv
+    package reads its CSVs (csv.DictReader counted a cut row: ``0.12`` of ``0.1234`` went
+    into the statistics as that epoch's value, missing cells were a TypeError): a last line
+    without its end of line, a row a trial that failed for good was killed writing, is
+    left out with a warning (the sweep still tables its trials and says which failed); a
+    row of more or fewer cells before it is a ValueError naming the file."""
+    from activevision.io import read_csv, read_csv_text
 
     path = run_dir / "metrics.csv"
     if not path.exists():
         return []
-    return read_csv(path, ("epoch", "step", *METRICS))
+    if read_csv_text(path, live=True)[1]:
+        warnings.warn(
+            f"{path}: its last line has no end of line (the trial was stopped writing it):"
+            " read without it",
+            stacklevel=2,
+        )
+    return read_csv(path, ("epoch", "step", *METRICS), live=True)
 
 
 def _trial_row(trial: Mapping[str, Any], status: Mapping[str, Any]) -> dict[str, Any]:
