@@ -149,3 +149,22 @@ def test_a_folder_where_a_file_goes_is_named_as_a_folder(tmp_path, monkeypatch, 
     assert main(["match", "--methods", "onnx_policy", "--model", "export", "--out", "m"]) == 2
     one_clear_line("--model export is a directory", "export/policy.onnx")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["export", "mine.py"]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["report", "{run}/config.json"],
+        ["plot", "{run}/metrics.csv"],
+        ["export", "{run}/policy.safetensors"],
+        ["train", "--resume", "{run}/config.json"],
+        ["evaluate", "--run", "{run}/config.json", "--methods", "random"],
+        ["match", "--run", "{run}/config.json"],
+    ],
+    ids=" ".join,
+)
+def test_a_run_named_by_one_of_its_files_names_the_run(trained, argv, one_clear_line):
+    """It said "RUN/config.json: not a training run (no config.json)"."""
+    assert main([a.format(run=trained) for a in argv]) == 2
+    line = one_clear_line(f"a file of the training run {trained}, not a run: name the run's")
+    assert "no config.json" not in line

@@ -18,6 +18,7 @@ from activevision.cli.args import (
     choice_list,
     float_in,
     int_in,
+    not_a_run,
     path,
     positive_int,
     seed,
@@ -163,7 +164,7 @@ def _strategies(
         if not model.is_file():
             raise ValueError(f"--model {model}: no such file")
     if args.run is not None and not (args.run / "config.json").is_file():
-        raise ValueError(f"--run {args.run}: not a training run (no config.json)")
+        raise ValueError(not_a_run(args.run))
     methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
     margins = list(dict.fromkeys(args.track_margin or ()))
     if margins and "entropy_track" not in methods:

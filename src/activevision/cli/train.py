@@ -15,6 +15,7 @@ from activevision.cli.args import (
     choice_list,
     grid_item,
     int_in,
+    not_a_run,
     path,
     positive_float,
     positive_int,
@@ -70,7 +71,7 @@ def _resume(args: argparse.Namespace) -> Path | None:
             " combined with it (start a new run with --out instead)"
         )
     if not (args.resume / "config.json").is_file():
-        raise ValueError(f"--resume {args.resume}: not a training run (no config.json)")
+        raise ValueError(not_a_run(args.resume, "--resume"))
     tensorboard = False
     with contextlib.suppress(ValueError, OSError):  # an unreadable config: reopen_run says so
         tensorboard = load_config(args.resume / "config.json").run.tensorboard
@@ -259,6 +260,8 @@ def _nothing_trained(run_dir: Path) -> bool:
 def cmd_plot(args: argparse.Namespace) -> None:
     from activevision.training import plot_run
 
+    if args.run.is_file():  # "RUN/metrics.csv is not a training run (no config.json...)"
+        raise ValueError(not_a_run(args.run, ""))
     if not is_training_run(args.run):
         # name what is missing: a run's config.json alone read "no config.json and metrics.csv"
         missing = [n for n in ("config.json", "metrics.csv") if not (args.run / n).is_file()]
