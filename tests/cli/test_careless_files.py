@@ -168,3 +168,14 @@ def test_a_run_named_by_one_of_its_files_names_the_run(trained, argv, one_clear_
     assert main([a.format(run=trained) for a in argv]) == 2
     line = one_clear_line(f"a file of the training run {trained}, not a run: name the run's")
     assert "no config.json" not in line
+
+
+def test_overwrite_of_a_run_with_checkpoints_says_why_it_is_kept(
+    run, tiny_train, digests, one_clear_line
+):
+    """``--out RUN --overwrite`` over a trained run said only "continue it with --resume",
+    as if --overwrite had not been read."""
+    before = digests(run)
+    assert main([*tiny_train, "--out", str(run), "--overwrite"]) == 2
+    one_clear_line("--resume", "--overwrite starts over only a run stopped before its first")
+    assert digests(run) == before

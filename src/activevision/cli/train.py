@@ -167,7 +167,16 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     if args.config is not None and args.preset is not None:
         raise ValueError("--config and --preset cannot be combined (the file is the config)")
     if list_checkpoints(args.out):
-        raise OutputError(f"{args.out} already holds a run; continue it with --resume {args.out}")
+        # --overwrite said nothing of why it did not start the run over
+        over = (
+            " (--overwrite starts over only a run stopped before its first checkpoint: to"
+            " start this one over, remove it first)"
+            if args.overwrite
+            else ""
+        )
+        raise OutputError(
+            f"{args.out} already holds a run; continue it with --resume {args.out}{over}"
+        )
     if is_training_run(args.out) and not args.overwrite:
         raise OutputError(
             f"{args.out} already holds a run that has no checkpoint yet; pass --overwrite to"
