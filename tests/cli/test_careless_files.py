@@ -32,21 +32,6 @@ def test_a_config_with_a_key_written_twice_is_refused(tmp_path, tiny_train, one_
     one_clear_line("env.camera", "duplicate key 'hfov'")
 
 
-@pytest.mark.parametrize(
-    ("sets", "needle"),
-    [
-        (["seed=1", "seed=2"], "--set seed=1 and --set seed=2 both set seed: give it once"),
-        (["learning_rate=1e-3", "learner.learning_rate=1e-4"], "both set learner.learning_rate"),
-    ],
-)
-def test_a_field_set_twice_is_refused(tmp_path, sets, needle, one_clear_line):
-    """A command line repeated with one value changed trained the later value, unsaid."""
-    argv = ["train", "--preset", "quickstart", "--out", str(tmp_path / "r")]
-    assert main([*argv, *(arg for s in sets for arg in ("--set", s))]) == 2
-    one_clear_line(needle)
-    assert not (tmp_path / "r").exists()
-
-
 def test_demo_of_a_file_that_is_no_policy_says_so(tmp_path, one_clear_line):
     """It named a missing ``f.json``, a file the user never meant."""
     table = tmp_path / "f.csv"

@@ -230,18 +230,10 @@ def _warn_never_validated(config: Any) -> None:
 def _refuse_set_beside(overrides: list[str], options: Mapping[str, str]) -> None:
     """ValueError where a ``--set`` key sets the field (full path -> option) that an option
     given sets too: the option's value was taken and the ``--set`` one dropped silently
-    (``--set total_timesteps=5000 --steps 100`` trained 100 steps); and where two ``--set``
-    set one field (by one name or two: ``lr`` and ``learner.learning_rate``): the later value
-    was taken, the earlier dropped, unsaid (a command line repeated with one value changed)."""
+    (``--set total_timesteps=5000 --steps 100`` trained 100 steps)."""
     from activevision.training.config import field_paths, parse_overrides
 
     paths = field_paths()
-    given: dict[str, str] = {}  # each field's path -> the --set that set it
-    for item in overrides:
-        path = paths.get(item.partition("=")[0].strip(), item.partition("=")[0].strip())
-        if path in given:
-            raise ValueError(f"--set {given[path]} and --set {item} both set {path}: give it once")
-        given[path] = item
     for key in parse_overrides(overrides):
         path = paths.get(key, key)
         if options.get(path):

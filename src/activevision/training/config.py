@@ -756,8 +756,7 @@ def apply_overrides(config: TrainConfig, overrides: Iterable[str]) -> TrainConfi
 
 
 def parse_overrides(overrides: Iterable[str]) -> dict[str, Any]:
-    """``key=value`` strings as a mapping of each key to its parsed value (later wins; the
-    command line refuses a field set twice)."""
+    """``key=value`` strings as a mapping of each key to its parsed value (later wins)."""
     changes: dict[str, Any] = {}
     for item in overrides:
         key, sep, text = item.partition("=")
