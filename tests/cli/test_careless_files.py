@@ -164,3 +164,27 @@ def test_overwrite_of_a_run_with_checkpoints_says_why_it_is_kept(
     assert main([*tiny_train, "--out", str(run), "--overwrite"]) == 2
     one_clear_line("--resume", "--overwrite starts over only a run stopped before its first")
     assert digests(run) == before
+
+
+def test_compare_resumes_no_levels_another_run_played(run, tmp_path, capsys):
+    """compare.csv was resumed whatever run played it: ``compare --run A --out C``
+    stopped, then ``--run B --out C`` kept A's levels as B's (checked: episodes and seed)."""
+    from activevision.io import read_csv, write_csv
+
+    out = tmp_path / "c"
+    argv = ["compare", "--methods", "random", "--episodes", "1", "--out", str(out)]
+    assert main([*argv, "--errors", "0"]) == 0  # no run
+    assert main([*argv, "--errors", "0,0.5", "--run", str(run)]) == 2
+    assert "holds levels played by a compare without --run" in capsys.readouterr().err
+    assert main([*argv, "--errors", "0", "--run", str(run), "--overwrite"]) == 0
+    rows = read_csv(out / "compare.csv")
+    digest = hashlib.sha256((run / "policy.safetensors").read_bytes()).hexdigest()
+    assert [row["run_sha256"] for row in rows] == [digest]
+    write_csv(out / "compare.csv", [{**rows[0], "run_sha256": "0" * 64}])  # another run's
+    assert main([*argv, "--errors", "0,0.5", "--run", str(run)]) == 2
+    assert "holds levels played by another run's weights" in capsys.readouterr().err
+    # a CSV from before the column resumes as before, in its own layout
+    write_csv(out / "compare.csv", [{k: v for k, v in rows[0].items() if k != "run_sha256"}])
+    assert main([*argv, "--errors", "0,0.5", "--run", str(run)]) == 0
+    rows = read_csv(out / "compare.csv")
+    assert len(rows) == 2 and "run_sha256" not in rows[1]

@@ -309,8 +309,12 @@ def _check_ray_options(args: argparse.Namespace) -> None:
 def _compare_into(out: Path, args: argparse.Namespace) -> None:
     """``cmd_compare``'s work, in ``out`` (made, and locked against another compare)."""
     from activevision.figures.compare import plot_compare
+    from activevision.training.policy_files import scored_run
 
     env_config = env_config_of_run(args.run)
+    # the weights the learned method plays, recorded in compare.csv: another run's levels
+    # are not resumed as this one's
+    run_sha256 = None if args.run is None else scored_run(args.run, args.weights)["weights_sha256"]
     # --overwrite removes compare.csv only once every method is made and checked: a refusal
     # before the first row left the user without the old file and without a new one
     if args.ray:
@@ -335,6 +339,7 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
             address=args.address,
             num_cpus=args.num_cpus,
             verbose=args.verbose,
+            run_sha256=run_sha256,
         )
     else:
         from activevision.experiments.compare import compare, default_methods
@@ -351,7 +356,9 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
         _try_users(users, env_config, args.errors[0], args.seed)
         methods.update(users)
         _start_over(out, args)
-        compare(out, methods, args.errors, args.episodes, args.seed, env_config)
+        compare(
+            out, methods, args.errors, args.episodes, args.seed, env_config, run_sha256=run_sha256
+        )
     plot_compare(out / "compare.csv", out / "compare.png")
     print(f"wrote {out}/compare.csv and compare.png")
 
