@@ -110,3 +110,38 @@ def test_read_csv_names_a_file_without_its_header_or_a_column_asked_for(tmp_path
     path.write_text("x,y\n1,2\n")
     with pytest.raises(ValueError, match=r"a\.csv has no 'z' column"):
         read_csv(path, ("z",))
+
+
+def test_read_json_refuses_a_key_named_twice_naming_it_and_the_file(tmp_path):
+    """json.loads keeps the last of two values of one key without a word: a config's
+    ``"seed": 1`` was silently replaced by a forgotten ``"seed": 2`` further down."""
+    from activevision.io import loads_json, read_json
+
+    path = tmp_path / "c.json"
+    path.write_text('{"run": {"seed": 1, "lr": 2, "seed": 2}}')
+    with pytest.raises(ValueError, match=r"c\.json: duplicate key 'seed'"):
+        read_json(path)
+    with pytest.raises(ValueError, match="duplicate key 'a'"):
+        loads_json('[{"b": 1}, {"a": 1, "a": 1}]')  # in any object, even with equal values
+    # the same key in two objects, and keys that differ only in case, are not duplicates
+    assert loads_json('[{"a": 1}, {"a": 2, "A": 3}]') == [{"a": 1}, {"a": 2, "A": 3}]
+
+
+def test_read_csv_refuses_a_last_line_without_its_end_of_line(tmp_path):
+    """Every CSV activevision writes ends each row with an end of line: a file cut inside
+    its last cell (``0.12`` of ``0.1234``) has all its cells and was read as whole. A log
+    still being written (``live``) is read without that line."""
+    from activevision.io import read_csv
+
+    path = tmp_path / "a.csv"
+    path.write_bytes(b"x,y\r\n1,2\r\n3,0.12")
+    with pytest.raises(ValueError, match=r"a\.csv line 3 has no end of line"):
+        read_csv(path)
+    assert read_csv(path, live=True) == [{"x": "1", "y": "2"}]
+    path.write_bytes(b"x,y")  # the header itself cut: no table at all
+    with pytest.raises(ValueError, match=r"a\.csv line 1 has no end of line"):
+        read_csv(path)
+    with pytest.raises(ValueError, match=r"a\.csv is empty"):
+        read_csv(path, live=True)
+    path.write_bytes(b'x,y\r\n1,"two\nlines"\n')  # a quoted end of line inside a cell
+    assert read_csv(path) == [{"x": "1", "y": "two\nlines"}]

@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import errno
+import io
 import json
 import math
 import os
@@ -91,24 +92,53 @@ def write_csv(path: str | os.PathLike, rows: Sequence[dict]) -> None:
             writer.writerows(rows)
 
 
-def read_csv(path: str | os.PathLike, columns: Sequence[str] = ()) -> list[dict[str, str]]:
+def read_csv(
+    path: str | os.PathLike, columns: Sequence[str] = (), *, live: bool = False
+) -> list[dict[str, str]]:
     """A CSV file's rows as dicts keyed by its header (:func:`read_csv_lines`)."""
-    return [row for _, row in read_csv_lines(path, columns)]
+    return [row for _, row in read_csv_lines(path, columns, live=live)]
+
+
+class CutLineError(ValueError):
+    """A CSV file whose last line has no end of line: it was cut inside that line."""
+
+
+def read_csv_text(path: str | os.PathLike, *, live: bool = False) -> tuple[str, bool]:
+    """A CSV file's text (UTF-8, newlines kept) and whether an unterminated last line was
+    dropped from it. Every CSV this package writes ends each row with an end of line
+    (csv's ``\r\n``; :class:`~activevision.training.metrics.CsvLog` appends whole rows),
+    so a last line without one was cut: by a crash, a full disk, a copy stopped midway, or,
+    for a log still being written (``live``), a row not written to its end yet. A row cut
+    inside its last cell still has all its cells (``0.12`` of ``0.1234``), so counting
+    cells does not find it. CutLineError naming the file where not ``live``; ``live`` drops
+    that line (the caller says so). UnicodeDecodeError where it is no UTF-8 text."""
+    text = Path(path).read_bytes().decode("utf-8")
+    if not text or text.endswith("\n"):
+        return text, False
+    if not live:
+        line = text.count("\n") + 1
+        raise CutLineError(
+            f"{path} line {line} has no end of line: the file was cut inside its last row;"
+            " it is damaged or not a file activevision wrote"
+        )
+    return text[: text.rfind("\n") + 1], True
 
 
 def read_csv_lines(
-    path: str | os.PathLike, columns: Sequence[str] = ()
+    path: str | os.PathLike, columns: Sequence[str] = (), *, live: bool = False
 ) -> list[tuple[int, dict[str, str]]]:
     """A CSV file's rows as dicts keyed by its header, each with the line it ends on;
     ValueError naming the file: where it has no header row (empty: every CSV this package
     writes has one, so a file of 0 bytes was read as a table of no rows), its header lacks
     one of ``columns`` (another file's table, whose rows were then skipped as not played
     or not there), a row has more or fewer cells than the header (a file cut mid-row:
-    DictReader fills the missing cells with None, which were read on as values) or the file
-    is not CSV text."""
+    DictReader fills the missing cells with None, which were read on as values), its last
+    line has no end of line (cut inside its last row, :func:`read_csv_text`; dropped where
+    ``live``) or the file is not CSV text."""
     rows = []
     try:
-        with Path(path).open(encoding="utf-8", newline="") as f:
+        text, _ = read_csv_text(path, live=live)
+        with io.StringIO(text, newline="") as f:
             reader = csv.DictReader(f)
             header = reader.fieldnames or []  # None for an empty file; [] for blank lines
             # the reader's line, not a count of rows: it skips blank lines, and a quoted
@@ -136,10 +166,35 @@ def read_csv_lines(
     return rows
 
 
+class DuplicateKeyError(ValueError):
+    """A JSON object that names one key twice (:func:`loads_json`)."""
+
+
+def _unique_pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """``json``'s object_pairs_hook refusing a key named twice: ``json.loads`` keeps the
+    last value and drops the first without a word (a config's ``"seed": 1`` written over by
+    a forgotten ``"seed": 2`` further down)."""
+    values: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in values:
+            raise DuplicateKeyError(f"duplicate key {key!r}")
+        values[key] = value
+    return values
+
+
+def loads_json(text: str | bytes) -> Any:
+    """``json.loads`` that refuses an object with a key named twice (DuplicateKeyError, a
+    ValueError naming the key), for every JSON file a user could write or edit."""
+    return json.loads(text, object_pairs_hook=_unique_pairs)
+
+
 def read_json(path: str | os.PathLike) -> Any:
-    """A JSON file's value; ValueError naming the file if it is not valid JSON."""
+    """A JSON file's value; ValueError naming the file if it is not valid JSON (or names a
+    key twice in one object)."""
     try:
-        return json.loads(Path(path).read_text(encoding="utf-8"))
+        return loads_json(Path(path).read_text(encoding="utf-8"))
+    except DuplicateKeyError as error:
+        raise ValueError(f"{path}: {error} (each key may appear once)") from None
     except (ValueError, RecursionError) as error:
         # ValueError: JSONDecodeError, UnicodeDecodeError, or an integer of more digits than
         # Python converts; RecursionError: arrays or objects nested too deep for the decoder

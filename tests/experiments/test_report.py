@@ -236,6 +236,10 @@ def test_a_metrics_log_cut_mid_row_is_refused_naming_it(tmp_path):
     run = make_run(tmp_path)
     text = (run / "metrics.csv").read_text()
     (run / "metrics.csv").write_text(text[: text.index(",0.25,") + 3])  # epsilon "0."
+    # all its cells are there up to the cut one: what tells the cut is its missing end of line
+    with pytest.raises(ValueError, match=r"metrics\.csv line 2 has no end of line"):
+        write_report(run)
+    (run / "metrics.csv").write_text(text[: text.index(",0.25,") + 3] + "\n")
     with pytest.raises(ValueError, match=r"metrics\.csv line 2 has fewer cells than its header"):
         write_report(run)
 

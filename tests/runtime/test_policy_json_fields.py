@@ -196,3 +196,15 @@ def test_a_policy_is_played_with_the_camera_it_was_trained_for(tmp_path, helpers
     assert OnnxPolicy(pretrained_policy_path()).env_config().camera == EnvConfig().camera
     argv = ["demo", "--policy", str(exported.model_path), "--out", str(tmp_path / "d.png")]
     assert main(argv) == 0, capsys.readouterr().err
+
+
+def test_a_key_written_twice_is_refused_naming_it_and_the_file(tmp_path):
+    """json.loads kept the last of two values: a second ``"step_deg"`` added by hand was
+    played, the first one dropped, unsaid."""
+    path = tmp_path / METADATA_FILENAME
+    text = json.dumps(SHIPPED)
+    path.write_text(text[:-1] + f', "opset": {SHIPPED["opset"]}}}')
+    with pytest.raises(PolicyFileError, match=f"^policy metadata {path}: duplicate key 'opset'"):
+        load_metadata(path)
+    path.write_text(text)
+    assert load_metadata(path).opset == SHIPPED["opset"]

@@ -401,3 +401,22 @@ def test_a_failed_ray_init_gives_the_sigterm_handler_back(monkeypatch):
         assert signal.getsignal(signal.SIGTERM) is ours
     finally:
         signal.signal(signal.SIGTERM, before)
+
+
+def test_aggregate_leaves_out_a_trial_log_s_cut_last_row_and_refuses_a_short_one(tmp_path):
+    """aggregate read each trial's metrics.csv with a bare csv.DictReader: a last row cut
+    inside its last cell went into the statistics as that epoch's value (success 0.12 where
+    the trial logged 0.1234); one cut after a cell was a TypeError."""
+    run_dir = tmp_path / "seed=0"
+    _metrics(run_dir, [0.2])
+    whole = (run_dir / "metrics.csv").read_bytes()
+    trials = [{"seed": 0, "point": {}, "run_dir": str(run_dir)}]
+    (run_dir / "metrics.csv").write_bytes(whole + b"2,600,0.12")  # a trial killed writing it
+    with pytest.warns(UserWarning, match=r"metrics\.csv: its last line has no end of line"):
+        rows = aggregate(trials, tmp_path)
+    assert [(r["epoch"], r["success_rate_mean"]) for r in rows] == [(1, 0.2)]
+    (run_dir / "metrics.csv").write_bytes(whole + b"2,600,0.1234,0,0,0\r\n")  # written whole
+    assert [r["success_rate_mean"] for r in aggregate(trials, tmp_path)] == [0.2, 0.1234]
+    (run_dir / "metrics.csv").write_bytes(whole + b"2,600,0.4\r\n")
+    with pytest.raises(ValueError, match=r"metrics\.csv line 3 has fewer cells"):
+        aggregate(trials, tmp_path)

@@ -346,3 +346,17 @@ def test_a_new_log_starts_with_its_header_alone(tmp_path):
     assert (tmp_path / "m.csv").read_bytes() == b"epoch,step\r\n"
     log.append({"epoch": 1, "step": 30})
     assert CsvLog(tmp_path / "m.csv", ["epoch", "step"]).rows() == [{"epoch": "1", "step": "30"}]
+
+
+def test_a_log_cut_inside_its_last_cell_is_refused_or_read_without_it_while_live(tmp_path):
+    """CsvLog writes whole rows, each with its end of line: a last line without one was cut
+    (``0.12`` of ``0.1234``, read as a value), or is being written by a run still training
+    (``live``: left out, with a warning)."""
+    path = tmp_path / "metrics.csv"
+    log = CsvLog(path, ["epoch", "step"])
+    log.append({"epoch": 1, "step": 0.1234})
+    path.write_bytes(path.read_bytes() + b"2,0.12")
+    with pytest.raises(ValueError, match=f"^{path} line 3 has no end of line"):
+        read_csv_columns(path)
+    with pytest.warns(UserWarning, match="last line has no end of line"):
+        assert read_csv_columns(path, live=True) == {"epoch": [1.0], "step": [0.1234]}

@@ -136,7 +136,13 @@ def test_every_field_is_checked_on_read(change, needle):
 
 
 @pytest.mark.parametrize(
-    ("text", "needle"), [("[]", "JSON object"), ("{", "cannot read"), ("3", "JSON object")]
+    ("text", "needle"),
+    [
+        ("[]", "JSON object"),
+        ("{", "cannot read"),
+        ("3", "JSON object"),
+        ('{"step": 1, "step": 2}', "duplicate key 'step'"),  # the last one was taken
+    ],
 )
 def test_not_an_object_is_refused(text, needle):
     with pytest.raises(ckpt.CheckpointError, match=needle):
@@ -182,3 +188,12 @@ def test_a_checkpoint_write_on_a_full_disk_names_the_checkpoint(tmp_path):
     final = tmp_path / "checkpoints" / "step_000000030"
     assert str(caught.value) == f"[Errno 28] cannot write {final}: No space left on device"
     assert list((tmp_path / "checkpoints").iterdir()) == []  # nor the temporary folder
+
+
+def test_a_manifest_that_lists_a_file_twice_is_refused(tmp_path):
+    """json.loads kept the manifest's last entry of a file named twice, unsaid."""
+    checkpoint = tmp_path / "step_000000070"
+    checkpoint.mkdir()
+    (checkpoint / ckpt.MANIFEST).write_text('{"state.json": 1, "state.json": 2}')
+    with pytest.raises(ckpt.CheckpointError, match="no readable manifest: duplicate key"):
+        ckpt.verify_checkpoint(checkpoint, ("state.json",))

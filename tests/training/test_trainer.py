@@ -1,4 +1,5 @@
 import csv
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -440,3 +441,43 @@ def test_a_custom_env_id_the_ddqn_cannot_learn_is_named(tmp_path, env_id, need):
     with pytest.raises(ValueError, match=rf"^env_factory's env: {need}"):
         Trainer(config, tmp_path / "run", env_factory=lambda: gym.make(env_id))
     assert not (tmp_path / "run").exists()
+
+
+def _earlier_attempt(run: Path) -> list[str]:
+    """``run`` as an attempt that stopped before its first checkpoint, with the outputs the
+    other commands wrote into it; returns their names."""
+    run.mkdir()
+    (run / "config.json").write_text("{}")
+    (run / "metrics.csv").write_text("epoch,step\r\n")
+    for folder in ("plots", "evaluation", "compare", "match", "robustness"):
+        (run / folder).mkdir()
+        (run / folder / "old.png").write_bytes(b"old")
+    for name in ("report.md", "policy.onnx", "policy.json", "episode.png", "episode.gif"):
+        (run / name).write_bytes(b"old")
+    return sorted(p.name for p in run.iterdir() if p.name not in ("config.json", "metrics.csv"))
+
+
+@pytest.mark.parametrize("algo", ["ddqn", "dagger"])
+def test_a_run_started_over_removes_the_earlier_attempts_outputs(tmp_path, fake_env_factory, algo):
+    """``train --out RUN --overwrite`` over an attempt that stopped before its first
+    checkpoint kept its figures, report.md and policy.onnx: report and demo read them as
+    the new run's. A folder that held no run keeps the same names (the user's files)."""
+    from activevision.training.dagger import DaggerTrainer
+
+    def start(run: Path) -> None:
+        if algo == "ddqn":
+            Trainer(tiny_config(), run, fake_env_factory).close()
+        else:  # a StudentRun: DAgger's and SB3's
+            config = TrainConfig().replace(**{"algo": "dagger", "dagger.num_envs": 2})
+            DaggerTrainer(config, run, loggers=[]).close()
+
+    outputs = _earlier_attempt(tmp_path / "run")
+    assert len(outputs) == 10
+    start(tmp_path / "run")
+    left = sorted(p.name for p in (tmp_path / "run").iterdir())
+    assert not set(outputs) & set(left), left
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "report.md").write_text("my notes")
+    start(mine)
+    assert (mine / "report.md").read_text() == "my notes"

@@ -291,8 +291,21 @@ def check_run(run_dir: Path | None, option: str = "--run") -> None:
     run, so a run that is a file is named as the run it is, not as an ``--out`` nobody
     typed."""
     if run_dir is not None and not (run_dir / "config.json").is_file():
-        named = f"{option} {run_dir}" if option else str(run_dir)
-        raise ValueError(f"{named}: not a training run (no config.json)")
+        raise ValueError(not_a_run(run_dir, option))
+
+
+def not_a_run(run_dir: Path, option: str = "--run") -> str:
+    """The line for ``run_dir``, named by ``option`` (``""`` for a positional RUN), that
+    holds no run's config.json; a file of a run named for the run (``RUN/config.json``,
+    ``RUN/policy.onnx``) says so, and which run it is in ("RUN/config.json: not a training
+    run (no config.json)" left the user looking for a config.json beside it)."""
+    named = f"{option} {run_dir}" if option else str(run_dir)
+    if run_dir.is_file() and (run_dir.parent / "config.json").is_file():
+        return (
+            f"{named}: a file of the training run {run_dir.parent}, not a run: name the run's"
+            " folder"
+        )
+    return f"{named}: not a training run (no config.json)"
 
 
 def env_config_of_run(run_dir: Path | None) -> EnvConfig:

@@ -106,8 +106,14 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
     from activevision.training.config import load_config
 
     policies: dict[str, HeadPolicy] = {}
+    given: dict[Path, Path] = {}  # each run's folder -> how --runs named it first
     for run in args.runs or []:
         check_run(run, "--runs")
+        if run.resolve() in given:  # the same folder twice ("rename one directory" said)
+            first = given[run.resolve()]
+            named = f"{run}" if first == run else f"{first} and {run}"
+            raise ValueError(f"--runs names the run {named} twice: give each run once")
+        given[run.resolve()] = run
         # every run plays in the comparison's env (--run's, or the shipped policy's where
         # it plays): an image of another size or stack was a traceback in the first step,
         # another camera or other moves a silently different policy
@@ -162,6 +168,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         summary_rows,
     )
     from activevision.io import nan_as_null, write_csv, write_json
+    from activevision.training.policy_files import scored_run
 
     check_weights(args)
     check_run(args.run)  # before the outputs inside it
@@ -237,6 +244,8 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
                     "episodes": args.episodes,
                     "seed": args.seed,
                     "weights": args.weights,  # of --run's learned policy: final or best validated
+                    # the run scored (its config's and weights' digests), for report's check
+                    "run": None if args.run is None else scored_run(args.run, args.weights),
                 }
             ),
         )
@@ -300,8 +309,12 @@ def _check_ray_options(args: argparse.Namespace) -> None:
 def _compare_into(out: Path, args: argparse.Namespace) -> None:
     """``cmd_compare``'s work, in ``out`` (made, and locked against another compare)."""
     from activevision.figures.compare import plot_compare
+    from activevision.training.policy_files import scored_run
 
     env_config = env_config_of_run(args.run)
+    # the weights the learned method plays, recorded in compare.csv: another run's levels
+    # are not resumed as this one's
+    run_sha256 = None if args.run is None else scored_run(args.run, args.weights)["weights_sha256"]
     # --overwrite removes compare.csv only once every method is made and checked: a refusal
     # before the first row left the user without the old file and without a new one
     if args.ray:
@@ -326,6 +339,7 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
             address=args.address,
             num_cpus=args.num_cpus,
             verbose=args.verbose,
+            run_sha256=run_sha256,
         )
     else:
         from activevision.experiments.compare import compare, default_methods
@@ -342,7 +356,9 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
         _try_users(users, env_config, args.errors[0], args.seed)
         methods.update(users)
         _start_over(out, args)
-        compare(out, methods, args.errors, args.episodes, args.seed, env_config)
+        compare(
+            out, methods, args.errors, args.episodes, args.seed, env_config, run_sha256=run_sha256
+        )
     plot_compare(out / "compare.csv", out / "compare.png")
     print(f"wrote {out}/compare.csv and compare.png")
 

@@ -19,6 +19,7 @@ from activevision.cli.args import (
     float_in,
     int_in,
     name,
+    not_a_run,
     path,
     positive_int,
     seed,
@@ -239,10 +240,15 @@ def _strategies(
 
     models: list[Path] = list(dict.fromkeys(args.model or ()))
     for model in models:
+        if model.is_dir():  # was "no such file"
+            raise ValueError(
+                f"--model {model} is a directory: name the .onnx model in it"
+                f" (e.g. {model / 'policy.onnx'})"
+            )
         if not model.is_file():
             raise ValueError(f"--model {model}: no such file")
     if args.run is not None and not (args.run / "config.json").is_file():
-        raise ValueError(f"--run {args.run}: not a training run (no config.json)")
+        raise ValueError(not_a_run(args.run))
     methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
     margins = list(dict.fromkeys(args.track_margin or ()))
     if margins and "entropy_track" not in methods:

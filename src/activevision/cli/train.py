@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import shutil
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +15,7 @@ from activevision.cli.args import (
     choice_list,
     grid_item,
     int_in,
+    not_a_run,
     path,
     positive_float,
     positive_int,
@@ -40,14 +42,18 @@ def cmd_train(args: argparse.Namespace) -> None:
     from activevision.training import plot_run
 
     # before training: the figures drawn after it failed on "[Errno 17] File exists"
-    _check_plots_folder(args.resume if args.resume is not None else args.out)
+    # (a resume names a checkpoints file itself, once no checkpoint is found)
+    if args.resume is not None:
+        _check_run_folders(args.resume, ("plots",))
+    else:
+        _check_run_folders(args.out, ("plots", "checkpoints"))
     run_dir = _resume(args) if args.resume is not None else _train_fresh(args)
     if run_dir is not None:
         print(f"figures: {plot_run(run_dir)}")
 
 
 def _resume(args: argparse.Namespace) -> Path | None:
-    from activevision.training import reopen_run
+    from activevision.training import load_config, reopen_run
     from activevision.training.checkpoint import (
         CHECKPOINTS_DIR,
         CheckpointError,
@@ -65,7 +71,12 @@ def _resume(args: argparse.Namespace) -> Path | None:
             " combined with it (start a new run with --out instead)"
         )
     if not (args.resume / "config.json").is_file():
-        raise ValueError(f"--resume {args.resume}: not a training run (no config.json)")
+        raise ValueError(not_a_run(args.resume, "--resume"))
+    tensorboard = False
+    with contextlib.suppress(ValueError, OSError):  # an unreadable config: reopen_run says so
+        tensorboard = load_config(args.resume / "config.json").run.tensorboard
+    if tensorboard:
+        _check_run_folders(args.resume, ("tensorboard",))
     try:
         trainer = reopen_run(args.resume)
     except CheckpointError as error:
@@ -156,7 +167,16 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     if args.config is not None and args.preset is not None:
         raise ValueError("--config and --preset cannot be combined (the file is the config)")
     if list_checkpoints(args.out):
-        raise OutputError(f"{args.out} already holds a run; continue it with --resume {args.out}")
+        # --overwrite said nothing of why it did not start the run over
+        over = (
+            " (--overwrite starts over only a run stopped before its first checkpoint: to"
+            " start this one over, remove it first)"
+            if args.overwrite
+            else ""
+        )
+        raise OutputError(
+            f"{args.out} already holds a run; continue it with --resume {args.out}{over}"
+        )
     if is_training_run(args.out) and not args.overwrite:
         raise OutputError(
             f"{args.out} already holds a run that has no checkpoint yet; pass --overwrite to"
@@ -184,6 +204,8 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     if args.config is None and args.steps is not None:
         config = _scale_preset_intervals(args.preset or "paper", base, config, args.set or [])
     _refuse_aux_without_target(config)
+    if config.run.tensorboard:
+        _check_run_folders(run_dir, ("tensorboard",))
     _warn_never_validated(config)
     new_folder = not run_dir.exists()
     try:
@@ -279,6 +301,8 @@ def _nothing_trained(run_dir: Path) -> bool:
 def cmd_plot(args: argparse.Namespace) -> None:
     from activevision.training import plot_run
 
+    if args.run.is_file():  # "RUN/metrics.csv is not a training run (no config.json...)"
+        raise ValueError(not_a_run(args.run, ""))
     if not is_training_run(args.run):
         # name what is missing: a run's config.json alone read "no config.json and metrics.csv"
         missing = [n for n in ("config.json", "metrics.csv") if not (args.run / n).is_file()]
@@ -286,16 +310,27 @@ def cmd_plot(args: argparse.Namespace) -> None:
     for log in ("metrics.csv", "episodes.csv"):  # episodes.csv: a bare "[Errno 2] ..."
         if not (args.run / log).is_file():
             raise ValueError(f"{args.run} has no {log} (its training log): nothing to plot")
-    _check_plots_folder(args.run)
+    _check_run_folders(args.run, ("plots",))
     print(f"wrote {plot_run(args.run)}")
 
 
-def _check_plots_folder(run_dir: Path | None) -> None:
-    """OutputError where ``run_dir/plots``, where train and plot draw the run's figures,
-    is a file (``[Errno 17] File exists``, for train once it had trained)."""
-    plots = None if run_dir is None else run_dir / "plots"
-    if plots is not None and plots.exists() and not plots.is_dir():
-        raise OutputError(f"{plots} is a file, not a directory: the run's figures are drawn there")
+#: the folders of a run that train writes, and what each holds
+_RUN_FOLDERS = {
+    "plots": "the run's figures are drawn there",
+    "checkpoints": "the run's checkpoints are written there",
+    "tensorboard": "the run's TensorBoard events are written there (run.tensorboard is true)",
+}
+
+
+def _check_run_folders(run_dir: Path | None, names: Sequence[str]) -> None:
+    """OutputError where one of ``names`` in ``run_dir``, a folder train writes, is a file:
+    ``[Errno 17] File exists`` once the run had written its config and logs (``plots``:
+    once it had trained), with or without ``--overwrite``, which replaces files by files
+    (as every command's: a file where a folder goes is never removed)."""
+    for name in names:
+        folder = None if run_dir is None else run_dir / name
+        if folder is not None and folder.exists() and not folder.is_dir():
+            raise OutputError(f"{folder} is a file, not a directory: {_RUN_FOLDERS[name]}")
 
 
 def cmd_sweep(args: argparse.Namespace) -> None:

@@ -65,17 +65,41 @@ def done_levels(csv_path: Path) -> list[dict]:
 
 #: the columns of ``compare.csv`` that say which level a row is, and on which episodes
 RESUME_COLUMNS = ("method", "error", "episodes", "seed")
+#: the column of ``compare.csv`` that says which run's weights played (empty: no run)
+RUN_COLUMN = "run_sha256"
+
+
+def with_run(new: list[dict], done: list[dict], run_sha256: str | None) -> list[dict]:
+    """``new`` rows with :data:`RUN_COLUMN`, last, where the CSV has it (or is new): the
+    rows resumed from a CSV from before the column keep its layout."""
+    if done and RUN_COLUMN not in done[0]:
+        return new
+    return [{**row, RUN_COLUMN: run_sha256 or ""} for row in new]
 
 
 def check_resumable(
-    csv_path: Path, rows: list[dict], episodes: int, seed: int, errors: Sequence[float]
+    csv_path: Path,
+    rows: list[dict],
+    episodes: int,
+    seed: int,
+    errors: Sequence[float],
+    run_sha256: str | None = None,
 ) -> None:
     """Levels already in the CSV are kept only if they were played on the same episodes: the
     same count and seed, and for each error level the episodes its place in ``errors``
     gives (level ``i`` plays seed ``seed + i``'s: a level moved in the list would keep
-    another level's episodes)."""
+    another level's episodes); and by the same run: ``run_sha256``, the digest of the
+    weights its learned policy plays (None: no run), against each row's (rows from before
+    the column are kept as before). Another run's levels were resumed as this run's (an
+    interrupted ``compare --run A --out C``, then ``--run B --out C``)."""
     places = {float(e): i for i, e in enumerate(errors)}
     for row in rows:
+        if RUN_COLUMN in row and (row[RUN_COLUMN] or None) != run_sha256:
+            other = "another run's weights" if row[RUN_COLUMN] else "a compare without --run"
+            raise ValueError(
+                f"{csv_path} holds levels played by {other}: resume with the same --run and"
+                " --weights, or pass --overwrite to start over"
+            )
         if (row.get("episodes"), row.get("seed")) != (str(episodes), str(seed)):
             raise ValueError(
                 f"{csv_path} holds levels of {row.get('episodes')} episodes from seed"
@@ -104,18 +128,22 @@ def compare(
     seed: int = 0,
     config: EnvConfig | None = None,
     progress: bool = True,
+    run_sha256: str | None = None,
 ) -> list[dict]:
     """Run the experiment into ``out_dir/compare.csv``, one error level at a time.
 
     The CSV is rewritten (atomically) after every level, and levels already in it are
     skipped: an interrupted run loses at most the level in progress. Level ``i`` of
     ``errors`` plays the episodes of seed ``seed + i`` (its ``level_seed`` column); a
-    resume with the levels in other places is refused (:func:`check_resumable`).
+    resume with the levels in other places is refused (:func:`check_resumable`), as one
+    of levels another run played (``run_sha256``: the digest of the weights the learned
+    method plays, recorded in each row).
     """
     out_dir = Path(out_dir)
     csv_path = out_dir / "compare.csv"
     rows = done_levels(csv_path)
-    check_resumable(csv_path, rows, episodes, seed, errors)
+    check_resumable(csv_path, rows, episodes, seed, errors, run_sha256)
+    resumed = list(rows)
     done = {(float(r["error"]), r["method"]) for r in rows}
     config = config or EnvConfig()
     env = ActiveVisionEnv(config)
@@ -137,13 +165,14 @@ def compare(
                 _, summary, _ = evaluate_policy(
                     factory(float(e)), episodes, seed=seed + level, env=env
                 )
-                rows += summary_rows(
+                level_rows = summary_rows(
                     {name: summary},
                     error=float(e),
                     episodes=episodes,
                     seed=seed,
                     level_seed=seed + level,
                 )
+                rows += with_run(level_rows, resumed, run_sha256)
                 if bar is not None:
                     bar.update()
                     bar.set_postfix(error=e, method=name, success=f"{summary['success'].mean:.2f}")

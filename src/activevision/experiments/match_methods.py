@@ -718,6 +718,8 @@ def _strategy_loader(spec: str, where: str) -> Callable[[], ModuleType]:
 
         return load_module
     path = Path(where)
+    if path.is_dir():  # a folder named FILE.py was "no such file"
+        raise ValueError(f"--strategy {spec}: {path} is a directory, not a file")
     if not path.is_file():
         raise ValueError(f"--strategy {spec}: no such file {path}")
     # one module per file: two files of one name in different folders were one module,

@@ -22,12 +22,14 @@ import math
 import platform
 from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 import activevision
 from activevision.io import read_csv, read_json, write_text
 from activevision.text import counted
 from activevision.training.checkpoint import checkpoint_step, list_checkpoints
 from activevision.training.config import MATCH_ENV_ID
+from activevision.training.policy_files import scored_run
 from activevision.training.state import check_run_config_unchanged
 
 #: what reporting a run whose config.json was edited after its checkpoint would do
@@ -124,6 +126,7 @@ def write_report(run_dir: str | Path) -> Path:
     evaluation = run / "evaluation" / "evaluation.json"
     if evaluation.exists():
         data = read_json(evaluation)
+        _check_scored(evaluation, data, run)
         with _reading(evaluation):
             latency = data.get("latency")  # where evaluations before latency.json kept it
         latency_path = evaluation.with_name("latency.json")
@@ -166,6 +169,32 @@ def write_report(run_dir: str | Path) -> Path:
     out = run / "report.md"
     write_text(out, "\n".join(parts))
     return out
+
+
+def _check_scored(evaluation: Path, data: Any, run: Path) -> None:
+    """ValueError where ``evaluation`` (in ``run``) records another run than ``run`` as the
+    one it scored: an evaluate without ``--run`` (the paper's env, no learned policy of this
+    run), another run's results copied in, or this run's weights replaced since (trained
+    on, retrained with ``--overwrite``). The report showed them as this run's. Files from
+    before the record (no ``run`` key) are read as before."""
+    if not isinstance(data, dict) or "run" not in data:
+        return
+    again = f"evaluate it again: activevision evaluate --run {run} --overwrite"
+    if data["run"] is None:
+        raise ValueError(
+            f"{evaluation} was written by an evaluate without --run: its table is not this"
+            f" run's; {again}"
+        )
+    with _reading(evaluation):
+        recorded = {key: data["run"][key] for key in ("config_sha256", "weights_sha256")}
+        weights = str(data["weights"])
+    current = scored_run(run, weights)
+    for key, what in (("config_sha256", "config.json"), ("weights_sha256", "weights")):
+        if recorded[key] != current[key]:
+            raise ValueError(
+                f"{evaluation} scored another run's {what}, or this run's before they were"
+                f" replaced (trained on or retrained): {again}"
+            )
 
 
 def _evaluation_part(data: dict, latency: dict | None) -> list[str]:

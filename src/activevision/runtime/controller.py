@@ -193,6 +193,13 @@ class HeadController:
                     else ""
                 )
             )
+        if self.model_path.suffix.lower() != ".onnx":
+            # export writes only .onnx models: a CSV or PNG passed here was "policy metadata
+            # f.json not found", naming a file the user never meant
+            raise PolicyFileError(
+                f"{self.model_path} is not a policy file: pass an exported .onnx model (with"
+                " its .json beside it) or the run or export folder that holds policy.onnx"
+            )
         self.metadata: PolicyMetadata = load_metadata(self.metadata_path)
         model_bytes = _read_model(self.model_path)
         if verify_checksum:

@@ -911,6 +911,18 @@ class _MetadataReader:
         return digest
 
 
+def _unique_pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """``json``'s object_pairs_hook refusing a key named twice (``json.loads`` keeps the
+    last value without a word: an edited policy.json's second ``"step_deg"``). The runtime
+    imports nothing else of activevision, so this is ``activevision.io``'s hook again."""
+    values: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in values:
+            raise PolicyFileError(f"duplicate key {key!r} (each key may appear once)")
+        values[key] = value
+    return values
+
+
 def load_metadata(path: str | os.PathLike[str]) -> PolicyMetadata:
     """Read and validate a policy.json; :class:`PolicyFileError` if missing or invalid."""
     path = Path(path)
@@ -923,7 +935,9 @@ def load_metadata(path: str | os.PathLike[str]) -> PolicyMetadata:
     except (OSError, UnicodeDecodeError) as error:
         raise PolicyFileError(f"cannot read policy metadata {path}: {error}") from error
     try:
-        values = json.loads(text)
+        values = json.loads(text, object_pairs_hook=_unique_pairs)
+    except PolicyFileError as error:
+        raise PolicyFileError(f"policy metadata {path}: {error}") from None
     except (ValueError, RecursionError) as error:
         # ValueError: JSONDecodeError, or an integer of more digits than Python converts;
         # RecursionError: arrays or objects nested too deep for the decoder

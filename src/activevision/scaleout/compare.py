@@ -63,19 +63,21 @@ def compare_ray(
     address: str | None = None,
     num_cpus: int | None = None,
     verbose: bool = False,
+    run_sha256: str | None = None,
 ) -> list[dict]:
     """Run the experiment on Ray into ``out_dir/compare.csv`` (same file as the local run).
 
     Every (level, method, ``chunk`` episodes) is one Ray task using one CPU. Levels and
     methods already in the CSV are skipped, and the CSV is rewritten (atomically) as each
     level completes, in level order, so an interrupted run loses only unfinished levels.
-    ``weights``: the run's "final" or "best" weights.
+    ``weights``: the run's "final" or "best" weights; ``run_sha256``: their digest, recorded
+    in each row and checked against those resumed (as the local run's).
     ``address``/``num_cpus``: see :func:`~activevision.scaleout.ray_session.ray_session`.
     ``verbose``: the workers' output (warnings, a worker's traceback) is printed too (where
     this call starts Ray: a Ray already initialised in the process keeps its own setting).
     """
     from activevision.envs import ActiveVisionEnv
-    from activevision.experiments.compare import check_resumable, done_levels
+    from activevision.experiments.compare import check_resumable, done_levels, with_run
     from activevision.experiments.evaluate import summarise, summary_rows, time_limit
     from activevision.io import write_csv
     from activevision.scaleout.ray_session import ray_session
@@ -86,7 +88,8 @@ def compare_ray(
     config = config or EnvConfig()
     csv_path = Path(out_dir) / "compare.csv"
     rows = done_levels(csv_path)
-    check_resumable(csv_path, rows, episodes, seed, errors)
+    check_resumable(csv_path, rows, episodes, seed, errors, run_sha256)
+    resumed = list(rows)
     done = {(float(r["error"]), r["method"]) for r in rows}
     run = str(run_dir) if run_dir is not None else None
     starts = list(range(0, episodes, chunk))
@@ -120,13 +123,14 @@ def compare_ray(
         for level, e, refs in pending:  # in level order, so the CSV matches the local run's
             for name, chunk_refs in refs.items():
                 records = [r for part in _get(ray, chunk_refs) for r in part]
-                rows += summary_rows(
+                level_rows = summary_rows(
                     {name: summarise(records, limit)},
                     error=e,
                     episodes=episodes,
                     seed=seed,
                     level_seed=seed + level,
                 )
+                rows += with_run(level_rows, resumed, run_sha256)
             write_csv(csv_path, rows)
     return rows
 

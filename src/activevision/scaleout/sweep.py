@@ -191,13 +191,7 @@ def _read_state(run_dir: Path) -> dict[str, Any]:
 
 
 def _last_metrics_row(run_dir: Path) -> dict[str, float]:
-    import csv
-
-    path = run_dir / "metrics.csv"
-    if not path.exists():
-        return {}
-    with path.open() as f:
-        rows = list(csv.DictReader(f))
+    rows = _metrics_rows(run_dir)
     return {k: float(v) for k, v in rows[-1].items()} if rows else {}
 
 
@@ -541,13 +535,24 @@ def _tune_dirname(trial: Any) -> str:
 
 
 def _metrics_rows(run_dir: Path) -> list[dict[str, str]]:
-    import csv
+    """A trial's ``metrics.csv`` rows (none before its first epoch), read as the rest of the
+    package reads its CSVs (csv.DictReader counted a cut row: ``0.12`` of ``0.1234`` went
+    into the statistics as that epoch's value, missing cells were a TypeError): a last line
+    without its end of line, a row a trial that failed for good was killed writing, is
+    left out with a warning (the sweep still tables its trials and says which failed); a
+    row of more or fewer cells before it is a ValueError naming the file."""
+    from activevision.io import read_csv, read_csv_text
 
     path = run_dir / "metrics.csv"
     if not path.exists():
         return []
-    with path.open() as f:
-        return list(csv.DictReader(f))
+    if read_csv_text(path, live=True)[1]:
+        warnings.warn(
+            f"{path}: its last line has no end of line (the trial was stopped writing it):"
+            " read without it",
+            stacklevel=2,
+        )
+    return read_csv(path, ("epoch", "step", *METRICS), live=True)
 
 
 def _trial_row(trial: Mapping[str, Any], status: Mapping[str, Any]) -> dict[str, Any]:
@@ -571,11 +576,10 @@ def _trial_row(trial: Mapping[str, Any], status: Mapping[str, Any]) -> dict[str,
 def check_trials_finished(out_dir: str | Path) -> None:
     """:class:`TrialsFailedError` saying how many trials of the sweep in ``out_dir`` did
     not finish and where their errors are, when any did not (read from its trials.csv)."""
-    import csv
+    from activevision.io import read_csv
 
     path = Path(out_dir) / "trials.csv"
-    with path.open() as f:
-        rows = list(csv.DictReader(f))
+    rows = read_csv(path, ("name", "status", "error"))
     failed = [r for r in rows if r["status"] != "TERMINATED"]
     if failed:
         first = failed[0]["name"] + (f" ({failed[0]['error']})" if failed[0].get("error") else "")

@@ -37,7 +37,7 @@ from safetensors import SafetensorError
 from safetensors.torch import load_file, safe_open
 from safetensors.torch import save as serialise_tensors
 
-from activevision.io import fsync_path
+from activevision.io import fsync_path, loads_json
 
 CHECKPOINTS_DIR = "checkpoints"
 MANIFEST = "manifest.json"
@@ -48,6 +48,21 @@ _CHECKSUM_KEY = "content_sha256"  #: safetensors metadata key of the weights' ow
 #: the weights files a trainer writes into its run (training.policy_files), atomically through
 #: a hidden ``.NAME.*.tmp`` file beside each
 _RUN_WEIGHTS = ("policy.safetensors", "best_policy.safetensors")
+#: what the other commands write into a run by default (``plot``, ``report``, ``export``,
+#: ``evaluate``, ``compare``, ``match``, ``robustness``, ``quickstart``'s episode figure):
+#: ``report`` shows them as the run's, ``demo``/``match`` play its policy.onnx
+RUN_OUTPUTS = (
+    "plots",
+    "report.md",
+    "policy.onnx",
+    "policy.json",
+    "evaluation",
+    "compare",
+    "episode.png",
+    "episode.gif",
+    "match",
+    "robustness",
+)
 
 
 class CheckpointError(RuntimeError):
@@ -143,6 +158,25 @@ def remove_stale_writes(run_dir: str | os.PathLike[str]) -> list[Path]:
     return stale + weights
 
 
+def remove_earlier_outputs(run_dir: str | os.PathLike[str]) -> list[Path]:
+    """Delete :data:`RUN_OUTPUTS` from ``run_dir`` where it holds an earlier attempt of a
+    run (its ``config.json`` and ``metrics.csv``: ``train --out RUN --overwrite`` over one
+    that stopped before its first checkpoint), before a fresh run starts there: its
+    figures, report, exported policy and results were the earlier attempt's, and ``report``,
+    ``demo`` and ``match`` read them as the new run's. A folder that held no run keeps them
+    (the user's own files). Returns what was removed. Call it while holding the run's lock."""
+    run = Path(run_dir)
+    if not ((run / "config.json").is_file() and (run / "metrics.csv").is_file()):
+        return []
+    removed = [run / name for name in RUN_OUTPUTS if (run / name).exists()]
+    for path in removed:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path)
+        else:
+            path.unlink()
+    return removed
+
+
 def remove_earlier_weights(run_dir: str | os.PathLike[str]) -> list[Path]:
     """Delete the run's ``policy.safetensors`` and ``best_policy.safetensors`` before a
     fresh run starts in ``run_dir`` (``train --out RUN --overwrite`` over an attempt that
@@ -163,7 +197,7 @@ def verify_checkpoint(
     nothing else, and every file against its size and SHA-256; CheckpointError otherwise."""
     path = Path(path)
     try:
-        manifest = json.loads((path / MANIFEST).read_text(encoding="utf-8"))
+        manifest = loads_json((path / MANIFEST).read_text(encoding="utf-8"))
     except (OSError, ValueError, RecursionError) as error:
         # ValueError: not JSON, or not UTF-8 text (a binary file was a bare "'utf-8' codec
         # can't decode byte", naming no file); RecursionError: nested too deep

@@ -24,7 +24,7 @@ from typing import Any
 
 from activevision.envs.config import MAX_VECTOR_ENVS, EnvConfig
 from activevision.envs.match.config import MatchConfig
-from activevision.io import read_json, write_text
+from activevision.io import loads_json, read_json, write_text
 from activevision.registration import MATCH_ENV_ID
 from activevision.runtime.goal_evidence import GoalFrame
 from activevision.typecheck import check_dataclass_fields, config_from_dict, config_to_dict
@@ -823,7 +823,7 @@ def parse_value(text: str) -> Any:
     """A ``--set``/``--grid`` value: its JSON value, or the text itself when it is no JSON
     (``lr=1e-3`` -> 0.001, ``device="cpu"`` and ``device=cpu`` -> ``"cpu"``)."""
     try:
-        return json.loads(text)
+        return loads_json(text)
     except json.JSONDecodeError:
         return text
     except (ValueError, RecursionError) as error:  # too many digits, or nested too deep

@@ -14,14 +14,16 @@ Gymnasium environment works:
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from activevision.io import write_text
+from activevision.io import read_csv_text, write_text
 
 EPISODE_FIELDS = (
     "episode",
@@ -193,15 +195,25 @@ _RESTORE = ": it was damaged after the checkpoint; restore it, or train a new ru
 
 
 def read_csv_columns(
-    path: str | os.PathLike[str], columns: Sequence[str] = ()
+    path: str | os.PathLike[str], columns: Sequence[str] = (), *, live: bool = False
 ) -> dict[str, list[float]]:
     """A CSV written by :class:`CsvLog` as float columns (empty cells become NaN); ``{}``
     for a log of no rows yet. ValueError naming the file where it has no header row (a
     :class:`CsvLog` is made with its header, atomically, so an empty file was damaged: it
-    was drawn as "no data yet") or the header lacks one of ``columns``, with or without
-    rows."""
+    was drawn as "no data yet"), the header lacks one of ``columns``, with or without
+    rows, or its last line has no end of line (a row cut inside its last cell has all its
+    cells: ``0.12`` of ``0.1234`` was drawn as a value). ``live``: the log of a run that
+    may still be training, whose last row may be half written: that line is left out, with
+    a warning saying so."""
     try:
-        with open(path, newline="", encoding="utf-8") as file:
+        text, cut = read_csv_text(path, live=live)
+        if cut:
+            warnings.warn(
+                f"{path}: its last line has no end of line (a row still being written, or"
+                " cut by a crash): read without it",
+                stacklevel=2,
+            )
+        with io.StringIO(text, newline="") as file:
             reader = csv.DictReader(file)
             header = reader.fieldnames or []
             rows = list(reader)

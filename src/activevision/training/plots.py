@@ -46,14 +46,17 @@ def plot_run(
     match = config is not None and config.on_match  # DDQN's too: a match has no success
     curves = MATCH_CURVES if match else CURVES
     # the columns each log is drawn against, checked in its header with or without rows (an
-    # empty log, or one of another table, was drawn as "no data yet")
+    # empty log, or one of another table, was drawn as "no data yet"); live: a run still
+    # training may be writing a row (left out, with a warning)
     tables = {
-        source: read_csv_columns(run_dir / _LOG_FILES[source], _x_columns(curves, source))
+        source: read_csv_columns(
+            run_dir / _LOG_FILES[source], _x_columns(curves, source), live=True
+        )
         for source in ("episodes", "metrics")
     }
     evaluations_csv = run_dir / _LOG_FILES["validation"]
     validation = (
-        read_csv_columns(evaluations_csv, ["step", *_x_columns(curves, "validation")])
+        read_csv_columns(evaluations_csv, ["step", *_x_columns(curves, "validation")], live=True)
         if evaluations_csv.exists()
         else {}
     )

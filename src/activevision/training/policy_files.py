@@ -14,6 +14,7 @@ the :class:`QNetwork` from the file alone and never executes code.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import sys
@@ -146,6 +147,24 @@ def load_policy_and_metadata(
     return network.to(device).eval(), meta
 
 
+def scored_run(run_dir: str | os.PathLike[str], weights: str = "final") -> dict[str, str | None]:
+    """What an evaluation records of the run it scored: the SHA-256 of its ``config.json``
+    and of its weights file ``weights`` names (None where absent), so that ``report`` can
+    tell results written for another run, or for weights the run has since replaced
+    (trained on, retrained with ``--overwrite``), from its own. Digests, not the folder's
+    name: a run moved or renamed stays itself, and the same seed still gives the same
+    bytes."""
+    run = Path(run_dir)
+    files = {
+        "config_sha256": run / "config.json",
+        "weights_sha256": run / (BEST_POLICY_FILE if weights == "best" else POLICY_FILE),
+    }
+    return {
+        key: hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
+        for key, path in files.items()
+    }
+
+
 def _caller_level() -> int:
     """The ``stacklevel`` of the first caller outside this module, for a warning issued by
     the function that calls this one (whichever public function the caller used)."""
@@ -200,6 +219,7 @@ __all__ = [
     "load_policy",
     "load_policy_and_metadata",
     "network_metadata",
+    "scored_run",
     "write_best_policy",
     "write_policy",
 ]

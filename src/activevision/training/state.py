@@ -30,6 +30,7 @@ import torch
 
 from activevision.agents.ddqn import DDQNLearner
 from activevision.agents.replay.prioritized import PrioritizedReplayBuffer
+from activevision.io import loads_json
 from activevision.training import checkpoint as ckpt
 from activevision.training.loggers import LogPosition
 from activevision.training.metrics import EPISODE_FIELDS, EpochAccumulator
@@ -75,8 +76,8 @@ class TrainerState:
     def from_json(cls, text: str, source: str = STATE_FILE) -> TrainerState:
         """Parse and check ``state.json``; CheckpointError naming ``source`` and the field."""
         try:
-            values = json.loads(text)
-        except json.JSONDecodeError as error:
+            values = loads_json(text)
+        except ValueError as error:  # not JSON, or a key named twice
             raise ckpt.CheckpointError(f"cannot read {source}: {error}") from error
         if not isinstance(values, dict):
             raise ckpt.CheckpointError(f"{source} must hold a JSON object")

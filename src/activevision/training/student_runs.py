@@ -17,6 +17,7 @@ import torch
 
 from activevision.agents.student import StudentNetwork
 from activevision.envs.seeding import episode_seed
+from activevision.io import loads_json
 from activevision.training import checkpoint as ckpt
 from activevision.training import state as run_state
 from activevision.training.config import TrainConfig, load_config, save_config
@@ -53,6 +54,8 @@ class StudentRun:
         try:
             self._lock = None if resuming else RunLock(self.run_dir)
             ckpt.remove_stale_writes(self.run_dir)
+            if not resuming:  # before config.json is written: it tells an earlier attempt
+                ckpt.remove_earlier_outputs(self.run_dir)
             self.episode = 0
             self.epoch_log = EpochAccumulator()
             self.best = BestWeights()
@@ -171,7 +174,7 @@ class StudentRun:
             ckpt.verify_checkpoint(newest)
             config = load_config(run_dir / run_state.CONFIG_FILE)
             path = newest
-            state = json.loads((path / run_state.STATE_FILE).read_text())
+            state = loads_json((path / run_state.STATE_FILE).read_text())
             run_state.check_config_unchanged(run_dir, path, state.get("config_sha256"))
             trainer = cls(config, run_dir, loggers=loggers, _resuming=True)  # type: ignore[call-arg]
             trainer._lock = lock  # handed over: close() releases it

@@ -121,6 +121,8 @@ class Trainer:
         """The constructor's writes, with the run's lock held: the learner, the replay, the
         progress counters, config.json and the logs."""
         ckpt.remove_stale_writes(self.run_dir)  # left by a checkpoint write that was killed
+        if not resuming:  # before config.json is written: it tells an earlier attempt
+            ckpt.remove_earlier_outputs(self.run_dir)
         configure_torch_cpu(config.run.num_threads)
         self.rng, self.learner, self.buffer = build_learning(
             config, self.n_actions, self.obs_shape, self.device, aux_size

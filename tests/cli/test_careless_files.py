@@ -1,0 +1,190 @@
+"""A careless user's files: a config with a key written twice, the wrong file passed where
+a policy goes, a run named twice, a file where a run's folder goes, results copied between
+runs, a run started over beside an earlier attempt's outputs, a log read while written."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from activevision.cli import main
+
+
+@pytest.fixture
+def run(trained, tmp_path) -> Path:
+    """A private copy of the tiny run, free to be tampered with."""
+    return Path(shutil.copytree(trained, tmp_path / "run"))
+
+
+def test_a_config_with_a_key_written_twice_is_refused(tmp_path, tiny_train, one_clear_line):
+    """The last value was trained, the first dropped unsaid (``--set`` values alike)."""
+    config = tmp_path / "dup.json"
+    config.write_text('{"seed": 1, "run": {"total_timesteps": 60}, "seed": 2}')
+    assert main(["train", "--config", str(config), "--out", str(tmp_path / "r")]) == 2
+    one_clear_line(str(config), "duplicate key 'seed'")
+    assert not (tmp_path / "r").exists()
+    camera = 'env.camera={"hfov": 1.0, "hfov": 1.2}'
+    assert main([*tiny_train, "--set", camera, "--out", str(tmp_path / "r")]) == 2
+    one_clear_line("env.camera", "duplicate key 'hfov'")
+
+
+def test_demo_of_a_file_that_is_no_policy_says_so(tmp_path, one_clear_line):
+    """It named a missing ``f.json``, a file the user never meant."""
+    table = tmp_path / "f.csv"
+    table.write_text("a,b\n")
+    assert main(["demo", "--policy", str(table), "--out", str(tmp_path / "d.png")]) == 2
+    line = one_clear_line(f"{table} is not a policy file")
+    assert "f.json" not in line
+
+
+def test_a_run_named_twice_is_said_to_be_named_twice(run, tmp_path, monkeypatch, one_clear_line):
+    """``--runs r r`` said "rename one directory"."""
+    monkeypatch.chdir(run.parent)
+    out = ["--episodes", "1", "--out", str(tmp_path / "ev")]
+    assert main(["evaluate", "--runs", "run", "./run/", *out]) == 2
+    line = one_clear_line("--runs names the run run twice")
+    assert "rename" not in line
+    assert main(["compare", "--runs", str(run), f"{run}/", "--errors", "0", *out]) == 2
+    one_clear_line(f"--runs names the run {run} twice")
+    assert not (tmp_path / "ev").exists()
+
+
+@pytest.mark.parametrize("folder", ["tensorboard", "checkpoints"])
+def test_a_file_where_a_run_writes_a_folder_is_named_before_training(
+    tmp_path, tiny_train, folder, one_clear_line
+):
+    """``--overwrite`` went on and ended on ``[Errno 17] File exists`` once the config and
+    logs were written (a run that then asked for --overwrite again). --overwrite replaces
+    files by files, as every command's does: the file is named, and kept."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / folder).write_text("mine")
+    argv = [*tiny_train[:-4], "--set", "tensorboard=true", "--out", str(out), "--overwrite"]
+    assert main(argv) == 2
+    one_clear_line(f"{out / folder} is a file, not a directory")
+    assert [p.name for p in out.iterdir()] == [folder]
+    assert (out / folder).read_text() == "mine"
+
+
+def test_report_refuses_results_of_another_run_or_of_no_run(run, trained, tmp_path, capsys):
+    evaluate = ["evaluate", "--methods", "learned", "random", "--episodes", "1"]
+    assert main([*evaluate, "--run", str(run)]) == 0
+    evaluation = run / "evaluation" / "evaluation.json"
+    data = json.loads(evaluation.read_text())
+    weights = run / "policy.safetensors"
+    assert data["run"] == {
+        "config_sha256": hashlib.sha256((run / "config.json").read_bytes()).hexdigest(),
+        "weights_sha256": hashlib.sha256(weights.read_bytes()).hexdigest(),
+    }
+    assert main(["report", str(run)]) == 0
+    capsys.readouterr()
+    # another run's weights (as another run's evaluation copied in records them)
+    evaluation.write_text(json.dumps({**data, "run": {**data["run"], "weights_sha256": "0" * 64}}))
+    assert main(["report", str(run), "--overwrite"]) == 2
+    assert "scored another run's weights" in capsys.readouterr().err
+    # an evaluate without --run: the paper's env, no learned policy of this run
+    assert (
+        main(
+            [
+                "evaluate",
+                "--methods",
+                "random",
+                "--episodes",
+                "1",
+                "--out",
+                str(run / "evaluation"),
+                "--overwrite",
+            ]
+        )
+        == 0
+    )
+    capsys.readouterr()
+    assert main(["report", str(run), "--overwrite"]) == 2
+    assert "written by an evaluate without --run" in capsys.readouterr().err
+    # a file from before the record is read as before
+    data.pop("run")
+    evaluation.write_text(json.dumps(data))
+    assert main(["report", str(run), "--overwrite"]) == 0
+
+
+def test_plot_of_a_run_writing_its_last_row_leaves_that_row_out_and_says_so(run, capsys):
+    """A row cut inside its last cell has all its cells: ``0.12`` of ``0.1234`` was drawn
+    as a value. A run still training may be writing it: drawn without it, with a note."""
+    metrics = run / "metrics.csv"
+    whole = metrics.read_bytes()
+    assert whole.endswith(b"\r\n")
+    last = whole[:-2].rsplit(b"\n", 1)[1]
+    metrics.write_bytes(whole + last[: len(last) // 2])
+    with pytest.warns(UserWarning, match=r"metrics\.csv: its last line has no end of line"):
+        assert main(["plot", str(run)]) == 0
+
+
+def test_a_folder_where_a_file_goes_is_named_as_a_folder(tmp_path, monkeypatch, one_clear_line):
+    """``--strategy dir.py:NAME`` and ``match --model FOLDER`` said "no such file"."""
+    monkeypatch.chdir(tmp_path)
+    Path("mine.py").mkdir()
+    argv = ["evaluate", "--methods", "random", "--episodes", "1", "--out", "ev"]
+    assert main([*argv, "--strategy", "mine.py:Mirror"]) == 2
+    one_clear_line("mine.py is a directory, not a file")
+    Path("export").mkdir()
+    assert main(["match", "--methods", "onnx_policy", "--model", "export", "--out", "m"]) == 2
+    one_clear_line("--model export is a directory", "export/policy.onnx")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["export", "mine.py"]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["report", "{run}/config.json"],
+        ["plot", "{run}/metrics.csv"],
+        ["export", "{run}/policy.safetensors"],
+        ["train", "--resume", "{run}/config.json"],
+        ["evaluate", "--run", "{run}/config.json", "--methods", "random"],
+        ["match", "--run", "{run}/config.json"],
+    ],
+    ids=" ".join,
+)
+def test_a_run_named_by_one_of_its_files_names_the_run(trained, argv, one_clear_line):
+    """It said "RUN/config.json: not a training run (no config.json)"."""
+    assert main([a.format(run=trained) for a in argv]) == 2
+    line = one_clear_line(f"a file of the training run {trained}, not a run: name the run's")
+    assert "no config.json" not in line
+
+
+def test_overwrite_of_a_run_with_checkpoints_says_why_it_is_kept(
+    run, tiny_train, digests, one_clear_line
+):
+    """``--out RUN --overwrite`` over a trained run said only "continue it with --resume",
+    as if --overwrite had not been read."""
+    before = digests(run)
+    assert main([*tiny_train, "--out", str(run), "--overwrite"]) == 2
+    one_clear_line("--resume", "--overwrite starts over only a run stopped before its first")
+    assert digests(run) == before
+
+
+def test_compare_resumes_no_levels_another_run_played(run, tmp_path, capsys):
+    """compare.csv was resumed whatever run played it: ``compare --run A --out C``
+    stopped, then ``--run B --out C`` kept A's levels as B's (checked: episodes and seed)."""
+    from activevision.io import read_csv, write_csv
+
+    out = tmp_path / "c"
+    argv = ["compare", "--methods", "random", "--episodes", "1", "--out", str(out)]
+    assert main([*argv, "--errors", "0"]) == 0  # no run
+    assert main([*argv, "--errors", "0,0.5", "--run", str(run)]) == 2
+    assert "holds levels played by a compare without --run" in capsys.readouterr().err
+    assert main([*argv, "--errors", "0", "--run", str(run), "--overwrite"]) == 0
+    rows = read_csv(out / "compare.csv")
+    digest = hashlib.sha256((run / "policy.safetensors").read_bytes()).hexdigest()
+    assert [row["run_sha256"] for row in rows] == [digest]
+    write_csv(out / "compare.csv", [{**rows[0], "run_sha256": "0" * 64}])  # another run's
+    assert main([*argv, "--errors", "0,0.5", "--run", str(run)]) == 2
+    assert "holds levels played by another run's weights" in capsys.readouterr().err
+    # a CSV from before the column resumes as before, in its own layout
+    write_csv(out / "compare.csv", [{k: v for k, v in rows[0].items() if k != "run_sha256"}])
+    assert main([*argv, "--errors", "0,0.5", "--run", str(run)]) == 0
+    rows = read_csv(out / "compare.csv")
+    assert len(rows) == 2 and "run_sha256" not in rows[1]
