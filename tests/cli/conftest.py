@@ -11,6 +11,17 @@ import pytest
 
 from activevision.cli import main
 
+
+@pytest.fixture(autouse=True)
+def _a_quiet_machine(monkeypatch):
+    """The machine's load as a quiet one's: ``train`` warns on a busy machine
+    (``training.cpu.busy_machine_note``), which would add a line to the output these tests
+    read whenever the tests run beside other work."""
+    import os
+
+    monkeypatch.setattr(os, "getloadavg", lambda: (0.0, 0.0, 0.0))
+
+
 #: A training run small enough for a test (CPU seconds), through the real CLI.
 TINY_TRAIN = [
     "train",

@@ -101,6 +101,7 @@ def test_a_run_shorter_than_its_validation_interval_says_so(tmp_path):
     # --preset quickstart --steps 3000 kept the preset's interval (10,000 steps): the run
     # never validated and wrote no best_policy.safetensors, and said nothing
     base = ["train", "--steps", "100", "--set", "num_threads=1", "--set", "tensorboard=false"]
+    base += ["--set", "learning_starts=50"]  # the paper's 1,000 would never update: a warning
     expected = (
         "run.eval_interval (500) is past the run's 100 steps: it never validates (no"
         " evaluations.csv rows, no best_policy.safetensors)"
@@ -277,3 +278,32 @@ def test_the_steps_where_every_method_solves_are_listed_one_space_apart(tmp_path
     line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("steps to"))
     assert ",  " not in line
     assert line.endswith("(median): oracle 8.5, entropy_jump 1")
+
+
+def test_training_on_a_busy_machine_says_one_thread_is_faster_there(tmp_path, monkeypatch):
+    """On 2 cores at load 6-7 the default thread per core trained 4x slower than one thread
+    (docs/benchmarks.md), unsaid; a run that sets its threads is not told."""
+    import os
+
+    monkeypatch.setattr(os, "getloadavg", lambda: (6.5, 6.0, 5.0))
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    base = ["train", "--steps", "30", "--set", "tensorboard=false", "--set", "epoch_steps=30"]
+    base += ["--set", "learning_starts=10"]
+    with pytest.warns(UserWarning, match=r"busy \(load 6.5 on 2 cores\).*num_threads=1"):
+        assert main([*base, "--out", str(tmp_path / "a")]) == 0
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main([*base, "--set", "num_threads=1", "--out", str(tmp_path / "b")]) == 0
+    assert not [w for w in caught if "busy" in str(w.message)]
+
+
+def test_a_run_that_ends_before_its_first_update_says_so(tmp_path):
+    """``--preset paper --steps 600`` kept the paper's 1,000 steps of random play before the
+    first update: the run never updated its network, and said nothing."""
+    base = ["train", "--steps", "60", "--set", "num_threads=1", "--set", "tensorboard=false"]
+    with pytest.warns(UserWarning, match=r"learning_starts \(1000\) is not before the run's end"):
+        assert main([*base, "--out", str(tmp_path / "a")]) == 0
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main([*base, "--set", "learning_starts=30", "--out", str(tmp_path / "b")]) == 0
+    assert not [w for w in caught if "learning_starts" in str(w.message)]

@@ -44,3 +44,15 @@ def test_a_gpu_that_is_not_there_is_refused():
     with pytest.raises(ValueError, match="CUDA device"):
         resolve_device("cuda")
     assert resolve_device("auto") == torch.device("cpu")
+
+
+def test_busy_machine_note_only_for_a_thread_per_core_on_a_busy_machine():
+    from activevision.training.cpu import busy_machine_note
+
+    note = busy_machine_note(0, load=6.5, cores=2)
+    assert note is not None and "load 6.5 on 2 cores" in note and "num_threads=1" in note
+    assert busy_machine_note(0, load=3.0, cores=2) is None  # at the margin: not busy
+    assert busy_machine_note(0, load=3.1, cores=2) is not None
+    assert busy_machine_note(2, load=9.0, cores=2) is None  # the user chose the threads
+    assert busy_machine_note(1, load=9.0, cores=2) is None
+    assert busy_machine_note(0, load=9.0, cores=1) is None  # one thread already

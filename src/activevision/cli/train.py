@@ -112,6 +112,7 @@ def _resume(args: argparse.Namespace) -> Path | None:
                 )
             print(f"{args.resume} is finished ({total} steps); nothing to train")
         else:
+            _warn_busy_machine(trainer.config.run.num_threads)
             trainer.train(args.steps)
     finally:
         trainer.close()
@@ -207,6 +208,8 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     if config.run.tensorboard:
         _check_run_folders(run_dir, ("tensorboard",))
     _warn_never_validated(config)
+    _warn_never_updated(config)
+    _warn_busy_machine(config.run.num_threads)
     new_folder = not run_dir.exists()
     try:
         train(config, run_dir)
@@ -265,6 +268,28 @@ def _warn_never_validated(config: Any) -> None:
             " steps: it never validates (no evaluations.csv rows, no best_policy.safetensors)",
             stacklevel=2,
         )
+
+
+def _warn_never_updated(config: Any) -> None:
+    """Warn where ``learner.learning_starts`` is past the run's end (DDQN, SAC, TD3):
+    ``--preset paper --steps 600`` kept the preset's 1,000 steps of random play before the
+    first update, so it never updated its network, unsaid."""
+    starts, total = config.learner.learning_starts, config.run.total_timesteps
+    if config.algo in ("ddqn", "sac", "td3") and 0 < total <= starts:
+        warnings.warn(
+            f"learner.learning_starts ({starts}) is not before the run's end ({total} steps):"
+            " it never updates its network (--set learning_starts=N to start sooner)",
+            stacklevel=2,
+        )
+
+
+def _warn_busy_machine(num_threads: int) -> None:
+    """Warn where the run's threads would wait on cores other processes keep busy."""
+    from activevision.training.cpu import busy_machine_note
+
+    note = busy_machine_note(num_threads)
+    if note is not None:
+        warnings.warn(note, stacklevel=2)
 
 
 def _refuse_set_beside(overrides: list[str], options: Mapping[str, str]) -> None:

@@ -63,6 +63,37 @@ def resolve_num_threads(num_threads: int) -> int:
     return num_threads if num_threads > 0 else (os.cpu_count() or 1)
 
 
+#: How many more runnable processes than cores (the 1-minute load average) make a machine
+#: busy for a run with a thread per core: beyond it, numba's and PyTorch's thread teams wait
+#: on cores the other processes hold. Measured on 2 cores at load 6-7 (docs/benchmarks.md):
+#: 2.8-3.2 steps/s with two threads, 11.5-13.3 with one.
+BUSY_LOAD_MARGIN = 1.0
+
+
+def busy_machine_note(
+    num_threads: int, load: float | None = None, cores: int | None = None
+) -> str | None:
+    """One line for a run about to train with a thread per core (``num_threads`` 0) on a
+    machine whose 1-minute load average ``load`` (read here when None) is more than
+    :data:`BUSY_LOAD_MARGIN` above its ``cores``; None where it is not, or the user chose
+    the thread count."""
+    cores = cores or os.cpu_count() or 1
+    if num_threads != 0 or cores < 2:
+        return None
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except OSError:  # where the OS keeps no load average
+            return None
+    if load <= cores + BUSY_LOAD_MARGIN:
+        return None
+    return (
+        f"this machine is busy (load {load:.1f} on {cores} cores): a thread per core, the"
+        " default, trained 4x slower on such a machine than --set run.num_threads=1"
+        " (docs/benchmarks.md)"
+    )
+
+
 def keep_freed_memory_mapped() -> bool:
     """Ask glibc to reuse freed heap memory instead of returning it to the OS.
 
