@@ -592,3 +592,12 @@ def test_a_shortened_preset_keeps_its_intervals_as_shares_of_its_run():
     # what the user set is kept
     shorter = quick.replace(total_timesteps=3000, eval_interval=2000)
     assert scaled_intervals(quick, shorter, keep={"run.eval_interval"}) == {}
+
+
+def test_config_path_names_the_field_a_key_sets():
+    from activevision.training.config import config_path
+
+    assert config_path("learning_rate") == "learner.learning_rate"  # a unique leaf name
+    assert config_path(" seed ") == "seed"  # --set spaces
+    assert config_path("env.camera.hfov") == "env.camera.hfov"  # a full path is itself
+    assert config_path("nope") == "nope"  # no field: left to the config's own check

@@ -226,11 +226,11 @@ def _scale_preset_intervals(name: str, base: Any, config: Any, sets: list[str]) 
     ``--set`` does not name them (``presets.scaled_intervals``), said in one line:
     ``--preset quickstart --steps 3000`` kept the 10,000-step interval and never
     validated."""
-    from activevision.training.config import field_paths, parse_overrides
+    from activevision.training.config import config_path, field_paths, parse_overrides
     from activevision.training.presets import scaled_intervals
 
     paths = field_paths()
-    given = {paths.get(key, key) for key in parse_overrides(sets)}
+    given = {config_path(key, paths) for key in parse_overrides(sets)}
     changes = scaled_intervals(base, config, keep=given)
     if not changes:
         return config
@@ -296,11 +296,11 @@ def _refuse_set_beside(overrides: list[str], options: Mapping[str, str]) -> None
     """ValueError where a ``--set`` key sets the field (full path -> option) that an option
     given sets too: the option's value was taken and the ``--set`` one dropped silently
     (``--set total_timesteps=5000 --steps 100`` trained 100 steps)."""
-    from activevision.training.config import field_paths, parse_overrides
+    from activevision.training.config import config_path, field_paths, parse_overrides
 
     paths = field_paths()
     for key in parse_overrides(overrides):
-        path = paths.get(key, key)
+        path = config_path(key, paths)
         if options.get(path):
             raise ValueError(
                 f"--set {key}=... and {options[path]} both set {path}: give it with"

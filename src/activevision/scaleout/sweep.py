@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 
 from activevision.training.config import (
     TrainConfig,
+    config_path,
     field_paths,
     load_config,
     override_value,
@@ -130,7 +131,7 @@ def checked_grid(
     owner: dict[str, str] = {}  # each named path -> the --grid key that set it
     grid: dict[str, list[Any]] = {}
     for key, values in items:
-        path = paths.get(key, key)
+        path = config_path(key, paths)
         if path in owner:
             raise ValueError(
                 f"--grid {owner[path]} and --grid {key} both set {path}: give its values in"
@@ -139,7 +140,7 @@ def checked_grid(
         owner[path] = key
         grid[key] = list(values)
     for key in overrides:
-        path = paths.get(key.strip(), key.strip())
+        path = config_path(key, paths)
         if path in owner:
             raise ValueError(
                 f"--set {key.strip()} and --grid {owner[path]} both set {path}: each trial"

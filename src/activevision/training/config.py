@@ -449,6 +449,14 @@ def field_paths() -> dict[str, str]:
     return paths
 
 
+def config_path(key: str, paths: dict[str, str] | None = None) -> str:
+    """The field a ``--set``/``--grid`` key names: its full dotted path (``learning_rate`` ->
+    ``learner.learning_rate``), or the key itself where it names none (the config's own
+    check refuses it). ``paths``: :func:`field_paths`, when the caller has it already."""
+    key = key.strip()
+    return (field_paths() if paths is None else paths).get(key, key)
+
+
 def _nested_paths(path: str, hint: Any) -> list[str]:
     """The dotted paths of the fields inside a nested config dataclass ``hint`` (none for a
     plain value): ``env.camera`` -> ``env.camera.width``, ``env.camera.hfov``, ..."""
