@@ -307,3 +307,25 @@ def test_a_run_that_ends_before_its_first_update_says_so(tmp_path):
         warnings.simplefilter("always")
         assert main([*base, "--set", "learning_starts=30", "--out", str(tmp_path / "b")]) == 0
     assert not [w for w in caught if "learning_starts" in str(w.message)]
+
+
+@pytest.mark.parametrize(
+    ("env_id", "said"),
+    [
+        ("Nope-v0", "Environment `Nope` doesn't exist"),
+        ("no_such_module:Nope-v0", "No module named 'no_such_module'"),
+    ],
+)
+def test_an_env_that_is_not_there_is_the_only_line(tmp_path, capsys, env_id, said):
+    """``--set env_id=Nope-v0 --steps 30`` printed the preset's interval note and the
+    learning_starts warning before its error: the env is checked first, and nothing is
+    written."""
+    argv = ["train", "--set", f"env_id={env_id}", "--steps", "30", "--out", str(tmp_path / "x")]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert not caught and not captured.out.strip()
+    (line,) = captured.err.strip().splitlines()
+    assert f"env_id '{env_id}'" in line and said in line
+    assert not (tmp_path / "x").exists()

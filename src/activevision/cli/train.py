@@ -162,6 +162,7 @@ def _given(args: argparse.Namespace, name: str) -> bool:
 def _train_fresh(args: argparse.Namespace) -> Path:
     from activevision.training import apply_overrides, load_config, preset, train
     from activevision.training.checkpoint import list_checkpoints
+    from activevision.training.environment import check_env_id
 
     if args.out is None:
         raise ValueError("--out runs/NAME is required (or --resume runs/NAME)")
@@ -202,6 +203,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
         overrides.append(f"algo={args.algo}")
     run_dir: Path = args.out
     config = apply_overrides(base, overrides)
+    check_env_id(config)  # before any note or warning: one line for an env that is not there
     if args.config is None and args.steps is not None:
         config = _scale_preset_intervals(args.preset or "paper", base, config, args.set or [])
     _refuse_aux_without_target(config)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from typing import Any
 
@@ -26,6 +27,19 @@ def make_env(config: TrainConfig) -> gym.Env:
     try:
         return gym.make(config.env_id, **kwargs)
     except gym.error.Error as error:  # e.g. NameNotFound: one clear line, not a traceback
+        raise ValueError(f"env_id {config.env_id!r}: {error}") from None
+
+
+def check_env_id(config: TrainConfig) -> None:
+    """ValueError naming ``config.env_id`` where Gymnasium registers no such env, before a
+    run is set up (``make_env`` would say so only once the run's folder, notes and warnings
+    were written). A ``module:`` prefix is imported first, as ``gymnasium.make`` does."""
+    module, _, name = config.env_id.rpartition(":")
+    try:
+        if module:
+            importlib.import_module(module)
+        gym.spec(name)
+    except (gym.error.Error, ImportError) as error:
         raise ValueError(f"env_id {config.env_id!r}: {error}") from None
 
 
