@@ -1,7 +1,8 @@
 """What ``gymnasium.make`` and ``make_vec`` do with the caller's keywords for our registered
 envs: NumPy scalars among them still give a spec that ``to_json`` writes and ``from_json``
 makes again, and a ``num_envs`` no machine could hold is one clear error up front, in every
-vectorization mode, not a hang inside Gymnasium."""
+vectorization mode, not a hang inside Gymnasium (for a spec read back from JSON, in the native
+mode only: docs/task.md says why)."""
 
 from __future__ import annotations
 
@@ -114,3 +115,21 @@ def test_num_envs_past_the_machines_memory_is_refused_naming_the_need(
     envs = gym.make_vec("ActiveVision-v0", num_envs=2, vectorization_mode=mode)
     assert envs.num_envs == 2
     envs.close()
+
+
+def test_a_json_spec_checks_num_envs_in_the_native_mode_only_as_documented() -> None:
+    """docs/task.md: ``make_vec(EnvSpec.from_json(text), num_envs=n)`` checks ``n`` in the
+    native mode (the default: its constructor) but not in the sync and async modes, because
+    ``from_json`` gives the keywords as a plain dict, not the registration's ``SpecKwargs``
+    whose ``pop`` checks ``num_envs``. Should Gymnasium keep the class one day, this fails and
+    the docs' exception can go."""
+    registered = gym.spec("ActiveVision-v0")
+    read_back = EnvSpec.from_json(registered.to_json())
+    assert type(registered.kwargs) is registration.SpecKwargs
+    assert type(read_back.kwargs) is dict
+    for mode in (None, "vector_entry_point"):
+        with pytest.raises(ValueError, match=r"^num_envs: expects a positive integer up to 65536"):
+            gym.make_vec(read_back, num_envs=10**9, vectorization_mode=mode)
+    # check_num_envs, which the docs give for the sync and async modes, refuses it
+    with pytest.raises(ValueError, match=r"^num_envs: expects a positive integer up to 65536"):
+        registration.check_num_envs(10**9, "sync")

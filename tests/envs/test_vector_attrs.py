@@ -81,11 +81,6 @@ def test_set_attr_takes_one_value_or_one_per_env_as_sync_does(env_id: str) -> No
         assert env.get_attr("difficulty") == (0.7,) * N
         with pytest.raises(ValueError, match="Got `2` values for 3 environments"):
             env.set_attr("difficulty", [0.1, 0.2])
-    # the native sub-environments share the attribute: different values are refused, not
-    # set to one of them
-    with pytest.raises(ValueError, match="share 'difficulty'"):
-        envs["vector_entry_point"].set_attr("difficulty", [0.1, 0.2, 0.3])
-    assert envs["vector_entry_point"].get_attr("difficulty") == (0.7,) * N
     # a generator per sub-environment, as Sync's envs take them: the same next episodes
     for env in envs.values():
         env.set_attr("np_random", [np.random.default_rng(s) for s in (1, 2, 3)])
@@ -106,7 +101,7 @@ def test_call_refuses_a_method_it_cannot_run_per_sub_environment() -> None:
     reset every sub-environment and returned the batch N times."""
     env = gym.make_vec("ActiveVision-v0", num_envs=2, vectorization_mode="vector_entry_point")
     env.reset(seed=0)
-    for name in ("reset", "step", "jump_head"):
+    for name in ("reset", "step"):
         with pytest.raises(AttributeError, match=repr(name)):
             env.call(name)
     env.close()
@@ -157,3 +152,113 @@ def test_get_attr_of_what_only_sync_sub_environments_have_says_why() -> None:
         env.get_attr("unwrapped")
     assert env.unwrapped is env  # the vector env's own, as VectorEnv documents
     env.close()
+
+
+def same_result(a: Any, b: Any) -> bool:
+    """Whether two single-env results (an observation, a step tuple, an info) are one value,
+    byte for byte, types included."""
+    if isinstance(b, tuple):
+        return isinstance(a, tuple) and len(a) == len(b) and all(map(same_result, a, b))
+    if isinstance(b, dict):
+        return (
+            isinstance(a, dict) and a.keys() == b.keys() and all(same_result(a[k], b[k]) for k in b)
+        )
+    return same(a, b)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {},
+        {"frame_stack": 2},
+        {"observation": "image+head+pose", "action_history": 2},
+    ],
+)
+def test_call_jump_head_jumps_each_sub_environment_as_sync_does(kwargs: dict) -> None:
+    """``call("jump_head", pan, tilt)``: ``SyncVectorEnv`` jumps every sub-environment's head
+    (the entropy baselines' move); the native env refused it as no attribute of its
+    sub-environments. Each sub-environment's result, then every later step (autoresets, and
+    truncation by step() calls only, as Sync's ``TimeLimit`` counts them), byte for byte."""
+    envs = pair("ActiveVision-v0", **kwargs)
+    sync, native = envs["sync"], envs["vector_entry_point"]
+    rng = np.random.default_rng(4)
+    # mostly "stay", so that episodes last to the time limit
+    actions = np.where(rng.random((60, N)) < 0.9, 0, rng.integers(0, 9, (60, N)))
+    head, truncated = sync.reset(seed=[11, 3, 8])[1]["head"], 0
+    native.reset(seed=[11, 3, 8])
+    for t, row in enumerate(actions):
+        if t % 25 in (2, 9):  # to sub-environment 0's own head (it goes on), or far away
+            pan, tilt = head[0] if t % 25 == 2 else (np.float32(0.4), 0.25)
+            want, got = sync.call("jump_head", pan, tilt), native.call("jump_head", pan, tilt)
+            assert len(got) == N and same_result(got, want), t
+        want, got = sync.step(row), native.step(row)
+        assert same_result(got, want), t
+        head, truncated = want[4]["head"], truncated + int(got[3][0])
+    assert truncated == 2  # sub-environment 0 reached the time limit after a jump twice
+    for env in envs.values():
+        env.close()
+
+
+def test_jump_head_is_refused_as_sync_refuses_it() -> None:
+    """A bad angle, or a sub-environment never reset, fails as the single env's does."""
+    for mode in ("sync", "vector_entry_point"):
+        env = gym.make_vec("ActiveVision-v0", num_envs=2, vectorization_mode=mode)
+        with pytest.raises(Exception, match="reset"):
+            env.call("jump_head", 0.1, 0.1)
+        env.reset(seed=1)
+        with pytest.raises(ValueError, match="jump_head: pan expects a finite number"):
+            env.call("jump_head", float("nan"), 0.1)
+        env.close()
+
+
+def test_call_of_what_it_cannot_run_per_sub_environment_says_what_to_use() -> None:
+    """``call("reset")``, ``call("step", a)`` and ``call("close")`` run each of Sync's envs by
+    itself, outside its autoreset; the native env's sub-environments are slots of one batch,
+    so it refuses them, naming the vector env's own method to use instead."""
+    env = gym.make_vec("ActiveVision-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    env.reset(seed=0)
+    hints = {
+        "reset": r"reset\(seed=\.\.\., options=\{'reset_mask': mask\}\)",
+        "step": r"step\(actions\)",
+        "close": r"close\(\)",
+        "get_wrapper_attr": r"get_attr\(name\)",
+        "set_wrapper_attr": r"set_attr\(name, values\)",
+    }
+    for name, hint in hints.items():
+        with pytest.raises(AttributeError, match=rf"call\({name!r}\).*use the vector env's {hint}"):
+            env.call(name)
+    env.close()
+    match = gym.make_vec(
+        "ActiveVisionMatch-v0", num_envs=2, vectorization_mode="vector_entry_point"
+    )
+    with pytest.raises(AttributeError, match="no attribute 'jump_head'"):
+        match.call("jump_head", 0.1, 0.1)  # as Sync: the match env has no jump_head
+    match.close()
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_set_attr_keeps_one_value_per_sub_environment_as_sync_does(env_id: str) -> None:
+    """An attribute of the user's own (a curriculum level, a tag) takes one value per
+    sub-environment, as Sync's env objects do; the native env refused differing values.
+    What the env reads (its config, render mode, time limit) is shared by the batch: differing
+    values are refused with what to use instead, and the attribute keeps its value."""
+    envs = pair(env_id)
+    for env in envs.values():
+        env.set_attr("level", [0.1, 0.2, 0.3])
+        assert env.get_attr("level") == (0.1, 0.2, 0.3)
+        assert env.call("level") == (0.1, 0.2, 0.3)
+        env.set_attr("level", 0.5)
+        assert env.get_attr("level") == (0.5,) * N
+        env.set_attr("level", (1, "b", None))
+        assert env.get_attr("level") == (1, "b", None)
+    native = envs["vector_entry_point"]
+    for name, values in (
+        ("render_mode", [None, "rgb_array", None]),
+        ("max_episode_steps", [3, 4, 5]),
+    ):
+        before = native.get_attr(name)
+        with pytest.raises(ValueError, match=rf"share {name!r}.*make one vector env per value"):
+            native.set_attr(name, values)
+        assert native.get_attr(name) == before
+    for env in envs.values():
+        env.close()

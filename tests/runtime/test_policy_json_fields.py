@@ -208,3 +208,64 @@ def test_a_key_written_twice_is_refused_naming_it_and_the_file(tmp_path):
         load_metadata(path)
     path.write_text(text)
     assert load_metadata(path).opset == SHIPPED["opset"]
+
+
+@pytest.mark.parametrize(
+    "model_file",
+    ["../../etc/passwd", "/etc/passwd", "../policy.onnx", "sub/policy.onnx"]
+    + ["..", ".", "", "a\\b.onnx"],
+)
+def test_model_file_must_be_a_bare_file_name(tmp_path, capsys, model_file):
+    """policy.json's ``model_file`` was only type-checked: a path out of the policy's folder
+    (every one of these names a file that exists, but ``..`` and ``""``), an absolute one or
+    one into a subfolder loaded the policy as if it named its model. The model sits beside
+    its policy.json: one line naming the file and the field, from the reader, the controller
+    and every command that loads a policy."""
+    from activevision.runtime import HeadController
+
+    run = tmp_path / "run"
+    (run / "sub").mkdir(parents=True)
+    for model in (run / "policy.onnx", tmp_path / "policy.onnx", run / "sub" / "policy.onnx"):
+        shutil.copy(pretrained_policy_path(), model)
+    path = run / METADATA_FILENAME
+    path.write_text(json.dumps(edited({"model_file": model_file})))
+    message = rf"^{path}: 'model_file' must be the model's file name, beside policy\.json \(no"
+    with pytest.raises(PolicyFileError, match=message):
+        load_metadata(path)
+    with pytest.raises(PolicyFileError, match=message):
+        HeadController(run / "policy.onnx")
+    assert_commands_refuse(run / "policy.onnx", tmp_path, capsys, "'model_file' must be")
+
+
+def test_model_file_must_be_beside_policy_json(tmp_path, capsys):
+    """A ``model_file`` of no file beside policy.json (a renamed or misplaced model) is
+    refused when the policy is loaded, naming it and the folder; the metadata alone reads."""
+    from activevision.runtime import HeadController
+
+    model = tmp_path / "policy.onnx"
+    shutil.copy(pretrained_policy_path(), model)
+    path = tmp_path / METADATA_FILENAME
+    path.write_text(json.dumps(edited({"model_file": "missing.onnx"})))
+    assert load_metadata(path).model_file == "missing.onnx"
+    message = rf"^{path}: 'model_file' 'missing\.onnx' is no file beside it in {tmp_path}"
+    with pytest.raises(PolicyFileError, match=message):
+        HeadController(model)
+    assert_commands_refuse(model, tmp_path, capsys, "'model_file' 'missing.onnx' is no file")
+    # a model_file beside it, or none (files from before it was written), loads
+    for values in (edited({}), edited({"model_file": REMOVED})):
+        path.write_text(json.dumps(values))
+        assert HeadController(model).metadata.model_file == values.get("model_file")
+
+
+def assert_commands_refuse(model, tmp_path, capsys, message: str) -> None:
+    """``demo --policy`` and ``match --model`` exit 2 with one line naming policy.json."""
+    commands = [
+        ["demo", "--policy", str(model), "--out", str(tmp_path / "demo.png")],
+        ["match", "--matches", "1", "--ticks", "3", "--methods", "onnx_policy", "--model"]
+        + [str(model), "--out", str(tmp_path / "m")],
+    ]
+    for argv in commands:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+        assert str(model.with_name(METADATA_FILENAME)) in err and message in err, err

@@ -115,6 +115,16 @@ def check_continuous_actions(actions: object, shape: tuple[int, ...]) -> np.ndar
     return array
 
 
+def head_angle(name: str, value: object) -> np.ndarray:
+    """A ``jump_head`` angle as a (1,) array (of its own dtype); a value that is not one
+    finite real number is a ValueError naming it (a NaN head would fail every later step
+    until a reset)."""
+    array = np.asarray(value)
+    if array.shape != () or array.dtype.kind not in "iuf" or not np.isfinite(array):
+        raise ValueError(f"jump_head: {name} expects a finite number (rad), got {value!r}")
+    return array.reshape(1)
+
+
 def head_action_space(action_type: ActionType, n_actions: int) -> spaces.Box | spaces.Discrete:
     """``Discrete(n_actions)``, or ``Box(-1, 1, (2,), float32)`` for continuous moves."""
     if action_type == "continuous":
@@ -162,6 +172,7 @@ __all__ = [
     "continuous_moves",
     "greedy_actions",
     "head_action_space",
+    "head_angle",
     "head_moves",
     "oracle_actions",
 ]

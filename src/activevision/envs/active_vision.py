@@ -8,7 +8,12 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from activevision.envs.actions import check_actions, check_continuous_actions, head_action_space
+from activevision.envs.actions import (
+    check_actions,
+    check_continuous_actions,
+    head_action_space,
+    head_angle,
+)
 from activevision.envs.config import (
     EnvConfig,
     check_render_mode,
@@ -193,7 +198,7 @@ class ActiveVisionEnv(gym.Env):
         scored like :meth:`step`. Not part of the Gymnasium API: for baselines that jump the
         head, such as the paper's entropy-based head control. Each angle must be one finite
         number (a NaN head would fail every later step until a reset)."""
-        target = [_head_angle(name, value) for name, value in (("pan", pan), ("tilt", tilt))]
+        target = [head_angle(name, value) for name, value in (("pan", pan), ("tilt", tilt))]
         return self._after_move(self.sim.move_head(self._slot, *target))
 
     def entropy_regret(self) -> float:
@@ -224,12 +229,3 @@ class ActiveVisionEnv(gym.Env):
         from activevision.envs.view import episode_panel  # imports matplotlib: only here
 
         return episode_panel(self.sim, 0, self._frames[-1])
-
-
-def _head_angle(name: str, value: object) -> np.ndarray:
-    """A :meth:`ActiveVisionEnv.jump_head` angle as a (1,) array (of its own dtype, as
-    before); a value that is not one finite real number is a ValueError naming it."""
-    array = np.asarray(value)
-    if array.shape != () or array.dtype.kind not in "iuf" or not np.isfinite(array):
-        raise ValueError(f"jump_head: {name} expects a finite number (rad), got {value!r}")
-    return array.reshape(1)

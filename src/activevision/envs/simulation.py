@@ -468,7 +468,10 @@ class EpisodeBatch:
         Python scalars, not NumPy ones: Gymnasium's vectorizers stack those into float64,
         int64 and bool arrays, but put a NumPy bool into an object array.
         """
-        return {
-            key: value[i].item() if value.ndim == 1 else value[i]
-            for key, value in self.info_arrays(never).items()
-        }
+        return slot_info(self.info_arrays(never), i)
+
+
+def slot_info(arrays: dict[str, np.ndarray], i: int) -> dict[str, Any]:
+    """Slot ``i`` of :meth:`EpisodeBatch.info_arrays` as a single env's ``info``: scalars as
+    Python ``float``, ``int`` and ``bool``, rows as arrays."""
+    return {key: value[i].item() if value.ndim == 1 else value[i] for key, value in arrays.items()}

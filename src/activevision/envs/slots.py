@@ -25,12 +25,14 @@ class SlotVectorEnv(VectorEnv):
 
     ``get_attr``, ``set_attr`` and ``call`` follow ``SyncVectorEnv``'s: ``get_attr(name)``
     is a tuple of each sub-environment's value (``np_random``, ``np_random_seed``, the
-    single ``observation_space``, ``action_space``, ``metadata`` and ``spec``; any other
-    attribute, the config or one set with ``set_attr``, is shared, the same for each);
-    ``call("render")`` draws each sub-environment's picture (subclasses name their other
-    per-sub-environment methods); ``set_attr`` takes one value or ``num_envs`` of them, all
-    equal but for ``np_random`` (one generator each), since the sub-environments share
-    every other attribute."""
+    single ``observation_space``, ``action_space``, ``metadata`` and ``spec``; an attribute
+    of the user's own, set with ``set_attr``, holds one value per sub-environment; what the
+    env has and reads, the config, the render mode, the time limit, is shared by the batch,
+    the same for each); ``call("render")`` draws each sub-environment's picture (subclasses
+    name their other per-sub-environment methods) and ``call`` of what the batch cannot run
+    per sub-environment (``reset``, ``step``, ...) names the vector env's method to use
+    instead; ``set_attr`` takes one value or ``num_envs`` of them (all equal for a shared
+    attribute; ``np_random`` takes one generator each)."""
 
     metadata = {
         "render_modes": ["rgb_array"],
@@ -55,6 +57,15 @@ class SlotVectorEnv(VectorEnv):
             "set_attr",
         }
     )
+    #: the single env's methods ``call`` cannot run per sub-environment (Sync runs each env
+    #: by itself, outside the batch's autoreset), and the vector env's own to use instead
+    _INSTEAD: ClassVar[dict[str, str]] = {
+        "reset": "reset(seed=..., options={'reset_mask': mask})",
+        "step": "step(actions)",
+        "close": "close()",
+        "get_wrapper_attr": "get_attr(name)",
+        "set_wrapper_attr": "set_attr(name, values)",
+    }
 
     def _set_up_slots(
         self,
@@ -85,6 +96,9 @@ class SlotVectorEnv(VectorEnv):
         self._seeds = [seed for _, seed in drawn]  # each sub-environment's, as its generator's
         self._frames = np.zeros((num_envs, *frame_shape), dtype=np.uint8)
         self._needs_reset = np.zeros(num_envs, dtype=bool)
+        # attributes of the user's own (set_attr of a name the env does not have): one value
+        # per sub-environment, as each of SyncVectorEnv's env objects keeps its own
+        self._own_attrs: dict[str, list[Any]] = {}
         # Gymnasium's "_key" masks: every sub-environment reports every key, every step.
         self._every_env = np.ones(num_envs, dtype=bool)
         self._every_env.flags.writeable = False
@@ -152,14 +166,23 @@ class SlotVectorEnv(VectorEnv):
         raise NotImplementedError
 
     # Gymnasium's VectorEnv API for sub-environment attributes (SyncVectorEnv's semantics):
-    # the sub-environments are slots of one batch, so a name is either one of the per-slot
-    # names below or an attribute that every sub-environment shares (the config, the
-    # render mode, one a user set), reported once per sub-environment.
+    # the sub-environments are slots of one batch, so a name is one of the per-slot names
+    # below, an attribute of the user's own (one value per sub-environment), or an attribute
+    # of the env that every sub-environment shares (the config, the render mode), reported
+    # once per sub-environment.
 
-    def _slot_methods(self) -> dict[str, Callable[..., Any]]:
-        """Single-env methods that ``call`` runs per sub-environment: ``f(i, *args,
-        **kwargs)``. Subclasses add theirs."""
-        return {"render": self._render_slot}
+    def _slot_calls(self) -> dict[str, Callable[..., tuple[Any, ...]]]:
+        """Single-env methods that ``call`` runs on every sub-environment: ``f(*args,
+        **kwargs)`` is each sub-environment's result. Subclasses add theirs."""
+        return {"render": self._per_slot(self._render_slot)}
+
+    def _per_slot(self, method: Callable[..., Any]) -> Callable[..., tuple[Any, ...]]:
+        """``method(i, *args, **kwargs)`` of sub-environment ``i`` called for each."""
+
+        def each(*args: Any, **kwargs: Any) -> tuple[Any, ...]:
+            return tuple(method(i, *args, **kwargs) for i in range(self.num_envs))
+
+        return each
 
     def _slot_attr(self, name: str, i: int) -> Any:
         """Sub-environment ``i``'s attribute ``name``, as its single env reports it."""
@@ -173,6 +196,8 @@ class SlotVectorEnv(VectorEnv):
         }
         if name in per_slot:
             return per_slot[name]()
+        if name in self._own_attrs:
+            return self._own_attrs[name][i]
         if name in self._VECTOR_ONLY:
             # e.g. "unwrapped": SyncVectorEnv's sub-environments are env objects, ours are
             # slots of one batch
@@ -202,15 +227,22 @@ class SlotVectorEnv(VectorEnv):
     def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
         """``SyncVectorEnv.call``: each sub-environment's method ``name`` called with
         ``args`` and ``kwargs`` (``render``, and the single env's own methods listed in the
-        class docstring), or its attribute ``name`` when that is no method."""
-        methods = self._slot_methods()
-        if name in methods:
-            return tuple(methods[name](i, *args, **kwargs) for i in range(self.num_envs))
+        class docstring), or its attribute ``name`` when that is no method. A method the
+        batch cannot run per sub-environment is an AttributeError naming what to use."""
+        calls = self._slot_calls()
+        if name in calls:
+            return calls[name](*args, **kwargs)
+        if name in self._INSTEAD:
+            raise AttributeError(
+                f"{type(self).__name__}.call({name!r}): its sub-environments are slots of one"
+                f" batch, not envs of their own; use the vector env's {self._INSTEAD[name]}"
+                " (vectorization_mode='sync' makes env objects)"
+            )
         values = self.get_attr(name)
         if any(callable(v) for v in values):
             raise AttributeError(
                 f"{type(self).__name__}.call: runs the sub-environments' methods"
-                f" {sorted(methods)}, not {name!r} (vectorization_mode='sync' runs any)"
+                f" {sorted(calls)}, not {name!r} (vectorization_mode='sync' runs any)"
             )
         return values
 
@@ -220,9 +252,10 @@ class SlotVectorEnv(VectorEnv):
 
     def set_attr(self, name: str, values: list[Any] | tuple[Any, ...] | Any) -> None:
         """``SyncVectorEnv.set_attr``: one value for every sub-environment, or a list or
-        tuple of ``num_envs`` values. ``np_random`` takes a generator per sub-environment;
-        any other attribute is shared by the sub-environments, so its values must be equal
-        (a ValueError otherwise), and the vector env's own names are refused."""
+        tuple of ``num_envs`` values. ``np_random`` takes a generator per sub-environment,
+        and so does an attribute the env does not have (the user's own, kept per
+        sub-environment); an attribute of the env is shared by the batch, so its values must
+        be equal (a ValueError otherwise), and the vector env's own names are refused."""
         if not isinstance(values, list | tuple):
             values = [values] * self.num_envs
         if len(values) != self.num_envs:
@@ -245,10 +278,14 @@ class SlotVectorEnv(VectorEnv):
             "action_space",
         ):
             raise AttributeError(f"{type(self).__name__}.set_attr: {name!r} cannot be set")
+        if name in self._own_attrs or not hasattr(self, name):
+            self._own_attrs[name] = list(values)
+            return
         if not all(_same(value, values[0]) for value in values[1:]):
             raise ValueError(
-                f"{type(self).__name__}.set_attr: the sub-environments share {name!r}, so"
-                " they take one value (vectorization_mode='sync' takes one each), got"
+                f"{type(self).__name__}.set_attr: the sub-environments share {name!r}, a"
+                " slot of one batch each, so they take one value; make one vector env per"
+                " value (or vectorization_mode='sync', an env object each), got"
                 f" {list(values)!r}"
             )
         setattr(self, name, values[0])

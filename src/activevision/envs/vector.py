@@ -9,15 +9,16 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
-from activevision.envs.actions import head_action_space
+from activevision.envs.actions import head_action_space, head_angle
 from activevision.envs.config import EnvConfig, resolve_config
 from activevision.envs.observations import (
     Observation,
     ObservationBuilder,
     image_space,
     observation_space,
+    single,
 )
-from activevision.envs.simulation import EpisodeBatch
+from activevision.envs.simulation import EpisodeBatch, slot_info
 from activevision.envs.slots import SlotVectorEnv, check_autoreset_mode
 from activevision.envs.time_limit import never, resolve_limit
 from activevision.localisation import LocalisationConfig
@@ -44,8 +45,10 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
     ``AsyncVectorEnv`` stack from single envs. Actions must lie in the action space (integers;
     with ``action_type="continuous"`` an (N, 2) float array in [-1, 1]).
     ``get_attr``, ``set_attr`` and ``call`` act as ``SyncVectorEnv``'s (see
-    :class:`SlotVectorEnv`); ``call`` runs ``render`` and ``entropy_regret`` per
-    sub-environment.
+    :class:`SlotVectorEnv`); ``call`` runs ``render``, ``entropy_regret`` and
+    ``jump_head`` per sub-environment. ``call("jump_head", pan, tilt)`` jumps every head, as
+    ``SyncVectorEnv`` calls each env's ``jump_head``: outside ``step``, so, as there, no
+    autoreset follows a sub-environment it ends and the time limit counts ``step`` calls only.
     """
 
     def __init__(
@@ -75,6 +78,9 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
             render_mode,
         )
         self._observations = ObservationBuilder(config, num_envs, n_actions)
+        # step() calls since each sub-environment's reset, as Gymnasium's TimeLimit counts
+        # them (the sim's step_count also counts call("jump_head") moves)
+        self._elapsed = np.zeros(num_envs, dtype=np.int64)
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict | None = None
@@ -83,6 +89,7 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         slots = np.flatnonzero(mask)
         self.sim.reset(slots, [self._rngs[i] for i in slots])
         self._observations.start(slots)
+        self._elapsed[slots] = 0
         # a reset sub-environment's whole frame stack is its first frame; the others keep
         # theirs (a state renders the same image each time)
         self._frames[slots] = self.sim.render(slots)[:, None]
@@ -115,22 +122,49 @@ class ActiveVisionVectorEnv(SlotVectorEnv):
         # Gymnasium's TimeLimit rule, which single envs from gymnasium.make follow: truncated
         # whenever the limit is reached, even on a step that also terminates.
         limit = self.max_episode_steps
-        truncated = stepping & (self.sim.step_count >= (np.inf if limit is None else limit))
+        self._elapsed[stepping] += 1
+        truncated = stepping & (self._elapsed >= (np.inf if limit is None else limit))
         started = np.flatnonzero(resetting)
         if len(started):
             self.sim.reset(started, [self._rngs[i] for i in started])
             self._observations.start(started)
+            self._elapsed[started] = 0
         self._render(started)
         self._collect_frames(started, np.flatnonzero(stepping))
         infos = self._infos()
         self._needs_reset = terminated | truncated
         return self._observe(), reward, terminated, truncated, infos
 
-    def _slot_methods(self) -> dict[str, Callable[..., Any]]:
+    def _slot_calls(self) -> dict[str, Callable[..., tuple[Any, ...]]]:
         def entropy_regret(i: int) -> float:
             return float(self.sim.entropy_regret(np.array([i]))[0])
 
-        return {**super()._slot_methods(), "entropy_regret": entropy_regret}
+        return {
+            **super()._slot_calls(),
+            "entropy_regret": self._per_slot(entropy_regret),
+            "jump_head": self._jump_heads,
+        }
+
+    def _jump_heads(self, pan: float, tilt: float) -> tuple[Any, ...]:
+        """Each sub-environment's ``ActiveVisionEnv.jump_head(pan, tilt)`` result, the heads
+        moved in one batched step; ``_needs_reset`` and the step counts are ``step``'s."""
+        slots = np.arange(self.num_envs)
+        target = [
+            np.repeat(head_angle(k, v), self.num_envs) for k, v in (("pan", pan), ("tilt", tilt))
+        ]
+        reward, terminated, _, _ = self.sim.move_head(slots, *target)
+        self._render(slots[:0])
+        observations, infos = self._observe(), self._info_arrays()
+        return tuple(
+            (
+                single(observations, i),
+                float(reward[i]),
+                bool(terminated[i]),
+                False,
+                slot_info(infos, i),
+            )
+            for i in range(self.num_envs)
+        )
 
     def _picture(self, i: int) -> np.ndarray:
         from activevision.envs.view import episode_panel  # imports matplotlib: only here

@@ -62,8 +62,10 @@ inputs (:data:`OBSERVATION_VECTOR_KEYS`), with ``"actions"`` last exactly when
 ``camera`` and ``world`` None, ``action_type`` ``"discrete"``, ``act_by`` ``"action"``.
 ``step_deg`` and ``action_set`` (the env's discrete moves; ``export_onnx`` alone writes
 neither) come together, and the action table must be their moves. Keys no reader acts on
-(``dueling``, ``preprocessing``, ``package_version``, ``model_file``,
-``training_config_sha256``) are checked for their type where present.
+(``dueling``, ``preprocessing``, ``package_version``, ``training_config_sha256``) are
+checked for their type where present. ``model_file``, where present, must be a bare file name
+(the model sits beside its policy.json: no folder, ``..`` or absolute path), and
+:class:`~activevision.runtime.HeadController` refuses one that names no file beside it.
 
 ``action_type`` is ``"discrete"`` (absent in older files: the graph scores the rows of
 ``action_table_deg``) or ``"continuous"``: the graph's output is one move ``(pan, tilt)`` in
@@ -507,7 +509,7 @@ class PolicyMetadata:
             output_name=read.name("output_name"),
             opset=read.opset(),
             package_version=read.optional_str("package_version"),
-            model_file=read.optional_str("model_file"),
+            model_file=read.model_file(),
             model_sha256=read.model_sha256(),
             training_config_sha256=read.training_config_sha256(),
             action_names=read.action_names(table_deg),
@@ -748,6 +750,20 @@ class _MetadataReader:
             raise self.fail(f"{key!r} must be a string, got {value!r}")
         return value
 
+    def model_file(self) -> str | None:
+        """The model's file name, where present: a bare name, as export writes it (the model
+        sits beside its policy.json; :func:`check_model_file` checks it is there), never a
+        path out of the policy's folder, absolute or into a subfolder."""
+        value = self.optional_str("model_file")
+        if value is not None and (
+            value in ("", ".", "..") or any(c in value for c in ("/", "\\", "\0"))
+        ):
+            raise self.fail(
+                "'model_file' must be the model's file name, beside policy.json (no folder,"
+                f" no path), got {value!r}"
+            )
+        return value
+
     def opset(self) -> int:
         """The ONNX opset the model was written with: every export records it."""
         opset = self.values.get("opset")
@@ -921,6 +937,19 @@ def _unique_pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
             raise PolicyFileError(f"duplicate key {key!r} (each key may appear once)")
         values[key] = value
     return values
+
+
+def check_model_file(metadata: PolicyMetadata, path: str | os.PathLike[str]) -> None:
+    """PolicyFileError naming the metadata file ``path`` unless its ``model_file`` (where
+    present) is a file beside it, as export writes the two."""
+    path = Path(path)
+    name = metadata.model_file
+    if name is not None and not (path.parent / name).is_file():
+        raise PolicyFileError(
+            f"{path}: 'model_file' {name!r} is no file beside it in {path.parent} (export"
+            " writes the model beside its policy.json; rename the model back, or set"
+            " 'model_file' to its name)"
+        )
 
 
 def load_metadata(path: str | os.PathLike[str]) -> PolicyMetadata:
