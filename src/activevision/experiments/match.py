@@ -115,7 +115,7 @@ def match_interval(values: np.ndarray, bounds: tuple[float, float] | None) -> In
     one took the normal one, [0, 0.2%] for a few ticks lost: more loss, a narrower
     interval. How many matches a never-lost robot vouches for is a statement about
     matches, not ticks: none of 50 lost puts the share of matches ever lost below 7.1%, by
-    Wilson's interval; the README says so beside its table.)"""
+    Wilson's interval; docs/match.md says so beside its table.)"""
     return mean_interval(values.tolist(), bounds=bounds, vouch_when_equal=False)
 
 

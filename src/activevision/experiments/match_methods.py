@@ -149,7 +149,7 @@ class BHumanCycle(TargetPolicy):
 
     def __init__(self, config: MatchConfig) -> None:
         super().__init__(config)
-        # exactly 0.8 and 0.2 at ticks of 0.32 s (the README's figures): the gain rounded
+        # exactly 0.8 and 0.2 at ticks of 0.32 s (docs/match.md's figures): the gain rounded
         # to 12 decimals, as 1 - 0.8 is 0.19999999999999996 in floating point
         self.keep_per_tick = self.keep ** (config.tick_seconds / self.keep_seconds)
         self.gain_per_tick = round(1.0 - self.keep_per_tick, 12)

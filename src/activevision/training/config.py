@@ -55,7 +55,8 @@ class LearnerConfig:
 
     learning_rate: float = field(default=5e-4, metadata=_POSITIVE)  #: Adam, constant (P)
     gamma: float = field(default=0.99, metadata=_FRACTION)  #: discount (P)
-    #: rewards summed per target: 1 the paper's one-step DDQN, 3 Rainbow's (README: no better)
+    #: rewards summed per target: 1 the paper's one-step DDQN, 3 Rainbow's (no better:
+    #: docs/evaluation.md)
     n_step: int = field(default=1, metadata=_range(1, MAX_N_STEP))
     batch_size: int = field(default=32, metadata=_range(1, MAX_BATCH_SIZE))  #: minibatch (P)
     learning_starts: int = field(default=1000, metadata=_AT_LEAST_0)  #: steps before updates (SB2)

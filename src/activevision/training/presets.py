@@ -142,7 +142,7 @@ def with_switch_margin(config: TrainConfig, margin: float) -> TrainConfig:
 
 #: Carpet and hall textures wider than the robust ranges of ``AppearanceConfig.randomised()``
 #: (grain 10, stripes 12, clutter 60 grey) and still short of the robustness suite's strong
-#: levels (25, 30, 110), which stay unseen: the shipped recipe's (README).
+#: levels (25, 30, 110), which stay unseen: the shipped recipe's (docs/randomised-world.md).
 WIDE_TEXTURE: dict[str, tuple[float, float]] = {
     "grain": (0.0, 16.0),
     "stripes": (0.0, 20.0),
@@ -206,12 +206,12 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
         "the authors' code release",
     ),
     # the paper's run (30,000 steps, one update per step) plus DrQ random shifts of up to
-    # 8 px and the auxiliary goal-offset head: 80-82% against 77-79% (README)
+    # 8 px and the auxiliary goal-offset head: 80-82% against 77-79% (docs/evaluation.md)
     "drq_aux": (
         lambda: TrainConfig(learner=LearnerConfig(augment_shift=8, aux_goal_weight=1.0)),
         "the paper's run + image shifts and an auxiliary goal head",
     ),
-    # more data, same learner: 81-83% (4x, 8x) against the paper set-up's 79% (README)
+    # more data, same learner: 81-83% (4x, 8x) against the paper set-up's 79% (docs/evaluation.md)
     "data4x": (lambda: more_episodes(4), "4x the episodes for the paper's 30,000 updates"),
     "data8x": (
         lambda: more_episodes(8),
@@ -220,7 +220,7 @@ _PRESETS: dict[str, tuple[Callable[[], TrainConfig], str]] = {
     # The README's main job: DAgger on what a robot has (image, head angles, a prior pose 0-2
     # m/rad off with its error scale, and the entropy method's proposal from it), 40,000
     # steps: about 2 minutes on a 2-core CPU, where the paper's DDQN in 6,000 steps stayed
-    # below the scan (README)
+    # below the scan (README, "What the main job does")
     "quickstart": (
         lambda: dagger("image+head+pose+proposal", 40_000, (0.0, 2.0), eval_episodes=100),
         "a short DAgger run that beats the scan in minutes (make run)",

@@ -8,7 +8,8 @@ its best ones; choosing by validation episodes that differ from the test episode
 test score honest.
 
 The validation episodes are those of ``activevision evaluate --seed eval_seed`` (seeds from
-:func:`activevision.envs.seeding.episode_seed`); the README's test figures use seed 0.
+:func:`activevision.envs.seeding.episode_seed`); the test figures of the README and docs/
+use seed 0.
 """
 
 from __future__ import annotations

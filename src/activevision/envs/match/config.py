@@ -158,7 +158,7 @@ class KidnapConfig:
     ``distance`` m (uniform between the two) in a uniform direction, stopped at the walk's
     margin inside the field lines (near the lines the carry is shorter), and turns it by up
     to ``turn`` rad either way (uniform); its odometry reports none of it. Off by default;
-    the README's kidnap check (teleported 2 m along, 1 m across, turned 0.8 rad) lies
+    docs/match.md's kidnap check (teleported 2 m along, 1 m across, turned 0.8 rad) lies
     within the defaults' reach."""
 
     #: kidnaps per minute of play (0: none at random)
