@@ -359,7 +359,8 @@ def test_results_recording_another_run_are_left_out_with_a_warning(tmp_path):
         robustness_row("clean", "as trained", True, (0.8, 0.7, 0.9), (0.5, 0.4, 0.6), (0, 0))
     ]
     for recorded, shown in ((mine, True), (theirs, False)):
-        write_rows(run / "match" / "match.csv", [match_row(m) | recorded for m in ("a", "b")])
+        rows = [match_row(m) | recorded for m in ("ball_track", "learned")]
+        write_rows(run / "match" / "match.csv", rows)
         write_rows(run / "robustness" / "robustness.csv", [r | recorded for r in robustness])
         if shown:
             report = write_report(run).read_text()
@@ -372,14 +373,15 @@ def test_results_recording_another_run_are_left_out_with_a_warning(tmp_path):
             assert said[1].startswith(f"left {run / 'robustness' / 'robustness.csv'} out")
             assert all("scored another run's weights, or this run's before" in s for s in said)
         assert ("## Head control through whole matches" in report) is shown
+        assert ("learned: this run's final weights (`match --run`)." in report) is shown
         assert ("## Robustness" in report) is shown
         assert "## Configuration" in report
     # best weights: the digest of best_policy.safetensors, and "--weights best" to redo them
     (run / "robustness" / "robustness.csv").unlink()
     (run / "best_policy.safetensors").write_bytes(b"best")
     best = mine | {"run_weights_sha256": hashlib.sha256(b"best").hexdigest(), "run_weights": "best"}
-    write_rows(run / "match" / "match.csv", [match_row("a") | best])
-    assert "## Head control" in write_report(run).read_text()
+    write_rows(run / "match" / "match.csv", [match_row("learned") | best])
+    assert "learned: this run's best validated weights" in write_report(run).read_text()
     (run / "best_policy.safetensors").write_bytes(b"better")
     with pytest.warns(UserWarning, match=r"--out \S+match --weights best --overwrite"):
         assert "## Head control" not in write_report(run).read_text()

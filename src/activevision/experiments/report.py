@@ -434,7 +434,8 @@ def _match_world_text(row: dict) -> str:
 
 def _match_policies_text(rows: list[dict]) -> str:
     """What ``onnx_policy`` and ``learned`` are, and whether a training run's own network
-    played (``match.csv`` does not record which model or run they were)."""
+    played (``match.csv`` records the run, :func:`_own_results` checked it is this one, but
+    not which model ``onnx_policy`` played)."""
     methods = [r["method"] for r in rows]
     text = []
     if any(m.startswith("onnx_policy") for m in methods):
@@ -442,7 +443,11 @@ def _match_policies_text(rows: list[dict]) -> str:
             "onnx_policy: an exported policy, the package's shipped one unless `match"
             " --model` named another."
         )
-    if "learned" in methods:
+    weights = rows[0].get("run_weights")
+    if "learned" in methods and weights:  # recorded: this run's, as it is (_own_results)
+        which = "best validated" if weights == "best" else "final"
+        text.append(f"learned: this run's {which} weights (`match --run`).")
+    elif "learned" in methods:  # a file from before the record
         text.append("learned: the training run `match --run` named.")
     else:
         text.append(
