@@ -4,9 +4,11 @@ runs, a run started over beside an earlier attempt's outputs, a log read while w
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 import shutil
+import warnings
 from pathlib import Path
 
 import pytest
@@ -109,6 +111,73 @@ def test_report_refuses_results_of_another_run_or_of_no_run(run, trained, tmp_pa
     data.pop("run")
     evaluation.write_text(json.dumps(data))
     assert main(["report", str(run), "--overwrite"]) == 0
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_report_leaves_out_matches_and_robustness_of_another_run_or_replaced_weights(run, capsys):
+    """``match --run`` and ``robustness --run`` recorded nothing of the run they scored, and
+    ``report`` showed whatever lay in RUN/match/ and RUN/robustness/ as the run's: another
+    run's results copied in, or this run's from before its weights were replaced. Each now
+    records the run's digests in its last columns; ``report`` leaves a stale one out with
+    one warning line naming it and how to write it again, and still writes the page."""
+    match_csv, robustness_csv = run / "match" / "match.csv", run / "robustness" / "robustness.csv"
+    matches = ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "learned"]
+    assert main([*matches, "--run", str(run), "--out", str(run / "match")]) == 0
+    suite = ["robustness", "--episodes", "2", "--perturbations", "gain-dark-mild"]
+    assert main([*suite, "--run", str(run)]) == 0
+    weights = run / "policy.safetensors"
+    recorded = {
+        "run_config_sha256": _sha256(run / "config.json"),
+        "run_weights_sha256": _sha256(weights),
+        "run_weights": "final",
+    }
+    for table in (match_csv, robustness_csv):
+        with table.open(newline="") as f:
+            reader = csv.DictReader(f)
+            rows = list(reader)
+        assert list(reader.fieldnames or ())[-3:] == list(recorded), table
+        assert [{key: row[key] for key in recorded} for row in rows] == [recorded] * len(rows)
+
+    def report() -> tuple[list[str], str]:
+        """report's warnings and page."""
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            assert main(["report", str(run), "--overwrite"]) == 0
+        return [str(w.message) for w in caught], (run / "report.md").read_text()
+
+    warned, page = report()
+    assert warned == []
+    assert "## Head control through whole matches" in page and "## Robustness" in page
+    # this run's weights replaced since (trained on, retrained): both left out, the page kept
+    original = weights.read_bytes()
+    weights.write_bytes(original + b" ")
+    warned, page = report()
+    assert len(warned) == 2, warned
+    for line, table, again in zip(
+        warned, (match_csv, robustness_csv), ("match", "robustness"), strict=True
+    ):
+        assert line.startswith(f"left {table} out of the report: it scored another run's weights")
+        assert f"activevision {again} --run {run} --out {table.parent} --overwrite" in line
+    assert "## Head control" not in page and "## Robustness" not in page
+    assert "match/match_pareto.png" not in page and "## Configuration" in page
+    # another run's matches (its config's digest) copied in: left out too
+    weights.write_bytes(original)
+    text = match_csv.read_text().replace(recorded["run_config_sha256"], "0" * 64)
+    match_csv.write_text(text)
+    warned, page = report()
+    assert len(warned) == 1 and f"left {match_csv} out" in warned[0]
+    assert "scored another run's config.json," in warned[0]
+    assert "## Head control" not in page and "## Robustness" in page
+    # matches without --run (the quickstart's: the handwritten strategies, no weights of
+    # the run) record no run, and are reported
+    assert main([*matches[:-1], "--out", str(run / "match"), "--overwrite"]) == 0
+    with match_csv.open(newline="") as f:
+        assert not set(recorded) & set(next(csv.reader(f)))
+    warned, page = report()
+    assert warned == [] and "## Head control through whole matches" in page
 
 
 def test_plot_of_a_run_writing_its_last_row_leaves_that_row_out_and_says_so(run, capsys):

@@ -6,7 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from activevision.envs.match.config import BallConfig, MatchConfig, OthersConfig, WalkConfig
+from activevision.envs.match.config import (
+    BallConfig,
+    KidnapConfig,
+    MatchConfig,
+    OthersConfig,
+    WalkConfig,
+)
 from activevision.envs.match.dynamics import blocking_robot, sidestep
 from activevision.envs.match.kernels import DETOUR_TICKS, move_kernel
 from activevision.envs.match.others import bounce_ball, walk_others
@@ -491,3 +497,52 @@ def test_the_ball_bounces_off_our_robot_only_when_asked():
     assert bounced.min() >= contact - 1e-9
     assert (bounced < contact + 1e-6).mean() > 0.03  # our robot walks into it and pushes it
     assert speeds.max() <= cfg.ball.kick_speed[1] + 1e-9  # a bounce adds no speed
+
+
+@pytest.mark.parametrize("speed", [0.0, 0.3])
+def test_a_kidnap_never_puts_our_robot_within_the_spacing_of_another(speed):
+    """Kidnapped in every tick among eight robots, standing or walking: at the end of every
+    tick every two robots, ours included, stand at least ``min_spacing`` apart (the carry
+    was drawn without looking at the others: here it put ours 0.03 m from one standing,
+    0.06 m from one walking), and the kidnaps still carry the robot (most by 1-2 m, fewer
+    where the field's margin stops them)."""
+    ticks = 60
+    cfg = MatchConfig(
+        ticks=ticks,
+        robots=RobotsConfig(count=(8, 8)),
+        others=OthersConfig(speed=speed),
+        kidnap=KidnapConfig(ticks=tuple(range(1, ticks + 1))),
+    )
+    robots, _, own = _play(cfg, list(range(20, 28)), ticks)
+    assert _gaps(robots, own).min() >= cfg.robots.min_spacing
+    carried = np.hypot(*np.moveaxis(np.diff(own[..., :2], axis=0), -1, 0))
+    assert np.median(carried) > 0.9
+
+
+def test_a_kidnap_with_no_free_place_leaves_our_robot_where_it_stands_only_turned():
+    """Eight robots in a ring 1.5 m round ours, 1.2 m apart at least: every place 1-2 m
+    away lies within 1.2 m of one of them, so no draw keeps the spacing; the kidnap turns
+    the robot where it stands (still a kidnap), the same way from the same seed."""
+    cfg = MatchConfig(
+        robots=RobotsConfig(count=(8, 8), min_spacing=1.2),
+        kidnap=KidnapConfig(ticks=(1,)),
+    )
+    poses = []
+    for _ in range(2):
+        batch = MatchBatch(cfg, 1)
+        batch.reset(np.arange(1), [np.random.default_rng(9)])
+        batch.pose[0] = (0.0, 0.0, 0.3)
+        angles = np.radians(np.arange(8) * 45.0)
+        batch.robots[0] = np.column_stack(
+            [1.5 * np.cos(angles), 1.5 * np.sin(angles), np.full(8, 0.6), np.full(8, 100.0)]
+        )
+        start = batch.pose[0].copy()
+        idx = np.arange(1)
+        batch._draw(idx)
+        batch._kidnap(idx)  # the kidnap alone, before the tick's walk
+        assert batch.kidnapped[0]
+        np.testing.assert_array_equal(batch.pose[0, :2], start[:2])
+        turn = batch.pose[0, 2] - start[2]
+        assert 0 < abs(turn) <= 0.8
+        poses.append(batch.pose[0].copy())
+    np.testing.assert_array_equal(poses[0], poses[1])

@@ -388,6 +388,29 @@ def test_the_six_point_look_dwells_for_seconds_not_ticks(tick_seconds, ticks_at_
     assert ticks_at_a_point * tick_seconds == pytest.approx(0.96)
 
 
+@pytest.mark.parametrize("method", ["entropy_greedy", "oracle_entropy", "onnx_policy"])
+@pytest.mark.parametrize(("tick_seconds", "ticks"), [(0.32, 16), (0.16, 32), (0.08, 64)])
+def test_the_view_is_planned_again_every_1_6_seconds_whatever_a_tick_lasts(
+    monkeypatch, method, tick_seconds, ticks
+):
+    """entropy_greedy (and its oracle) and onnx_policy planned their view every 5 ticks
+    whatever a tick lasted: 1.6 s of the paper's ticks, 0.8 s of ticks of 0.16 s. Now every
+    1.6 s: in 5.12 s of play, at 0, 1.6, 3.2 and 4.8 s, at every tick length (counted as
+    real matches call Algorithm 1)."""
+    import activevision.experiments.match_methods as methods
+
+    planned: list[int] = []
+    plan = methods.plan_views
+
+    def counting(info, *args):
+        planned.append(1)
+        return plan(info, *args)
+
+    monkeypatch.setattr(methods, "plan_views", counting)
+    play_matches(method, MatchConfig(ticks=ticks, tick_seconds=tick_seconds), 1, seed=3)
+    assert len(planned) == 4  # 5.12 s / 1.6 s, the first at the first tick
+
+
 def test_entropy_track_keeps_the_ball_inside_its_margin():
     """From real match states: every target lies within half the field of view less the
     margin of the ball's direction (clipped to the head's limits, so also for a ball behind

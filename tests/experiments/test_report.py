@@ -339,3 +339,52 @@ def test_the_robustness_suite_of_the_run_is_reported(tmp_path):
     write_rows(run / "robustness" / "robustness.csv", [{"method": "learned", "n": 1}])
     with pytest.raises(ValueError, match=r"robustness.csv has no 'name' column: it is damaged"):
         write_report(run)
+
+
+def test_results_recording_another_run_are_left_out_with_a_warning(tmp_path):
+    """match.csv and robustness.csv rows that record (``--run``) the run they scored: this
+    run's digests are reported; another's (or this run's replaced weights) left out with a
+    warning naming the file, the page still written; rows recording two runs are damaged."""
+    import hashlib
+
+    run = make_run(tmp_path)
+    (run / "policy.safetensors").write_bytes(b"weights")
+    mine = {
+        "run_config_sha256": hashlib.sha256((run / "config.json").read_bytes()).hexdigest(),
+        "run_weights_sha256": hashlib.sha256(b"weights").hexdigest(),
+        "run_weights": "final",
+    }
+    theirs = mine | {"run_weights_sha256": hashlib.sha256(b"other weights").hexdigest()}
+    robustness = [
+        robustness_row("clean", "as trained", True, (0.8, 0.7, 0.9), (0.5, 0.4, 0.6), (0, 0))
+    ]
+    for recorded, shown in ((mine, True), (theirs, False)):
+        rows = [match_row(m) | recorded for m in ("ball_track", "learned")]
+        write_rows(run / "match" / "match.csv", rows)
+        write_rows(run / "robustness" / "robustness.csv", [r | recorded for r in robustness])
+        if shown:
+            report = write_report(run).read_text()
+        else:
+            with pytest.warns(UserWarning) as caught:
+                report = write_report(run).read_text()
+            said = [str(w.message) for w in caught]
+            assert len(said) == 2
+            assert said[0].startswith(f"left {run / 'match' / 'match.csv'} out of the report")
+            assert said[1].startswith(f"left {run / 'robustness' / 'robustness.csv'} out")
+            assert all("scored another run's weights, or this run's before" in s for s in said)
+        assert ("## Head control through whole matches" in report) is shown
+        assert ("learned: this run's final weights (`match --run`)." in report) is shown
+        assert ("## Robustness" in report) is shown
+        assert "## Configuration" in report
+    # best weights: the digest of best_policy.safetensors, and "--weights best" to redo them
+    (run / "robustness" / "robustness.csv").unlink()
+    (run / "best_policy.safetensors").write_bytes(b"best")
+    best = mine | {"run_weights_sha256": hashlib.sha256(b"best").hexdigest(), "run_weights": "best"}
+    write_rows(run / "match" / "match.csv", [match_row("learned") | best])
+    assert "learned: this run's best validated weights" in write_report(run).read_text()
+    (run / "best_policy.safetensors").write_bytes(b"better")
+    with pytest.warns(UserWarning, match=r"--out \S+match --weights best --overwrite"):
+        assert "## Head control" not in write_report(run).read_text()
+    write_rows(run / "match" / "match.csv", [match_row("a") | mine, match_row("b") | theirs])
+    with pytest.raises(ValueError, match=r"match.csv is damaged .* not one run's"):
+        write_report(run)

@@ -124,8 +124,12 @@ def cmd_robustness(args: argparse.Namespace) -> None:
     )
     from activevision.figures.robustness import plot_robustness
     from activevision.io import write_csv
+    from activevision.training.policy_files import scored_run_columns
 
     policy, clean = _policy(method, args)
+    # the run scored, as its weights were loaded: robustness.csv's last columns, for report,
+    # which leaves out another run's suite
+    run = {} if args.run is None else scored_run_columns(args.run, args.weights)
     blind = _blind(method, policy)
     rows = perturbations(clean, args.perturbations, blind)
     made = make_output_folder(csv_path.parent, None if args.out else str(csv_path.parent))
@@ -151,7 +155,7 @@ def cmd_robustness(args: argparse.Namespace) -> None:
         )
     print(worst_drops(scored))
     with removed_on_failure(made, [csv_path, png_path]):  # both, or neither
-        write_csv(csv_path, [{"method": method, "error": args.error, **r} for r in scored])
+        write_csv(csv_path, [{"method": method, "error": args.error, **r, **run} for r in scored])
         # the run by its folder's name, not the path given: the same figure from any directory
         named = f"{method} ({args.run.resolve().name})" if args.run else method
         plot_robustness(

@@ -357,11 +357,18 @@ def format_result(result: MethodResult, width: int = NAME_WIDTH) -> str:
 
 
 def csv_rows(
-    results: Sequence[MethodResult], matches: int, seed: int, config: MatchConfig
+    results: Sequence[MethodResult],
+    matches: int,
+    seed: int,
+    config: MatchConfig,
+    scored: dict[str, str] | None = None,
 ) -> list[dict]:
     """One CSV row per method: every metric's mean, low and high, plus the run's facts and
     the world's (:func:`world_columns`: the head's move, the other robots, the detector, the
-    walk, the ball: what the report names).
+    walk, the ball: what the report names), and last, for matches that played a training
+    run (``match --run``), ``scored``: its digests
+    (:func:`~activevision.training.policy_files.scored_run_columns`, which ``report``
+    checks against the run it reports).
 
     No wall-clock time: the same seed writes the same bytes (the console prints the time)."""
     rows = []
@@ -386,7 +393,7 @@ def csv_rows(
                 row[name] = iv.mean
                 row[f"{name}_low"] = iv.low
                 row[f"{name}_high"] = iv.high
-        rows.append(row)
+        rows.append(row | (scored or {}))
     return rows
 
 

@@ -20,6 +20,7 @@ import csv
 import json
 import math
 import platform
+import warnings
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -29,7 +30,7 @@ from activevision.io import read_csv, read_json, write_text
 from activevision.text import counted
 from activevision.training.checkpoint import checkpoint_step, list_checkpoints
 from activevision.training.config import MATCH_ENV_ID
-from activevision.training.policy_files import scored_run
+from activevision.training.policy_files import SCORED_RUN_COLUMNS, scored_run
 from activevision.training.state import check_run_config_unchanged
 
 #: what reporting a run whose config.json was edited after its checkpoint would do
@@ -149,12 +150,14 @@ def write_report(run_dir: str | Path) -> Path:
         ]
     match_csv = run / "match" / "match.csv"
     match_rows = _csv_rows(match_csv, ("method", "matches", "seed"))
-    if match_rows:
+    if match_rows and _own_results(match_csv, match_rows, run, f"match --run {run} --out"):
         with _reading(match_csv):
             parts += _match_part(match_rows)
     robustness_csv = run / "robustness" / "robustness.csv"
     robustness_rows = _csv_rows(robustness_csv, ("method", "name", "n", "seed"))
-    if robustness_rows:
+    if robustness_rows and _own_results(
+        robustness_csv, robustness_rows, run, f"robustness --run {run} --out"
+    ):
         with _reading(robustness_csv):
             parts += _robustness_part(robustness_rows, run / "robustness" / "robustness.png")
     parts += [
@@ -195,6 +198,47 @@ def _check_scored(evaluation: Path, data: Any, run: Path) -> None:
                 f"{evaluation} scored another run's {what}, or this run's before they were"
                 f" replaced (trained on or retrained): {again}"
             )
+
+
+def _own_results(path: Path, rows: list[dict], run: Path, again: str) -> bool:
+    """Whether the results ``rows`` of ``path`` (``match.csv``, ``robustness.csv`` in
+    ``run``) are this run's to report: False, with a warning naming the file and how to
+    write it again (``activevision {again} {path's folder} --overwrite``), where they record
+    (:data:`~activevision.training.policy_files.SCORED_RUN_COLUMNS`) another run's
+    ``config.json`` or weights, or this run's before they were replaced (trained on,
+    retrained with ``--overwrite``): the report showed them as this run's. The report is
+    still written, without them (a quickstart resumed after ``robustness --run`` ended on a
+    refusal). Results that played no run (a match without ``--run``: the handwritten
+    strategies, which this run's weights do not change) and files from before the record
+    are reported as before."""
+    recorded = {tuple(row.get(column) or "" for column in SCORED_RUN_COLUMNS) for row in rows}
+    if recorded == {("", "", "")}:
+        return True
+    config_sha256, weights_sha256, weights = recorded.pop()
+    if recorded or weights not in ("final", "best"):  # rows of two runs, or no weights named
+        raise ValueError(
+            f"{path} is damaged or not a file activevision wrote (its run columns"
+            f" {', '.join(SCORED_RUN_COLUMNS)} are not one run's)"
+        )
+    current = scored_run(run, weights)
+    stale = [
+        what
+        for what, mine, theirs in (
+            ("config.json", current["config_sha256"], config_sha256),
+            ("weights", current["weights_sha256"], weights_sha256),
+        )
+        if (mine or "") != theirs
+    ]
+    if not stale:
+        return True
+    best = " --weights best" if weights == "best" else ""
+    warnings.warn(
+        f"left {path} out of the report: it scored another run's {' and '.join(stale)}, or"
+        f" this run's before they were replaced (trained on or retrained); write it again:"
+        f" activevision {again} {path.parent}{best} --overwrite",
+        stacklevel=3,
+    )
+    return False
 
 
 def _evaluation_part(data: dict, latency: dict | None) -> list[str]:
@@ -390,7 +434,8 @@ def _match_world_text(row: dict) -> str:
 
 def _match_policies_text(rows: list[dict]) -> str:
     """What ``onnx_policy`` and ``learned`` are, and whether a training run's own network
-    played (``match.csv`` does not record which model or run they were)."""
+    played (``match.csv`` records the run, :func:`_own_results` checked it is this one, but
+    not which model ``onnx_policy`` played)."""
     methods = [r["method"] for r in rows]
     text = []
     if any(m.startswith("onnx_policy") for m in methods):
@@ -398,7 +443,11 @@ def _match_policies_text(rows: list[dict]) -> str:
             "onnx_policy: an exported policy, the package's shipped one unless `match"
             " --model` named another."
         )
-    if "learned" in methods:
+    weights = rows[0].get("run_weights")
+    if "learned" in methods and weights:  # recorded: this run's, as it is (_own_results)
+        which = "best validated" if weights == "best" else "final"
+        text.append(f"learned: this run's {which} weights (`match --run`).")
+    elif "learned" in methods:  # a file from before the record
         text.append("learned: the training run `match --run` named.")
     else:
         text.append(

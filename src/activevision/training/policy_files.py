@@ -165,6 +165,23 @@ def scored_run(run_dir: str | os.PathLike[str], weights: str = "final") -> dict[
     }
 
 
+#: the columns a table of results (``match.csv``, ``robustness.csv``) records the training
+#: run it scored in (``--run``; absent without): :func:`scored_run`'s digests and which of its
+#: weights played, for ``report`` to tell another run's results from its own
+SCORED_RUN_COLUMNS = ("run_config_sha256", "run_weights_sha256", "run_weights")
+
+
+def scored_run_columns(run_dir: str | os.PathLike[str], weights: str = "final") -> dict[str, str]:
+    """:data:`SCORED_RUN_COLUMNS` of a table that scored run ``run_dir``'s ``weights``
+    ("final" or "best"); a file that is absent has an empty digest."""
+    digests = scored_run(run_dir, weights)
+    return {
+        "run_config_sha256": digests["config_sha256"] or "",
+        "run_weights_sha256": digests["weights_sha256"] or "",
+        "run_weights": weights,
+    }
+
+
 def _caller_level() -> int:
     """The ``stacklevel`` of the first caller outside this module, for a warning issued by
     the function that calls this one (whichever public function the caller used)."""
@@ -215,11 +232,13 @@ def _weights_file(path: Path, weights: str) -> Path:
 __all__ = [
     "BEST_POLICY_FILE",
     "POLICY_FILE",
+    "SCORED_RUN_COLUMNS",
     "BestWeights",
     "load_policy",
     "load_policy_and_metadata",
     "network_metadata",
     "scored_run",
+    "scored_run_columns",
     "write_best_policy",
     "write_policy",
 ]

@@ -156,8 +156,11 @@ class KidnapConfig:
     match's own, which leaves the match's draws as they were: the same seed, the same
     kidnaps, and until the first the same match as without them. A kidnap carries the robot
     ``distance`` m (uniform between the two) in a uniform direction, stopped at the walk's
-    margin inside the field lines (near the lines the carry is shorter), and turns it by up
-    to ``turn`` rad either way (uniform); its odometry reports none of it. Off by default;
+    margin inside the field lines (near the lines the carry is shorter), never within
+    ``robots.min_spacing`` of another robot (a carry that would be is drawn again, up to 16
+    draws, from the same generator; with none clear the robot stays where it stands), and
+    turns it by up to ``turn`` rad either way (uniform); its odometry reports none of it.
+    A kidnap whose first carry is clear draws nothing more. Off by default;
     docs/match.md's kidnap check (teleported 2 m along, 1 m across, turned 0.8 rad) lies
     within the defaults' reach."""
 

@@ -87,8 +87,10 @@ class ActiveVisionMatchEnv(gym.Env):
     direction, stopped at the walk's margin inside the field, and turned by up to ``turn``
     rad (0.8) either way. The lost detector (step 5) is what may notice; ``activevision
     match --kidnap`` scores how often it does and how soon the error is back under 0.5 m.
-    (Among other robots a kidnap may put ours within ``robots.min_spacing`` of one, as no
-    walk does.)
+    Among other robots a kidnap keeps ours at least ``robots.min_spacing`` from each, as a
+    walk does: a carry that would end nearer one is drawn again from the match's kidnap
+    generator (16 draws in all), and where none is clear the robot is only turned where it
+    stands.
 
     Other robots (``robots``; none by default) are placed as in the episodic env and hide
     the landmarks and the ball behind them (the sight line from the camera passes through

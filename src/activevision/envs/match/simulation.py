@@ -52,6 +52,10 @@ _EXTRA_NORMALS = 5
 #: uniforms per match per tick with kidnapping on, from the match's kidnap generator:
 #: whether (1), how far, which way and how much it turns (3)
 _KIDNAP_UNIFORMS = 4
+#: carries a kidnap draws (the first from the tick's uniforms, the others two uniforms each
+#: from the match's kidnap generator) for one that keeps ``robots.min_spacing`` from every
+#: other robot; when none does, the robot is only turned where it stands
+KIDNAP_TRIES = 16
 
 
 def _child(rng: np.random.Generator) -> np.random.Generator:
@@ -407,14 +411,51 @@ class MatchBatch:
         if not now.any():
             return
         slots, u = idx[now], u[now]
-        low, high = kidnap.distance
-        distance, heading = low + (high - low) * u[:, 1], 2 * np.pi * u[:, 2]
-        hx, hy = cfg.field.half_length - cfg.walk.margin, cfg.field.half_width - cfg.walk.margin
         pose = self.pose[slots]
-        pose[:, 0] = np.clip(pose[:, 0] + distance * np.cos(heading), -hx, hx)
-        pose[:, 1] = np.clip(pose[:, 1] + distance * np.sin(heading), -hy, hy)
+        carried = self._carried(pose[:, :2], u[:, 1], u[:, 2])
+        if cfg.robots.max_count:  # never within the spacing of another robot
+            for j in np.flatnonzero(self._crowded(slots, carried)):
+                carried[j] = self._free_carry(int(slots[j]), pose[j, :2])
+        pose[:, :2] = carried
         pose[:, 2] = wrap_angle(pose[:, 2] + kidnap.turn * (2 * u[:, 3] - 1))
         self.pose[slots] = pose
+
+    def _carried(self, xy: np.ndarray, far: np.ndarray, way: np.ndarray) -> np.ndarray:
+        """Where kidnaps carry robots from ``xy`` (n, 2), by uniforms ``far`` (how far,
+        within ``kidnap.distance``) and ``way`` (which way) (n,): stopped at the walk's
+        margin inside the field lines."""
+        cfg = self.cfg
+        low, high = cfg.kidnap.distance
+        distance, heading = low + (high - low) * far, 2 * np.pi * way
+        hx, hy = cfg.field.half_length - cfg.walk.margin, cfg.field.half_width - cfg.walk.margin
+        return np.column_stack(
+            [
+                np.clip(xy[:, 0] + distance * np.cos(heading), -hx, hx),
+                np.clip(xy[:, 1] + distance * np.sin(heading), -hy, hy),
+            ]
+        )
+
+    def _crowded(self, slots: np.ndarray, xy: np.ndarray) -> np.ndarray:
+        """Whether ``xy`` (n, 2), our robot's place in each match of ``slots``, lies within
+        ``robots.min_spacing`` of another robot's centre (n,)."""
+        robots = self.robots[slots]
+        gap = np.hypot(robots[..., 0] - xy[:, None, 0], robots[..., 1] - xy[:, None, 1])
+        crowded: np.ndarray = ((gap < self.cfg.robots.min_spacing) & (robots[..., 2] > 0)).any(1)
+        return crowded
+
+    def _free_carry(self, slot: int, xy: np.ndarray) -> np.ndarray:
+        """A kidnap's place for match ``slot``'s robot, at ``xy`` (2,), whose first draw came
+        within the spacing of another robot: drawn again from the match's kidnap generator
+        (up to :data:`KIDNAP_TRIES` draws in all) until one keeps the spacing; where none
+        does (robots all round), ``xy``, where it stands and the spacing holds (no walk
+        ends a tick within it)."""
+        rng, slots = self._kidnap_rngs[slot], np.array([slot])
+        for _ in range(KIDNAP_TRIES - 1):
+            far, way = rng.random((2, 1))
+            carried = self._carried(xy[None], far, way)
+            if not self._crowded(slots, carried)[0]:
+                return np.asarray(carried[0])
+        return xy
 
     def _ball_hidden(self, idx: np.ndarray) -> np.ndarray:
         """Whether another robot stands between each camera of ``idx`` and its ball."""
