@@ -134,6 +134,38 @@ def test_several_models_play_side_by_side(tmp_path, capsys):
     assert float(paired["position_rmse_diff"]) == 0.0 == float(paired["head_travel_diff"])
 
 
+def test_match_csv_records_the_model_each_onnx_policy_row_played(tmp_path, capsys):
+    """``match --model runs/X/policy.onnx`` wrote nothing of which model played: its rows
+    record the file as given and its SHA-256 (empty in the other rows); without
+    ``--model`` (the shipped policy) match.csv has no such columns, as before."""
+    import hashlib
+
+    from activevision.runtime import pretrained_policy_path
+
+    shipped = pretrained_policy_path()
+    (tmp_path / "x").mkdir()
+    for suffix in (".onnx", ".json"):
+        target = tmp_path / "x" / f"policy{suffix}"
+        target.write_bytes(shipped.with_suffix(suffix).read_bytes())
+    model = tmp_path / "x" / "policy.onnx"
+    argv = [*TINY[:3], "--ticks", "3", "--methods", "onnx_policy", "ball_track"]
+    assert main([*argv, "--model", str(model), "--out", str(tmp_path / "m")]) == 0
+    assert main([*argv, "--out", str(tmp_path / "shipped")]) == 0
+    with (tmp_path / "m" / "match.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    digest = hashlib.sha256(model.read_bytes()).hexdigest()
+    assert [(r["method"], r["model"], r["model_sha256"]) for r in rows] == [
+        ("onnx_policy", str(model), digest),
+        ("ball_track", "", ""),
+    ]
+    with (tmp_path / "shipped" / "match.csv").open() as f:
+        header = next(csv.reader(f))
+    assert "model" not in header and "model_sha256" not in header
+    # the same results otherwise: the shipped policy's bytes are the copy's
+    with (tmp_path / "shipped" / "match.csv").open() as f:
+        assert [{k: r[k] for k in header} for r in rows] == list(csv.DictReader(f))
+
+
 def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     out = tmp_path / "m"
     assert main([*TINY, "--out", str(out)]) == 0

@@ -140,6 +140,36 @@ def test_the_match_section_says_how_long_and_whose_policies(tmp_path):
     assert "detected with probability" not in report  # a match.csv without the world's columns
 
 
+def test_the_match_section_names_the_model_each_onnx_policy_row_played(tmp_path):
+    """``match --model`` rows record the model's file and SHA-256: the report said "the
+    package's shipped one unless `match --model` named another" whichever played; it names
+    the file, its digest, and whether it is this run's policy.onnx as it is now."""
+    import hashlib
+
+    run = make_run(tmp_path)
+    (run / "policy.onnx").write_bytes(b"exported")
+    digest = hashlib.sha256(b"exported").hexdigest()
+    rows = [
+        match_row("onnx_policy[run]") | {"model": "runs/x/policy.onnx", "model_sha256": digest},
+        match_row("onnx_policy[b]") | {"model": "b.onnx", "model_sha256": "ab" * 32},
+        match_row("ball_track") | {"model": "", "model_sha256": ""},
+    ]
+    write_rows(run / "match" / "match.csv", rows)
+    report = write_report(run).read_text()
+    assert (
+        f"onnx_policy[run]: `runs/x/policy.onnx` (`match --model`, SHA-256 {digest[:12]}…,"
+        " this run's policy.onnx)." in report
+    )
+    assert (
+        "onnx_policy[b]: `b.onnx` (`match --model`, SHA-256 abababababab…, not this run's"
+        " policy.onnx as it is now)." in report
+    )
+    assert "shipped one" not in report and "ball_track:" not in report
+    (run / "policy.onnx").write_bytes(b"exported again")
+    report = write_report(run).read_text()  # exported again since the matches
+    assert report.count("not this run's policy.onnx as it is now") == 2
+
+
 def test_the_match_section_names_the_world(tmp_path):
     """match --run on a student trained with a weaker detector plays that detector: the
     report said nothing of which detector, head or other robots the matches had."""

@@ -302,6 +302,7 @@ def cmd_match(args: argparse.Namespace) -> None:
         overwrite=args.overwrite,
         run=args.run,
     )
+    from activevision.experiments.match import model_columns
     from activevision.training.policy_files import scored_run_columns
 
     config = _match_config(args)
@@ -309,6 +310,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     # the run the learned strategy plays, as its weights are now (they were loaded to be
     # checked): recorded in match.csv for report, which leaves out another run's matches
     scored = None if args.run is None else scored_run_columns(args.run, args.weights)
+    models = model_columns(entries)  # --model's files, as played: which model each row is
     methods = list(dict.fromkeys(method for _, method, _ in entries))
     labels = [label for label, _, _ in entries]
     clip_method = labels[0] if args.clip_method is None else args.clip_method
@@ -388,7 +390,7 @@ def cmd_match(args: argparse.Namespace) -> None:
     outputs = files + ([paired_path] if args.baseline is not None else [])
     with removed_on_failure(made, outputs):
         csv_path, pareto_path, error_path, clip_path = files
-        write_csv(csv_path, csv_rows(results, args.matches, args.seed, config, scored))
+        write_csv(csv_path, csv_rows(results, args.matches, args.seed, config, scored, models))
         if args.baseline is None and args.overwrite and paired_path.exists():
             paired_path.unlink()  # --overwrite (match.csv was there): not this run's pairs
         if args.baseline is not None:

@@ -17,10 +17,11 @@ than the methods do.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import math
 import numbers
 import time
-from collections.abc import Callable, Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -230,6 +231,31 @@ def expand_methods(
     return entries
 
 
+#: the columns of ``match.csv`` that record the exported model each ``onnx_policy`` row played
+#: (``match --model``): the file as given and its SHA-256, empty in the other rows. Absent
+#: without ``--model``: the shipped policy plays, and those files keep their bytes.
+MODEL_COLUMNS = ("model", "model_sha256")
+
+
+def model_columns(
+    entries: Sequence[tuple[str, str, StrategyOptions]],
+) -> dict[str, dict[str, str]]:
+    """:data:`MODEL_COLUMNS` per label of ``entries`` (:func:`expand_methods`), for
+    :func:`csv_rows`: each model file's path as given and SHA-256 as it is now (read once
+    the strategies were made, before the matches), ``""`` for the labels that play none;
+    ``{}`` where no entry names a model (the shipped policy, or no ``onnx_policy``)."""
+    if not any(options.model is not None for _, _, options in entries):
+        return {}
+    columns = {}
+    for label, _, options in entries:
+        model = options.model
+        columns[label] = {
+            "model": "" if model is None else str(model),
+            "model_sha256": "" if model is None else hashlib.sha256(model.read_bytes()).hexdigest(),
+        }
+    return columns
+
+
 def check_labels(entries: Sequence[tuple[str, str, StrategyOptions]]) -> None:
     """ValueError if two results would share a label (the CSV, the tables and the figures
     tell results apart by it)."""
@@ -362,13 +388,16 @@ def csv_rows(
     seed: int,
     config: MatchConfig,
     scored: dict[str, str] | None = None,
+    models: Mapping[str, Mapping[str, str]] | None = None,
 ) -> list[dict]:
     """One CSV row per method: every metric's mean, low and high, plus the run's facts and
     the world's (:func:`world_columns`: the head's move, the other robots, the detector, the
     walk, the ball: what the report names), and last, for matches that played a training
     run (``match --run``), ``scored``: its digests
     (:func:`~activevision.training.policy_files.scored_run_columns`, which ``report``
-    checks against the run it reports).
+    checks against the run it reports); before them, where ``match --model`` named
+    exported models, ``models``: each row's :data:`MODEL_COLUMNS` (:func:`model_columns`;
+    none without, whose files keep their bytes).
 
     No wall-clock time: the same seed writes the same bytes (the console prints the time)."""
     rows = []
@@ -393,6 +422,8 @@ def csv_rows(
                 row[name] = iv.mean
                 row[f"{name}_low"] = iv.low
                 row[f"{name}_high"] = iv.high
+        if models:
+            row |= models.get(r.method, dict.fromkeys(MODEL_COLUMNS, ""))
         rows.append(row | (scored or {}))
     return rows
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import hashlib
 import json
 import math
 import platform
@@ -152,7 +153,7 @@ def write_report(run_dir: str | Path) -> Path:
     match_rows = _csv_rows(match_csv, ("method", "matches", "seed"))
     if match_rows and _own_results(match_csv, match_rows, run, f"match --run {run} --out"):
         with _reading(match_csv):
-            parts += _match_part(match_rows)
+            parts += _match_part(match_rows, run)
     robustness_csv = run / "robustness" / "robustness.csv"
     robustness_rows = _csv_rows(robustness_csv, ("method", "name", "n", "seed"))
     if robustness_rows and _own_results(
@@ -282,8 +283,8 @@ def _evaluation_part(data: dict, latency: dict | None) -> list[str]:
     return parts
 
 
-def _match_part(match_rows: list[dict]) -> list[str]:
-    """The report's section on whole matches, from ``match.csv``'s rows."""
+def _match_part(match_rows: list[dict], run: Path) -> list[str]:
+    """The report's section on whole matches, from ``match.csv``'s rows (of ``run``)."""
     first = match_rows[0]
     return [
         "",
@@ -302,7 +303,7 @@ def _match_part(match_rows: list[dict]) -> list[str]:
         "position_rmse (m) and heading_rmse (degrees): the belief's error over every"
         " tick; lost_share, ball_in_view: shares of ticks; entropy: the belief's mean"
         " (nats); head_travel: degrees per second."
-        f" {_match_policies_text(match_rows)}",
+        f" {_match_policies_text(match_rows, run)}",
         "",
         "![Pareto front](match/match_pareto.png)",
         "",
@@ -432,13 +433,16 @@ def _match_world_text(row: dict) -> str:
     return text
 
 
-def _match_policies_text(rows: list[dict]) -> str:
+def _match_policies_text(rows: list[dict], run: Path) -> str:
     """What ``onnx_policy`` and ``learned`` are, and whether a training run's own network
-    played (``match.csv`` records the run, :func:`_own_results` checked it is this one, but
-    not which model ``onnx_policy`` played)."""
+    played (``match.csv`` records the run, :func:`_own_results` checked it is this one, and,
+    with ``match --model``, which model each ``onnx_policy`` row played)."""
     methods = [r["method"] for r in rows]
     text = []
-    if any(m.startswith("onnx_policy") for m in methods):
+    models = [r for r in rows if r.get("model")]  # match --model: each one's file and digest
+    if models:
+        text += [_model_text(r, run) for r in models]
+    elif any(m.startswith("onnx_policy") for m in methods):
         text.append(
             "onnx_policy: an exported policy, the package's shipped one unless `match"
             " --model` named another."
@@ -456,3 +460,16 @@ def _match_policies_text(rows: list[dict]) -> str:
             " RUN/policy.onnx`."
         )
     return " ".join(text)
+
+
+def _model_text(row: dict, run: Path) -> str:
+    """What model a ``match --model`` row played: the file as given, its digest's first 12
+    digits, and whether that is ``run``'s ``policy.onnx`` as it is now (a model exported
+    again since, or another's, is said to be not)."""
+    digest = row["model_sha256"]
+    exported = run / "policy.onnx"
+    if exported.is_file() and hashlib.sha256(exported.read_bytes()).hexdigest() == digest:
+        whose = "this run's policy.onnx"
+    else:
+        whose = "not this run's policy.onnx as it is now"
+    return f"{row['method']}: `{row['model']}` (`match --model`, SHA-256 {digest[:12]}…, {whose})."
