@@ -257,3 +257,56 @@ def test_compare_resumes_no_levels_another_run_played(run, tmp_path, capsys):
     assert main([*argv, "--errors", "0,0.5", "--run", str(run)]) == 0
     rows = read_csv(out / "compare.csv")
     assert len(rows) == 2 and "run_sha256" not in rows[1]
+
+
+def test_report_leaves_out_figures_and_a_suite_that_played_no_policy_of_the_run(run):
+    """``report`` showed RUN/compare/compare.png, RUN/episode.png and RUN/robustness/ as the
+    run's whatever played them: a compare without --run, ``demo`` (the shipped policy) or
+    an episode without --run, ``robustness --shipped``. ``compare.csv`` records the weights'
+    digest, ``episode`` and ``demo`` a record beside the figure (episode.json), and
+    robustness.csv the method; report leaves out what is not this run's, with one warning
+    line each, and still writes the page."""
+    figure = run / "episode.png"
+    compare = ["compare", "--methods", "random", "--errors", "0", "--episodes", "1"]
+    assert main([*compare, "--run", str(run)]) == 0
+    assert main(["episode", "--run", str(run), "--out", str(figure)]) == 0
+    record = json.loads((run / "episode.json").read_text())
+    assert record["command"] == "episode" and record["policies"] == ["learned", "random"]
+    assert record["run"] == {
+        "config_sha256": _sha256(run / "config.json"),
+        "weights_sha256": _sha256(run / "policy.safetensors"),
+    }
+    assert record["files"] == {p.name: _sha256(p) for p in (figure, run / "episode.gif")}
+    suite = ["robustness", "--episodes", "2", "--perturbations", "gain-dark-mild"]
+    assert main([*suite, "--run", str(run)]) == 0
+
+    def report() -> tuple[list[str], str]:
+        """report's warnings and page."""
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            assert main(["report", str(run), "--overwrite"]) == 0
+        return [str(w.message) for w in caught], (run / "report.md").read_text()
+
+    warned, page = report()
+    assert warned == []
+    for heading in ("## Success vs localisation error", "## One episode", "## Robustness"):
+        assert heading in page
+    assert "`learned` plays this run's final weights." in page
+    assert "`learned` and `random` from the start of seed 0; `learned` plays" in page
+    # what played no policy of this run, written over the run's own
+    assert main([*compare, "--out", str(run / "compare"), "--overwrite"]) == 0
+    assert main(["demo", "--out", str(figure), "--overwrite"]) == 0
+    shipped = ["robustness", "--shipped", "--episodes", "2", "--perturbations", "gain-dark-mild"]
+    assert main([*shipped, "--out", str(run / "robustness"), "--overwrite"]) == 0
+    warned, page = report()
+    assert [line.split(" out of the report: ")[0] for line in warned] == [
+        f"left {path}"
+        for path in (run / "compare" / "compare.png", figure, run / "robustness/robustness.csv")
+    ]
+    assert "it played no run (a compare without --run)" in warned[0]
+    assert "it played the shipped policy (demo), not this run's policy" in warned[1]
+    assert f"activevision episode --run {run} --out {figure} --overwrite" in warned[1]
+    assert "it scored `shipped` (robustness --shipped), not this run's learned policy" in warned[2]
+    for heading in ("## Success vs localisation error", "## One episode", "## Robustness"):
+        assert heading not in page
+    assert "## Configuration" in page

@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import pytest
 
@@ -253,12 +254,13 @@ def test_demo_names_the_policy_it_shows(tmp_path, monkeypatch):
     from activevision.runtime import pretrained_policy_path
 
     shown: list[list[str]] = []
-    monkeypatch.setattr(
-        episode_figures,
-        "plot_episodes",
-        lambda traces, out: shown.append([t.policy for t in traces]),
-    )
-    monkeypatch.setattr(episode_figures, "animate_episode", lambda trace, out: None)
+
+    def plot(traces, out):
+        shown.append([t.policy for t in traces])
+        Path(out).write_bytes(b"")  # the record beside it (episode.json) takes its digest
+
+    monkeypatch.setattr(episode_figures, "plot_episodes", plot)
+    monkeypatch.setattr(episode_figures, "animate_episode", lambda trace, out: out.write_bytes(b""))
     assert main(["demo", "--out", str(tmp_path / "a.png")]) == 0
     run = tmp_path / "my_run"
     run.mkdir()

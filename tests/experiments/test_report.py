@@ -2,6 +2,7 @@
 columns as what they are, and what the match comparison's strategies are."""
 
 import csv
+import functools
 import json
 
 import pytest
@@ -418,3 +419,144 @@ def test_results_recording_another_run_are_left_out_with_a_warning(tmp_path):
     write_rows(run / "match" / "match.csv", [match_row("a") | mine, match_row("b") | theirs])
     with pytest.raises(ValueError, match=r"match.csv is damaged .* not one run's"):
         write_report(run)
+
+
+def _report_warnings(run):
+    """report's page and the warnings it gave."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        page = write_report(run).read_text()
+    return page, [str(w.message) for w in caught]
+
+
+def test_a_comparison_is_reported_only_where_its_csv_records_this_runs_weights(tmp_path):
+    """``report`` showed RUN/compare/compare.png whatever played it, though compare.csv
+    records the digest of the weights its learned method played (``run_sha256``): another
+    run's, this run's replaced ones, or none (a compare without --run) are left out with one
+    warning; a CSV from before the column, or no CSV, is reported as before."""
+    import hashlib
+
+    run = make_run(tmp_path)
+    (run / "policy.safetensors").write_bytes(b"final")
+    (run / "best_policy.safetensors").write_bytes(b"best")
+    figure = run / "compare" / "compare.png"
+    figure.parent.mkdir()
+    figure.write_bytes(b"png")
+    heading = "## Success vs localisation error"
+    row = {"method": "learned", "error": 0.0, "episodes": 2, "seed": 0, "level_seed": 0}
+
+    page, warned = _report_warnings(run)  # no compare.csv: as before
+    assert heading in page and warned == []
+    write_rows(figure.with_name("compare.csv"), [row])  # from before the column
+    page, warned = _report_warnings(run)
+    assert heading in page and "`learned` plays" not in page and warned == []
+    for weights, which in ((b"final", "final"), (b"best", "best validated")):
+        digest = hashlib.sha256(weights).hexdigest()
+        write_rows(figure.with_name("compare.csv"), [row | {"run_sha256": digest}] * 2)
+        page, warned = _report_warnings(run)
+        assert warned == []
+        assert f"{heading}\n\n`learned` plays this run's {which} weights.\n\n![comparison]" in page
+    again = f"write it again: activevision compare --run {run} --out {figure.parent} --overwrite"
+    for digest, why in (
+        (hashlib.sha256(b"other").hexdigest(), "it played another run's weights, or this run's"),
+        ("", "it played no run (a compare without --run)"),
+    ):
+        write_rows(figure.with_name("compare.csv"), [row | {"run_sha256": digest}])
+        page, warned = _report_warnings(run)
+        assert heading not in page and "## Configuration" in page
+        assert len(warned) == 1 and warned[0].startswith(f"left {figure} out of the report: ")
+        assert why in warned[0] and warned[0].endswith(again)
+    rows = [row | {"run_sha256": "a" * 64}, row | {"run_sha256": "b" * 64}]
+    write_rows(figure.with_name("compare.csv"), rows)
+    with pytest.raises(ValueError, match=r"compare.csv is damaged .* not one run's"):
+        write_report(run)
+
+
+def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_path):
+    """``report`` showed RUN/episode.png whatever drew it: ``demo`` (the shipped policy),
+    an episode without --run, another run's. ``episode`` and ``demo`` now record what
+    played beside the figure (episode.json); report leaves out one that played no policy of
+    this run, another run's or this run's replaced weights, or a figure replaced since its
+    record, with one warning each; a figure without a record is reported as before."""
+    import hashlib
+
+    from activevision.experiments.provenance import write_episode_record
+    from activevision.training.policy_files import scored_run
+
+    run = make_run(tmp_path)
+    (run / "policy.safetensors").write_bytes(b"final")
+    figure, gif = run / "episode.png", run / "episode.gif"
+    figure.write_bytes(b"png")
+    gif.write_bytes(b"gif")
+    heading = "## One episode"
+    page, warned = _report_warnings(run)
+    assert heading in page and warned == []  # no record: as before
+    write = functools.partial(write_episode_record, figure, gif, seed=3)
+    write(command="episode", policies=["learned", "random"], run=scored_run(run), weights="final")
+    page, warned = _report_warnings(run)
+    assert warned == []
+    assert (
+        f"{heading}\n\n`learned` and `random` from the start of seed 3; `learned` plays this"
+        " run's final weights.\n\n![episode](episode.png)" in page
+    )
+    again = f"; write it again: activevision episode --run {run} --out {figure} --overwrite"
+    # this run's weights replaced since (trained on, retrained)
+    (run / "policy.safetensors").write_bytes(b"retrained")
+    page, warned = _report_warnings(run)
+    assert heading not in page and "## Configuration" in page
+    assert warned == [
+        f"left {figure} out of the report: it played another run's weights, or this run's"
+        f" before they were replaced (trained on or retrained){again}"
+    ]
+    # demo: the shipped policy, another model, or this run's exported policy.onnx
+    shipped = hashlib.sha256(b"shipped model").hexdigest()
+    write(command="demo", policies=["shipped", "random"], model_sha256=shipped)
+    page, warned = _report_warnings(run)
+    assert heading not in page
+    assert warned == [
+        f"left {figure} out of the report: it played the shipped policy (demo), not this"
+        f" run's policy{again}"
+    ]
+    (run / "policy.onnx").write_bytes(b"exported")
+    exported = hashlib.sha256(b"exported").hexdigest()
+    model = str(run / "policy.onnx")
+    write(command="demo", policies=["run", "random"], model=model, model_sha256=exported)
+    page, warned = _report_warnings(run)
+    assert warned == [] and "`run` is this run's policy.onnx." in page
+    (run / "policy.onnx").write_bytes(b"exported again")
+    assert "it played another exported model (demo)" in _report_warnings(run)[1][0]
+    # an episode without --run (oracle and random in the paper's env)
+    write(command="episode", policies=["oracle", "random"])
+    page, warned = _report_warnings(run)
+    assert warned[0].endswith(f"it played no policy of this run (an episode without --run){again}")
+    # this run's, but the figure replaced since (another run's copied over it)
+    write(command="episode", policies=["learned", "random"], run=scored_run(run), weights="final")
+    figure.write_bytes(b"another run's png")
+    page, warned = _report_warnings(run)
+    assert heading not in page
+    assert "episode.png is not the one episode.json records (replaced since)" in warned[0]
+    (run / "episode.json").write_text('{"policies": []}')
+    with pytest.raises(ValueError, match=r"episode.json is damaged or not a file activevision"):
+        write_report(run)
+
+
+@pytest.mark.parametrize(
+    ("method", "how"), [("shipped", "robustness --shipped"), ("scan", "robustness --method")]
+)
+def test_a_robustness_suite_of_another_policy_than_the_runs_is_left_out(tmp_path, method, how):
+    """``robustness --shipped --out RUN/robustness`` (or ``--method scan``) scored no policy
+    of the run and records none, and the report showed it as the run's robustness (its
+    only sign the method's name in a sentence): left out with one warning."""
+    run = make_run(tmp_path)
+    row = robustness_row("clean", "as trained", True, (0.8, 0.7, 0.9), (0.5, 0.4, 0.6), (0, 0))
+    path = run / "robustness" / "robustness.csv"
+    write_rows(path, [row | {"method": method}])
+    page, warned = _report_warnings(run)
+    assert "## Robustness" not in page and "## Configuration" in page
+    assert warned == [
+        f"left {path} out of the report: it scored `{method}` ({how}), not this run's learned"
+        f" policy; write it again: activevision robustness --run {run} --out {path.parent}"
+        " --overwrite"
+    ]

@@ -452,8 +452,9 @@ def _earlier_attempt(run: Path) -> list[str]:
     for folder in ("plots", "evaluation", "compare", "match", "robustness"):
         (run / folder).mkdir()
         (run / folder / "old.png").write_bytes(b"old")
-    for name in ("report.md", "policy.onnx", "policy.json", "episode.png", "episode.gif"):
+    for name in ("report.md", "policy.onnx", "policy.json") + ("episode.png", "episode.gif"):
         (run / name).write_bytes(b"old")
+    (run / "episode.json").write_text("{}")  # what played in the figure (report reads it)
     return sorted(p.name for p in run.iterdir() if p.name not in ("config.json", "metrics.csv"))
 
 
@@ -472,7 +473,7 @@ def test_a_run_started_over_removes_the_earlier_attempts_outputs(tmp_path, fake_
             DaggerTrainer(config, run, loggers=[]).close()
 
     outputs = _earlier_attempt(tmp_path / "run")
-    assert len(outputs) == 10
+    assert len(outputs) == 11
     start(tmp_path / "run")
     left = sorted(p.name for p in (tmp_path / "run").iterdir())
     assert not set(outputs) & set(left), left

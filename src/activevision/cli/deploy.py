@@ -54,13 +54,17 @@ def cmd_demo(args: argparse.Namespace) -> None:
     """Episode figure and GIF of the shipped (or a given) ONNX policy against random."""
     from activevision.experiments.episode_figure import trace_episode
     from activevision.experiments.policies import OnnxPolicy, RandomPolicy
+    from activevision.experiments.provenance import record_path, sha256_of, write_episode_record
     from activevision.figures.episode import animate_episode, plot_episodes
     from activevision.runtime import pretrained_policy_path
 
     gif = figure_and_gif(args.out)
-    check_outputs(named=[args.out, gif], overwrite=args.overwrite)
+    record = record_path(args.out)  # what played, for report (no run's policy: demo's)
+    check_outputs(named=[args.out, gif, record], overwrite=args.overwrite)
     check_figure_path(args.out)
-    policy = OnnxPolicy(args.policy or pretrained_policy_path())
+    model = args.policy or pretrained_policy_path()
+    policy = OnnxPolicy(model)
+    model_sha256 = sha256_of(model)  # as loaded
     # the figure's row says whose policy it is (the class's name, "onnx", said neither): the
     # file's name, or its run's folder for an exported policy.onnx
     if args.policy is None:
@@ -72,7 +76,16 @@ def cmd_demo(args: argparse.Namespace) -> None:
     traces = [trace_episode(p, args.seed, config) for p in (policy, RandomPolicy(config))]
     plot_episodes(traces, args.out)
     animate_episode(traces[0], gif)
-    print(f"wrote {args.out} and {gif}")
+    write_episode_record(
+        args.out,
+        gif,
+        command="demo",
+        policies=[trace.policy for trace in traces],
+        seed=args.seed,
+        model=None if args.policy is None else str(args.policy),
+        model_sha256=model_sha256,
+    )
+    print(f"wrote {args.out}, {gif} and {record}")
 
 
 def add_parsers(sub: Any) -> None:

@@ -389,12 +389,15 @@ def _try_users(
 def cmd_episode(args: argparse.Namespace) -> None:
     """The paper's qualitative episode figure (and a GIF) for two methods."""
     from activevision.experiments.episode_figure import trace_episode
+    from activevision.experiments.provenance import record_path, write_episode_record
     from activevision.figures.episode import animate_episode, plot_episodes
+    from activevision.training.policy_files import scored_run
 
     check_weights(args)
     check_run(args.run)  # before the outputs inside it
     gif = figure_and_gif(args.out)
-    check_outputs(named=[args.out, gif], overwrite=args.overwrite, run=args.run)
+    record = record_path(args.out)  # what played, for report
+    check_outputs(named=[args.out, gif, record], overwrite=args.overwrite, run=args.run)
     check_figure_path(args.out)
     from activevision.experiments.compare import config_at_error
 
@@ -403,10 +406,21 @@ def cmd_episode(args: argparse.Namespace) -> None:
     shipped, env_config = _shipped_first(names, args, env_config)
     others = _policies([name for name in names if name not in shipped], args, env_config)
     policies = {name: (shipped | others)[name] for name in names}  # in the order named
+    # the run whose policies play, as its weights were loaded: report leaves out another's
+    run = None if args.run is None else scored_run(args.run, args.weights)
     traces = [trace_episode(p, args.seed, env_config) for p in policies.values()]
     plot_episodes(traces, args.out)
     animate_episode(traces[0], gif)
-    print(f"wrote {args.out} and {gif}")
+    write_episode_record(
+        args.out,
+        gif,
+        command="episode",
+        policies=list(policies),
+        seed=args.seed,
+        run=run,
+        weights=args.weights,
+    )
+    print(f"wrote {args.out}, {gif} and {record}")
 
 
 def cmd_report(args: argparse.Namespace) -> None:

@@ -7,10 +7,15 @@ Layout of a run directory after the quickstart::
     runs/NAME/evaluation/evaluation.{csv,json} fixed-seed evaluation of every method
     runs/NAME/compare/compare.{csv,png}       success vs localisation error
     runs/NAME/episode.png, episode.gif        learned vs random from one start
+    runs/NAME/episode.json                    what played in them (``episode``, ``demo``)
     runs/NAME/match/match.csv, match_*.png    head-control strategies through whole matches
     runs/NAME/robustness/robustness.{csv,png} the policy under named perturbations
                                               (``activevision robustness --run``)
     runs/NAME/report.md                       this page
+
+A result that records another run, or no policy of this run
+(:mod:`~activevision.experiments.provenance`, :func:`_own_results`), is left out with a
+warning naming it and the command that writes it again.
 """
 
 from __future__ import annotations
@@ -27,6 +32,12 @@ from pathlib import Path
 from typing import Any
 
 import activevision
+from activevision.experiments.provenance import (
+    ANOTHER_RUN,
+    Provenance,
+    compare_provenance,
+    episode_provenance,
+)
 from activevision.io import read_csv, read_json, write_text
 from activevision.text import counted
 from activevision.training.checkpoint import checkpoint_step, list_checkpoints
@@ -138,17 +149,7 @@ def write_report(run_dir: str | Path) -> Path:
                 float(latency["p50_ms"]), float(latency["p99_ms"])
         with _reading(evaluation):
             parts += _evaluation_part(data, latency)
-    if (run / "compare" / "compare.png").exists():
-        parts += ["", "## Success vs localisation error", "", "![comparison](compare/compare.png)"]
-    if (run / "episode.png").exists():
-        parts += [
-            "",
-            "## One episode",
-            "",
-            "![episode](episode.png)",
-            "",
-            "Animated: [episode.gif](episode.gif)",
-        ]
+    parts += _figures_part(run)
     match_csv = run / "match" / "match.csv"
     match_rows = _csv_rows(match_csv, ("method", "matches", "seed"))
     if match_rows and _own_results(match_csv, match_rows, run, f"match --run {run} --out"):
@@ -156,8 +157,10 @@ def write_report(run_dir: str | Path) -> Path:
             parts += _match_part(match_rows, run)
     robustness_csv = run / "robustness" / "robustness.csv"
     robustness_rows = _csv_rows(robustness_csv, ("method", "name", "n", "seed"))
-    if robustness_rows and _own_results(
-        robustness_csv, robustness_rows, run, f"robustness --run {run} --out"
+    if (
+        robustness_rows
+        and _learned_suite(robustness_csv, robustness_rows, run)
+        and _own_results(robustness_csv, robustness_rows, run, f"robustness --run {run} --out")
     ):
         with _reading(robustness_csv):
             parts += _robustness_part(robustness_rows, run / "robustness" / "robustness.png")
@@ -201,6 +204,67 @@ def _check_scored(evaluation: Path, data: Any, run: Path) -> None:
             )
 
 
+def _figures_part(run: Path) -> list[str]:
+    """The report's comparison and episode sections, each where the run has its figure
+    and it records (:mod:`~activevision.experiments.provenance`) that this run played, with
+    what played."""
+    parts = []
+    compare_png = run / "compare" / "compare.png"
+    if compare_png.exists():
+        said = _included(compare_png, compare_provenance(compare_png, run))
+        if said is not None:
+            parts += ["", "## Success vs localisation error", ""]
+            parts += [said, ""] if said else []
+            parts += ["![comparison](compare/compare.png)"]
+    episode_png = run / "episode.png"
+    if episode_png.exists():
+        said = _included(episode_png, episode_provenance(episode_png, run))
+        if said is not None:
+            parts += ["", "## One episode", ""]
+            parts += [said, ""] if said else []
+            parts += ["![episode](episode.png)", "", "Animated: [episode.gif](episode.gif)"]
+    return parts
+
+
+def _included(path: Path, provenance: Provenance) -> str | None:
+    """What the report says of what the file ``path`` played (its :class:`Provenance`'s
+    text; ``""`` where it records nothing), or None, with a warning naming it, why and the
+    command that writes it again, where it is not the run's."""
+    if provenance.own:
+        return provenance.text
+    _left_out(path, provenance.text, provenance.again, depth=4)
+    return None
+
+
+def _left_out(path: Path, why: str, again: str, depth: int) -> None:
+    """Warn that ``path`` is left out of the report: ``why``, and the command (after
+    ``activevision``) that writes it again; ``depth``: the calls from the caller of
+    :func:`write_report` to here. The report is still written, without it."""
+    warnings.warn(
+        f"left {path} out of the report: {why}; write it again: activevision {again}",
+        stacklevel=depth + 1,
+    )
+
+
+def _learned_suite(path: Path, rows: list[dict], run: Path) -> bool:
+    """Whether ``robustness.csv`` (``path``, in ``run``) scored the run's learned policy:
+    False, with a warning, for a suite of the shipped policy (``robustness --shipped``) or
+    of another method (``--method NAME``) written into the run, which the report showed as
+    the run's policy's robustness (its only sign the method's name in a sentence)."""
+    methods = {row["method"] for row in rows}
+    if methods == {"learned"}:
+        return True
+    scored = ", ".join(f"`{m}`" for m in sorted(methods))
+    how = "--shipped" if methods == {"shipped"} else "--method"
+    _left_out(
+        path,
+        f"it scored {scored} (robustness {how}), not this run's learned policy",
+        f"robustness --run {run} --out {path.parent} --overwrite",
+        depth=3,
+    )
+    return False
+
+
 def _own_results(path: Path, rows: list[dict], run: Path, again: str) -> bool:
     """Whether the results ``rows`` of ``path`` (``match.csv``, ``robustness.csv`` in
     ``run``) are this run's to report: False, with a warning naming the file and how to
@@ -233,11 +297,11 @@ def _own_results(path: Path, rows: list[dict], run: Path, again: str) -> bool:
     if not stale:
         return True
     best = " --weights best" if weights == "best" else ""
-    warnings.warn(
-        f"left {path} out of the report: it scored another run's {' and '.join(stale)}, or"
-        f" this run's before they were replaced (trained on or retrained); write it again:"
-        f" activevision {again} {path.parent}{best} --overwrite",
-        stacklevel=3,
+    _left_out(
+        path,
+        f"it scored another run's {' and '.join(stale)}, {ANOTHER_RUN}",
+        f"{again} {path.parent}{best} --overwrite",
+        depth=3,
     )
     return False
 

@@ -60,6 +60,7 @@ RUN_OUTPUTS = (
     "compare",
     "episode.png",
     "episode.gif",
+    "episode.json",
     "match",
     "robustness",
 )

@@ -1,0 +1,182 @@
+"""What a run's comparison figure and episode figure record of what played, and whether
+``activevision report`` shows them as the run's (:func:`compare_provenance`,
+:func:`episode_provenance`).
+
+``compare.csv`` records the digest of the weights its ``learned`` method played
+(``run_sha256``, :mod:`activevision.experiments.compare`). ``episode`` and ``demo`` write,
+beside their figure and GIF, a record (``FIGURE.json``, :func:`write_episode_record`): the
+policies, the start's seed, the run whose policy played (the digests of its ``config.json``
+and weights, as ``evaluation.json`` records them) or the exported model, and the digests of
+the figure and GIF it describes. Files written before these records are reported as before.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from activevision.io import read_csv, read_json, write_json
+from activevision.training.policy_files import scored_run
+
+#: what ``episode`` and ``demo`` record beside their figure: ``episode.png`` -> ``episode.json``
+RECORD_SUFFIX = ".json"
+#: the record's keys, each always written (null where it does not apply)
+RECORD_KEYS = ("command", "policies", "seed", "run", "weights", "model", "model_sha256", "files")
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Whether a result file is the run's to report: ``own``, with ``text`` saying what
+    played (``""``: nothing recorded, a file from before the record); or not, with ``text``
+    saying why and ``again`` the command (after ``activevision``) that writes it again."""
+
+    own: bool
+    text: str = ""
+    again: str = ""
+
+
+def sha256_of(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def record_path(figure: str | Path) -> Path:
+    """The record ``episode`` and ``demo`` write beside ``figure``."""
+    return Path(figure).with_suffix(RECORD_SUFFIX)
+
+
+def write_episode_record(
+    figure: Path,
+    gif: Path,
+    *,
+    command: str,
+    policies: Sequence[str],
+    seed: int,
+    run: dict[str, str | None] | None = None,
+    weights: str | None = None,
+    model: str | None = None,
+    model_sha256: str | None = None,
+) -> Path:
+    """Write :func:`record_path` of ``figure`` (drawn with ``gif`` by ``command``): the
+    ``policies`` in their rows' order, the start's ``seed``, ``run``: the digests of the run
+    whose ``weights`` played (:func:`~activevision.training.policy_files.scored_run`, taken
+    as they were loaded; None: no run), ``model``/``model_sha256``: the exported model
+    ``demo`` played (its path as given, None for the shipped one), and the digests of the
+    figure and the GIF as written. The same seed writes the same bytes."""
+    path = record_path(figure)
+    record: dict[str, Any] = {
+        "command": command,
+        "policies": list(policies),
+        "seed": seed,
+        "run": run,
+        "weights": weights if run is not None else None,
+        "model": model,
+        "model_sha256": model_sha256,
+        "files": {p.name: sha256_of(p) for p in (figure, gif)},
+    }
+    write_json(path, record)
+    return path
+
+
+def _damaged(path: Path, why: str) -> ValueError:
+    return ValueError(f"{path} is damaged or not a file activevision wrote ({why})")
+
+
+def _stale(current: dict[str, str | None], recorded: dict[str, str | None]) -> list[str]:
+    """What of a run (``config.json``, ``weights``) a record's digests do not match."""
+    return [
+        what
+        for key, what in (("config_sha256", "config.json"), ("weights_sha256", "weights"))
+        if current[key] != recorded.get(key)
+    ]
+
+
+#: why a result of another run's files, or of this run's before they changed, is left out
+ANOTHER_RUN = "or this run's before they were replaced (trained on or retrained)"
+
+
+def episode_provenance(figure: Path, run: Path) -> Provenance:
+    """Whether ``figure`` (``RUN/episode.png``) is ``run``'s episode, by its record
+    (:func:`write_episode_record`): not where the figure or its GIF is not the one recorded
+    (replaced since), where it played another run's ``config.json`` or weights or this
+    run's before they were replaced, or where it played no policy of this run (``demo`` of
+    the shipped policy or of another model, ``episode`` without ``--run``; ``demo --policy
+    RUN/policy.onnx`` of this run's exported policy as it is now is this run's). A figure
+    without a record (written before it) is the run's, as before. ValueError naming the
+    record where it is damaged."""
+    path = record_path(figure)
+    again = f"episode --run {run} --out {figure} --overwrite"
+    if not path.is_file():
+        return Provenance(True)
+    data = read_json(path)
+    if not isinstance(data, dict) or not set(RECORD_KEYS) <= set(data):
+        raise _damaged(path, f"it must hold an object with the keys {', '.join(RECORD_KEYS)}")
+    try:
+        policies = [str(p) for p in data["policies"]]
+        seed = int(data["seed"])
+        files = {str(k): str(v) for k, v in dict(data["files"]).items()}
+        recorded = None if data["run"] is None else dict(data["run"])
+    except (TypeError, ValueError) as error:
+        raise _damaged(path, f"{type(error).__name__}: {error}") from None
+    if any(Path(name).name != name for name in files):
+        raise _damaged(path, "its files must be named without a folder")
+    for name, digest in files.items():
+        drawn = figure.with_name(name)
+        if drawn.is_file() and sha256_of(drawn) != digest:
+            why = f"{drawn.name} is not the one {path.name} records (replaced since)"
+            return Provenance(False, why, again)
+    played = " and ".join(f"`{p}`" for p in policies) + f" from the start of seed {seed}"
+    if recorded is None:
+        exported = run / "policy.onnx"
+        model_sha256 = data["model_sha256"]
+        if model_sha256 and exported.is_file() and sha256_of(exported) == model_sha256:
+            return Provenance(True, f"{played}; `{policies[0]}` is this run's policy.onnx.")
+        if data["command"] == "demo":
+            what = "another exported model" if data["model"] else "the shipped policy"
+            why = f"it played {what} (demo), not this run's policy"
+        else:
+            why = "it played no policy of this run (an episode without --run)"
+        return Provenance(False, why, again)
+    weights = "best" if data["weights"] == "best" else "final"
+    stale = _stale(scored_run(run, weights), recorded)
+    if stale:
+        best = " --weights best" if weights == "best" else ""
+        why = f"it played another run's {' and '.join(stale)}, {ANOTHER_RUN}"
+        return Provenance(False, why, again.replace(" --out", f"{best} --out"))
+    if "learned" in policies:
+        which = "best validated" if weights == "best" else "final"
+        played += f"; `learned` plays this run's {which} weights"
+    return Provenance(True, played + ".")
+
+
+def compare_provenance(figure: Path, run: Path) -> Provenance:
+    """Whether ``figure`` (``RUN/compare/compare.png``) is ``run``'s comparison, by the
+    ``run_sha256`` its ``compare.csv`` records: not where it played another run's weights
+    or this run's before they were replaced, or no run (a compare without ``--run``: no
+    learned policy of this run, in the paper's env). A figure without a CSV, or a CSV from
+    before the column, is the run's, as before. ValueError naming the CSV where it is
+    damaged or its rows record two runs."""
+    from activevision.experiments.compare import RESUME_COLUMNS, RUN_COLUMN
+
+    csv_path = figure.with_name("compare.csv")
+    again = f"compare --run {run} --out {figure.parent} --overwrite"
+    if not csv_path.is_file():
+        return Provenance(True)
+    rows = read_csv(csv_path, RESUME_COLUMNS)
+    if not rows:
+        raise _damaged(csv_path, "it holds no rows")
+    if RUN_COLUMN not in rows[0]:
+        return Provenance(True)
+    digests = {row[RUN_COLUMN] for row in rows}
+    if len(digests) > 1:
+        raise _damaged(csv_path, f"its rows' {RUN_COLUMN} are not one run's")
+    (digest,) = digests
+    if not digest:
+        return Provenance(False, "it played no run (a compare without --run)", again)
+    for weights, which in (("final", "final"), ("best", "best validated")):
+        if scored_run(run, weights)["weights_sha256"] == digest:
+            return Provenance(True, f"`learned` plays this run's {which} weights.")
+    why = f"it played another run's weights, {ANOTHER_RUN}"
+    return Provenance(False, why, again)
