@@ -70,6 +70,9 @@ def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     report = (out / "report.md").read_text()
     assert "compare/compare.png" in report and "| learned |" in report
     assert "match/match_pareto.png" in report and "| entropy_greedy |" in report
+    # the comparison and the episode record that this run's final weights played
+    assert "`learned` plays this run's final weights.\n\n![comparison]" in report
+    assert "`learned` and `random` from the start of seed 0; `learned` plays this run's" in report
     # Running it again finds the finished run and only redoes evaluation and figures.
     assert main(argv) == 0
     # ... but another quickstart's (other steps or seed) is not resumed into this run

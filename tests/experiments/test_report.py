@@ -531,12 +531,29 @@ def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_p
     write(command="episode", policies=["oracle", "random"])
     page, warned = _report_warnings(run)
     assert warned[0].endswith(f"it played no policy of this run (an episode without --run){again}")
-    # this run's, but the figure replaced since (another run's copied over it)
-    write(command="episode", policies=["learned", "random"], run=scored_run(run), weights="final")
-    figure.write_bytes(b"another run's png")
+    # drawn elsewhere for this run (ep.png, ep.gif, ep.json), then moved in: this run's
+    elsewhere = tmp_path / "ep.png"
+    for name in ("ep.png", "ep.gif"):
+        (tmp_path / name).write_bytes(b"gif" if name.endswith("gif") else b"png")
+    moved = write_episode_record(
+        elsewhere,
+        elsewhere.with_suffix(".gif"),
+        command="episode",
+        policies=["learned"],
+        seed=1,
+        run=scored_run(run),
+        weights="final",
+    )
+    (run / "episode.json").write_bytes(moved.read_bytes())
     page, warned = _report_warnings(run)
-    assert heading not in page
-    assert "episode.png is not the one episode.json records (replaced since)" in warned[0]
+    assert warned == [] and "`learned` from the start of seed 1; `learned` plays" in page
+    # this run's, but the figure or its GIF replaced since (another run's copied over it)
+    write(command="episode", policies=["learned", "random"], run=scored_run(run), weights="final")
+    for drawn in (gif, figure):
+        drawn.write_bytes(b"another run's")
+        page, warned = _report_warnings(run)
+        assert heading not in page
+        assert f"{drawn.name} is not the one episode.json records (replaced since)" in warned[0]
     (run / "episode.json").write_text('{"policies": []}')
     with pytest.raises(ValueError, match=r"episode.json is damaged or not a file activevision"):
         write_report(run)

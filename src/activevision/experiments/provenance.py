@@ -120,11 +120,10 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
         recorded = None if data["run"] is None else dict(data["run"])
     except (TypeError, ValueError) as error:
         raise _damaged(path, f"{type(error).__name__}: {error}") from None
-    if any(Path(name).name != name for name in files):
-        raise _damaged(path, "its files must be named without a folder")
-    for name, digest in files.items():
-        drawn = figure.with_name(name)
-        if drawn.is_file() and sha256_of(drawn) != digest:
+    # by digest, not name: a figure and record renamed together (ep.png to episode.png)
+    # are still each other's
+    for drawn in (figure, figure.with_suffix(".gif")):
+        if drawn.is_file() and sha256_of(drawn) not in files.values():
             why = f"{drawn.name} is not the one {path.name} records (replaced since)"
             return Provenance(False, why, again)
     played = " and ".join(f"`{p}`" for p in policies) + f" from the start of seed {seed}"
