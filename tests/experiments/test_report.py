@@ -510,6 +510,14 @@ def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_p
         f"left {figure} out of the report: it played another run's weights, or this run's"
         f" before they were replaced (trained on or retrained){again}"
     ]
+    # its best validated weights, replaced since: written again with --weights best
+    (run / "best_policy.safetensors").write_bytes(b"best")
+    write(command="episode", policies=["learned"], run=scored_run(run, "best"), weights="best")
+    assert "`learned` plays this run's best validated weights." in _report_warnings(run)[0]
+    (run / "best_policy.safetensors").write_bytes(b"better")
+    assert _report_warnings(run)[1][0].endswith(
+        f"activevision episode --run {run} --weights best --out {figure} --overwrite"
+    )
     # demo: the shipped policy, another model, or this run's exported policy.onnx
     shipped = hashlib.sha256(b"shipped model").hexdigest()
     write(command="demo", policies=["shipped", "random"], model_sha256=shipped)

@@ -143,7 +143,7 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
     if stale:
         best = " --weights best" if weights == "best" else ""
         why = f"it played another run's {' and '.join(stale)}, {ANOTHER_RUN}"
-        return Provenance(False, why, again.replace(" --out", f"{best} --out"))
+        return Provenance(False, why, f"episode --run {run}{best} --out {figure} --overwrite")
     if "learned" in policies:
         which = "best validated" if weights == "best" else "final"
         played += f"; `learned` plays this run's {which} weights"
