@@ -5,7 +5,7 @@ import os
 
 import pytest
 
-from activevision.io import write_csv, write_text
+from activevision.io import file_sha256, write_csv, write_text
 
 
 def test_a_write_replaces_the_file_whole_and_leaves_no_temporary(tmp_path):
@@ -145,3 +145,10 @@ def test_read_csv_refuses_a_last_line_without_its_end_of_line(tmp_path):
         read_csv(path, live=True)
     path.write_bytes(b'x,y\r\n1,"two\nlines"\n')  # a quoted end of line inside a cell
     assert read_csv(path) == [{"x": "1", "y": "two\nlines"}]
+
+
+def test_file_sha256_is_the_standard_digest_of_the_file_bytes(tmp_path):
+    # FIPS 180-2's example: SHA-256("abc")
+    path = tmp_path / "abc.txt"
+    path.write_bytes(b"abc")
+    assert file_sha256(path) == ("ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad")

@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import errno
+import hashlib
 import io
 import json
 import math
@@ -52,6 +53,11 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         raise type(error)(error.errno, f"cannot write {path}: {error.strerror}") from None
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """The SHA-256 of a file's bytes, hex: what result files record of the files they used."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def write_bytes(path: str | os.PathLike, data: bytes) -> None:

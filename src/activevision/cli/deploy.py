@@ -54,8 +54,9 @@ def cmd_demo(args: argparse.Namespace) -> None:
     """Episode figure and GIF of the shipped (or a given) ONNX policy against random."""
     from activevision.experiments.episode_figure import trace_episode
     from activevision.experiments.policies import OnnxPolicy, RandomPolicy
-    from activevision.experiments.provenance import record_path, sha256_of, write_episode_record
+    from activevision.experiments.provenance import record_path, write_episode_record
     from activevision.figures.episode import animate_episode, plot_episodes
+    from activevision.io import file_sha256
     from activevision.runtime import pretrained_policy_path
 
     gif = figure_and_gif(args.out)
@@ -64,7 +65,7 @@ def cmd_demo(args: argparse.Namespace) -> None:
     check_figure_path(args.out)
     model = args.policy or pretrained_policy_path()
     policy = OnnxPolicy(model)
-    model_sha256 = sha256_of(model)  # as loaded
+    model_sha256 = file_sha256(model)  # as loaded
     # the figure's row says whose policy it is (the class's name, "onnx", said neither): the
     # file's name, or its run's folder for an exported policy.onnx
     if args.policy is None:

@@ -17,7 +17,6 @@ than the methods do.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import math
 import numbers
 import time
@@ -41,6 +40,7 @@ from activevision.experiments.match_methods import (
     user_errors,
 )
 from activevision.experiments.match_world import world_columns
+from activevision.io import file_sha256
 
 #: per-match metrics, in table order: name -> (column header, format)
 MATCH_METRICS = {
@@ -251,7 +251,7 @@ def model_columns(
         model = options.model
         columns[label] = {
             "model": "" if model is None else str(model),
-            "model_sha256": "" if model is None else hashlib.sha256(model.read_bytes()).hexdigest(),
+            "model_sha256": "" if model is None else file_sha256(model),
         }
     return columns
 

@@ -12,13 +12,12 @@ the figure and GIF it describes. Files written before these records are reported
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from activevision.io import read_csv, read_json, write_json
+from activevision.io import file_sha256, read_csv, read_json, write_json
 from activevision.training.policy_files import scored_run
 
 #: what ``episode`` and ``demo`` record beside their figure: ``episode.png`` -> ``episode.json``
@@ -36,10 +35,6 @@ class Provenance:
     own: bool
     text: str = ""
     again: str = ""
-
-
-def sha256_of(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def record_path(figure: str | Path) -> Path:
@@ -74,7 +69,7 @@ def write_episode_record(
         "weights": weights if run is not None else None,
         "model": model,
         "model_sha256": model_sha256,
-        "files": {p.name: sha256_of(p) for p in (figure, gif)},
+        "files": {p.name: file_sha256(p) for p in (figure, gif)},
     }
     write_json(path, record)
     return path
@@ -123,14 +118,14 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
     # by digest, not name: a figure and record renamed together (ep.png to episode.png)
     # are still each other's
     for drawn in (figure, figure.with_suffix(".gif")):
-        if drawn.is_file() and sha256_of(drawn) not in files.values():
+        if drawn.is_file() and file_sha256(drawn) not in files.values():
             why = f"{drawn.name} is not the one {path.name} records (replaced since)"
             return Provenance(False, why, again)
     played = " and ".join(f"`{p}`" for p in policies) + f" from the start of seed {seed}"
     if recorded is None:
         exported = run / "policy.onnx"
         model_sha256 = data["model_sha256"]
-        if model_sha256 and exported.is_file() and sha256_of(exported) == model_sha256:
+        if model_sha256 and exported.is_file() and file_sha256(exported) == model_sha256:
             return Provenance(True, f"{played}; `{policies[0]}` is this run's policy.onnx.")
         if data["command"] == "demo":
             what = "another exported model" if data["model"] else "the shipped policy"

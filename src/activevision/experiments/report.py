@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import hashlib
 import json
 import math
 import platform
@@ -38,7 +37,7 @@ from activevision.experiments.provenance import (
     compare_provenance,
     episode_provenance,
 )
-from activevision.io import read_csv, read_json, write_text
+from activevision.io import file_sha256, read_csv, read_json, write_text
 from activevision.text import counted
 from activevision.training.checkpoint import checkpoint_step, list_checkpoints
 from activevision.training.config import MATCH_ENV_ID
@@ -532,7 +531,7 @@ def _model_text(row: dict, run: Path) -> str:
     again since, or another's, is said to be not)."""
     digest = row["model_sha256"]
     exported = run / "policy.onnx"
-    if exported.is_file() and hashlib.sha256(exported.read_bytes()).hexdigest() == digest:
+    if exported.is_file() and file_sha256(exported) == digest:
         whose = "this run's policy.onnx"
     else:
         whose = "not this run's policy.onnx as it is now"

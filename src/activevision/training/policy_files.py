@@ -14,7 +14,6 @@ the :class:`QNetwork` from the file alone and never executes code.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import sys
@@ -28,7 +27,7 @@ import torch
 
 from activevision.agents.q_network import QNetwork
 from activevision.agents.student import StudentNetwork
-from activevision.io import atomic_path
+from activevision.io import atomic_path, file_sha256
 from activevision.training import checkpoint as ckpt
 
 POLICY_FILE = "policy.safetensors"  #: the newest online weights
@@ -159,10 +158,7 @@ def scored_run(run_dir: str | os.PathLike[str], weights: str = "final") -> dict[
         "config_sha256": run / "config.json",
         "weights_sha256": run / (BEST_POLICY_FILE if weights == "best" else POLICY_FILE),
     }
-    return {
-        key: hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
-        for key, path in files.items()
-    }
+    return {key: file_sha256(path) if path.is_file() else None for key, path in files.items()}
 
 
 #: the columns a table of results (``match.csv``, ``robustness.csv``) records the training

@@ -30,7 +30,7 @@ import torch
 
 from activevision.agents.ddqn import DDQNLearner
 from activevision.agents.replay.prioritized import PrioritizedReplayBuffer
-from activevision.io import loads_json
+from activevision.io import file_sha256, loads_json
 from activevision.training import checkpoint as ckpt
 from activevision.training.loggers import LogPosition
 from activevision.training.metrics import EPISODE_FIELDS, EpochAccumulator
@@ -219,7 +219,7 @@ def obs_digest(obs: np.ndarray | None) -> str | None:
 
 def config_digest(run_dir: Path) -> str:
     """SHA-256 of the run's ``config.json``."""
-    return hashlib.sha256((run_dir / CONFIG_FILE).read_bytes()).hexdigest()
+    return file_sha256(run_dir / CONFIG_FILE)
 
 
 # ---------------------------------------------------------------------- the directory
