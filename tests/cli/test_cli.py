@@ -41,8 +41,9 @@ def test_python_dash_m_runs_the_command():
 
 def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     out = tmp_path / "run"
-    argv = ["quickstart", "--out", str(out), "--steps", "600", "--episodes", "6"]
-    argv += ["--matches", "2", "--match-ticks", "6"]
+    options = ["quickstart", "--out", str(out), "--episodes", "6"]
+    options += ["--matches", "2", "--match-ticks", "6"]
+    argv = [*options, "--steps", "600"]
     assert main(argv) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last.startswith("main job: learned ") and "scan" in last and "random" in last
@@ -73,8 +74,8 @@ def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     assert main(argv) == 0
     # ... but another quickstart's (other steps or seed) is not resumed into this run
     capsys.readouterr()
-    for other in (["--steps", "900"], ["--seed", "1"]):
-        assert main([*argv, *other]) == 2
+    for other in (["--steps", "900"], ["--steps", "600", "--seed", "1"]):
+        assert main([*options, *other]) == 2
         assert "holds another training run than this quickstart's" in capsys.readouterr().err
     # The trained run exports to ONNX for the robot runtime.
     assert main(["export", str(out), "-o", str(tmp_path / "policy.onnx")]) == 0

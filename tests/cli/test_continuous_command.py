@@ -11,9 +11,8 @@ import pytest
 
 from activevision.cli import main
 
-TINY = [
-    "--set",
-    "env.action_type=continuous",
+#: a tiny run's sizes, whatever its moves
+SMALL = [
     "--set",
     "epoch_steps=40",
     "--set",
@@ -25,6 +24,7 @@ TINY = [
     "--set",
     "batch_size=8",
 ]
+TINY = ["--set", "env.action_type=continuous", *SMALL]
 #: what each learner reads on top (a key its algo never reads is refused)
 SB3_TINY = {
     algo: [*TINY, "--set", "sb3.num_envs=2", *own]
@@ -34,7 +34,8 @@ SB3_TINY = {
         "ppo": ("--set", "sb3.n_steps=20"),
     }.items()
 }
-DAGGER_TINY = [*TINY, "--set", "dagger.num_envs=8", "--set", "dagger.updates_per_rollout=1"]
+DAGGER_SMALL = [*SMALL, "--set", "dagger.num_envs=8", "--set", "dagger.updates_per_rollout=1"]
+DAGGER_TINY = ["--set", "env.action_type=continuous", *DAGGER_SMALL]
 
 
 @pytest.fixture(scope="module")

@@ -136,13 +136,13 @@ UNREAD_PATHS = {
 def match_settings(items: list[str] | None) -> dict[str, Any]:
     """``--set KEY=VALUE`` items as ``{path: value}`` (a leading ``match.`` dropped; values
     JSON where they parse, as ``train --set``). ValueError for an item that is no KEY=VALUE,
-    or a key that an option sets (:data:`OPTION_PATHS`) or that ``match`` never reads
-    (:data:`UNREAD_PATHS`)."""
+    a path set twice (``camera.hfov`` and ``match.camera.hfov``), or a key that an option
+    sets (:data:`OPTION_PATHS`) or that ``match`` never reads (:data:`UNREAD_PATHS`)."""
     from activevision.training.config import parse_overrides
 
     settings: dict[str, Any] = {}
     try:
-        changes = parse_overrides(items or [])
+        changes = parse_overrides(items or [], lambda key: key.removeprefix("match."))
     except ValueError as error:
         raise ValueError(f"--set: {error}") from None
     for key, value in changes.items():
