@@ -4,6 +4,7 @@ runs, a run started over beside an earlier attempt's outputs, a log read while w
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 import shutil
@@ -51,6 +52,45 @@ def test_a_run_named_twice_is_said_to_be_named_twice(run, tmp_path, monkeypatch,
     assert main(["compare", "--runs", str(run), f"{run}/", "--errors", "0", *out]) == 2
     one_clear_line(f"--runs names the run {run} twice")
     assert not (tmp_path / "ev").exists()
+
+
+def test_the_run_of_run_named_again_in_runs_is_refused(run, tmp_path, monkeypatch, one_clear_line):
+    """``evaluate --run R --runs R`` scored the run twice, as learned and as learned:R, on
+    the same episodes (and ``compare`` drew both lines); the paths are compared as the
+    folders they name."""
+    monkeypatch.chdir(run.parent)
+    out = ["--episodes", "1", "--out", str(tmp_path / "ev")]
+    argv = ["evaluate", "--run", "run", "--runs", f"{run}/", "--methods", "learned", *out]
+    assert main(argv) == 2
+    one_clear_line(f"--runs {run} is --run run, whose policy plays as method learned already")
+    compare = ["compare", "--run", str(run), "--runs", "./run", "--errors", "0", *out]
+    assert main(compare) == 2
+    one_clear_line(f"--runs run is --run {run}")
+    assert not (tmp_path / "ev").exists()
+    # where --run only sets the env (learned is not among --methods) it plays once: taken
+    argv = ["evaluate", "--run", "run", "--runs", "run", "--methods", "random", *out]
+    assert main(argv) == 0
+    with (tmp_path / "ev" / "evaluation.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["random", "learned:run"]
+
+
+def test_a_model_named_twice_is_refused(tmp_path, monkeypatch, one_clear_line):
+    """``match --model a/policy.onnx ./a/policy.onnx`` played one policy twice (as
+    onnx_policy[a-1] and onnx_policy[a-2]); the same path twice was dropped silently."""
+    from activevision.runtime import pretrained_policy_path
+
+    (tmp_path / "a").mkdir()
+    for suffix in (".onnx", ".json"):
+        shipped = pretrained_policy_path().with_suffix(suffix)
+        (tmp_path / "a" / f"policy{suffix}").write_bytes(shipped.read_bytes())
+    monkeypatch.chdir(tmp_path)
+    argv = ["match", "--methods", "onnx_policy", "--matches", "1", "--ticks", "1", "--model"]
+    out = ["--out", str(tmp_path / "m")]
+    assert main([*argv, "a/policy.onnx", str(tmp_path / "a" / "policy.onnx"), *out]) == 2
+    one_clear_line(f"--model names the policy a/policy.onnx and {tmp_path}/a/policy.onnx twice")
+    assert main([*argv, "a/policy.onnx", "a/policy.onnx", *out]) == 2
+    one_clear_line("--model names the policy a/policy.onnx twice: give each once")
+    assert not (tmp_path / "m").exists()
 
 
 #: what keeps each command below short where it is not refused (it was not, before):
