@@ -103,7 +103,7 @@ def test_runs_remembering_moves_the_env_does_not_give_are_named(tmp_path, one_cl
     runs = {}
     for history in (0, 1):
         runs[history] = run = tmp_path / f"history{history}"
-        args = ["train", "--algo", "dagger", "--set", "env.observation=image+head", *DAGGER_TINY]
+        args = ["train", "--algo", "dagger", "--set", "env.observation=image+head", *DAGGER_SMALL]
         args += ["--set", "env.action_type=discrete", "--set", f"env.action_history={history}"]
         args += ["--steps", "40", "--out", str(run)]
         assert main(args) == 0
@@ -113,3 +113,23 @@ def test_runs_remembering_moves_the_env_does_not_give_are_named(tmp_path, one_cl
         "'image+head' (head, actions) against 'image+head': no actions (action_history 1:"
         " the moves it remembers)"
     )
+
+
+@pytest.mark.parametrize(
+    ("setting", "named"),
+    [("env.step_deg=4", "'env.step_deg'"), ("action_set=4way", "'action_set' (env.action_set)")],
+)
+def test_the_discrete_moves_settings_are_refused_on_a_continuous_run(
+    tmp_path, setting, named, one_clear_line
+):
+    """``--set env.step_deg=4`` on a run of continuous moves was stored in config.json and
+    never read (its moves are scaled by env.max_move_deg); a discrete run takes it."""
+    args = ["train", "--algo", "dagger", "--set", "env.action_history=0", *DAGGER_SMALL]
+    args += ["--set", setting, "--steps", "40"]
+    continuous = [*args, "--set", "env.action_type=continuous"]
+    assert main([*continuous, "--out", str(tmp_path / "c")]) == 2
+    one_clear_line(f"{named} is never read by this run: only discrete moves read it")
+    assert not (tmp_path / "c").exists()
+    assert main([*args, "--out", str(tmp_path / "d")]) == 0
+    config = json.loads((tmp_path / "d" / "config.json").read_text())["env"]
+    assert (config["step_deg"], config["action_set"]) != (3.0, "8way")

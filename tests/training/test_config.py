@@ -527,6 +527,17 @@ def test_values_another_setting_leaves_unread_are_refused_in_any_order():
         )
     with pytest.raises(ValueError, match="only continuous moves are scaled by it"):
         apply_overrides(preset("dagger_image"), ["max_move_deg=[5,5]"])
+    # and the discrete moves' step and set with continuous ones (sac_head's moves)
+    for setting in ("env.step_deg=4", "action_set=4way"):
+        key = setting.partition("=")[0]
+        with pytest.raises(
+            ValueError,
+            match=rf"'{key}'( \(env\.action_set\))? is never read by this run: only discrete"
+            r" moves read it .* continuous moves are scaled by env\.max_move_deg",
+        ):
+            apply_overrides(preset("sac_head"), [setting])
+        with pytest.raises(ValueError, match="only discrete moves read it"):
+            apply_overrides(preset("paper"), [setting, "algo=dagger", "action_type=continuous"])
     with pytest.raises(ValueError, match="this run never validates"):
         apply_overrides(preset("paper"), ["eval_seed=3"])
     with pytest.raises(ValueError, match=r"only env\.success_mode=tolerance ends an episode by"):
@@ -547,6 +558,10 @@ def test_values_another_setting_leaves_unread_are_refused_in_any_order():
         preset("dagger_image"), ["max_move_deg=[5,5]", "action_type=continuous"]
     )
     assert config.env.max_move_deg == (5, 5)
+    config = apply_overrides(
+        preset("dagger_image_continuous"), ["step_deg=4", "action_set=4way", "action_type=discrete"]
+    )
+    assert (config.env.step_deg, config.env.action_set) == (4, "4way")
     config = apply_overrides(preset("paper"), ["eval_episodes=7", "eval_interval=600"])
     assert (config.run.eval_episodes, config.run.eval_interval) == (7, 600)
     # what a preset carries is not refused: quickstart's prior range on the image and head

@@ -654,10 +654,11 @@ def _unread_by(algo: object, path: str, on_match: bool = False) -> str:
 def _unread_given(config: TrainConfig, path: str) -> str:
     """Why ``config``'s run never reads the value at ``path`` because of another of its
     values ("" when it does): the prior pose's settings where the observation has no prior
-    pose, continuous moves' size with discrete actions, the success tolerance where success
-    is by landmarks, validation's episodes where the run never validates, and a DAgger key
-    that one match teacher, or one way of acting, reads and the run's does not
-    (``_unread_by`` has the algo's and the env's)."""
+    pose, continuous moves' size with discrete actions and the discrete moves' step and set
+    with continuous ones, the success tolerance where success is by landmarks, validation's
+    episodes where the run never validates, and a DAgger key that one match teacher, or one
+    way of acting, reads and the run's does not (``_unread_by`` has the algo's and the
+    env's)."""
     unread = _unread_env(config.env, path) or _unread_run(config.run, path)
     if unread or config.algo != "dagger":
         return unread
@@ -702,6 +703,11 @@ def _unread_env(env: EnvConfig, path: str) -> str:
         return (
             "only continuous moves are scaled by it (env.action_type=continuous); this run's"
             " discrete moves are env.step_deg"
+        )
+    if path in ("env.step_deg", "env.action_set") and env.action_type == "continuous":
+        return (
+            "only discrete moves read it (the table of the actions' moves); this run's"
+            " continuous moves are scaled by env.max_move_deg"
         )
     if path == "env.success_tolerance_deg" and env.success_mode != "tolerance":
         return (
