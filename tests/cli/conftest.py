@@ -89,3 +89,20 @@ def digests() -> Callable[[Path], dict[str, str]]:
 def tiny_train() -> list[str]:
     """The arguments of :data:`TINY_TRAIN` (add ``--out``)."""
     return list(TINY_TRAIN)
+
+
+@pytest.fixture
+def tiny_train_without() -> Callable[..., list[str]]:
+    """``tiny_train_without(*keys)``: :data:`TINY_TRAIN` without its ``--set`` of each key,
+    for a test that sets them itself (``train`` refuses a field set twice)."""
+
+    def without(*keys: str) -> list[str]:
+        argv: list[str] = []
+        for word in TINY_TRAIN:
+            if argv and argv[-1] == "--set" and word.partition("=")[0] in keys:
+                argv.pop()
+            else:
+                argv.append(word)
+        return argv
+
+    return without

@@ -662,7 +662,9 @@ def test_a_run_started_over_keeps_no_weights_of_the_earlier_attempt(
     # with --overwrite (and no validation), its best_policy was exported as the new run's
     shutil.copyfile(run / "policy.safetensors", run / "best_policy.safetensors")
     shutil.rmtree(run / "checkpoints")
-    assert main([*tiny_train, "--steps", "30", "--out", str(run), "--overwrite"]) == 0
+    steps = tiny_train.index("--steps")
+    tiny_train[steps + 1] = "30"  # a shorter run than the tiny one
+    assert main([*tiny_train, "--out", str(run), "--overwrite"]) == 0
     capsys.readouterr()
     assert not (run / "best_policy.safetensors").exists()
     out = run.parent / "best.onnx"
@@ -1417,11 +1419,14 @@ def test_a_size_this_machine_cannot_hold_is_one_line(
         ("learner.batch_size", "LearnerConfig.batch_size: must be in [1, 65536]"),
     ],
 )
-def test_a_huge_size_names_its_key_and_limit(tmp_path, tiny_train, one_clear_line, setting, named):
+def test_a_huge_size_names_its_key_and_limit(
+    tmp_path, tiny_train_without, one_clear_line, setting, named
+):
     """``--set replay.buffer_size=10**15`` (or an image, a minibatch of that size) ended in
     numpy's "Maximum allowed dimension exceeded" or a MemoryError naming no key: it is one
     line naming the key and its limit, before any work."""
-    argv = [*tiny_train, "--set", f"{setting}={10**15}", "--out", str(tmp_path / "new")]
+    tiny = tiny_train_without("batch_size", "buffer_size")  # the huge one alone sets them
+    argv = [*tiny, "--set", f"{setting}={10**15}", "--out", str(tmp_path / "new")]
     assert main(argv) == 2
     one_clear_line(named, f"got {10**15}")
     assert not (tmp_path / "new").exists()

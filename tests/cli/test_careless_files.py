@@ -55,6 +55,114 @@ def test_a_run_named_twice_is_said_to_be_named_twice(run, tmp_path, monkeypatch,
     assert not (tmp_path / "ev").exists()
 
 
+def test_the_run_of_run_named_again_in_runs_is_refused(run, tmp_path, monkeypatch, one_clear_line):
+    """``evaluate --run R --runs R`` scored the run twice, as learned and as learned:R, on
+    the same episodes (and ``compare`` drew both lines); the paths are compared as the
+    folders they name."""
+    monkeypatch.chdir(run.parent)
+    out = ["--episodes", "1", "--out", str(tmp_path / "ev")]
+    argv = ["evaluate", "--run", "run", "--runs", f"{run}/", "--methods", "learned", *out]
+    assert main(argv) == 2
+    one_clear_line(f"--runs {run} is --run run, whose policy plays as method learned already")
+    compare = ["compare", "--run", str(run), "--runs", "./run", "--errors", "0", *out]
+    assert main(compare) == 2
+    one_clear_line(f"--runs run is --run {run}")
+    assert not (tmp_path / "ev").exists()
+    # where --run only sets the env (learned is not among --methods) it plays once: taken
+    argv = ["evaluate", "--run", "run", "--runs", "run", "--methods", "random", *out]
+    assert main(argv) == 0
+    with (tmp_path / "ev" / "evaluation.csv").open() as f:
+        assert [r["method"] for r in csv.DictReader(f)] == ["random", "learned:run"]
+
+
+def test_a_model_named_twice_is_refused(tmp_path, monkeypatch, one_clear_line):
+    """``match --model a/policy.onnx ./a/policy.onnx`` played one policy twice (as
+    onnx_policy[a-1] and onnx_policy[a-2]); the same path twice was dropped silently."""
+    from activevision.runtime import pretrained_policy_path
+
+    (tmp_path / "a").mkdir()
+    for suffix in (".onnx", ".json"):
+        shipped = pretrained_policy_path().with_suffix(suffix)
+        (tmp_path / "a" / f"policy{suffix}").write_bytes(shipped.read_bytes())
+    monkeypatch.chdir(tmp_path)
+    argv = ["match", "--methods", "onnx_policy", "--matches", "1", "--ticks", "1", "--model"]
+    out = ["--out", str(tmp_path / "m")]
+    assert main([*argv, "a/policy.onnx", str(tmp_path / "a" / "policy.onnx"), *out]) == 2
+    one_clear_line(f"--model names the policy a/policy.onnx and {tmp_path}/a/policy.onnx twice")
+    assert main([*argv, "a/policy.onnx", "a/policy.onnx", *out]) == 2
+    one_clear_line("--model names the policy a/policy.onnx twice: give each once")
+    assert not (tmp_path / "m").exists()
+
+
+#: what keeps each command below short where it is not refused (it was not, before):
+#: a paper run of 2 steps, a sweep of one seed, one match of one tick, one episode
+_SHORT = {
+    "train": [("--steps", "2")],
+    "sweep": [("--seeds", "0"), ("--set", "total_timesteps=2")],
+    "match": [("--matches", "1"), ("--ticks", "1"), ("--methods", "random")],
+    "compare": [("--episodes", "1"), ("--methods", "random")],
+}
+
+
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [
+        (
+            ["train", "--set", "learning_rate=1e-3", "--set", "learner.learning_rate=2e-3"],
+            "overrides learning_rate=1e-3 and learner.learning_rate=2e-3 both set"
+            " learner.learning_rate: give it once",
+        ),
+        (
+            ["train", "--set", "step_deg=4", "--set", "step_deg=5"],
+            "override 'step_deg' (env.step_deg) is given twice (step_deg=4, then step_deg=5)",
+        ),
+        (
+            ["sweep", "--set", "learning_rate=1e-3", "--set", "learner.learning_rate=2e-3"],
+            "both set learner.learning_rate",
+        ),
+        (
+            ["sweep", "--grid", "learning_rate=1e-3", "--grid", "learner.learning_rate=2e-3"],
+            "--grid learning_rate and --grid learner.learning_rate both set",
+        ),
+        (
+            ["match", "--set", "camera.hfov=1.2", "--set", "match.camera.hfov=1.0"],
+            "--set: overrides camera.hfov=1.2 and match.camera.hfov=1.0 both set camera.hfov",
+        ),
+        # an option that keeps one value: argparse kept the last
+        (
+            ["train", "--steps", "5", "--steps", "6"],
+            "argument --steps: given twice (--steps 5, then --steps 6): give it once",
+        ),
+        (["train", "--seed", "1", "--seed", "1"], "argument --seed: given twice"),
+        (["train", "--overwrite", "--overwrite"], "argument --overwrite: given twice"),
+        (
+            ["evaluate", "--runs", "a", "b", "--runs", "c"],
+            "argument --runs: given twice (--runs a b, then --runs c)",
+        ),
+        (["match", "--ticks", "3", "--ticks", "4"], "argument --ticks: given twice"),
+        (["compare", "--errors", "0", "--errors", "1"], "argument --errors: given twice"),
+    ],
+)
+def test_a_value_given_twice_is_refused_naming_it(tmp_path, argv, named, one_clear_line):
+    """The last of two values was taken silently: ``train --set X=1 --set X=2`` (or two
+    spellings of X), ``--steps 5 --steps 6``, ``--runs A --runs B`` (B alone scored)."""
+    taken = {word for word in argv if word.startswith("--")} - {"--set"}  # --set: repeatable
+    short = [w for pair in _SHORT.get(argv[0], []) if pair[0] not in taken for w in pair]
+    assert main([*argv, *short, "--out", str(tmp_path / "out")]) == 2
+    one_clear_line(named)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_parsed_command_keeps_only_its_own_values():
+    """The parser's note of the options given (to refuse one given twice) is not left in
+    the namespace the command reads."""
+    from activevision.cli import build_parser
+
+    args = build_parser().parse_args(["train", "--steps", "5", "--out", "r", "--overwrite"])
+    assert not [name for name in vars(args) if name.startswith("_")]
+    assert (args.steps, args.overwrite) == (5, True)
+
+
 @pytest.mark.parametrize("folder", ["tensorboard", "checkpoints"])
 def test_a_file_where_a_run_writes_a_folder_is_named_before_training(
     tmp_path, tiny_train, folder, one_clear_line

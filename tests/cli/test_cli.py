@@ -42,8 +42,9 @@ def test_python_dash_m_runs_the_command():
 
 def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     out = tmp_path / "run"
-    argv = ["quickstart", "--out", str(out), "--steps", "600", "--episodes", "6"]
-    argv += ["--matches", "2", "--match-ticks", "6"]
+    options = ["quickstart", "--out", str(out), "--episodes", "6"]
+    options += ["--matches", "2", "--match-ticks", "6"]
+    argv = [*options, "--steps", "600"]
     assert main(argv) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last.startswith("main job: learned ") and "scan" in last and "random" in last
@@ -77,8 +78,8 @@ def test_quickstart_trains_evaluates_and_reports(tmp_path, capsys):
     assert main(argv) == 0
     # ... but another quickstart's (other steps or seed) is not resumed into this run
     capsys.readouterr()
-    for other in (["--steps", "900"], ["--seed", "1"]):
-        assert main([*argv, *other]) == 2
+    for other in (["--steps", "900"], ["--steps", "600", "--seed", "1"]):
+        assert main([*options, *other]) == 2
         assert "holds another training run than this quickstart's" in capsys.readouterr().err
     # The trained run exports to ONNX for the robot runtime.
     assert main(["export", str(out), "-o", str(tmp_path / "policy.onnx")]) == 0
@@ -106,6 +107,7 @@ def test_a_run_shorter_than_its_validation_interval_says_so(tmp_path):
     # never validated and wrote no best_policy.safetensors, and said nothing
     base = ["train", "--steps", "100", "--set", "num_threads=1", "--set", "tensorboard=false"]
     base += ["--set", "learning_starts=50"]  # the paper's 1,000 would never update: a warning
+    base += ["--set", "target_update_interval=25"]  # the paper's 10,000 would never sync: a warning
     expected = (
         "run.eval_interval (500) is past the run's 100 steps: it never validates (no"
         " evaluations.csv rows, no best_policy.safetensors)"
@@ -312,6 +314,66 @@ def test_a_run_that_ends_before_its_first_update_says_so(tmp_path):
         warnings.simplefilter("always")
         assert main([*base, "--set", "learning_starts=30", "--out", str(tmp_path / "b")]) == 0
     assert not [w for w in caught if "learning_starts" in str(w.message)]
+
+
+def test_a_run_that_never_syncs_its_target_network_says_so(tmp_path, monkeypatch):
+    """``--preset paper --steps 5000`` kept the paper's 10,000-step target_update_interval:
+    its DDQN learned against its random initial target network throughout, unsaid."""
+    from activevision.agents.ddqn import DDQNLearner
+
+    synced: list[str] = []
+    sync = DDQNLearner.sync_target
+    monkeypatch.setattr(
+        DDQNLearner, "sync_target", lambda self: synced.append(run) or sync(self), raising=True
+    )
+    base = ["train", "--steps", "60", "--set", "num_threads=1", "--set", "tensorboard=false"]
+    base += ["--set", "learning_starts=20", "--set", "batch_size=8", "--set", "epoch_steps=30"]
+    expected = (
+        "learner.target_update_interval (10000) first syncs the target network at step 10000,"
+        " not before the run's end (60 steps): it is never updated (--set"
+        " target_update_interval=N for a shorter one)"
+    )
+    run = "a"
+    with pytest.warns(UserWarning) as caught:
+        assert main([*base, "--out", str(tmp_path / run)]) == 0
+    assert [str(w.message) for w in caught] == [expected]
+    assert synced == []  # as said
+    run = "b"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        synced_often = [*base, "--set", "target_update_interval=25"]
+        assert main([*synced_often, "--out", str(tmp_path / run)]) == 0
+    assert not [w for w in caught if "target_update_interval" in str(w.message)]
+    assert synced == ["b", "b"]  # steps 25 and 50
+
+
+@pytest.mark.parametrize(
+    ("starts", "interval", "total", "first"),
+    [(40, 30, 60, 60), (40, 30, 61, None), (0, 60, 60, 60), (0, 60, 59, 60), (58, 1, 60, None)],
+)
+def test_the_target_sync_warning_is_where_the_first_sync_is_not_before_the_end(
+    starts, interval, total, first
+):
+    """The first sync is the first multiple of the interval after learning_starts
+    (``training.trainer``): hand-counted here."""
+    from activevision.cli.train import _warn_never_synced
+    from activevision.training import preset
+
+    config = preset("paper").replace(
+        learning_starts=starts, target_update_interval=interval, total_timesteps=total
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _warn_never_synced(config)
+    said = [str(w.message) for w in caught]
+    assert said == ([] if first is None else [said[0]])
+    if first is not None:
+        assert f"first syncs the target network at step {first}," in said[0]
+    # only DDQN has a target network of its own to sync (SB3's learners take no interval)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _warn_never_synced(preset("quickstart").replace(total_timesteps=total))
+    assert caught == []
 
 
 @pytest.mark.parametrize(

@@ -11,9 +11,8 @@ import pytest
 
 from activevision.cli import main
 
-TINY = [
-    "--set",
-    "env.action_type=continuous",
+#: a tiny run's sizes, whatever its moves
+SMALL = [
     "--set",
     "epoch_steps=40",
     "--set",
@@ -25,6 +24,7 @@ TINY = [
     "--set",
     "batch_size=8",
 ]
+TINY = ["--set", "env.action_type=continuous", *SMALL]
 #: what each learner reads on top (a key its algo never reads is refused)
 SB3_TINY = {
     algo: [*TINY, "--set", "sb3.num_envs=2", *own]
@@ -34,7 +34,8 @@ SB3_TINY = {
         "ppo": ("--set", "sb3.n_steps=20"),
     }.items()
 }
-DAGGER_TINY = [*TINY, "--set", "dagger.num_envs=8", "--set", "dagger.updates_per_rollout=1"]
+DAGGER_SMALL = [*SMALL, "--set", "dagger.num_envs=8", "--set", "dagger.updates_per_rollout=1"]
+DAGGER_TINY = ["--set", "env.action_type=continuous", *DAGGER_SMALL]
 
 
 @pytest.fixture(scope="module")
@@ -102,7 +103,7 @@ def test_runs_remembering_moves_the_env_does_not_give_are_named(tmp_path, one_cl
     runs = {}
     for history in (0, 1):
         runs[history] = run = tmp_path / f"history{history}"
-        args = ["train", "--algo", "dagger", "--set", "env.observation=image+head", *DAGGER_TINY]
+        args = ["train", "--algo", "dagger", "--set", "env.observation=image+head", *DAGGER_SMALL]
         args += ["--set", "env.action_type=discrete", "--set", f"env.action_history={history}"]
         args += ["--steps", "40", "--out", str(run)]
         assert main(args) == 0
@@ -112,3 +113,23 @@ def test_runs_remembering_moves_the_env_does_not_give_are_named(tmp_path, one_cl
         "'image+head' (head, actions) against 'image+head': no actions (action_history 1:"
         " the moves it remembers)"
     )
+
+
+@pytest.mark.parametrize(
+    ("setting", "named"),
+    [("env.step_deg=4", "'env.step_deg'"), ("action_set=4way", "'action_set' (env.action_set)")],
+)
+def test_the_discrete_moves_settings_are_refused_on_a_continuous_run(
+    tmp_path, setting, named, one_clear_line
+):
+    """``--set env.step_deg=4`` on a run of continuous moves was stored in config.json and
+    never read (its moves are scaled by env.max_move_deg); a discrete run takes it."""
+    args = ["train", "--algo", "dagger", "--set", "env.action_history=0", *DAGGER_SMALL]
+    args += ["--set", setting, "--steps", "40"]
+    continuous = [*args, "--set", "env.action_type=continuous"]
+    assert main([*continuous, "--out", str(tmp_path / "c")]) == 2
+    one_clear_line(f"{named} is never read by this run: only discrete moves read it")
+    assert not (tmp_path / "c").exists()
+    assert main([*args, "--out", str(tmp_path / "d")]) == 0
+    config = json.loads((tmp_path / "d" / "config.json").read_text())["env"]
+    assert (config["step_deg"], config["action_set"]) != (3.0, "8way")

@@ -11,12 +11,29 @@ from PIL import Image
 from activevision.cli import build_parser, main
 from activevision.runtime import CameraMismatchWarning
 
-TINY = ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "random"]
+#: the tiny real command's options: 2 matches of 9 ticks, two quick strategies
+TINY_OPTIONS = {"--matches": ("2",), "--ticks": ("9",), "--methods": ("ball_track", "random")}
+
+
+def tiny(*argv: str) -> list[str]:
+    """``match`` with :data:`TINY_OPTIONS` and ``argv``, where an option ``argv`` gives
+    takes the place of TINY's (the command refuses one given twice)."""
+    given = {word for word in argv if word.startswith("--")}
+    kept = [
+        w
+        for option, values in TINY_OPTIONS.items()
+        if option not in given
+        for w in (option, *values)
+    ]
+    return ["match", *kept, *argv]
+
+
+TINY = tiny()
 
 
 def test_tiny_match_writes_table_csv_and_figures(tmp_path, capsys):
     out = tmp_path / "m"
-    assert main([*TINY, "--out", str(out)]) == 0
+    assert main(tiny("--out", str(out))) == 0
     printed = capsys.readouterr().out
     assert "ball_track" in printed and "Pareto front" in printed
     assert "(2.88 s of play)" in printed  # 9 ticks of 0.32 s: not "0.0 min"
@@ -32,7 +49,7 @@ def test_tiny_match_writes_table_csv_and_figures(tmp_path, capsys):
 
 def test_the_same_seed_writes_the_same_bytes(tmp_path, capsys):
     """Two runs of one command: every output file is byte-identical (no wall-clock column)."""
-    argv = [*TINY, "--ticks", "3", "--baseline", "random"]
+    argv = tiny("--ticks", "3", "--baseline", "random")
     for name in ("a", "b"):
         assert main([*argv, "--out", str(tmp_path / name)]) == 0
     written = sorted(p.name for p in (tmp_path / "a").iterdir())
@@ -42,20 +59,20 @@ def test_the_same_seed_writes_the_same_bytes(tmp_path, capsys):
 
 
 def test_one_match_says_it_has_no_intervals(tmp_path, capsys):
-    assert main([*TINY, "--matches", "1", "--ticks", "3", "--out", str(tmp_path / "m")]) == 0
+    assert main(tiny("--matches", "1", "--ticks", "3", "--out", str(tmp_path / "m"))) == 0
     printed = capsys.readouterr().out
     assert "one match gives no 95% intervals" in printed and "[nan,nan]" in printed
     assert (tmp_path / "m" / "match_pareto.png").stat().st_size > 0
 
 
 def test_a_match_of_one_tick_says_tick(tmp_path, capsys):
-    assert main([*TINY, "--ticks", "1", "--out", str(tmp_path / "m")]) == 0
+    assert main(tiny("--ticks", "1", "--out", str(tmp_path / "m"))) == 0
     assert "2 matches of 1 tick (0.32 s of play)" in capsys.readouterr().out  # not "1 ticks"
 
 
 def test_a_continuous_match(tmp_path, capsys):
     out = tmp_path / "m"
-    assert main([*TINY, "--action-type", "continuous", "--out", str(out)]) == 0
+    assert main(tiny("--action-type", "continuous", "--out", str(out))) == 0
     assert "continuous head moves of up to 3 deg per axis" in capsys.readouterr().out
     with (out / "match.csv").open() as f:
         assert [r["method"] for r in csv.DictReader(f)] == ["ball_track", "random"]
@@ -63,7 +80,7 @@ def test_a_continuous_match(tmp_path, capsys):
 
 def test_a_match_with_walking_robots_draws_them_in_the_clip(tmp_path, capsys):
     out, plain = tmp_path / "m", tmp_path / "plain"
-    argv = [*TINY, "--methods", "ball_track", "--ticks", "3"]
+    argv = tiny("--methods", "ball_track", "--ticks", "3")
     assert main([*argv, "--robots", "4", "--robot-speed", "0.3", "--out", str(out)]) == 0
     assert "4 other robots walking at 0.3 m/s" in capsys.readouterr().out
     assert main([*argv, "--out", str(plain)]) == 0
@@ -74,7 +91,7 @@ def test_a_match_with_walking_robots_draws_them_in_the_clip(tmp_path, capsys):
 
 
 def test_a_sparser_detector_localises_worse(tmp_path, capsys):
-    argv = [*TINY, "--methods", "nubots_6point", "--matches", "4", "--ticks", "60"]
+    argv = tiny("--methods", "nubots_6point", "--matches", "4", "--ticks", "60")
     rmse = {}
     for name, extra in (("default", []), ("sparse", ["--detection", "0.5", "0.1", "0.3"])):
         assert main([*argv, *extra, "--out", str(tmp_path / name)]) == 0
@@ -86,7 +103,7 @@ def test_a_sparser_detector_localises_worse(tmp_path, capsys):
 
 def test_paired_differences_from_a_baseline(tmp_path, capsys):
     out = tmp_path / "m"
-    assert main([*TINY, "--baseline", "ball_track", "--out", str(out)]) == 0
+    assert main(tiny("--baseline", "ball_track", "--out", str(out))) == 0
     printed = capsys.readouterr().out
     assert "paired differences from ball_track" in printed
     with (out / "match.csv").open() as f:
@@ -98,13 +115,13 @@ def test_paired_differences_from_a_baseline(tmp_path, capsys):
     assert float(paired["position_rmse_diff"]) == pytest.approx(gap)
     # without --baseline the file is neither written nor in the way
     plain = tmp_path / "plain"
-    assert main([*TINY, "--out", str(plain)]) == 0
+    assert main(tiny("--out", str(plain))) == 0
     assert not (plain / "match_paired.csv").exists()
 
 
 def test_entropy_track_at_several_margins(tmp_path):
     out = tmp_path / "m"
-    argv = [*TINY, "--methods", "entropy_track", "ball_track", "--track-margin", "0", "20"]
+    argv = tiny("--methods", "entropy_track", "ball_track", "--track-margin", "0", "20")
     assert main([*argv, "--baseline", "ball_track", "--out", str(out)]) == 0
     with (out / "match_paired.csv").open() as f:
         methods = [r["method"] for r in csv.DictReader(f)]
@@ -125,7 +142,7 @@ def test_several_models_play_side_by_side(tmp_path, capsys):
             target.write_bytes(shipped.with_suffix(suffix).read_bytes())
         models.append(str(tmp_path / name / "policy.onnx"))
     out = tmp_path / "m"
-    argv = [*TINY, "--methods", "onnx_policy", "--model", *models]
+    argv = tiny("--methods", "onnx_policy", "--model", *models)
     assert main([*argv, "--baseline", "onnx_policy[a]", "--out", str(out)]) == 0
     assert "2 methods" in capsys.readouterr().out
     with (out / "match_paired.csv").open() as f:
@@ -168,11 +185,11 @@ def test_match_csv_records_the_model_each_onnx_policy_row_played(tmp_path, capsy
 
 def test_existing_outputs_need_overwrite(tmp_path, capsys, one_clear_line):
     out = tmp_path / "m"
-    assert main([*TINY, "--out", str(out)]) == 0
+    assert main(tiny("--out", str(out))) == 0
     capsys.readouterr()
-    assert main([*TINY, "--out", str(out)]) == 2
+    assert main(tiny("--out", str(out))) == 2
     one_clear_line("match.csv", "--overwrite")
-    assert main([*TINY, "--out", str(out), "--overwrite"]) == 0
+    assert main(tiny("--out", str(out), "--overwrite")) == 0
 
 
 @pytest.mark.parametrize(
@@ -209,7 +226,7 @@ def test_bad_input_is_one_clear_line(tmp_path, argv, needle, one_clear_line):
 
 
 def test_refuses_a_training_run(trained, one_clear_line):
-    assert main([*TINY, "--out", str(Path(trained))]) == 2
+    assert main(tiny("--out", str(Path(trained)))) == 2
     one_clear_line("training run")
 
 
@@ -231,7 +248,7 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
     assert not (run / "plots" / "success_rate.png").exists()
     out = tmp_path / "m"
     capsys.readouterr()
-    assert main([*TINY, "--out", str(out), "--run", str(run), "--methods", "learned"]) == 0
+    assert main(tiny("--out", str(out), "--run", str(run), "--methods", "learned")) == 0
     assert f"detector 0.95/0.2/0.05 (the one {run} was trained with)" in capsys.readouterr().out
     with (out / "match.csv").open() as f:
         row = next(csv.DictReader(f))
@@ -240,12 +257,12 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
     # the figures' titles name the run by its folder ("the one match_run was trained with"),
     # not by the path given: the same bytes from another directory
     monkeypatch.chdir(tmp_path)
-    relative = [*TINY, "--out", "m_relative", "--run", "match_run", "--methods", "learned"]
+    relative = tiny("--out", "m_relative", "--run", "match_run", "--methods", "learned")
     assert main(relative) == 0
     for name in ("match.csv", "match_pareto.png", "match_error.png"):
         assert (out / name).read_bytes() == (tmp_path / "m_relative" / name).read_bytes(), name
     capsys.readouterr()
-    played = [*TINY, "--out", str(out), "--run", str(run), "--methods", "learned", "--overwrite"]
+    played = tiny("--out", str(out), "--run", str(run), "--methods", "learned", "--overwrite")
     assert main([*played, "--detection", "0.95", "0.5", "0.05"]) == 0
     printed = capsys.readouterr().out
     note = f"note: {run} was trained with detector 0.95/0.2/0.05; these matches use 0.95/0.5/0.05"
@@ -253,12 +270,12 @@ def test_a_match_trained_ddqn_run_plays_and_exports(tmp_path, tiny_train, capsys
     assert ", detector" not in printed  # the default world, as asked
     assert main(["export", str(run), "-o", str(tmp_path / "policy.onnx")]) == 0
     onnx = ["--methods", "onnx_policy", "--model", str(tmp_path / "policy.onnx")]
-    assert main([*TINY, "--out", str(out), "--overwrite", *onnx]) == 0
+    assert main(tiny("--out", str(out), "--overwrite", *onnx)) == 0
     with (out / "match.csv").open() as f:
         assert [r["method"] for r in csv.DictReader(f)] == ["onnx_policy"]
     # its actions are 3-degree moves: a 6-degree discrete match would play them as 6-degree
     capsys.readouterr()
-    assert main([*TINY, "--out", str(tmp_path / "m6"), "--step-deg", "6", *onnx]) == 2
+    assert main(tiny("--out", str(tmp_path / "m6"), "--step-deg", "6", *onnx)) == 2
     err = capsys.readouterr().err.strip()
     assert "3-degree 8way moves; play it with --step-deg 3" in err and "\n" not in err
     assert not (tmp_path / "m6").exists()
@@ -292,7 +309,7 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
     mine.write_text(MIRROR)
     out = tmp_path / "m"
     example = Path(__file__).parents[2] / "examples" / "uncertainty_glance.py"
-    argv = [*TINY, "--out", str(out), "--baseline", "ball_track"]
+    argv = tiny("--out", str(out), "--baseline", "ball_track")
     strategies = ["--strategy", f"{mine}:Mirror", f"{example}:UncertaintyGlance"]
     assert main([*argv, *strategies]) == 0
     with (out / "match_paired.csv").open() as f:
@@ -334,7 +351,7 @@ def test_a_bad_strategy_is_one_clear_line(tmp_path, monkeypatch, spec, needle, o
     # a MODULE is looked for in the current directory too: this test's, for this test only
     monkeypatch.setattr(sys, "path", list(sys.path))
     monkeypatch.delitem(sys.modules, "folder_xyz", raising=False)
-    argv = [*TINY, "--out", str(tmp_path / "m"), "--strategy", *spec.split()]
+    argv = tiny("--out", str(tmp_path / "m"), "--strategy", *spec.split())
     if needle is None:
         assert main(argv) == 0
         return
@@ -362,7 +379,7 @@ def test_a_strategy_imports_its_own_modules_under_the_script_too(tmp_path, monke
     monkeypatch.setattr(sys, "path", script_path)
     for name in ("team_helpers", "here_strategy"):
         monkeypatch.delitem(sys.modules, name, raising=False)
-    argv = [*TINY, "--methods", "ball_track", "--ticks", "2", "--strategy"]
+    argv = tiny("--methods", "ball_track", "--ticks", "2", "--strategy")
     assert main([*argv, "team/ours.py:Ours", "--out", "a"]) == 0
     assert main([*argv, "here_strategy:Mirror", "--out", "b"]) == 0
     with (tmp_path / "a" / "match.csv").open() as f:
@@ -391,7 +408,7 @@ class Wide:
 
 def test_a_strategy_acting_wrongly_is_named_on_one_line(tmp_path, one_clear_line):
     (tmp_path / "wide.py").write_text(WIDE)
-    argv = [*TINY, "--out", str(tmp_path / "m"), "--strategy", f"{tmp_path / 'wide.py'}:Wide"]
+    argv = tiny("--out", str(tmp_path / "m"), "--strategy", f"{tmp_path / 'wide.py'}:Wide")
     assert main(argv) == 2
     one_clear_line("strategy wide, tick 0: invalid action", "shape (2,)")
 
@@ -466,7 +483,7 @@ def test_a_strategy_that_raises_is_named_on_one_line_with_its_line(
     also after the trial ticks) ends in one line: what raised, at which tick, and the line
     of their file, not a traceback through the package."""
     (tmp_path / "raising.py").write_text(source)
-    argv = [*TINY, "--ticks", "8", "--out", str(tmp_path / "m")]
+    argv = tiny("--ticks", "8", "--out", str(tmp_path / "m"))
     argv += ["--strategy", f"{tmp_path / 'raising.py'}:{name}"]
     assert main(argv) == 2
     one_clear_line(*needles, "raising.py")
@@ -476,7 +493,7 @@ def test_two_strategies_of_one_name_are_refused(tmp_path, one_clear_line):
     (tmp_path / "a.py").write_text(MIRROR)
     (tmp_path / "b.py").write_text(MIRROR)
     specs = [f"{tmp_path / 'a.py'}:Mirror", f"{tmp_path / 'b.py'}:Mirror"]
-    assert main([*TINY, "--out", str(tmp_path / "m"), "--strategy", *specs]) == 2
+    assert main(tiny("--out", str(tmp_path / "m"), "--strategy", *specs)) == 2
     one_clear_line("two strategies are named mirror")
 
 
@@ -490,7 +507,7 @@ def test_a_strategy_label_of_more_than_one_printable_line_is_refused(
     assert repr(label) in source
     (tmp_path / "mine.py").write_text(source)
     out = tmp_path / "m"
-    argv = [*TINY, "--out", str(out), "--strategy", f"{tmp_path / 'mine.py'}:Mirror"]
+    argv = tiny("--out", str(out), "--strategy", f"{tmp_path / 'mine.py'}:Mirror")
     assert main(argv) == 2
     one_clear_line(f"its label {label!r} is not one line of printable text")
     assert not out.exists()
@@ -505,7 +522,7 @@ def test_a_strategy_labelled_as_a_built_in_one_is_refused(tmp_path, label, one_c
     assert label in source
     (tmp_path / "mine.py").write_text(source)
     out = tmp_path / "m"
-    argv = [*TINY, "--out", str(out), "--strategy", f"{tmp_path / 'mine.py'}:Mirror"]
+    argv = tiny("--out", str(out), "--strategy", f"{tmp_path / 'mine.py'}:Mirror")
     assert main(argv) == 2
     one_clear_line(f"its label {label!r} is a built-in strategy's")
     assert not out.exists()
@@ -514,7 +531,7 @@ def test_a_strategy_labelled_as_a_built_in_one_is_refused(tmp_path, label, one_c
 def test_the_ball_can_bounce_off_our_robot(tmp_path, capsys):
     from activevision.cli.match import _match_config
 
-    argv = [*TINY, "--methods", "ball_track", "--ball-bounces-off-us", "--out", str(tmp_path)]
+    argv = tiny("--methods", "ball_track", "--ball-bounces-off-us", "--out", str(tmp_path))
     assert main(argv) == 0
     assert "the ball bouncing off our robot" in capsys.readouterr().out
     args = build_parser().parse_args(argv)
@@ -536,7 +553,7 @@ def test_the_figures_titles_name_a_walk_to_the_ball(tmp_path, capsys, monkeypatc
             return draw(*args, **kwargs)
 
         monkeypatch.setattr(figures, name, recorded)
-    argv = [*TINY, "--methods", "ball_track", "--ticks", "3"]
+    argv = tiny("--methods", "ball_track", "--ticks", "3")
     assert main([*argv, "--walk", "ball", "--out", str(tmp_path / "ball")]) == 0
     assert len(titles) == 2 and all("walking to the ball" in t for t in titles), titles
     titles.clear()
@@ -559,7 +576,7 @@ def test_an_out_that_cannot_be_made_is_refused_before_any_match(monkeypatch, one
     played = []
     monkeypatch.setattr(experiment, "compare_matches", lambda *a, **k: played.append(a))
     # /proc exists and is a folder, but no folder can be made in it (not even by root)
-    assert main([*TINY, "--out", "/proc/activevision-no-such/m"]) == 2
+    assert main(tiny("--out", "/proc/activevision-no-such/m")) == 2
     one_clear_line("--out /proc/activevision-no-such/m", "cannot create")
     assert played == []
 
@@ -567,7 +584,7 @@ def test_an_out_that_cannot_be_made_is_refused_before_any_match(monkeypatch, one
 def test_a_strategy_failing_in_its_trial_leaves_no_folder(tmp_path, one_clear_line):
     (tmp_path / "wide.py").write_text(WIDE)
     out = tmp_path / "new" / "m"  # the output folder is made before the matches are played
-    argv = [*TINY, "--out", str(out), "--strategy", f"{tmp_path / 'wide.py'}:Wide"]
+    argv = tiny("--out", str(out), "--strategy", f"{tmp_path / 'wide.py'}:Wide")
     assert main(argv) == 2
     one_clear_line("strategy wide, tick 0: invalid action")
     assert not (tmp_path / "new").exists()
@@ -575,7 +592,7 @@ def test_a_strategy_failing_in_its_trial_leaves_no_folder(tmp_path, one_clear_li
 
 def test_ticks_beyond_memory_are_one_clear_line(tmp_path, one_clear_line):
     # 10**15 ticks of per-tick scores: more than any address space, refused at once
-    argv = [*TINY, "--methods", "random", "--ticks", str(10**15), "--out", str(tmp_path / "m")]
+    argv = tiny("--methods", "random", "--ticks", str(10**15), "--out", str(tmp_path / "m"))
     assert main(argv) == 2
     one_clear_line(f"--ticks {10**15} x --matches 2: out of memory")
     assert not (tmp_path / "m").exists()
@@ -635,7 +652,7 @@ def test_a_strategy_calling_sys_exit_is_one_line_not_a_silent_exit_0(
     (tmp_path / "exiting.py").write_text(EXITING)
     if name == "import":  # a module the file looks for makes it exit as it is imported
         monkeypatch.setitem(sys.modules, "exit_at_import", types.ModuleType("exit_at_import"))
-    argv = [*TINY, "--out", str(tmp_path / "m")]
+    argv = tiny("--out", str(tmp_path / "m"))
     argv += ["--strategy", f"{tmp_path / 'exiting.py'}:{'AtAct' if name == 'import' else name}"]
     assert main(argv) == 2
     one_clear_line(needle, "SystemExit", "exiting.py")
@@ -657,7 +674,7 @@ def test_a_run_trained_for_another_camera_plays_in_its_camera(tmp_path, tiny_tra
     assert main(argv) == 0
     capsys.readouterr()
     out = tmp_path / "m"
-    assert main([*TINY, "--out", str(out), "--run", str(run), "--methods", "learned"]) == 0
+    assert main(tiny("--out", str(out), "--run", str(run), "--methods", "learned")) == 0
     captured = capsys.readouterr()
     assert "Traceback" not in captured.err
     assert f"camera 160x90 px, hfov 70 deg (the one {run} was trained with)" in captured.out
@@ -668,7 +685,7 @@ def test_a_run_trained_for_another_camera_plays_in_its_camera(tmp_path, tiny_tra
     capsys.readouterr()
     onnx = ["--methods", "onnx_policy", "--model", str(tmp_path / "policy.onnx")]
     with pytest.warns(CameraMismatchWarning) as warned:
-        assert main([*TINY, "--out", str(tmp_path / "m2"), *onnx]) == 0
+        assert main(tiny("--out", str(tmp_path / "m2"), *onnx)) == 0
     differs = [str(w.message) for w in warned if "camera differs" in str(w.message)]
     assert len(differs) == 1 and "hfov: robot 58.0 deg, trained 70.0 deg" in differs[0]
 
@@ -721,7 +738,7 @@ def test_set_changes_the_matches_world_and_says_so(tmp_path, capsys):
     from activevision.experiments.match_world import world_differences
 
     out = tmp_path / "m"
-    argv = [*TINY, "--out", str(out), "--set", "tick_seconds=0.16", "--set", "camera.hfov=1.2"]
+    argv = tiny("--out", str(out), "--set", "tick_seconds=0.16", "--set", "camera.hfov=1.2")
     assert main([*argv, "--set", "match.tracker.gate=9"]) == 0
     printed = capsys.readouterr().out
     assert "per 0.16 s" in printed and "(1.44 s of play)" in printed
@@ -732,11 +749,11 @@ def test_set_changes_the_matches_world_and_says_so(tmp_path, capsys):
     assert float(row["hfov_deg"]) == pytest.approx(68.755, abs=1e-3)
     assert row["settings"] == "tracker.gate=9.0"
     assert world_differences(row)[-1] == "--set tracker.gate=9.0"
-    assert main([*TINY, "--out", str(tmp_path / "plain")]) == 0
+    assert main(tiny("--out", str(tmp_path / "plain"))) == 0
     with (tmp_path / "plain" / "match.csv").open() as f:
         assert "settings" not in next(csv.DictReader(f))
     # a detector set so, with no run: it named "the one None was trained with"
-    argv = [*TINY, "--out", str(tmp_path / "noise"), "--set", "detection.ball_noise=0.1"]
+    argv = tiny("--out", str(tmp_path / "noise"), "--set", "detection.ball_noise=0.1")
     capsys.readouterr()
     assert main(argv) == 0
     printed = capsys.readouterr().out.splitlines()[0]
@@ -760,13 +777,13 @@ def test_set_changes_the_matches_world_and_says_so(tmp_path, capsys):
     ],
 )
 def test_a_bad_set_is_one_clear_line(tmp_path, setting, needle, one_clear_line):
-    assert main([*TINY, "--out", str(tmp_path / "m"), "--set", setting]) == 2
+    assert main(tiny("--out", str(tmp_path / "m"), "--set", setting)) == 2
     one_clear_line("--set", needle)
     assert not (tmp_path / "m").exists()
 
 
 def test_set_camera_beside_a_run_is_refused(trained, tmp_path, one_clear_line):
-    argv = [*TINY, "--methods", "learned", "--run", str(trained), "--out", str(tmp_path / "m")]
+    argv = tiny("--methods", "learned", "--run", str(trained), "--out", str(tmp_path / "m"))
     assert main([*argv, "--set", "camera.hfov=1.2"]) == 2
     one_clear_line("--set camera", "trained for")
 
@@ -789,7 +806,7 @@ def test_kidnapped_matches_report_what_followed(tmp_path, capsys):
         assert 1 <= lost <= 3
         low, high = float(row["kidnap_recovered_low"]), float(row["kidnap_recovered_high"])
         assert 0 <= low <= float(row["kidnap_recovered"]) <= high <= 1
-    assert main([*TINY, "--out", str(tmp_path / "plain")]) == 0
+    assert main(tiny("--out", str(tmp_path / "plain"))) == 0
     with (tmp_path / "plain" / "match.csv").open() as f:
         assert not any(key.startswith("kidnap") for key in next(csv.DictReader(f)))
 
@@ -806,5 +823,5 @@ def test_kidnapped_matches_report_what_followed(tmp_path, capsys):
     ],
 )
 def test_a_bad_kidnap_is_one_clear_line(tmp_path, argv, needle, one_clear_line):
-    assert main([*TINY, "--out", str(tmp_path / "m"), *argv]) == 2
+    assert main(tiny("--out", str(tmp_path / "m"), *argv)) == 2
     one_clear_line(needle)

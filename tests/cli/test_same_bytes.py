@@ -40,7 +40,7 @@ def test_robustness_figure_names_the_run_not_its_path(trained, tmp_path, monkeyp
 def test_evaluate_runs_names_a_run_by_its_folder(trained, tmp_path, monkeypatch):
     """``--runs .`` played as ``learned:`` (an empty name), the same run by path as
     ``learned:tiny``."""
-    argv = ["evaluate", "--run", str(trained), "--methods", "learned", "--episodes", "1"]
+    argv = ["evaluate", "--run", str(trained), "--methods", "random", "--episodes", "1"]
     assert main([*argv, "--runs", str(trained), "--out", str(tmp_path / "absolute")]) == 0
     monkeypatch.chdir(trained)
     assert main([*argv, "--runs", ".", "--out", str(tmp_path / "dot")]) == 0

@@ -397,12 +397,8 @@ def test_a_key_the_runs_algo_never_reads_is_refused(base, setting, message):
         ),
         # the other setting counts as the run ends up, whatever the order of the overrides
         (
-            "match_dagger",
-            [
-                "dagger.glance_track_margin_deg=20",
-                "match_teacher=glance_track",
-                "match_teacher=entropy_track",
-            ],
+            "match_dagger_glance",
+            ["dagger.glance_track_margin_deg=20", "match_teacher=entropy_track"],
             r"only the glance_track teacher reads it",
         ),
         (
@@ -419,13 +415,13 @@ def test_a_key_another_setting_leaves_unread_is_refused(base, settings, message)
     with pytest.raises(ValueError, match=message):
         apply_overrides(preset(base), settings)
     # the setting that reads it, in the same overrides, takes it
-    readers = {
-        "match_dagger": ["match_teacher=glance_track"],
-        "match_dagger_glance": ["match_teacher=entropy_track"],
-        "dagger_prior": ["dagger.act_by=goal"],
-    }
-    config = apply_overrides(preset(base), [*settings, *readers[base]])
     key, _, value = settings[0].partition("=")
+    readers = {
+        "glance_track_margin_deg": "match_teacher=glance_track",
+        "track_margin_deg": "match_teacher=entropy_track",
+        "switch_margin": "dagger.act_by=goal",
+    }
+    config = apply_overrides(preset(base), [settings[0], readers[key.rpartition(".")[2]]])
     assert getattr(config.dagger, key.rpartition(".")[2]) == float(value)
 
 
@@ -531,6 +527,17 @@ def test_values_another_setting_leaves_unread_are_refused_in_any_order():
         )
     with pytest.raises(ValueError, match="only continuous moves are scaled by it"):
         apply_overrides(preset("dagger_image"), ["max_move_deg=[5,5]"])
+    # and the discrete moves' step and set with continuous ones (sac_head's moves)
+    for setting in ("env.step_deg=4", "action_set=4way"):
+        key = setting.partition("=")[0]
+        with pytest.raises(
+            ValueError,
+            match=rf"'{key}'( \(env\.action_set\))? is never read by this run: only discrete"
+            r" moves read it .* continuous moves are scaled by env\.max_move_deg",
+        ):
+            apply_overrides(preset("sac_head"), [setting])
+        with pytest.raises(ValueError, match="only discrete moves read it"):
+            apply_overrides(preset("paper"), [setting, "algo=dagger", "action_type=continuous"])
     with pytest.raises(ValueError, match="this run never validates"):
         apply_overrides(preset("paper"), ["eval_seed=3"])
     with pytest.raises(ValueError, match=r"only env\.success_mode=tolerance ends an episode by"):
@@ -551,6 +558,10 @@ def test_values_another_setting_leaves_unread_are_refused_in_any_order():
         preset("dagger_image"), ["max_move_deg=[5,5]", "action_type=continuous"]
     )
     assert config.env.max_move_deg == (5, 5)
+    config = apply_overrides(
+        preset("dagger_image_continuous"), ["step_deg=4", "action_set=4way", "action_type=discrete"]
+    )
+    assert (config.env.step_deg, config.env.action_set) == (4, "4way")
     config = apply_overrides(preset("paper"), ["eval_episodes=7", "eval_interval=600"])
     assert (config.run.eval_episodes, config.run.eval_interval) == (7, 600)
     # what a preset carries is not refused: quickstart's prior range on the image and head
@@ -601,3 +612,43 @@ def test_config_path_names_the_field_a_key_sets():
     assert config_path(" seed ") == "seed"  # --set spaces
     assert config_path("env.camera.hfov") == "env.camera.hfov"  # a full path is itself
     assert config_path("nope") == "nope"  # no field: left to the config's own check
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        (
+            ["learning_rate=1e-3", "learning_rate=2e-3"],
+            r"^override 'learning_rate' \(learner\.learning_rate\) is given twice"
+            r" \(learning_rate=1e-3, then learning_rate=2e-3\): give it once$",
+        ),
+        (  # two spellings of one field: the short name and the full path
+            ["learning_rate=1e-3", "learner.learning_rate=2e-3"],
+            r"^overrides learning_rate=1e-3 and learner\.learning_rate=2e-3 both set"
+            r" learner\.learning_rate: give it once$",
+        ),
+        (  # activevision 0.1's spelling and today's
+            ["env_kwargs.step_deg=4", "env.step_deg=2"],
+            r"both set env\.step_deg",
+        ),
+        (["seed=1", " seed=2"], r"override 'seed' is given twice"),
+    ],
+)
+def test_a_field_set_twice_is_refused_naming_it(overrides, message):
+    """``--set learning_rate=1e-3 --set learner.learning_rate=2e-3`` trained with the last,
+    the first dropped silently."""
+    with pytest.raises(ValueError, match=message):
+        apply_overrides(preset("paper"), overrides)
+    assert apply_overrides(preset("paper"), overrides[:1]) != preset("paper")
+
+
+def test_a_field_given_twice_by_key_is_refused_naming_it():
+    """``config.replace(**{"learning_rate": ..., "learner.learning_rate": ...})`` took the
+    later one silently."""
+    with pytest.raises(
+        ValueError,
+        match=r"^keys 'learning_rate' and 'learner\.learning_rate' both set"
+        r" learner\.learning_rate: give it once$",
+    ):
+        TrainConfig().replace(**{"learning_rate": 1e-3, "learner.learning_rate": 2e-3})
+    assert TrainConfig().replace(learning_rate=1e-3).learner.learning_rate == 1e-3

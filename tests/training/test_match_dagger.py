@@ -343,3 +343,20 @@ def test_a_match_student_starts_from_another_runs_weights(tmp_path):
     other = tiny(action_type="continuous", **{"dagger.init_from": str(tmp_path / "source")})
     with pytest.raises(ValueError, match=r"dagger\.init_from: .* another network or input"):
         MatchDaggerTrainer(other, tmp_path / "other", loggers=[])
+    # a discrete student's moves are the action table's: the continuous moves' size, which
+    # its config carries unread, is no difference (it was refused, naming max_move_deg)
+    wider = tiny(
+        **{"match.max_move_deg": [10.0, 10.0], "dagger.init_from": str(tmp_path / "source")}
+    )
+    start = MatchDaggerTrainer(wider, tmp_path / "wider", loggers=[]).network.state_dict()
+    assert all(torch.equal(start[k].cpu(), source[k]) for k in source)
+    # a continuous student's moves are scaled by it: refused, naming it
+    train(tiny(action_type="continuous"), tmp_path / "continuous")
+    faster = tiny(
+        action_type="continuous",
+        **{"match.max_move_deg": [6.0, 6.0], "dagger.init_from": str(tmp_path / "continuous")},
+    )
+    with pytest.raises(
+        ValueError, match=r"\(max_move_deg: \[3\.0, 3\.0\]; this run: \[6\.0, 6\.0\]\)"
+    ):
+        MatchDaggerTrainer(faster, tmp_path / "faster", loggers=[])

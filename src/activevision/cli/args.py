@@ -10,16 +10,86 @@ import argparse
 import contextlib
 import math
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn, TypeVar
+from typing import TYPE_CHECKING, Any, NoReturn, TypeVar
 
 if TYPE_CHECKING:
     from activevision.envs import EnvConfig
 
 
+#: the namespace attribute where :class:`ArgumentParser` keeps, while it parses, the options
+#: given so far (each destination -> how it was given); removed before the namespace returns
+_GIVEN = "_activevision_given"
+
+
+def _shown(option: str | None, values: object) -> str:
+    """An option as typed: ``--steps 5``, ``--runs a b``, ``--overwrite``."""
+    if values is None or isinstance(values, bool):
+        words: list[str] = []
+    elif isinstance(values, list | tuple):
+        words = [str(v) for v in values]
+    else:
+        words = [str(values)]
+    return " ".join([option or "", *words]).strip()
+
+
+def _once(base: type[argparse.Action]) -> type[argparse.Action]:
+    """``base`` (a store action) that refuses a second value for its destination: argparse
+    kept the last one silently (``--steps 5 --steps 6`` trained 6 steps, ``--runs A --runs
+    B`` scored B alone)."""
+
+    class Once(base):  # type: ignore[misc,valid-type]
+        def __call__(
+            self,
+            parser: argparse.ArgumentParser,
+            namespace: argparse.Namespace,
+            values: object,
+            option_string: str | None = None,
+        ) -> None:
+            given: dict[str, str] = vars(namespace).setdefault(_GIVEN, {})
+            now = _shown(option_string, values)
+            if self.dest in given:
+                raise argparse.ArgumentError(
+                    self, f"given twice ({given[self.dest]}, then {now}): give it once"
+                )
+            given[self.dest] = now
+            super().__call__(parser, namespace, values, option_string)
+
+    Once.__name__ = Once.__qualname__ = f"{base.__name__.lstrip('_')}Once"
+    return Once
+
+
+#: argparse's actions that keep one value, each as one refusing a second (:func:`_once`);
+#: ``append`` (``--set``, ``--grid``), ``count``, ``help`` and ``version`` are left as they are
+_ONCE_ACTIONS = {
+    name: _once(base)
+    for name, base in {
+        None: argparse._StoreAction,
+        "store": argparse._StoreAction,
+        "store_const": argparse._StoreConstAction,
+        "store_true": argparse._StoreTrueAction,
+        "store_false": argparse._StoreFalseAction,
+    }.items()
+}
+
+
 class ArgumentParser(argparse.ArgumentParser):
-    """argparse with a one-line error: ``activevision CMD: error: ...`` and exit code 2."""
+    """argparse with a one-line error: ``activevision CMD: error: ...`` and exit code 2; an
+    option that keeps one value (not ``--set``'s kind, which collects them) given twice is
+    refused, naming it (argparse kept the last silently)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        for name, action in _ONCE_ACTIONS.items():
+            self.register("action", name, action)
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        parsed, extras = super().parse_known_args(args, namespace)
+        vars(parsed).pop(_GIVEN, None)
+        return parsed, extras
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

@@ -96,11 +96,12 @@ def _shipped_first(
     return shipped, env_config
 
 
-def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolicy]:
+def _more_runs(args: argparse.Namespace, env_config: Any, learned: bool) -> dict[str, HeadPolicy]:
     """``--runs``: each run's learned policy, as method ``learned:NAME`` (NAME: its
     directory). Each must take what the comparison's env gives (``--run``'s, or the paper's
     image), in its camera and moves (:func:`~activevision.envs.observations.play_differences`);
-    a continuous policy plays the same env, moving by head targets."""
+    a continuous policy plays the same env, moving by head targets. ``learned``: whether
+    ``--run``'s policy plays (method ``learned``), which ``--runs`` must not name again."""
     from activevision.envs.observations import play_differences
     from activevision.experiments.policies import LearnedPolicy
     from activevision.training.config import load_config
@@ -113,6 +114,12 @@ def _more_runs(args: argparse.Namespace, env_config: Any) -> dict[str, HeadPolic
             first = given[run.resolve()]
             named = f"{run}" if first == run else f"{first} and {run}"
             raise ValueError(f"--runs names the run {named} twice: give each run once")
+        if learned and args.run is not None and run.resolve() == args.run.resolve():
+            # it played twice, as learned and as learned:NAME, on the same episodes
+            raise ValueError(
+                f"--runs {run} is --run {args.run}, whose policy plays as method learned"
+                " already: give it once"
+            )
         given[run.resolve()] = run
         # every run plays in the comparison's env (--run's, or the shipped policy's where
         # it plays): an image of another size or stack was a traceback in the first step,
@@ -187,7 +194,7 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     others = [name for name in names if name not in shipped]
     policies = shipped | _policies(others, args, env_config, args.error)
     policies = {name: policies[name] for name in names}  # in the order named
-    policies.update(_more_runs(args, env_config))
+    policies.update(_more_runs(args, env_config, "learned" in policies))
     users = _user_methods(args, env_config, policies)
     _try_users(users, env_config, args.error, args.seed)  # before the built-in methods play
     policies.update({label: make(args.error) for label, make in users.items()})
@@ -350,7 +357,7 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
         if args.methods:
             # in the order given, each once
             methods = {k: methods[k] for k in dict.fromkeys(args.methods) if k in methods}
-        for name, policy in _more_runs(args, env_config).items():
+        for name, policy in _more_runs(args, env_config, "learned" in methods).items():
             methods[name] = functools.partial(_same, policy)
         users = _user_methods(args, env_config, methods)
         _try_users(users, env_config, args.errors[0], args.seed)

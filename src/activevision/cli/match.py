@@ -136,13 +136,13 @@ UNREAD_PATHS = {
 def match_settings(items: list[str] | None) -> dict[str, Any]:
     """``--set KEY=VALUE`` items as ``{path: value}`` (a leading ``match.`` dropped; values
     JSON where they parse, as ``train --set``). ValueError for an item that is no KEY=VALUE,
-    or a key that an option sets (:data:`OPTION_PATHS`) or that ``match`` never reads
-    (:data:`UNREAD_PATHS`)."""
+    a path set twice (``camera.hfov`` and ``match.camera.hfov``), or a key that an option
+    sets (:data:`OPTION_PATHS`) or that ``match`` never reads (:data:`UNREAD_PATHS`)."""
     from activevision.training.config import parse_overrides
 
     settings: dict[str, Any] = {}
     try:
-        changes = parse_overrides(items or [])
+        changes = parse_overrides(items or [], lambda key: key.removeprefix("match."))
     except ValueError as error:
         raise ValueError(f"--set: {error}") from None
     for key, value in changes.items():
@@ -238,15 +238,7 @@ def _strategies(
         make_match_policy,
     )
 
-    models: list[Path] = list(dict.fromkeys(args.model or ()))
-    for model in models:
-        if model.is_dir():  # was "no such file"
-            raise ValueError(
-                f"--model {model} is a directory: name the .onnx model in it"
-                f" (e.g. {model / 'policy.onnx'})"
-            )
-        if not model.is_file():
-            raise ValueError(f"--model {model}: no such file")
+    models = _models(args.model or [])
     if args.run is not None and not (args.run / "config.json").is_file():
         raise ValueError(not_a_run(args.run))
     methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
@@ -275,6 +267,26 @@ def _strategies(
         with users_code(method, f"strategy {label}: reset"):
             policy.reset(1, np.random.default_rng(0))
     return entries
+
+
+def _models(named: list[Path]) -> list[Path]:
+    """``--model``'s files, each checked to be one, and each once: one named twice (however
+    the path was written) played twice, as ``onnx_policy[NAME-1]`` and ``[NAME-2]``."""
+    given: dict[Path, Path] = {}  # each model's file -> how --model named it first
+    for model in named:
+        if model.resolve() in given:
+            first = given[model.resolve()]
+            twice = f"{model}" if first == model else f"{first} and {model}"
+            raise ValueError(f"--model names the policy {twice} twice: give each once")
+        given[model.resolve()] = model
+        if model.is_dir():  # was "no such file"
+            raise ValueError(
+                f"--model {model} is a directory: name the .onnx model in it"
+                f" (e.g. {model / 'policy.onnx'})"
+            )
+        if not model.is_file():
+            raise ValueError(f"--model {model}: no such file")
+    return list(named)
 
 
 @contextmanager

@@ -211,6 +211,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
         _check_run_folders(run_dir, ("tensorboard",))
     _warn_never_validated(config)
     _warn_never_updated(config)
+    _warn_never_synced(config)
     _warn_busy_machine(config.run.num_threads)
     new_folder = not run_dir.exists()
     try:
@@ -281,6 +282,24 @@ def _warn_never_updated(config: Any) -> None:
         warnings.warn(
             f"learner.learning_starts ({starts}) is not before the run's end ({total} steps):"
             " it never updates its network (--set learning_starts=N to start sooner)",
+            stacklevel=2,
+        )
+
+
+def _warn_never_synced(config: Any) -> None:
+    """Warn where DDQN's target network would never be synced before the run's end: the
+    first sync is the first multiple of ``learner.target_update_interval`` after
+    ``learning_starts`` (``training.trainer``), and ``--preset paper --steps 5000`` kept the
+    paper's 10,000, so the run learned against its random initial target throughout,
+    unsaid. (A run that never updates at all has :func:`_warn_never_updated`'s line.)"""
+    learner, total = config.learner, config.run.total_timesteps
+    interval, starts = learner.target_update_interval, learner.learning_starts
+    first = (starts // interval + 1) * interval
+    if config.algo == "ddqn" and starts < total <= first:
+        warnings.warn(
+            f"learner.target_update_interval ({interval}) first syncs the target network at"
+            f" step {first}, not before the run's end ({total} steps): it is never updated"
+            " (--set target_update_interval=N for a shorter one)",
             stacklevel=2,
         )
 

@@ -14,10 +14,11 @@ top, ``env_kwargs``), converting it on the fly.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
 import typing
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -455,7 +456,7 @@ def config_path(key: str, paths: dict[str, str] | None = None) -> str:
     ``learner.learning_rate``), or the key itself where it names none (the config's own
     check refuses it). ``paths``: :func:`field_paths`, when the caller has it already."""
     key = key.strip()
-    return (field_paths() if paths is None else paths).get(key, key)
+    return (field_paths() if paths is None else paths).get(key) or _env_alias(key) or key
 
 
 def _nested_paths(path: str, hint: Any) -> list[str]:
@@ -500,6 +501,9 @@ def with_values(config: TrainConfig, changes: Mapping[str, Any]) -> TrainConfig:
                     f" {', '.join(twins)}"
                 )
             raise ValueError(f"unknown TrainConfig key {key!r}")
+        twin = next((k for k, p in resolved.items() if p == path), None)
+        if twin is not None:  # the later one was taken silently
+            raise ValueError(f"keys {twin!r} and {key.strip()!r} both set {path}: give it once")
         _refuse_unread(key.strip(), path, algo, env_id, paths)
         resolved[key.strip()] = path
         *parents, leaf = path.split(".")
@@ -651,10 +655,11 @@ def _unread_by(algo: object, path: str, on_match: bool = False) -> str:
 def _unread_given(config: TrainConfig, path: str) -> str:
     """Why ``config``'s run never reads the value at ``path`` because of another of its
     values ("" when it does): the prior pose's settings where the observation has no prior
-    pose, continuous moves' size with discrete actions, the success tolerance where success
-    is by landmarks, validation's episodes where the run never validates, and a DAgger key
-    that one match teacher, or one way of acting, reads and the run's does not
-    (``_unread_by`` has the algo's and the env's)."""
+    pose, continuous moves' size with discrete actions and the discrete moves' step and set
+    with continuous ones, the success tolerance where success is by landmarks, validation's
+    episodes where the run never validates, and a DAgger key that one match teacher, or one
+    way of acting, reads and the run's does not (``_unread_by`` has the algo's and the
+    env's)."""
     unread = _unread_env(config.env, path) or _unread_run(config.run, path)
     if unread or config.algo != "dagger":
         return unread
@@ -699,6 +704,11 @@ def _unread_env(env: EnvConfig, path: str) -> str:
         return (
             "only continuous moves are scaled by it (env.action_type=continuous); this run's"
             " discrete moves are env.step_deg"
+        )
+    if path in ("env.step_deg", "env.action_set") and env.action_type == "continuous":
+        return (
+            "only discrete moves read it (the table of the actions' moves); this run's"
+            " continuous moves are scaled by env.max_move_deg"
         )
     if path == "env.success_tolerance_deg" and env.success_mode != "tolerance":
         return (
@@ -809,14 +819,33 @@ def apply_overrides(config: TrainConfig, overrides: Iterable[str]) -> TrainConfi
     return with_values(config, parse_overrides(overrides))
 
 
-def parse_overrides(overrides: Iterable[str]) -> dict[str, Any]:
-    """``key=value`` strings as a mapping of each key to its parsed value (later wins)."""
+def parse_overrides(
+    overrides: Iterable[str], field_of: Callable[[str], str] | None = None
+) -> dict[str, Any]:
+    """``key=value`` strings as a mapping of each key to its parsed value. ValueError where
+    two of them set one field, by one key or by two that name it (``learning_rate`` and
+    ``learner.learning_rate``): the last was taken silently. ``field_of``: the field a key
+    names (default: a TrainConfig's, :func:`config_path`)."""
+    if field_of is None:
+        field_of = functools.partial(config_path, paths=field_paths())
     changes: dict[str, Any] = {}
+    setters: dict[str, tuple[str, str]] = {}  # each field set -> the key and item that set it
     for item in overrides:
         key, sep, text = item.partition("=")
-        if not sep or not key.strip():
+        key = key.strip()
+        if not sep or not key:
             raise ValueError(f"override {item!r} must look like key=value")
-        changes[key.strip()] = override_value(key, text)
+        named = field_of(key)
+        if named in setters:
+            first_key, first = setters[named]
+            if first_key == key:
+                raise ValueError(
+                    f"override {_named(key, named)} is given twice ({first}, then {item}):"
+                    " give it once"
+                )
+            raise ValueError(f"overrides {first} and {item} both set {named}: give it once")
+        setters[named] = (key, item)
+        changes[key] = override_value(key, text)
     return changes
 
 

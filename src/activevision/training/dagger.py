@@ -212,13 +212,17 @@ class ImitationRun(StudentRun):
     def _warm_start(self, source: str) -> None:
         """Load the student weights of ``source`` (``DaggerConfig.init_from``) into the
         network; ValueError naming the first difference when ``source`` was trained for
-        another network or other inputs."""
+        another network or other inputs (``max_move_deg``, the continuous moves' size, only
+        where they are continuous: a discrete source's action_type is named first)."""
         try:
             network, meta = load_policy_and_metadata(source)
         except ckpt.CheckpointError as error:
             raise ValueError(f"dagger.init_from: {error}") from error
         mine = self.metadata()
-        for key in sorted((set(mine) | set(meta)) - WARM_START_FREE_KEYS):
+        free = WARM_START_FREE_KEYS
+        if not self.continuous:  # discrete moves are the action table's: no move's size
+            free |= {"max_move_deg"}
+        for key in sorted((set(mine) | set(meta)) - free):
             if meta.get(key) != mine.get(key):
                 raise ValueError(
                     f"dagger.init_from: {source} holds a policy for another network or input"
