@@ -263,14 +263,14 @@ def test_report_leaves_out_figures_and_a_suite_that_played_no_policy_of_the_run(
     """``report`` showed RUN/compare/compare.png, RUN/episode.png and RUN/robustness/ as the
     run's whatever played them: a compare without --run, ``demo`` (the shipped policy) or
     an episode without --run, ``robustness --shipped``. ``compare.csv`` records the weights'
-    digest, ``episode`` and ``demo`` a record beside the figure (episode.json), and
+    digest, ``episode`` and ``demo`` a record beside the figure (episode.png.json), and
     robustness.csv the method; report leaves out what is not this run's, with one warning
     line each, and still writes the page."""
     figure = run / "episode.png"
     compare = ["compare", "--methods", "random", "--errors", "0", "--episodes", "1"]
     assert main([*compare, "--run", str(run)]) == 0
     assert main(["episode", "--run", str(run), "--out", str(figure)]) == 0
-    record = json.loads((run / "episode.json").read_text())
+    record = json.loads((run / "episode.png.json").read_text())
     assert record["command"] == "episode" and record["policies"] == ["learned", "random"]
     assert record["run"] == {
         "config_sha256": _sha256(run / "config.json"),
@@ -310,3 +310,22 @@ def test_report_leaves_out_figures_and_a_suite_that_played_no_policy_of_the_run(
     for heading in ("## Success vs localisation error", "## One episode", "## Robustness"):
         assert heading not in page
     assert "## Configuration" in page
+
+
+def test_an_episode_drawn_again_in_another_format_keeps_each_figures_record(run):
+    """``episode --out RUN/episode.svg --overwrite`` wrote its record to RUN/episode.json,
+    over episode.png's, and report then left episode.png out as "replaced since". Each
+    figure has its own record (episode.png.json, episode.svg.json); the same start draws the
+    same GIF, so episode.png is still the run's."""
+    png, svg = run / "episode.png", run / "episode.svg"
+    assert main(["episode", "--run", str(run), "--out", str(png)]) == 0
+    assert main(["episode", "--run", str(run), "--out", str(svg), "--overwrite"]) == 0
+    for figure in (png, svg):
+        record = json.loads((run / f"{figure.name}.json").read_text())
+        assert record["files"] == {p.name: _sha256(p) for p in (figure, run / "episode.gif")}
+    assert not (run / "episode.json").exists()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["report", str(run), "--overwrite"]) == 0
+    assert [str(w.message) for w in caught] == []
+    assert "## One episode" in (run / "report.md").read_text()

@@ -477,7 +477,7 @@ def test_a_comparison_is_reported_only_where_its_csv_records_this_runs_weights(t
 def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_path):
     """``report`` showed RUN/episode.png whatever drew it: ``demo`` (the shipped policy),
     an episode without --run, another run's. ``episode`` and ``demo`` now record what
-    played beside the figure (episode.json); report leaves out one that played no policy of
+    played beside the figure (episode.png.json); report leaves out one that played no policy of
     this run, another run's or this run's replaced weights, or a figure replaced since its
     record, with one warning each; a figure without a record is reported as before."""
     import hashlib
@@ -539,7 +539,7 @@ def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_p
     write(command="episode", policies=["oracle", "random"])
     page, warned = _report_warnings(run)
     assert warned[0].endswith(f"it played no policy of this run (an episode without --run){again}")
-    # drawn elsewhere for this run (ep.png, ep.gif, ep.json), then moved in: this run's
+    # drawn elsewhere for this run (ep.png, ep.gif, ep.png.json), then moved in: this run's
     elsewhere = tmp_path / "ep.png"
     for name in ("ep.png", "ep.gif"):
         (tmp_path / name).write_bytes(b"gif" if name.endswith("gif") else b"png")
@@ -552,7 +552,7 @@ def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_p
         run=scored_run(run),
         weights="final",
     )
-    (run / "episode.json").write_bytes(moved.read_bytes())
+    (run / "episode.png.json").write_bytes(moved.read_bytes())
     page, warned = _report_warnings(run)
     assert warned == [] and "`learned` from the start of seed 1; `learned` plays" in page
     # this run's, but the figure or its GIF replaced since (another run's copied over it)
@@ -561,9 +561,9 @@ def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_p
         drawn.write_bytes(b"another run's")
         page, warned = _report_warnings(run)
         assert heading not in page
-        assert f"{drawn.name} is not the one episode.json records (replaced since)" in warned[0]
-    (run / "episode.json").write_text('{"policies": []}')
-    with pytest.raises(ValueError, match=r"episode.json is damaged or not a file activevision"):
+        assert f"{drawn.name} is not the one episode.png.json records (replaced since)" in warned[0]
+    (run / "episode.png.json").write_text('{"policies": []}')
+    with pytest.raises(ValueError, match=r"episode.png.json is damaged or not a file activevision"):
         write_report(run)
 
 

@@ -4,7 +4,8 @@
 
 ``compare.csv`` records the digest of the weights its ``learned`` method played
 (``run_sha256``, :mod:`activevision.experiments.compare`). ``episode`` and ``demo`` write,
-beside their figure and GIF, a record (``FIGURE.json``, :func:`write_episode_record`): the
+beside their figure and GIF, a record (the figure's name and ``.json``, ``episode.png.json``:
+:func:`write_episode_record`): the
 policies, the start's seed, the run whose policy played (the digests of its ``config.json``
 and weights, as ``evaluation.json`` records them) or the exported model, and the digests of
 the figure and GIF it describes. Files written before these records are reported as before.
@@ -20,7 +21,10 @@ from typing import Any
 from activevision.io import file_sha256, read_csv, read_json, write_json
 from activevision.training.policy_files import scored_run
 
-#: what ``episode`` and ``demo`` record beside their figure: ``episode.png`` -> ``episode.json``
+#: what ``episode`` and ``demo`` record beside their figure: ``episode.png`` ->
+#: ``episode.png.json``, the whole name (``episode.svg`` beside it has its own,
+#: ``episode.svg.json``; ``episode.json`` was both's, and ``--out RUN/policy.png`` would
+#: have written over the exported policy's ``policy.json``)
 RECORD_SUFFIX = ".json"
 #: the record's keys, each always written (null where it does not apply)
 RECORD_KEYS = ("command", "policies", "seed", "run", "weights", "model", "model_sha256", "files")
@@ -38,8 +42,10 @@ class Provenance:
 
 
 def record_path(figure: str | Path) -> Path:
-    """The record ``episode`` and ``demo`` write beside ``figure``."""
-    return Path(figure).with_suffix(RECORD_SUFFIX)
+    """The record ``episode`` and ``demo`` write beside ``figure``: its name and
+    :data:`RECORD_SUFFIX`, one per figure."""
+    figure = Path(figure)
+    return figure.with_name(figure.name + RECORD_SUFFIX)
 
 
 def write_episode_record(

@@ -7,7 +7,7 @@ Layout of a run directory after the quickstart::
     runs/NAME/evaluation/evaluation.{csv,json} fixed-seed evaluation of every method
     runs/NAME/compare/compare.{csv,png}       success vs localisation error
     runs/NAME/episode.png, episode.gif        learned vs random from one start
-    runs/NAME/episode.json                    what played in them (``episode``, ``demo``)
+    runs/NAME/episode.png.json                what played in them (``episode``, ``demo``)
     runs/NAME/match/match.csv, match_*.png    head-control strategies through whole matches
     runs/NAME/robustness/robustness.{csv,png} the policy under named perturbations
                                               (``activevision robustness --run``)
