@@ -329,3 +329,39 @@ def test_an_episode_drawn_again_in_another_format_keeps_each_figures_record(run)
         assert main(["report", str(run), "--overwrite"]) == 0
     assert [str(w.message) for w in caught] == []
     assert "## One episode" in (run / "report.md").read_text()
+
+
+def _report(run: Path) -> tuple[list[str], str]:
+    """``report RUN``'s warnings and page."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["report", str(run), "--overwrite"]) == 0
+    return [str(w.message) for w in caught], (run / "report.md").read_text()
+
+
+def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
+    """compare.csv recorded only the digest of the weights that played (run_sha256): a
+    comparison of best weights the run replaced since was to be written again without
+    ``--weights best``, and best weights that were the final ones read as final. It records
+    which (run_weights), only where a run played: a compare without --run keeps its bytes."""
+    from activevision.io import read_csv
+
+    shutil.copyfile(run / "policy.safetensors", run / "best_policy.safetensors")
+    out = run / "compare"
+    argv = ["compare", "--methods", "random", "--episodes", "1", "--errors", "0"]
+    assert main([*argv, "--run", str(run), "--weights", "best", "--out", str(out)]) == 0
+    digest = _sha256(run / "best_policy.safetensors")
+    [row] = read_csv(out / "compare.csv")
+    assert list(row)[-2:] == ["run_sha256", "run_weights"]
+    assert (row["run_sha256"], row["run_weights"]) == (digest, "best")
+    warned, page = _report(run)
+    assert warned == [] and "`learned` plays this run's best validated weights." in page
+    (run / "best_policy.safetensors").write_bytes(b"validated again")
+    warned, page = _report(run)
+    assert "## Success vs localisation error" not in page
+    assert len(warned) == 1 and "it played another run's weights" in warned[0]
+    assert warned[0].endswith(
+        f"activevision compare --run {run} --weights best --out {out} --overwrite"
+    )
+    assert main([*argv, "--out", str(tmp_path / "c")]) == 0  # no run: no run_weights
+    assert list(read_csv(tmp_path / "c" / "compare.csv")[0])[-1] == "run_sha256"

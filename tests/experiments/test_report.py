@@ -472,6 +472,24 @@ def test_a_comparison_is_reported_only_where_its_csv_records_this_runs_weights(t
     write_rows(figure.with_name("compare.csv"), rows)
     with pytest.raises(ValueError, match=r"compare.csv is damaged .* not one run's"):
         write_report(run)
+    # which weights (run_weights): one kind, of a run
+    for recorded in (
+        [("a" * 64, "final"), ("a" * 64, "best")],
+        [("a" * 64, "latest")],
+        [("", "final")],  # no run's
+    ):
+        rows = [row | {"run_sha256": d, "run_weights": w} for d, w in recorded]
+        write_rows(figure.with_name("compare.csv"), rows)
+        with pytest.raises(ValueError, match=r"compare.csv is damaged .* not one run's"):
+            write_report(run)
+    # the final weights' digest recorded as the best's: not this run's best
+    final = hashlib.sha256(b"final").hexdigest()
+    best = row | {"run_sha256": final, "run_weights": "best"}
+    write_rows(figure.with_name("compare.csv"), [best])
+    page, warned = _report_warnings(run)
+    assert heading not in page and warned[0].endswith(
+        f"compare --run {run} --weights best --out {figure.parent} --overwrite"
+    )
 
 
 def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_path):

@@ -153,12 +153,13 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
 
 def compare_provenance(figure: Path, run: Path) -> Provenance:
     """Whether ``figure`` (``RUN/compare/compare.png``) is ``run``'s comparison, by the
-    ``run_sha256`` its ``compare.csv`` records: not where it played another run's weights
+    ``run_sha256`` its ``compare.csv`` records, of the run's weights ``run_weights`` names
+    (a CSV from before that column: either): not where it played another run's weights
     or this run's before they were replaced, or no run (a compare without ``--run``: no
     learned policy of this run, in the paper's env). A figure without a CSV, or a CSV from
-    before the column, is the run's, as before. ValueError naming the CSV where it is
+    before the columns, is the run's, as before. ValueError naming the CSV where it is
     damaged or its rows record two runs."""
-    from activevision.experiments.compare import RESUME_COLUMNS, RUN_COLUMN
+    from activevision.experiments.compare import RESUME_COLUMNS, RUN_COLUMN, WEIGHTS_COLUMN
 
     csv_path = figure.with_name("compare.csv")
     again = f"compare --run {run} --out {figure.parent} --overwrite"
@@ -169,14 +170,16 @@ def compare_provenance(figure: Path, run: Path) -> Provenance:
         raise _damaged(csv_path, "it holds no rows")
     if RUN_COLUMN not in rows[0]:
         return Provenance(True)
-    digests = {row[RUN_COLUMN] for row in rows}
-    if len(digests) > 1:
-        raise _damaged(csv_path, f"its rows' {RUN_COLUMN} are not one run's")
-    (digest,) = digests
+    recorded = {(row[RUN_COLUMN], row.get(WEIGHTS_COLUMN)) for row in rows}
+    (digest, weights), *others = recorded
+    if others or weights not in (None, "final", "best") or (weights and not digest):
+        raise _damaged(csv_path, f"its rows' {RUN_COLUMN} and {WEIGHTS_COLUMN} are not one run's")
     if not digest:
         return Provenance(False, "it played no run (a compare without --run)", again)
-    for weights, which in (("final", "final"), ("best", "best validated")):
-        if scored_run(run, weights)["weights_sha256"] == digest:
+    for played, which in (("final", "final"), ("best", "best validated")):
+        if weights in (None, played) and scored_run(run, played)["weights_sha256"] == digest:
             return Provenance(True, f"`learned` plays this run's {which} weights.")
     why = f"it played another run's weights, {ANOTHER_RUN}"
+    if weights == "best":
+        again = f"compare --run {run} --weights best --out {figure.parent} --overwrite"
     return Provenance(False, why, again)
