@@ -365,3 +365,30 @@ def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
     )
     assert main([*argv, "--out", str(tmp_path / "c")]) == 0  # no run: no run_weights
     assert list(read_csv(tmp_path / "c" / "compare.csv")[0])[-1] == "run_sha256"
+
+
+def test_report_tells_a_policy_exported_before_the_run_was_trained_on(run):
+    """``demo --policy RUN/policy.onnx --out RUN/episode.png`` was reported as the run's
+    policy whenever RUN/policy.onnx was the file it played, though exported before the run
+    trained on: ``export`` records in policy.json the weights it read (which, and their
+    SHA-256), and report leaves out a demo of an export of weights the run has replaced."""
+    assert main(["export", str(run)]) == 0
+    meta = json.loads((run / "policy.json").read_text())
+    weights = meta["training_weights"], meta["training_weights_sha256"]
+    assert weights == ("final", _sha256(run / "policy.safetensors"))
+    figure = run / "episode.png"
+    assert main(["demo", "--policy", str(run / "policy.onnx"), "--out", str(figure)]) == 0
+    warned, page = _report(run)
+    assert warned == [] and "is this run's policy.onnx, exported from its final weights." in page
+    # trained on (a run exported mid-training, then resumed): its next weights
+    from activevision.training.checkpoint import load_tensors, save_tensors
+
+    tensors, metadata = load_tensors(run / "policy.safetensors")
+    trained_on = {name: tensor + 0.01 for name, tensor in tensors.items()}
+    save_tensors(run / "policy.safetensors", trained_on, metadata | {"step": 100})
+    warned, page = _report(run)
+    assert "## One episode" not in page
+    assert len(warned) == 1 and warned[0].startswith(
+        f"left {figure} out of the report: it played this run's policy.onnx, exported from"
+        " another run's weights, or this run's before they were replaced (trained on"
+    )

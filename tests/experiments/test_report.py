@@ -603,3 +603,96 @@ def test_a_robustness_suite_of_another_policy_than_the_runs_is_left_out(tmp_path
         f" policy; write it again: activevision robustness --run {run} --out {path.parent}"
         " --overwrite"
     ]
+
+
+def _sha256(data: bytes) -> str:
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()
+
+
+def write_export(run, model=b"exported", **changes):
+    """RUN/policy.onnx (``model``) and a policy.json beside it that records, as ``export``
+    writes them, the run's config.json and final weights as they are now (``changes``:
+    other values)."""
+    from activevision.runtime import pretrained_policy_path
+
+    values = json.loads(pretrained_policy_path().with_suffix(".json").read_text())
+    (run / "policy.onnx").write_bytes(model)
+    values |= {
+        "model_sha256": _sha256(model),
+        "training_config_sha256": _sha256((run / "config.json").read_bytes()),
+        "training_weights": "final",
+        "training_weights_sha256": _sha256((run / "policy.safetensors").read_bytes()),
+    }
+    (run / "policy.json").write_text(json.dumps(values | changes))
+
+
+def test_a_policy_exported_before_the_run_was_trained_on_is_not_its_policy(tmp_path):
+    """``match --model RUN/policy.onnx`` and ``demo --policy RUN/policy.onnx`` were this
+    run's policy whenever the file was RUN/policy.onnx as it is now, though exported before
+    the run was trained on: policy.json records the weights it was exported from (and
+    which), and report tells such an export by them."""
+    from activevision.experiments.provenance import write_episode_record
+
+    run = make_run(tmp_path)
+    (run / "policy.safetensors").write_bytes(b"final")
+    write_export(run)
+    digest = _sha256(b"exported")
+    model = str(run / "policy.onnx")
+    rows = [match_row("onnx_policy") | {"model": model, "model_sha256": digest}]
+    write_rows(run / "match" / "match.csv", rows)
+    figure = run / "episode.png"
+    figure.write_bytes(b"png")
+    figure.with_suffix(".gif").write_bytes(b"gif")
+    write_episode_record(
+        figure,
+        figure.with_suffix(".gif"),
+        command="demo",
+        policies=["run", "random"],
+        seed=0,
+        model=model,
+        model_sha256=digest,
+    )
+    said = f"onnx_policy: `{model}` (`match --model`, SHA-256 {digest[:12]}…, this run's"
+    said += " policy.onnx"
+    page, warned = _report_warnings(run)
+    assert warned == []
+    assert f"{said}, exported from its final weights)." in page
+    assert "`run` is this run's policy.onnx, exported from its final weights." in page
+    (run / "policy.safetensors").write_bytes(b"trained on")  # since the export
+    stale = "exported from another run's weights, or this run's before they were replaced"
+    page, warned = _report_warnings(run)
+    assert f"{said}, {stale} (trained on or retrained))." in page
+    assert "## One episode" not in page
+    assert warned == [
+        f"left {figure} out of the report: it played this run's policy.onnx, {stale} (trained"
+        f" on or retrained); write it again: activevision episode --run {run} --out {figure}"
+        " --overwrite"
+    ]
+    # exported again: this run's; of its best weights, which the run has replaced since
+    write_export(run)
+    assert _report_warnings(run)[1] == []
+    (run / "best_policy.safetensors").write_bytes(b"best")
+    best = {"training_weights": "best", "training_weights_sha256": _sha256(b"best")}
+    write_export(run, **best)
+    page, warned = _report_warnings(run)
+    assert warned == [] and f"{said}, exported from its best validated weights)." in page
+    (run / "best_policy.safetensors").write_bytes(b"validated again")
+    assert f"{said}, {stale}" in _report_warnings(run)[0]
+    # another run's config.json (a policy.json from before the weights' record checks it
+    # alone); a policy.json of another model than policy.onnx
+    older = {"training_weights": None, "training_weights_sha256": None}
+    write_export(run, training_config_sha256="ab" * 32, **older)
+    page, warned = _report_warnings(run)
+    assert f"{said}, exported from another run's config.json, or this run's" in page
+    write_export(run)
+    values = json.loads((run / "policy.json").read_text())
+    del values["training_weights"], values["training_weights_sha256"]
+    (run / "policy.json").write_text(json.dumps(values))  # from before the record
+    page, warned = _report_warnings(run)
+    assert warned == [] and f"{said})." in page
+    write_export(run, model_sha256=_sha256(b"another model"))
+    page, warned = _report_warnings(run)
+    assert f"{said}, whose policy.json describes another model (its model_sha256))." in page
+    assert len(warned) == 1

@@ -9,6 +9,11 @@ beside their figure and GIF, a record (the figure's name and ``.json``, ``episod
 policies, the start's seed, the run whose policy played (the digests of its ``config.json``
 and weights, as ``evaluation.json`` records them) or the exported model, and the digests of
 the figure and GIF it describes. Files written before these records are reported as before.
+
+A model ``demo --policy`` or ``match --model`` played is the run's own where it is
+``RUN/policy.onnx`` as it is now and the ``policy.json`` beside it records that it was
+exported from the run's ``config.json`` and weights as they are now (:func:`run_export`): an
+export from before the run was trained on or retrained is not the run's policy.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from activevision.io import file_sha256, read_csv, read_json, write_json
+from activevision.runtime.metadata import MODEL_FILENAME, load_metadata, metadata_path_for
 from activevision.training.policy_files import scored_run
 
 #: what ``episode`` and ``demo`` record beside their figure: ``episode.png`` ->
@@ -86,16 +92,68 @@ def _damaged(path: Path, why: str) -> ValueError:
 
 
 def _stale(current: dict[str, str | None], recorded: dict[str, str | None]) -> list[str]:
-    """What of a run (``config.json``, ``weights``) a record's digests do not match."""
+    """What of a run (``config.json``, ``weights``: those ``current`` holds) a record's
+    digests do not match."""
     return [
         what
         for key, what in (("config_sha256", "config.json"), ("weights_sha256", "weights"))
-        if current[key] != recorded.get(key)
+        if key in current and current[key] != recorded.get(key)
     ]
 
 
 #: why a result of another run's files, or of this run's before they changed, is left out
 ANOTHER_RUN = "or this run's before they were replaced (trained on or retrained)"
+
+
+@dataclass(frozen=True)
+class RunExport:
+    """A model that is a run's ``policy.onnx`` as it is now (:func:`run_export`): ``why``
+    it is not the run's policy as it is now (``""``: it is), and the ``weights`` it was
+    exported from, ``"final"`` or ``"best"`` (None: its ``policy.json`` does not say)."""
+
+    why: str = ""
+    weights: str | None = None
+
+    def text(self) -> str:
+        """``this run's policy.onnx`` and, where recorded, which weights it was exported
+        from, or why it is not the run's policy as it is now."""
+        if self.why:
+            return f"this run's policy.onnx, {self.why}"
+        if self.weights is None:
+            return "this run's policy.onnx"
+        which = "best validated" if self.weights == "best" else "final"
+        return f"this run's policy.onnx, exported from its {which} weights"
+
+
+def run_export(run: Path, model_sha256: str) -> RunExport | None:
+    """What the exported model of SHA-256 ``model_sha256`` is of ``run``: None where it is
+    not ``RUN/policy.onnx`` as it is now; else, by the ``policy.json`` beside it, whether it
+    was exported from the run's ``config.json`` and weights as they are now (``export``
+    records their digests): not where its ``policy.json`` describes another model or
+    records another run's files or this run's before they were replaced (an export before
+    the run was trained on or retrained). A ``policy.json`` from before the weights' record
+    is checked for its ``config.json`` alone, one that is missing not at all, as before.
+    :class:`~activevision.runtime.PolicyFileError` (a ValueError) naming a damaged one."""
+    exported = run / MODEL_FILENAME
+    if not exported.is_file() or file_sha256(exported) != model_sha256:
+        return None
+    path = metadata_path_for(exported)
+    if not path.is_file():
+        return RunExport()
+    meta = load_metadata(path)
+    if meta.model_sha256 != model_sha256:
+        return RunExport(f"whose {path.name} describes another model (its model_sha256)")
+    recorded = {"config_sha256": meta.training_config_sha256}
+    weights = meta.training_weights
+    current = scored_run(run, weights or "final")
+    if weights is None:  # a policy.json from before the weights' record
+        current = {"config_sha256": current["config_sha256"]}
+    else:
+        recorded["weights_sha256"] = meta.training_weights_sha256
+    stale = _stale(current, recorded)
+    if stale:
+        return RunExport(f"exported from another run's {' and '.join(stale)}, {ANOTHER_RUN}")
+    return RunExport(weights=weights)
 
 
 def episode_provenance(figure: Path, run: Path) -> Provenance:
@@ -104,7 +162,8 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
     (replaced since), where it played another run's ``config.json`` or weights or this
     run's before they were replaced, or where it played no policy of this run (``demo`` of
     the shipped policy or of another model, ``episode`` without ``--run``; ``demo --policy
-    RUN/policy.onnx`` of this run's exported policy as it is now is this run's). A figure
+    RUN/policy.onnx`` of this run's exported policy as it is now is this run's, where it
+    was exported from the run's files as they are now, :func:`run_export`). A figure
     without a record (written before it) is the run's, as before. ValueError naming the
     record where it is damaged."""
     path = record_path(figure)
@@ -129,11 +188,12 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
             return Provenance(False, why, again)
     played = " and ".join(f"`{p}`" for p in policies) + f" from the start of seed {seed}"
     if recorded is None:
-        exported = run / "policy.onnx"
-        model_sha256 = data["model_sha256"]
-        if model_sha256 and exported.is_file() and file_sha256(exported) == model_sha256:
-            return Provenance(True, f"{played}; `{policies[0]}` is this run's policy.onnx.")
-        if data["command"] == "demo":
+        export = run_export(run, str(data["model_sha256"])) if data["model_sha256"] else None
+        if export is not None and not export.why:
+            return Provenance(True, f"{played}; `{policies[0]}` is {export.text()}.")
+        if export is not None:
+            why = f"it played {export.text()}"
+        elif data["command"] == "demo":
             what = "another exported model" if data["model"] else "the shipped policy"
             why = f"it played {what} (demo), not this run's policy"
         else:
