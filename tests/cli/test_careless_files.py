@@ -371,14 +371,14 @@ def test_report_leaves_out_figures_and_a_suite_that_played_no_policy_of_the_run(
     """``report`` showed RUN/compare/compare.png, RUN/episode.png and RUN/robustness/ as the
     run's whatever played them: a compare without --run, ``demo`` (the shipped policy) or
     an episode without --run, ``robustness --shipped``. ``compare.csv`` records the weights'
-    digest, ``episode`` and ``demo`` a record beside the figure (episode.json), and
+    digest, ``episode`` and ``demo`` a record beside the figure (episode.png.json), and
     robustness.csv the method; report leaves out what is not this run's, with one warning
     line each, and still writes the page."""
     figure = run / "episode.png"
     compare = ["compare", "--methods", "random", "--errors", "0", "--episodes", "1"]
     assert main([*compare, "--run", str(run)]) == 0
     assert main(["episode", "--run", str(run), "--out", str(figure)]) == 0
-    record = json.loads((run / "episode.json").read_text())
+    record = json.loads((run / "episode.png.json").read_text())
     assert record["command"] == "episode" and record["policies"] == ["learned", "random"]
     assert record["run"] == {
         "config_sha256": _sha256(run / "config.json"),
@@ -418,3 +418,85 @@ def test_report_leaves_out_figures_and_a_suite_that_played_no_policy_of_the_run(
     for heading in ("## Success vs localisation error", "## One episode", "## Robustness"):
         assert heading not in page
     assert "## Configuration" in page
+
+
+def test_an_episode_drawn_again_in_another_format_keeps_each_figures_record(run):
+    """``episode --out RUN/episode.svg --overwrite`` wrote its record to RUN/episode.json,
+    over episode.png's, and report then left episode.png out as "replaced since". Each
+    figure has its own record (episode.png.json, episode.svg.json); the same start draws the
+    same GIF, so episode.png is still the run's."""
+    png, svg = run / "episode.png", run / "episode.svg"
+    assert main(["episode", "--run", str(run), "--out", str(png)]) == 0
+    assert main(["episode", "--run", str(run), "--out", str(svg), "--overwrite"]) == 0
+    for figure in (png, svg):
+        record = json.loads((run / f"{figure.name}.json").read_text())
+        assert record["files"] == {p.name: _sha256(p) for p in (figure, run / "episode.gif")}
+    assert not (run / "episode.json").exists()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["report", str(run), "--overwrite"]) == 0
+    assert [str(w.message) for w in caught] == []
+    assert "## One episode" in (run / "report.md").read_text()
+
+
+def _report(run: Path) -> tuple[list[str], str]:
+    """``report RUN``'s warnings and page."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["report", str(run), "--overwrite"]) == 0
+    return [str(w.message) for w in caught], (run / "report.md").read_text()
+
+
+def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
+    """compare.csv recorded only the digest of the weights that played (run_sha256): a
+    comparison of best weights the run replaced since was to be written again without
+    ``--weights best``, and best weights that were the final ones read as final. It records
+    which (run_weights), only where a run played: a compare without --run keeps its bytes."""
+    from activevision.io import read_csv
+
+    shutil.copyfile(run / "policy.safetensors", run / "best_policy.safetensors")
+    out = run / "compare"
+    argv = ["compare", "--methods", "random", "--episodes", "1", "--errors", "0"]
+    assert main([*argv, "--run", str(run), "--weights", "best", "--out", str(out)]) == 0
+    digest = _sha256(run / "best_policy.safetensors")
+    [row] = read_csv(out / "compare.csv")
+    assert list(row)[-2:] == ["run_sha256", "run_weights"]
+    assert (row["run_sha256"], row["run_weights"]) == (digest, "best")
+    warned, page = _report(run)
+    assert warned == [] and "`learned` plays this run's best validated weights." in page
+    (run / "best_policy.safetensors").write_bytes(b"validated again")
+    warned, page = _report(run)
+    assert "## Success vs localisation error" not in page
+    assert len(warned) == 1 and "it played another run's weights" in warned[0]
+    assert warned[0].endswith(
+        f"activevision compare --run {run} --weights best --out {out} --overwrite"
+    )
+    assert main([*argv, "--out", str(tmp_path / "c")]) == 0  # no run: no run_weights
+    assert list(read_csv(tmp_path / "c" / "compare.csv")[0])[-1] == "run_sha256"
+
+
+def test_report_tells_a_policy_exported_before_the_run_was_trained_on(run):
+    """``demo --policy RUN/policy.onnx --out RUN/episode.png`` was reported as the run's
+    policy whenever RUN/policy.onnx was the file it played, though exported before the run
+    trained on: ``export`` records in policy.json the weights it read (which, and their
+    SHA-256), and report leaves out a demo of an export of weights the run has replaced."""
+    assert main(["export", str(run)]) == 0
+    meta = json.loads((run / "policy.json").read_text())
+    weights = meta["training_weights"], meta["training_weights_sha256"]
+    assert weights == ("final", _sha256(run / "policy.safetensors"))
+    figure = run / "episode.png"
+    assert main(["demo", "--policy", str(run / "policy.onnx"), "--out", str(figure)]) == 0
+    warned, page = _report(run)
+    assert warned == [] and "is this run's policy.onnx, exported from its final weights." in page
+    # trained on (a run exported mid-training, then resumed): its next weights
+    from activevision.training.checkpoint import load_tensors, save_tensors
+
+    tensors, metadata = load_tensors(run / "policy.safetensors")
+    trained_on = {name: tensor + 0.01 for name, tensor in tensors.items()}
+    save_tensors(run / "policy.safetensors", trained_on, metadata | {"step": 100})
+    warned, page = _report(run)
+    assert "## One episode" not in page
+    assert len(warned) == 1 and warned[0].startswith(
+        f"left {figure} out of the report: it played this run's policy.onnx, exported from"
+        " another run's weights, or this run's before they were replaced (trained on"
+    )

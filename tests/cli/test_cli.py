@@ -226,7 +226,10 @@ def test_an_evaluation_is_the_same_bytes_its_latency_apart(trained, tmp_path, ca
 
 def test_the_picture_commands_help_says_what_they_draw_and_where(capsys):
     """``episode``, ``demo`` and ``plot --help`` had no description, and no picture command
-    said what --out and --seed are (nor that a GIF is written beside the figure)."""
+    said what --out and --seed are (nor that a GIF is written beside the figure, nor the
+    record of what played beside both, which ``report`` reads)."""
+    from activevision.experiments.provenance import record_path
+
     for command in ("render", "viewpoints", "episode", "demo", "plot"):
         assert main([command, "--help"]) == 0
         text = capsys.readouterr().out
@@ -237,7 +240,9 @@ def test_the_picture_commands_help_says_what_they_draw_and_where(capsys):
             assert command == "plot" or line.split(maxsplit=2)[2:], (command, option)
     for command in ("episode", "demo"):
         assert main([command, "--help"]) == 0
-        assert "GIF is written beside it" in " ".join(capsys.readouterr().out.split())
+        text = " ".join(capsys.readouterr().out.split())
+        assert "GIF is written beside it" in text and "a record of what played" in text
+        assert f"+ .json: {record_path('episode.png').name})" in text
 
 
 def test_every_command_says_what_it_does_in_its_help():
@@ -262,7 +267,7 @@ def test_demo_names_the_policy_it_shows(tmp_path, monkeypatch):
 
     def plot(traces, out):
         shown.append([t.policy for t in traces])
-        Path(out).write_bytes(b"")  # the record beside it (episode.json) takes its digest
+        Path(out).write_bytes(b"")  # the record beside it (episode.png.json) takes its digest
 
     monkeypatch.setattr(episode_figures, "plot_episodes", plot)
     monkeypatch.setattr(episode_figures, "animate_episode", lambda trace, out: out.write_bytes(b""))

@@ -154,7 +154,8 @@ def test_several_models_play_side_by_side(tmp_path, capsys):
 def test_match_csv_records_the_model_each_onnx_policy_row_played(tmp_path, capsys):
     """``match --model runs/X/policy.onnx`` wrote nothing of which model played: its rows
     record the file as given and its SHA-256 (empty in the other rows); without
-    ``--model`` (the shipped policy) match.csv has no such columns, as before."""
+    ``--model`` (the shipped policy) match.csv has no such columns, as before. So do the
+    rows of match_paired.csv (``--baseline``), the baseline's model too."""
     import hashlib
 
     from activevision.runtime import pretrained_policy_path
@@ -166,8 +167,9 @@ def test_match_csv_records_the_model_each_onnx_policy_row_played(tmp_path, capsy
         target.write_bytes(shipped.with_suffix(suffix).read_bytes())
     model = tmp_path / "x" / "policy.onnx"
     argv = [*TINY[:3], "--ticks", "3", "--methods", "onnx_policy", "ball_track"]
-    assert main([*argv, "--model", str(model), "--out", str(tmp_path / "m")]) == 0
-    assert main([*argv, "--out", str(tmp_path / "shipped")]) == 0
+    paired = ["--baseline", "ball_track"]
+    assert main([*argv, *paired, "--model", str(model), "--out", str(tmp_path / "m")]) == 0
+    assert main([*argv, *paired, "--out", str(tmp_path / "shipped")]) == 0
     with (tmp_path / "m" / "match.csv").open() as f:
         rows = list(csv.DictReader(f))
     digest = hashlib.sha256(model.read_bytes()).hexdigest()
@@ -175,9 +177,22 @@ def test_match_csv_records_the_model_each_onnx_policy_row_played(tmp_path, capsy
         ("onnx_policy", str(model), digest),
         ("ball_track", "", ""),
     ]
-    with (tmp_path / "shipped" / "match.csv").open() as f:
-        header = next(csv.reader(f))
-    assert "model" not in header and "model_sha256" not in header
+    with (tmp_path / "m" / "match_paired.csv").open() as f:
+        (row,) = list(csv.DictReader(f))
+    assert list(row)[-4:] == ["model", "model_sha256", "baseline_model", "baseline_model_sha256"]
+    assert list(row.values())[-4:] == [str(model), digest, "", ""]
+    for name in ("match_paired.csv", "match.csv"):  # header: match.csv's, below
+        with (tmp_path / "shipped" / name).open() as f:
+            header = next(csv.reader(f))
+        assert not any("model" in column for column in header), name
+    # the model as the baseline: the row's none, the baseline's the model
+    out = tmp_path / "b"
+    argv = [*argv, "--model", str(model), "--baseline", "onnx_policy", "--out", str(out)]
+    assert main(argv) == 0
+    with (out / "match_paired.csv").open() as f:
+        (row,) = list(csv.DictReader(f))
+    assert row["method"] == "ball_track"
+    assert list(row.values())[-4:] == ["", "", str(model), digest]
     # the same results otherwise: the shipped policy's bytes are the copy's
     with (tmp_path / "shipped" / "match.csv").open() as f:
         assert [{k: r[k] for k in header} for r in rows] == list(csv.DictReader(f))

@@ -472,12 +472,30 @@ def test_a_comparison_is_reported_only_where_its_csv_records_this_runs_weights(t
     write_rows(figure.with_name("compare.csv"), rows)
     with pytest.raises(ValueError, match=r"compare.csv is damaged .* not one run's"):
         write_report(run)
+    # which weights (run_weights): one kind, of a run
+    for recorded in (
+        [("a" * 64, "final"), ("a" * 64, "best")],
+        [("a" * 64, "latest")],
+        [("", "final")],  # no run's
+    ):
+        rows = [row | {"run_sha256": d, "run_weights": w} for d, w in recorded]
+        write_rows(figure.with_name("compare.csv"), rows)
+        with pytest.raises(ValueError, match=r"compare.csv is damaged .* not one run's"):
+            write_report(run)
+    # the final weights' digest recorded as the best's: not this run's best
+    final = hashlib.sha256(b"final").hexdigest()
+    best = row | {"run_sha256": final, "run_weights": "best"}
+    write_rows(figure.with_name("compare.csv"), [best])
+    page, warned = _report_warnings(run)
+    assert heading not in page and warned[0].endswith(
+        f"compare --run {run} --weights best --out {figure.parent} --overwrite"
+    )
 
 
 def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_path):
     """``report`` showed RUN/episode.png whatever drew it: ``demo`` (the shipped policy),
     an episode without --run, another run's. ``episode`` and ``demo`` now record what
-    played beside the figure (episode.json); report leaves out one that played no policy of
+    played beside the figure (episode.png.json); report leaves out one that played no policy of
     this run, another run's or this run's replaced weights, or a figure replaced since its
     record, with one warning each; a figure without a record is reported as before."""
     import hashlib
@@ -539,7 +557,7 @@ def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_p
     write(command="episode", policies=["oracle", "random"])
     page, warned = _report_warnings(run)
     assert warned[0].endswith(f"it played no policy of this run (an episode without --run){again}")
-    # drawn elsewhere for this run (ep.png, ep.gif, ep.json), then moved in: this run's
+    # drawn elsewhere for this run (ep.png, ep.gif, ep.png.json), then moved in: this run's
     elsewhere = tmp_path / "ep.png"
     for name in ("ep.png", "ep.gif"):
         (tmp_path / name).write_bytes(b"gif" if name.endswith("gif") else b"png")
@@ -552,7 +570,7 @@ def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_p
         run=scored_run(run),
         weights="final",
     )
-    (run / "episode.json").write_bytes(moved.read_bytes())
+    (run / "episode.png.json").write_bytes(moved.read_bytes())
     page, warned = _report_warnings(run)
     assert warned == [] and "`learned` from the start of seed 1; `learned` plays" in page
     # this run's, but the figure or its GIF replaced since (another run's copied over it)
@@ -561,9 +579,9 @@ def test_an_episode_is_reported_only_where_its_record_says_this_run_played(tmp_p
         drawn.write_bytes(b"another run's")
         page, warned = _report_warnings(run)
         assert heading not in page
-        assert f"{drawn.name} is not the one episode.json records (replaced since)" in warned[0]
-    (run / "episode.json").write_text('{"policies": []}')
-    with pytest.raises(ValueError, match=r"episode.json is damaged or not a file activevision"):
+        assert f"{drawn.name} is not the one episode.png.json records (replaced since)" in warned[0]
+    (run / "episode.png.json").write_text('{"policies": []}')
+    with pytest.raises(ValueError, match=r"episode.png.json is damaged or not a file activevision"):
         write_report(run)
 
 
@@ -585,3 +603,96 @@ def test_a_robustness_suite_of_another_policy_than_the_runs_is_left_out(tmp_path
         f" policy; write it again: activevision robustness --run {run} --out {path.parent}"
         " --overwrite"
     ]
+
+
+def _sha256(data: bytes) -> str:
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()
+
+
+def write_export(run, model=b"exported", **changes):
+    """RUN/policy.onnx (``model``) and a policy.json beside it that records, as ``export``
+    writes them, the run's config.json and final weights as they are now (``changes``:
+    other values)."""
+    from activevision.runtime import pretrained_policy_path
+
+    values = json.loads(pretrained_policy_path().with_suffix(".json").read_text())
+    (run / "policy.onnx").write_bytes(model)
+    values |= {
+        "model_sha256": _sha256(model),
+        "training_config_sha256": _sha256((run / "config.json").read_bytes()),
+        "training_weights": "final",
+        "training_weights_sha256": _sha256((run / "policy.safetensors").read_bytes()),
+    }
+    (run / "policy.json").write_text(json.dumps(values | changes))
+
+
+def test_a_policy_exported_before_the_run_was_trained_on_is_not_its_policy(tmp_path):
+    """``match --model RUN/policy.onnx`` and ``demo --policy RUN/policy.onnx`` were this
+    run's policy whenever the file was RUN/policy.onnx as it is now, though exported before
+    the run was trained on: policy.json records the weights it was exported from (and
+    which), and report tells such an export by them."""
+    from activevision.experiments.provenance import write_episode_record
+
+    run = make_run(tmp_path)
+    (run / "policy.safetensors").write_bytes(b"final")
+    write_export(run)
+    digest = _sha256(b"exported")
+    model = str(run / "policy.onnx")
+    rows = [match_row("onnx_policy") | {"model": model, "model_sha256": digest}]
+    write_rows(run / "match" / "match.csv", rows)
+    figure = run / "episode.png"
+    figure.write_bytes(b"png")
+    figure.with_suffix(".gif").write_bytes(b"gif")
+    write_episode_record(
+        figure,
+        figure.with_suffix(".gif"),
+        command="demo",
+        policies=["run", "random"],
+        seed=0,
+        model=model,
+        model_sha256=digest,
+    )
+    said = f"onnx_policy: `{model}` (`match --model`, SHA-256 {digest[:12]}…, this run's"
+    said += " policy.onnx"
+    page, warned = _report_warnings(run)
+    assert warned == []
+    assert f"{said}, exported from its final weights)." in page
+    assert "`run` is this run's policy.onnx, exported from its final weights." in page
+    (run / "policy.safetensors").write_bytes(b"trained on")  # since the export
+    stale = "exported from another run's weights, or this run's before they were replaced"
+    page, warned = _report_warnings(run)
+    assert f"{said}, {stale} (trained on or retrained))." in page
+    assert "## One episode" not in page
+    assert warned == [
+        f"left {figure} out of the report: it played this run's policy.onnx, {stale} (trained"
+        f" on or retrained); write it again: activevision episode --run {run} --out {figure}"
+        " --overwrite"
+    ]
+    # exported again: this run's; of its best weights, which the run has replaced since
+    write_export(run)
+    assert _report_warnings(run)[1] == []
+    (run / "best_policy.safetensors").write_bytes(b"best")
+    best = {"training_weights": "best", "training_weights_sha256": _sha256(b"best")}
+    write_export(run, **best)
+    page, warned = _report_warnings(run)
+    assert warned == [] and f"{said}, exported from its best validated weights)." in page
+    (run / "best_policy.safetensors").write_bytes(b"validated again")
+    assert f"{said}, {stale}" in _report_warnings(run)[0]
+    # another run's config.json (a policy.json from before the weights' record checks it
+    # alone); a policy.json of another model than policy.onnx
+    older = {"training_weights": None, "training_weights_sha256": None}
+    write_export(run, training_config_sha256="ab" * 32, **older)
+    page, warned = _report_warnings(run)
+    assert f"{said}, exported from another run's config.json, or this run's" in page
+    write_export(run)
+    values = json.loads((run / "policy.json").read_text())
+    del values["training_weights"], values["training_weights_sha256"]
+    (run / "policy.json").write_text(json.dumps(values))  # from before the record
+    page, warned = _report_warnings(run)
+    assert warned == [] and f"{said})." in page
+    write_export(run, model_sha256=_sha256(b"another model"))
+    page, warned = _report_warnings(run)
+    assert f"{said}, whose policy.json describes another model (its model_sha256))." in page
+    assert len(warned) == 1

@@ -109,6 +109,16 @@ def test_export_run(tmp_path, frames):
     paths = export_run(run, tmp_path / "out" / "policy.onnx")
     meta = load_metadata(paths.metadata_path)
     assert meta.training_config_sha256 == hashlib.sha256(config).hexdigest()
+    # and the weights it was exported from, so that report tells an export from before the
+    # run was trained on (policy.json recorded the config's digest alone)
+    final = hashlib.sha256((run / "policy.safetensors").read_bytes()).hexdigest()
+    assert (meta.training_weights, meta.training_weights_sha256) == ("final", final)
+    best = dict(shape, step=7, validation_success_rate=0.5)
+    save_tensors(run / "best_policy.safetensors", network.state_dict(), best)
+    meta = load_metadata(export_run(run, tmp_path / "best", weights="best").metadata_path)
+    digest = hashlib.sha256((run / "best_policy.safetensors").read_bytes()).hexdigest()
+    assert (meta.training_weights, meta.training_weights_sha256) == ("best", digest)
+    assert digest != final
     np.testing.assert_allclose(meta.action_table, action_table(4.0), atol=1e-12)
     batch = frames(160, 120)[:, None]
     assert np.abs(onnx_q(paths.model_path, batch) - torch_q(network, batch)).max() <= 1e-4

@@ -63,6 +63,21 @@ def edited(changes: dict) -> dict:
         ({"action_set": "4way"}, "'action_table_deg' is not the 4way moves"),
         ({"action_set": REMOVED}, "'action_set'"),
         ({"training_config_sha256": "abc"}, "'training_config_sha256'"),
+        # which weights were exported and theirs: export writes both, or neither
+        ({"training_weights": "best"}, "'training_weights' and 'training_weights_sha256' come"),
+        ({"training_weights_sha256": "ab" * 32}, "'training_weights' and 'training_weights_sha2"),
+        (
+            {"training_weights": "latest", "training_weights_sha256": "ab" * 32},
+            "'training_weights' must be 'final', 'best' or null, got 'latest'",
+        ),
+        (
+            {"training_weights": "final", "training_weights_sha256": "AB" * 32},
+            "'training_weights_sha256' must be a SHA-256",
+        ),
+        (
+            {"training_weights": None, "training_weights_sha256": "ab" * 32},
+            "'training_weights_sha256' is given but 'training_weights' is null",
+        ),
         ({"action_names": [*SHIPPED["action_names"][:-1], 8]}, "'action_names'"),
         # the controller keeps this many actions: 10**13 asked for 73 TiB (a MemoryError)
         ({"action_history": 10**13}, "'action_history' must be an integer in 0..16"),
@@ -93,6 +108,21 @@ def test_the_shipped_policy_and_older_files_load():
     meta = PolicyMetadata.from_dict(SHIPPED)
     assert (meta.step_deg, meta.action_set, meta.opset) == (3.0, "8way", 17)
     assert meta.observation == "image+head+pose+proposal"
+    # shipped before policy.json recorded the weights it was exported from
+    assert "training_weights" not in SHIPPED
+    assert (meta.training_weights, meta.training_weights_sha256) == (None, None)
+    recorded = {"training_weights": "best", "training_weights_sha256": "ab" * 32}
+    meta = PolicyMetadata.from_dict(edited(recorded))
+    assert (meta.training_weights, meta.training_weights_sha256) == ("best", "ab" * 32)
+    meta = PolicyMetadata.from_dict(
+        edited(
+            {"training_weights": "final"}
+            | {
+                "training_weights_sha256": None  # the run had no policy.safetensors: a checkpoint's
+            }
+        )
+    )
+    assert (meta.training_weights, meta.training_weights_sha256) == ("final", None)
     # keys an older export lacks (export_onnx alone writes no moves, observation, camera or
     # world) keep their defaults
     older = edited({k: REMOVED for k in ("step_deg", "action_set", "camera", "world")})

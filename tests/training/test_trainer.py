@@ -454,7 +454,7 @@ def _earlier_attempt(run: Path) -> list[str]:
         (run / folder / "old.png").write_bytes(b"old")
     for name in ("report.md", "policy.onnx", "policy.json") + ("episode.png", "episode.gif"):
         (run / name).write_bytes(b"old")
-    (run / "episode.json").write_text("{}")  # what played in the figure (report reads it)
+    (run / "episode.png.json").write_text("{}")  # what played in the figure (report reads it)
     return sorted(p.name for p in run.iterdir() if p.name not in ("config.json", "metrics.csv"))
 
 

@@ -141,7 +141,12 @@ def refused_by(parser: argparse.ArgumentParser, option: str) -> Iterator[None]:
 
 #: ``--out`` of the picture commands (their ``--help`` said nothing of it)
 FIGURE_HELP = "the figure's file, in the format its suffix names (.png, .pdf, .svg, ...)"
-FIGURE_AND_GIF_HELP = FIGURE_HELP + "; the first policy's GIF is written beside it (.gif)"
+#: ``--out`` of ``episode`` and ``demo``: the record is
+#: :func:`activevision.experiments.provenance.record_path`'s
+FIGURE_AND_GIF_HELP = (
+    FIGURE_HELP + "; the first policy's GIF is written beside it (.gif), and a record of"
+    " what played in them (the figure's name + .json: episode.png.json), which report reads"
+)
 
 
 def figure_file(text: str) -> Path:

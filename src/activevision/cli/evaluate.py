@@ -364,7 +364,14 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
         methods.update(users)
         _start_over(out, args)
         compare(
-            out, methods, args.errors, args.episodes, args.seed, env_config, run_sha256=run_sha256
+            out,
+            methods,
+            args.errors,
+            args.episodes,
+            args.seed,
+            env_config,
+            run_sha256=run_sha256,
+            weights=args.weights,
         )
     plot_compare(out / "compare.csv", out / "compare.png")
     print(f"wrote {out}/compare.csv and compare.png")

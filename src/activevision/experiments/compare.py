@@ -67,14 +67,26 @@ def done_levels(csv_path: Path) -> list[dict]:
 RESUME_COLUMNS = ("method", "error", "episodes", "seed")
 #: the column of ``compare.csv`` that says which run's weights played (empty: no run)
 RUN_COLUMN = "run_sha256"
+#: the column after it that says which of the run's weights they are, ``final`` or ``best``
+#: (``--weights``), for ``report``'s command that writes the comparison again; only where a
+#: run played (``compare --run``: a compare without keeps its bytes), absent in CSVs from
+#: before it
+WEIGHTS_COLUMN = "run_weights"
 
 
-def with_run(new: list[dict], done: list[dict], run_sha256: str | None) -> list[dict]:
-    """``new`` rows with :data:`RUN_COLUMN`, last, where the CSV has it (or is new): the
-    rows resumed from a CSV from before the column keep its layout."""
+def with_run(
+    new: list[dict], done: list[dict], run_sha256: str | None, weights: str = "final"
+) -> list[dict]:
+    """``new`` rows with :data:`RUN_COLUMN`, last, where the CSV has it (or is new), and,
+    where a run played (``run_sha256``, the digest of its ``weights``, "final" or "best"),
+    :data:`WEIGHTS_COLUMN` after it: the rows resumed from a CSV from before a column keep
+    its layout."""
     if done and RUN_COLUMN not in done[0]:
         return new
-    return [{**row, RUN_COLUMN: run_sha256 or ""} for row in new]
+    columns = {RUN_COLUMN: run_sha256 or ""}
+    if run_sha256 and not (done and WEIGHTS_COLUMN not in done[0]):
+        columns[WEIGHTS_COLUMN] = weights
+    return [{**row, **columns} for row in new]
 
 
 def check_resumable(
@@ -129,6 +141,7 @@ def compare(
     config: EnvConfig | None = None,
     progress: bool = True,
     run_sha256: str | None = None,
+    weights: str = "final",
 ) -> list[dict]:
     """Run the experiment into ``out_dir/compare.csv``, one error level at a time.
 
@@ -137,7 +150,7 @@ def compare(
     ``errors`` plays the episodes of seed ``seed + i`` (its ``level_seed`` column); a
     resume with the levels in other places is refused (:func:`check_resumable`), as one
     of levels another run played (``run_sha256``: the digest of the weights the learned
-    method plays, recorded in each row).
+    method plays, the run's ``weights``, "final" or "best": recorded in each row).
     """
     out_dir = Path(out_dir)
     csv_path = out_dir / "compare.csv"
@@ -172,7 +185,7 @@ def compare(
                     seed=seed,
                     level_seed=seed + level,
                 )
-                rows += with_run(level_rows, resumed, run_sha256)
+                rows += with_run(level_rows, resumed, run_sha256, weights)
                 if bar is not None:
                     bar.update()
                     bar.set_postfix(error=e, method=name, success=f"{summary['success'].mean:.2f}")

@@ -464,9 +464,18 @@ def format_difference(
 
 
 def paired_rows(
-    differences: dict[str, dict[str, Interval]], baseline: str, matches: int, seed: int
+    differences: dict[str, dict[str, Interval]],
+    baseline: str,
+    matches: int,
+    seed: int,
+    models: Mapping[str, Mapping[str, str]] | None = None,
 ) -> list[dict]:
-    """One CSV row per method: every metric's paired difference from ``baseline``."""
+    """One CSV row per method: every metric's paired difference from ``baseline``, and
+    last, where ``match --model`` named exported models, ``models`` (:func:`model_columns`):
+    the row's :data:`MODEL_COLUMNS` and the baseline's (``baseline_model``,
+    ``baseline_model_sha256``), as ``match.csv`` records them (none without, whose files
+    keep their bytes)."""
+    none = dict.fromkeys(MODEL_COLUMNS, "")
     rows = []
     for method, metrics in differences.items():
         row: dict[str, object] = {
@@ -479,6 +488,9 @@ def paired_rows(
             row[f"{name}_diff"] = iv.mean
             row[f"{name}_diff_low"] = iv.low
             row[f"{name}_diff_high"] = iv.high
+        if models:
+            row |= models.get(method, none)
+            row |= {f"baseline_{k}": v for k, v in models.get(baseline, none).items()}
         rows.append(row)
     return rows
 

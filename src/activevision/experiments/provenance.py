@@ -4,10 +4,16 @@
 
 ``compare.csv`` records the digest of the weights its ``learned`` method played
 (``run_sha256``, :mod:`activevision.experiments.compare`). ``episode`` and ``demo`` write,
-beside their figure and GIF, a record (``FIGURE.json``, :func:`write_episode_record`): the
+beside their figure and GIF, a record (the figure's name and ``.json``, ``episode.png.json``:
+:func:`write_episode_record`): the
 policies, the start's seed, the run whose policy played (the digests of its ``config.json``
 and weights, as ``evaluation.json`` records them) or the exported model, and the digests of
 the figure and GIF it describes. Files written before these records are reported as before.
+
+A model ``demo --policy`` or ``match --model`` played is the run's own where it is
+``RUN/policy.onnx`` as it is now and the ``policy.json`` beside it records that it was
+exported from the run's ``config.json`` and weights as they are now (:func:`run_export`): an
+export from before the run was trained on or retrained is not the run's policy.
 """
 
 from __future__ import annotations
@@ -18,9 +24,13 @@ from pathlib import Path
 from typing import Any
 
 from activevision.io import file_sha256, read_csv, read_json, write_json
+from activevision.runtime.metadata import MODEL_FILENAME, load_metadata, metadata_path_for
 from activevision.training.policy_files import scored_run
 
-#: what ``episode`` and ``demo`` record beside their figure: ``episode.png`` -> ``episode.json``
+#: what ``episode`` and ``demo`` record beside their figure: ``episode.png`` ->
+#: ``episode.png.json``, the whole name (``episode.svg`` beside it has its own,
+#: ``episode.svg.json``; ``episode.json`` was both's, and ``--out RUN/policy.png`` would
+#: have written over the exported policy's ``policy.json``)
 RECORD_SUFFIX = ".json"
 #: the record's keys, each always written (null where it does not apply)
 RECORD_KEYS = ("command", "policies", "seed", "run", "weights", "model", "model_sha256", "files")
@@ -38,8 +48,10 @@ class Provenance:
 
 
 def record_path(figure: str | Path) -> Path:
-    """The record ``episode`` and ``demo`` write beside ``figure``."""
-    return Path(figure).with_suffix(RECORD_SUFFIX)
+    """The record ``episode`` and ``demo`` write beside ``figure``: its name and
+    :data:`RECORD_SUFFIX`, one per figure."""
+    figure = Path(figure)
+    return figure.with_name(figure.name + RECORD_SUFFIX)
 
 
 def write_episode_record(
@@ -80,16 +92,68 @@ def _damaged(path: Path, why: str) -> ValueError:
 
 
 def _stale(current: dict[str, str | None], recorded: dict[str, str | None]) -> list[str]:
-    """What of a run (``config.json``, ``weights``) a record's digests do not match."""
+    """What of a run (``config.json``, ``weights``: those ``current`` holds) a record's
+    digests do not match."""
     return [
         what
         for key, what in (("config_sha256", "config.json"), ("weights_sha256", "weights"))
-        if current[key] != recorded.get(key)
+        if key in current and current[key] != recorded.get(key)
     ]
 
 
 #: why a result of another run's files, or of this run's before they changed, is left out
 ANOTHER_RUN = "or this run's before they were replaced (trained on or retrained)"
+
+
+@dataclass(frozen=True)
+class RunExport:
+    """A model that is a run's ``policy.onnx`` as it is now (:func:`run_export`): ``why``
+    it is not the run's policy as it is now (``""``: it is), and the ``weights`` it was
+    exported from, ``"final"`` or ``"best"`` (None: its ``policy.json`` does not say)."""
+
+    why: str = ""
+    weights: str | None = None
+
+    def text(self) -> str:
+        """``this run's policy.onnx`` and, where recorded, which weights it was exported
+        from, or why it is not the run's policy as it is now."""
+        if self.why:
+            return f"this run's policy.onnx, {self.why}"
+        if self.weights is None:
+            return "this run's policy.onnx"
+        which = "best validated" if self.weights == "best" else "final"
+        return f"this run's policy.onnx, exported from its {which} weights"
+
+
+def run_export(run: Path, model_sha256: str) -> RunExport | None:
+    """What the exported model of SHA-256 ``model_sha256`` is of ``run``: None where it is
+    not ``RUN/policy.onnx`` as it is now; else, by the ``policy.json`` beside it, whether it
+    was exported from the run's ``config.json`` and weights as they are now (``export``
+    records their digests): not where its ``policy.json`` describes another model or
+    records another run's files or this run's before they were replaced (an export before
+    the run was trained on or retrained). A ``policy.json`` from before the weights' record
+    is checked for its ``config.json`` alone, one that is missing not at all, as before.
+    :class:`~activevision.runtime.PolicyFileError` (a ValueError) naming a damaged one."""
+    exported = run / MODEL_FILENAME
+    if not exported.is_file() or file_sha256(exported) != model_sha256:
+        return None
+    path = metadata_path_for(exported)
+    if not path.is_file():
+        return RunExport()
+    meta = load_metadata(path)
+    if meta.model_sha256 != model_sha256:
+        return RunExport(f"whose {path.name} describes another model (its model_sha256)")
+    recorded = {"config_sha256": meta.training_config_sha256}
+    weights = meta.training_weights
+    current = scored_run(run, weights or "final")
+    if weights is None:  # a policy.json from before the weights' record
+        current = {"config_sha256": current["config_sha256"]}
+    else:
+        recorded["weights_sha256"] = meta.training_weights_sha256
+    stale = _stale(current, recorded)
+    if stale:
+        return RunExport(f"exported from another run's {' and '.join(stale)}, {ANOTHER_RUN}")
+    return RunExport(weights=weights)
 
 
 def episode_provenance(figure: Path, run: Path) -> Provenance:
@@ -98,7 +162,8 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
     (replaced since), where it played another run's ``config.json`` or weights or this
     run's before they were replaced, or where it played no policy of this run (``demo`` of
     the shipped policy or of another model, ``episode`` without ``--run``; ``demo --policy
-    RUN/policy.onnx`` of this run's exported policy as it is now is this run's). A figure
+    RUN/policy.onnx`` of this run's exported policy as it is now is this run's, where it
+    was exported from the run's files as they are now, :func:`run_export`). A figure
     without a record (written before it) is the run's, as before. ValueError naming the
     record where it is damaged."""
     path = record_path(figure)
@@ -123,11 +188,12 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
             return Provenance(False, why, again)
     played = " and ".join(f"`{p}`" for p in policies) + f" from the start of seed {seed}"
     if recorded is None:
-        exported = run / "policy.onnx"
-        model_sha256 = data["model_sha256"]
-        if model_sha256 and exported.is_file() and file_sha256(exported) == model_sha256:
-            return Provenance(True, f"{played}; `{policies[0]}` is this run's policy.onnx.")
-        if data["command"] == "demo":
+        export = run_export(run, str(data["model_sha256"])) if data["model_sha256"] else None
+        if export is not None and not export.why:
+            return Provenance(True, f"{played}; `{policies[0]}` is {export.text()}.")
+        if export is not None:
+            why = f"it played {export.text()}"
+        elif data["command"] == "demo":
             what = "another exported model" if data["model"] else "the shipped policy"
             why = f"it played {what} (demo), not this run's policy"
         else:
@@ -147,12 +213,13 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
 
 def compare_provenance(figure: Path, run: Path) -> Provenance:
     """Whether ``figure`` (``RUN/compare/compare.png``) is ``run``'s comparison, by the
-    ``run_sha256`` its ``compare.csv`` records: not where it played another run's weights
+    ``run_sha256`` its ``compare.csv`` records, of the run's weights ``run_weights`` names
+    (a CSV from before that column: either): not where it played another run's weights
     or this run's before they were replaced, or no run (a compare without ``--run``: no
     learned policy of this run, in the paper's env). A figure without a CSV, or a CSV from
-    before the column, is the run's, as before. ValueError naming the CSV where it is
+    before the columns, is the run's, as before. ValueError naming the CSV where it is
     damaged or its rows record two runs."""
-    from activevision.experiments.compare import RESUME_COLUMNS, RUN_COLUMN
+    from activevision.experiments.compare import RESUME_COLUMNS, RUN_COLUMN, WEIGHTS_COLUMN
 
     csv_path = figure.with_name("compare.csv")
     again = f"compare --run {run} --out {figure.parent} --overwrite"
@@ -163,14 +230,16 @@ def compare_provenance(figure: Path, run: Path) -> Provenance:
         raise _damaged(csv_path, "it holds no rows")
     if RUN_COLUMN not in rows[0]:
         return Provenance(True)
-    digests = {row[RUN_COLUMN] for row in rows}
-    if len(digests) > 1:
-        raise _damaged(csv_path, f"its rows' {RUN_COLUMN} are not one run's")
-    (digest,) = digests
+    recorded = {(row[RUN_COLUMN], row.get(WEIGHTS_COLUMN)) for row in rows}
+    (digest, weights), *others = recorded
+    if others or weights not in (None, "final", "best") or (weights and not digest):
+        raise _damaged(csv_path, f"its rows' {RUN_COLUMN} and {WEIGHTS_COLUMN} are not one run's")
     if not digest:
         return Provenance(False, "it played no run (a compare without --run)", again)
-    for weights, which in (("final", "final"), ("best", "best validated")):
-        if scored_run(run, weights)["weights_sha256"] == digest:
+    for played, which in (("final", "final"), ("best", "best validated")):
+        if weights in (None, played) and scored_run(run, played)["weights_sha256"] == digest:
             return Provenance(True, f"`learned` plays this run's {which} weights.")
     why = f"it played another run's weights, {ANOTHER_RUN}"
+    if weights == "best":
+        again = f"compare --run {run} --weights best --out {figure.parent} --overwrite"
     return Provenance(False, why, again)

@@ -7,7 +7,7 @@ Layout of a run directory after the quickstart::
     runs/NAME/evaluation/evaluation.{csv,json} fixed-seed evaluation of every method
     runs/NAME/compare/compare.{csv,png}       success vs localisation error
     runs/NAME/episode.png, episode.gif        learned vs random from one start
-    runs/NAME/episode.json                    what played in them (``episode``, ``demo``)
+    runs/NAME/episode.png.json                what played in them (``episode``, ``demo``)
     runs/NAME/match/match.csv, match_*.png    head-control strategies through whole matches
     runs/NAME/robustness/robustness.{csv,png} the policy under named perturbations
                                               (``activevision robustness --run``)
@@ -36,8 +36,9 @@ from activevision.experiments.provenance import (
     Provenance,
     compare_provenance,
     episode_provenance,
+    run_export,
 )
-from activevision.io import file_sha256, read_csv, read_json, write_text
+from activevision.io import read_csv, read_json, write_text
 from activevision.text import counted
 from activevision.training.checkpoint import checkpoint_step, list_checkpoints
 from activevision.training.config import MATCH_ENV_ID
@@ -528,11 +529,10 @@ def _match_policies_text(rows: list[dict], run: Path) -> str:
 def _model_text(row: dict, run: Path) -> str:
     """What model a ``match --model`` row played: the file as given, its digest's first 12
     digits, and whether that is ``run``'s ``policy.onnx`` as it is now (a model exported
-    again since, or another's, is said to be not)."""
+    again since, or another's, is said to be not), exported from the run's weights as they
+    are now (:func:`~activevision.experiments.provenance.run_export`: one exported before
+    the run was trained on or retrained is said to be not its policy as it is now)."""
     digest = row["model_sha256"]
-    exported = run / "policy.onnx"
-    if exported.is_file() and file_sha256(exported) == digest:
-        whose = "this run's policy.onnx"
-    else:
-        whose = "not this run's policy.onnx as it is now"
+    export = run_export(run, digest)
+    whose = "not this run's policy.onnx as it is now" if export is None else export.text()
     return f"{row['method']}: `{row['model']}` (`match --model`, SHA-256 {digest[:12]}…, {whose})."

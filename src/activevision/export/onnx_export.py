@@ -129,6 +129,8 @@ def policy_metadata(
     action_names: Sequence[str] | None = None,
     camera: Any | None = None,
     world: Mapping[str, Any] | None = None,
+    training_weights: str | None = None,
+    training_weights_sha256: str | None = None,
 ) -> dict[str, Any]:
     """The caller's part of policy.json, from radians.
 
@@ -149,6 +151,10 @@ def policy_metadata(
             record name -> config dataclass or its dict (``{"appearance": env.appearance,
             "robots": env.robots}``, stored as ``typecheck.config_to_dict`` writes them).
             None: not recorded.
+        training_weights: which of the run's weights are exported, "final" or "best",
+            recorded with ``training_weights_sha256``, their SHA-256 (None where unknown),
+            so that ``activevision report`` can tell an export from weights the run has
+            replaced since. None: neither is recorded.
     """
     table = np.asarray(action_table, dtype=np.float64)
     if table.ndim != 2 or table.shape[1] != 2:
@@ -167,6 +173,9 @@ def policy_metadata(
     if world is not None:
         values["world"] = {name: config_to_dict(record) for name, record in world.items()}
     values["training_config_sha256"] = training_config_sha256
+    if training_weights is not None:
+        values["training_weights"] = training_weights
+        values["training_weights_sha256"] = training_weights_sha256
     values["action_names"] = list((action_names or STANDARD_ACTION_NAMES)[: len(table)])
     return values
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +29,9 @@ def export_run(
     Reads the weights with :func:`activevision.training.load_policy`, the action table,
     head limits, camera and world (appearance ranges, other robots) from the run's
     environment settings (``config.json``'s ``env``, or ``match`` for a run trained on
-    ``ActiveVisionMatch-v0``) and records the SHA-256 of ``config.json`` in the metadata.
+    ``ActiveVisionMatch-v0``) and records the SHA-256 of ``config.json`` in the metadata, and
+    which weights were exported and theirs (``training_weights``,
+    ``training_weights_sha256``), taken as they were read.
 
     Args:
         run_dir: a run directory written by :mod:`activevision.training`.
@@ -38,6 +40,7 @@ def export_run(
     """
     from activevision.envs.observations import vector_keys
     from activevision.training import load_config, load_policy
+    from activevision.training.policy_files import scored_run
     from activevision.training.state import check_run_config_unchanged
 
     run_dir = Path(run_dir)
@@ -53,6 +56,12 @@ def export_run(
         "policy.json would record the edited camera and moves, not those the policy was"
         " trained with; restore the file",
     )
+    # the weights exported, as they are read: report tells an export of weights the run
+    # has replaced since (trained on, retrained) from its policy as it is
+    source = {
+        "training_weights": weights,
+        "training_weights_sha256": scored_run(run_dir, weights)["weights_sha256"],
+    }
     network = load_policy(run_dir, weights=weights)
     if config.env_id == MATCH_ENV_ID:
         # a policy trained on the match: its world, observation and moves are the match's
@@ -66,6 +75,7 @@ def export_run(
             match.observation if student else "image",
             match_keys(match) if student else (),
             sha256,
+            source,
         )
         if student:
             metadata["act_by"] = "action"
@@ -78,7 +88,9 @@ def export_run(
         raise ValueError(
             f"{run_dir}: the network stacks {stack} frames but the environment {env.frame_stack}"
         )
-    metadata = _world_metadata(env, env.action_set, env.observation, vector_keys(env), sha256)
+    metadata = _world_metadata(
+        env, env.action_set, env.observation, vector_keys(env), sha256, source
+    )
     metadata["action_history"] = env.action_history
     if config.algo == "dagger":
         from activevision.localisation import LocalisationConfig
@@ -93,10 +105,18 @@ def export_run(
 
 
 def _world_metadata(
-    world: Any, action_set: str, observation: str, keys: Sequence[str], config_sha256: str
+    world: Any,
+    action_set: str,
+    observation: str,
+    keys: Sequence[str],
+    config_sha256: str,
+    source: Mapping[str, Any],
 ) -> dict[str, Any]:
     """policy.json's record of the world a policy was trained in (``world`` an ``EnvConfig``
-    or a ``MatchConfig``): its moves, camera, appearance and robots, and the observation."""
+    or a ``MatchConfig``): its moves, camera, appearance and robots, and the observation;
+    and of the run's files it was exported from (``config_sha256``, ``source``: the
+    weights', :func:`policy_metadata`'s ``training_weights`` and
+    ``training_weights_sha256``)."""
     from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
 
     metadata = policy_metadata(
@@ -106,6 +126,7 @@ def _world_metadata(
         action_names=ACTION_NAMES_8WAY,
         camera=world.camera,
         world={"appearance": world.appearance, "robots": world.robots},
+        **source,
     )
     metadata["step_deg"] = world.step_deg
     metadata["action_set"] = action_set

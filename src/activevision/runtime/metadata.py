@@ -27,7 +27,9 @@ Example ``policy.json`` (abridged)::
                  "tilt_max_deg": 65.0},
       "world": {"appearance": {"gain": [1.0, 1.0], "offset": [0.0, 0.0], ...},
                 "robots": {"count": [0, 0], "height": [0.4, 1.0], "radius": 0.12, ...}},
-      "training_config_sha256": "9a0b..."
+      "training_config_sha256": "9a0b...",
+      "training_weights": "final",
+      "training_weights_sha256": "5d2e..."
     }
 
 Angles are stored in degrees for people to read; :class:`PolicyMetadata` hands them out in
@@ -62,10 +64,19 @@ inputs (:data:`OBSERVATION_VECTOR_KEYS`), with ``"actions"`` last exactly when
 ``camera`` and ``world`` None, ``action_type`` ``"discrete"``, ``act_by`` ``"action"``.
 ``step_deg`` and ``action_set`` (the env's discrete moves; ``export_onnx`` alone writes
 neither) come together, and the action table must be their moves. Keys no reader acts on
-(``dueling``, ``preprocessing``, ``package_version``, ``training_config_sha256``) are
-checked for their type where present. ``model_file``, where present, must be a bare file name
-(the model sits beside its policy.json: no folder, ``..`` or absolute path), and
+(``dueling``, ``preprocessing``, ``package_version``, ``training_config_sha256``,
+``training_weights``, ``training_weights_sha256``) are checked for their type where present.
+``model_file``, where present, must be a bare file name (the model sits beside its
+policy.json: no folder, ``..`` or absolute path), and
 :class:`~activevision.runtime.HeadController` refuses one that names no file beside it.
+
+``training_config_sha256`` is the SHA-256 of the run's ``config.json`` the policy was exported
+from, ``training_weights`` which of its weights (``"final"``: ``policy.safetensors``,
+``"best"``: ``best_policy.safetensors``) and ``training_weights_sha256`` their SHA-256 (null
+where the run had no such file and its newest checkpoint's were read): ``activevision report``
+tells by them a run's ``policy.onnx`` exported before the run was trained on or retrained.
+Files written before the weights' record lack both keys (None: unknown); ``export_onnx``
+alone writes neither.
 
 ``action_type`` is ``"discrete"`` (absent in older files: the graph scores the rows of
 ``action_table_deg``) or ``"continuous"``: the graph's output is one move ``(pan, tilt)`` in
@@ -437,6 +448,10 @@ class PolicyMetadata:
     model_file: str | None = None
     model_sha256: str = ""
     training_config_sha256: str | None = None
+    #: which of the run's weights were exported, "final" or "best" (None: not recorded)
+    training_weights: str | None = None
+    #: their SHA-256 (None: not recorded, or the run had no such file)
+    training_weights_sha256: str | None = None
     action_names: tuple[str, ...] = ()
     #: the observation the policy was trained on ("image", "image+head", ...)
     observation: str = "image"
@@ -512,6 +527,8 @@ class PolicyMetadata:
             model_file=read.model_file(),
             model_sha256=read.model_sha256(),
             training_config_sha256=read.training_config_sha256(),
+            training_weights=read.training_weights(),
+            training_weights_sha256=read.training_weights_sha256(),
             action_names=read.action_names(table_deg),
             observation=read.observation(),
             vector_keys=read.vector_keys(),
@@ -707,12 +724,31 @@ class _MetadataReader:
         return self.name("vector_input_name")
 
     def training_config_sha256(self) -> str | None:
-        digest = self.values.get("training_config_sha256")
+        return self.optional_sha256("training_config_sha256")
+
+    def optional_sha256(self, key: str) -> str | None:
+        digest = self.values.get(key)
         if digest is not None and not (isinstance(digest, str) and _is_sha256(digest)):
+            raise self.fail(f"{key!r} must be a SHA-256 (64 hex digits) or null, got {digest!r}")
+        return digest
+
+    def training_weights(self) -> str | None:
+        """Which of the run's weights were exported: "final" or "best", where recorded
+        (with ``training_weights_sha256``: export writes both, or neither)."""
+        value = self.values.get("training_weights")
+        if value is not None and value not in ("final", "best"):
+            raise self.fail(f"'training_weights' must be 'final', 'best' or null, got {value!r}")
+        if ("training_weights" in self.values) != ("training_weights_sha256" in self.values):
             raise self.fail(
-                f"'training_config_sha256' must be a SHA-256 (64 hex digits) or null, got"
-                f" {digest!r}"
+                "'training_weights' and 'training_weights_sha256' come together (export writes"
+                " both)"
             )
+        return value
+
+    def training_weights_sha256(self) -> str | None:
+        digest = self.optional_sha256("training_weights_sha256")
+        if digest is not None and self.values.get("training_weights") is None:
+            raise self.fail("'training_weights_sha256' is given but 'training_weights' is null")
         return digest
 
     def step_deg(self, table_deg: np.ndarray) -> float | None:

@@ -130,7 +130,7 @@ def compare_ray(
                     seed=seed,
                     level_seed=seed + level,
                 )
-                rows += with_run(level_rows, resumed, run_sha256)
+                rows += with_run(level_rows, resumed, run_sha256, weights)
             write_csv(csv_path, rows)
     return rows
 

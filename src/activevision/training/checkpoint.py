@@ -60,7 +60,7 @@ RUN_OUTPUTS = (
     "compare",
     "episode.png",
     "episode.gif",
-    "episode.json",
+    "episode.png.json",
     "match",
     "robustness",
 )
