@@ -233,7 +233,8 @@ def test_report_leaves_out_matches_and_robustness_of_another_run_or_replaced_wei
     one warning line naming it and how to write it again, and still writes the page."""
     match_csv, robustness_csv = run / "match" / "match.csv", run / "robustness" / "robustness.csv"
     matches = ["match", "--matches", "2", "--ticks", "9", "--methods", "ball_track", "learned"]
-    assert main([*matches, "--run", str(run), "--out", str(run / "match")]) == 0
+    paired = ["--baseline", "ball_track"]  # match_paired.csv records the run as match.csv does
+    assert main([*matches, *paired, "--run", str(run), "--out", str(run / "match")]) == 0
     suite = ["robustness", "--episodes", "2", "--perturbations", "gain-dark-mild"]
     assert main([*suite, "--run", str(run)]) == 0
     weights = run / "policy.safetensors"
@@ -242,7 +243,7 @@ def test_report_leaves_out_matches_and_robustness_of_another_run_or_replaced_wei
         "run_weights_sha256": _sha256(weights),
         "run_weights": "final",
     }
-    for table in (match_csv, robustness_csv):
+    for table in (match_csv, match_csv.with_name("match_paired.csv"), robustness_csv):
         with table.open(newline="") as f:
             reader = csv.DictReader(f)
             rows = list(reader)

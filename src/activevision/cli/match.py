@@ -411,7 +411,7 @@ def cmd_match(args: argparse.Namespace) -> None:
             print(table_header(width))
             for method, metrics in differences.items():
                 print(format_difference(method, metrics, width))
-            pairs = paired_rows(differences, args.baseline, args.matches, args.seed, models)
+            pairs = paired_rows(differences, args.baseline, args.matches, args.seed, models, scored)
             write_csv(paired_path, pairs)
         # the run by its folder's name, not by the path given: the figures are the same bytes
         # whatever the current directory and wherever the run lies

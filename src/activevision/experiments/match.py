@@ -469,12 +469,14 @@ def paired_rows(
     matches: int,
     seed: int,
     models: Mapping[str, Mapping[str, str]] | None = None,
+    scored: dict[str, str] | None = None,
 ) -> list[dict]:
-    """One CSV row per method: every metric's paired difference from ``baseline``, and
-    last, where ``match --model`` named exported models, ``models`` (:func:`model_columns`):
-    the row's :data:`MODEL_COLUMNS` and the baseline's (``baseline_model``,
-    ``baseline_model_sha256``), as ``match.csv`` records them (none without, whose files
-    keep their bytes)."""
+    """One CSV row per method: every metric's paired difference from ``baseline``; then,
+    where ``match --model`` named exported models, ``models`` (:func:`model_columns`): the
+    row's :data:`MODEL_COLUMNS` and the baseline's (``baseline_model``,
+    ``baseline_model_sha256``); and last, for matches that played a training run, ``scored``:
+    its digests. Each as ``match.csv`` records them (none without, whose files keep their
+    bytes)."""
     none = dict.fromkeys(MODEL_COLUMNS, "")
     rows = []
     for method, metrics in differences.items():
@@ -491,7 +493,7 @@ def paired_rows(
         if models:
             row |= models.get(method, none)
             row |= {f"baseline_{k}": v for k, v in models.get(baseline, none).items()}
-        rows.append(row)
+        rows.append(row | (scored or {}))
     return rows
 
 
