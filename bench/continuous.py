@@ -99,9 +99,9 @@ def main() -> None:
         s, mine = summaries[name], paired.get(name, {})
         print(
             f"{name:26s} {kinds[name]:>10s} {100 * s['success_rate'].mean:12.1f}%"
-            f" {100 * s['success'].mean:12.1f}% {own[name]['median']:11g}"
-            f" {mine.get('median', float('nan')):14g} {s['head_travel'].mean:7.1f}°"
-            f" {mine.get('head_travel', float('nan')):14.1f}°"
+            f" {100 * s['success'].mean:12.1f}% {cell(own[name]['median'], '{:11g}')}"
+            f" {cell(mine.get('median', math.nan), '{:14g}')} {s['head_travel'].mean:7.1f}°"
+            f" {cell(mine.get('head_travel', math.nan), '{:14.1f}°')}"
         )
         record[name] = {
             "actions": kinds[name],
@@ -154,6 +154,13 @@ def finite(value):
     return value
 
 
+def cell(value: float, spec: str) -> str:
+    """A table cell: ``value`` formatted by ``spec``, or "-" as wide where it is NaN (a
+    median or mean over no episodes read "nan°")."""
+    text = spec.format(value)
+    return f"{'-':>{len(text)}s}" if math.isnan(value) else text
+
+
 def plot(episodes, names, kinds, n_paired, path: Path) -> None:
     """Steps to success on the episodes every policy solves, one histogram per policy."""
     solved = {n: {} for n in names}
@@ -170,6 +177,16 @@ def plot(episodes, names, kinds, n_paired, path: Path) -> None:
     ax.set_xlabel("steps to the goal view")
     ax.set_ylabel("episodes")
     ax.set_title(f"steps to the goal view on the {n_paired} test episodes all three solve")
+    if not common:  # three empty histograms on a y axis around 0: say why instead
+        ax.set_ylim(0, 1)
+        ax.text(
+            0.5,
+            0.5,
+            f"no test episode that {', '.join(names[:-1])} and {names[-1]} all solve",
+            ha="center",
+            va="center",
+            transform=ax.transAxes,
+        )
     ax.legend(fontsize=8)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -159,6 +159,33 @@ def test_continuous_writes_no_nan_into_its_json():
     assert json.loads(text) == {"paired": 0, "a": {"median": None, "ci": [0.1, None]}, "ok": True}
 
 
+def test_continuous_figure_with_no_paired_episode_says_so(tmp_path, monkeypatch):
+    """With no test episode that all three policies solve (short runs, few episodes) the
+    figure was three empty histograms on a y axis from -0.04 to 0.04: it now says why it is
+    empty, and a table cell of no paired episode reads "-", not "nan°"."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("continuous", BENCH / "continuous.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    drawn = {}
+    monkeypatch.setattr(module.plt.Figure, "savefig", lambda fig, path, dpi: drawn.update(fig=fig))
+    episodes = [
+        {"method": "a", "seed": 0, "success": True, "success_duration": 3},
+        {"method": "b", "seed": 1, "success": True, "success_duration": 2},
+        {"method": "oracle", "seed": 0, "success": True, "success_duration": 4},
+    ]
+    kinds = {"a": "discrete", "b": "continuous", "oracle": "discrete"}
+    module.plot(episodes, ["a", "b", "oracle"], kinds, 0, tmp_path / "f.png")
+    (ax,) = drawn["fig"].axes
+    texts = [t.get_text() for t in ax.texts]
+    assert any("no test episode that a, b and oracle all solve" in t for t in texts), texts
+    assert ax.get_ylim()[0] >= 0
+    assert module.cell(float("nan"), "{:14g}") == f"{'-':>14s}"
+    assert module.cell(3.0, "{:14g}") == f"{3.0:14g}"
+
+
 def test_reproducibility_runs_leave_no_folder(tmp_path):
     """Each of bench/reproducibility.py's training processes removes its run folder (it
     left one in the temporary directory per process); here with 60 steps, not 900."""

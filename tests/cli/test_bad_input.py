@@ -355,6 +355,11 @@ def test_a_figure_named_as_a_folder_is_refused(tmp_path, capsys, command, one_cl
     one_clear_line("--out", "'.png' is a suffix alone", f"{tmp_path}/view.png")
     assert not (tmp_path / ".png").exists()
     assert figure_file(f"{tmp_path}/.hidden.png").name == ".hidden.png"  # a name and a suffix
+    # no suffix, no format: --out demo (read as demo's folder) wrote a PNG file called demo
+    # and demo.gif beside it
+    assert main([command, "--out", str(folder)]) == 2
+    one_clear_line("--out", "has no suffix", f"{folder}.png")
+    assert not folder.exists() and not folder.with_suffix(".gif").exists()
 
 
 # ------------------------------------------------------------ outputs never overwritten

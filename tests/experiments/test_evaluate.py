@@ -161,6 +161,19 @@ def summarise_success_rates(rates):
     return iv.low, iv.high
 
 
+def test_compare_draws_its_bar_on_a_terminal_only(tmp_path, capsys, monkeypatch):
+    """As a training run's: off a terminal (make run's log, a pipe) the bar wrote every
+    redraw into the log, 60 of them for quickstart's 5 levels."""
+    import sys
+
+    methods = {"oracle": lambda e: OraclePolicy()}
+    compare(tmp_path / "pipe", methods, errors=[0.0, 1.0], episodes=2)  # stderr: no terminal
+    assert "method/s" not in capsys.readouterr().err
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    compare(tmp_path / "tty", methods, errors=[0.0, 1.0], episodes=2)
+    assert "2/2" in capsys.readouterr().err
+
+
 def test_compare_is_incremental(tmp_path):
     methods = {"oracle": lambda e: OraclePolicy(), "entropy_jump": lambda e: EntropyPolicy(e)}
     rows = compare(tmp_path, methods, errors=[0.0, 1.0], episodes=5, progress=False)

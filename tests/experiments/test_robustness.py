@@ -389,3 +389,38 @@ def test_the_bars_are_labelled_as_the_table_prints_them(tmp_path, monkeypatch):
     assert labels == [["72.5"], ["12.5"]]
     cells = format_row(clean).split()
     assert "72.5" in cells and "12.5" in cells
+
+
+def test_the_panels_axis_labels_do_not_run_into_each_other(tmp_path, monkeypatch):
+    # a blind method's rows (`robustness --method scan`): the long name of
+    # all-mild+robots-4 narrowed both panels, and the success-rate panel's two-line label ran
+    # 33 px into the goal-reached panel's ("...at the end goal reached: ...")
+    import activevision.figures.robustness as figure
+
+    drawn = {}
+    monkeypatch.setattr(figure, "save_figure", lambda fig, path, dpi: drawn.update(fig=fig))
+    clean = {"name": "clean", "factor": "none", "level": "trained", "setting": "the env as it is"}
+    clean["in_training_range"] = ""  # untrained, as the CSV of a blind method says
+    for metric in ("success_rate", "goal_reached"):
+        clean |= {metric: 0.73, f"{metric}_low": 0.57, f"{metric}_high": 0.89}
+    rows = [clean]
+    rows += [
+        clean | {"name": f"robots-{k}", "factor": "robots", "level": str(k)} for k in range(1, 5)
+    ]
+    rows.append(
+        clean
+        | {
+            "name": "all-mild+robots-4",
+            "factor": "all",
+            "level": "mild",
+            "setting": "all factors mild, robots=4",
+        }
+    )
+    figure.plot_robustness(rows, tmp_path / "r.png", title="scan: 6 rows")
+    fig = drawn["fig"]
+    renderer = fig.canvas.get_renderer()
+    left, right = (ax.xaxis.label.get_window_extent(renderer) for ax in fig.axes[:2])
+    assert left.x1 + 10 < right.x0, (left, right)  # 10 px apart at least
+    for ax in fig.axes[:2]:  # and each label stays inside the figure
+        box = ax.xaxis.label.get_window_extent(renderer)
+        assert fig.bbox.x0 <= box.x0 and box.x1 <= fig.bbox.x1

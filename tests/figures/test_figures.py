@@ -11,6 +11,8 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
 import activevision
 
 SRC = Path(activevision.__file__).parent
@@ -163,6 +165,30 @@ def test_the_success_rate_panel_names_both_curves():
     metrics = {"epoch": [1, 2], "step": [10, 20], "success_rate": [0.9, 0.7]}
     draw_curve(ax, CURVES[2], metrics, {"step": [20], "success_rate": [0.8]})
     assert ax.get_legend_handles_labels()[1] == ["training episodes", "greedy validation"]
+
+
+def test_validation_sits_at_its_step_on_the_epoch_axis():
+    """A run that ends between two epochs logs a short last epoch (`--steps 1000`: epochs at
+    steps 300, 600, 900 and 1000): validation was placed by the last row's epochs per step,
+    so step 750 sat at epoch 3.0, not between epochs 2 and 3; a PPO run's validation at step
+    2,000 sat at epoch 1.95 beside its own epoch 1 at that step. And a run of one epoch drew
+    its axis as 0.945 ... 1.050 (no two whole epochs in it)."""
+    from activevision.figures.canvas import new_figure
+    from activevision.figures.training import CURVES, draw_curve
+
+    ax = new_figure().subplots()
+    metrics = {"epoch": [1, 2, 3, 4], "step": [300, 600, 900, 1000]}
+    metrics["success_rate"] = [0.5, 0.6, 0.7, 0.8]
+    draw_curve(ax, CURVES[2], metrics, {"step": [250, 750, 1000], "success_rate": [0.6] * 3})
+    (validation,) = [line for line in ax.lines if line.get_label() == "greedy validation"]
+    assert validation.get_xdata() == pytest.approx([250 / 300, 2.5, 4.0])
+
+    ax = new_figure().subplots()
+    one = {"epoch": [1], "step": [3724], "success_rate": [0.76]}
+    draw_curve(ax, CURVES[2], one, {"step": [1233, 3724], "success_rate": [0.7, 0.8]})
+    ax.figure.canvas.draw()
+    ticks = [t for t in ax.get_xticks() if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
+    assert len(ticks) >= 2 and all(float(t).is_integer() for t in ticks), ticks
 
 
 def test_a_match_runs_reward_panel_counts_matches():

@@ -153,7 +153,8 @@ def figure_file(text: str) -> Path:
     """A figure's file (``--out view.png``): a path that ends in a separator names a folder,
     which ``Path`` would silently make a file of that name (``--out figs/`` wrote a PNG
     called ``figs``); a name that is a suffix alone (``--out figs/.png``) has no suffix to
-    Python and was written as a PNG called ``.png``."""
+    Python and was written as a PNG called ``.png``; a name without a suffix names no format
+    (``--out demo``, read as ``demo``'s folder, wrote a PNG file called ``demo``)."""
     if text.endswith(("/", os.sep)) or not text:
         raise argparse.ArgumentTypeError(
             f"name the figure's file, not a folder: got {text!r} (e.g. {text or './'}view.png)"
@@ -163,6 +164,11 @@ def figure_file(text: str) -> Path:
         raise argparse.ArgumentTypeError(
             f"name the figure's file: {path.name!r} is a suffix alone (e.g."
             f" {path.with_name('view' + path.name)})"
+        )
+    if not path.suffix:
+        raise argparse.ArgumentTypeError(
+            f"name the figure's file with its format's suffix: {text!r} has no suffix (e.g."
+            f" {path.with_name(path.name + '.png')}, or {path / 'view.png'} in that folder)"
         )
     return path
 

@@ -13,6 +13,7 @@ shows.
 from __future__ import annotations
 
 import functools
+import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -151,6 +152,7 @@ def compare(
     resume with the levels in other places is refused (:func:`check_resumable`), as one
     of levels another run played (``run_sha256``: the digest of the weights the learned
     method plays, the run's ``weights``, "final" or "best": recorded in each row).
+    ``progress``: a bar on stderr, where that is a terminal.
     """
     out_dir = Path(out_dir)
     csv_path = out_dir / "compare.csv"
@@ -164,7 +166,7 @@ def compare(
         (li, e) for li, e in enumerate(errors) if any((float(e), m) not in done for m in methods)
     ]
     bar = None
-    if progress:
+    if progress and sys.stderr.isatty():  # as a training run's: a log gets no redraws
         from tqdm import tqdm
 
         bar = tqdm(total=len(todo) * len(methods), desc="compare", unit="method")

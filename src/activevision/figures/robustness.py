@@ -12,15 +12,19 @@ import numpy as np
 
 from activevision.figures.canvas import new_figure, save_figure
 
+#: each panel's metric and axis label, in lines short enough that the two labels stay apart
+#: when long row names narrow the panels (a blind method's all-mild+robots-4)
 PANELS = (
     (
         "success_rate",
-        "success rate: mean share of the goal view's landmarks seen at the end"
-        "\n(%; whiskers: 95% interval, normal approximation; Wilson's where all are 0 or 100)",
+        "success rate: mean share of the goal view's"
+        "\nlandmarks seen at the end (%; whiskers: 95% interval,"
+        "\nnormal approximation; Wilson's where all are 0 or 100)",
     ),
     (
         "goal_reached",
-        "goal reached: share of episodes that end at the goal view"
+        "goal reached: share of episodes that end"
+        "\nat the goal view"
         "\n(%; whiskers: 95% Wilson interval)",
     ),
 )

@@ -87,11 +87,22 @@ def moving_average(values: np.ndarray, window: int) -> np.ndarray:
     return means
 
 
+def steps_on_axis(steps: np.ndarray, x: np.ndarray, table_steps: np.ndarray) -> np.ndarray:
+    """Where ``steps`` sit on the axis ``x`` of rows logged at ``table_steps``: between two
+    rows as far as their steps are (a run that ends between two epochs logs a short last
+    one, so one factor of epochs per step misplaced them), from 0 at step 0, and past the
+    last row at its epochs per step (a run still training)."""
+    steps, x, table_steps = (np.asarray(a, dtype=float) for a in (steps, x, table_steps))
+    inside = np.interp(steps, np.r_[0.0, table_steps], np.r_[0.0, x])
+    beyond = x[-1] + (steps - table_steps[-1]) * (x[-1] / table_steps[-1])
+    placed: np.ndarray = np.where(steps > table_steps[-1], beyond, inside)
+    return placed
+
+
 def _draw_validation(ax: Axes, x: np.ndarray, table: Columns, validation: Columns) -> None:
     """Greedy validation's success rate on the epoch axis of ``table``."""
-    epochs_per_step = x[-1] / np.asarray(table["step"])[-1]
     ax.plot(
-        np.asarray(validation["step"]) * epochs_per_step,
+        steps_on_axis(np.asarray(validation["step"]), x, np.asarray(table["step"])),
         validation["success_rate"],
         color="tab:orange",
         marker="s",
@@ -137,6 +148,9 @@ def draw_curve(ax: Axes, curve: Curve, table: Columns, validation: Columns) -> N
     ax.set_title(curve.title)
     if curve.x in ("epoch", "episode"):  # counts: a short run's axis read "epoch 1.2"
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        low, high = ax.get_xlim()
+        if np.floor(high) - np.ceil(low) < 1:  # < 2 whole counts in view: it fell back on 0.945...
+            ax.set_xlim(np.floor(low), max(np.ceil(high), np.floor(low) + 2))
     ax.set_xlabel(curve.xlabel or curve.x)
     ax.set_ylabel(curve.ylabel)
     ax.grid(True, alpha=0.3)
