@@ -133,3 +133,28 @@ def test_the_discrete_moves_settings_are_refused_on_a_continuous_run(
     assert main([*args, "--out", str(tmp_path / "d")]) == 0
     config = json.loads((tmp_path / "d" / "config.json").read_text())["env"]
     assert (config["step_deg"], config["action_set"]) != (3.0, "8way")
+
+
+@pytest.mark.parametrize(
+    ("preset", "setting", "why"),
+    [
+        (
+            "match_dagger_continuous",
+            "match.step_deg=5",
+            "only discrete moves read it (the step of the 8-way moves)",
+        ),
+        ("match_dagger", "match.max_move_deg=[5,5]", "only continuous moves are scaled by it"),
+    ],
+)
+def test_the_match_moves_of_the_other_kind_are_refused(
+    tmp_path, preset, setting, why, one_clear_line
+):
+    """``train --preset match_dagger_continuous --set match.step_deg=5`` trained a student
+    whose moves were still of up to 3 degrees, and stored the 5 unread in config.json (so
+    did match.max_move_deg on a discrete match run): refused before the run's folder."""
+    out = tmp_path / "run"
+    args = ["train", "--preset", preset, "--set", setting, "--steps", "40", "--out", str(out)]
+    assert main(args) == 2
+    field = setting.partition("=")[0]
+    one_clear_line(f"'{field}' is never read by this run: {why}")
+    assert not out.exists()
