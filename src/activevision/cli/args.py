@@ -74,6 +74,33 @@ _ONCE_ACTIONS = {
 }
 
 
+def distinct(noun: str) -> type[argparse.Action]:
+    """The action of a list option (``nargs="+"``) that refuses a value given twice, naming
+    it: ``--methods random random`` (``names the method random twice: give each method
+    once``) played random once, the repeat dropped silently. Its list is given once, as
+    every option that keeps one value (:func:`_once`)."""
+
+    class Distinct(argparse._StoreAction):
+        def __call__(
+            self,
+            parser: argparse.ArgumentParser,
+            namespace: argparse.Namespace,
+            values: str | Sequence[Any] | None,
+            option_string: str | None = None,
+        ) -> None:
+            seen: list[object] = []
+            for value in values if isinstance(values, list) else [values]:
+                if value in seen:  # by value: --track-margin 5 5.0 is one margin twice
+                    shown = f"{value:g}" if isinstance(value, float) else str(value)
+                    raise argparse.ArgumentError(
+                        self, f"names the {noun} {shown} twice: give each {noun} once"
+                    )
+                seen.append(value)
+            super().__call__(parser, namespace, values, option_string)
+
+    return _once(Distinct)
+
+
 class ArgumentParser(argparse.ArgumentParser):
     """argparse with a one-line error: ``activevision CMD: error: ...`` and exit code 2; an
     option that keeps one value (not ``--set``'s kind, which collects them) given twice is
