@@ -407,11 +407,17 @@ def not_a_run(run_dir: Path, option: str = "--run") -> str:
 
 def env_config_of_run(run_dir: Path | None) -> EnvConfig:
     """The EnvConfig a run trained on (its config.json), else the paper's default. Its
-    actions are the paper's discrete ones: a continuous policy moves by head targets
-    (``HeadTarget``), so every method plays the same env. A run trained on the match
-    (``match_ddqn``) plays episodes through the match's camera, with its moves: the image
-    its network takes and the moves its actions are (its config's ``env`` is the unused
-    default)."""
+    actions are discrete: a continuous policy moves by head targets (``HeadTarget``), so
+    every method plays the same env. A run trained on the match (``match_ddqn``) plays
+    episodes through the match's camera, with its moves: the image its network takes and
+    the moves its actions are (its config's ``env`` is the unused default).
+
+    The discrete moves the other methods (scan, random, oracle, entropy_steps...) make are
+    the run's own where its actions are discrete; beside a run of continuous moves, which
+    never reads ``step_deg`` or ``action_set``, they are the paper's (3 degrees, 8 ways):
+    its config's values were read here, and one it carried unread (from a ``--config``
+    file, or a run trained before ``--set`` refused them) made the baselines' moves
+    silently other than the paper's, and refused discrete ``--runs`` of the paper's."""
     from activevision.envs import EnvConfig
 
     if run_dir is None:
@@ -421,9 +427,13 @@ def env_config_of_run(run_dir: Path | None) -> EnvConfig:
 
     check_run(run_dir)
     config = load_config(run_dir / "config.json")
+    world = config.match if config.env_id == MATCH_ENV_ID else config.env
     env = config.env.replace(action_type="discrete")
     if config.env_id == MATCH_ENV_ID:
         match = config.match
         moves = {"step_deg": match.step_deg, "action_set": MATCH_ACTION_SET}
         env = env.through_camera(match.camera).replace(**moves)
+    if world.action_type == "continuous":  # its step_deg and action_set are unread
+        paper = EnvConfig()
+        env = env.replace(step_deg=paper.step_deg, action_set=paper.action_set)
     return env
