@@ -15,7 +15,6 @@ success rate).
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 from pathlib import Path
@@ -27,7 +26,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import torch
 
-from activevision.cli.args import positive_int, refused_by, seed
+from activevision.cli.args import ArgumentParser, positive_int, refused_by, seed
 from activevision.envs import ActiveVisionEnv
 from activevision.envs.observations import play_differences
 from activevision.experiments.evaluate import evaluate_policy, paired_steps
@@ -36,7 +35,7 @@ from activevision.training import load_config
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=Path, nargs="+", required=True)
     parser.add_argument("--episodes", type=positive_int, default=1000)
     parser.add_argument("--seed", type=seed, default=0)

@@ -8,7 +8,6 @@ single env measured in the same run is the reference. Last line: JSON.
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 
@@ -16,7 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 import activevision.envs  # noqa: F401
-from activevision.cli.args import positive_float, positive_int
+from activevision.cli.args import ArgumentParser, positive_float, positive_int
 
 PAPER_STEP_S = 0.320
 
@@ -49,7 +48,7 @@ def vector_env_steps_per_s(n: int, batches: int) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rounds", type=positive_int, default=3, help="best of this many")
     parser.add_argument(
         "--scale", type=positive_float, default=1.0, help="steps per measurement, x the default"

@@ -12,7 +12,6 @@ is not zero. Needs no trained run: commands that read one get a tiny run made fi
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import dataclasses
 import functools
@@ -25,7 +24,7 @@ import time
 import typing
 from pathlib import Path
 
-from activevision.cli.args import positive_int, seed
+from activevision.cli.args import ArgumentParser, positive_int, seed
 
 HOSTILE_NUMBERS = ["nan", "inf", "-inf", "1e309", "-1", "abc", "", "3.5", "0x10", "1_0_"]
 HOSTILE_JSON = ['"3"', "true", "null", "[1]", '{"a": 1}', "NaN", "Infinity", "-1e400", '"x"']
@@ -249,7 +248,7 @@ def make_tiny_run(directory: Path) -> Path:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=seed, default=0)
     parser.add_argument("--cases", type=positive_int, default=400, help="CLI cases at most")
     args = parser.parse_args()

@@ -18,7 +18,6 @@ The last printed line is one JSON object (``onnx_p50_ms``, ``onnx_p99_ms``, ``to
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -33,7 +32,7 @@ import torch
 
 import activevision
 from activevision.agents.q_network import QNetwork
-from activevision.cli.args import int_in, positive_int, refused_by
+from activevision.cli.args import ArgumentParser, int_in, positive_int, refused_by
 from activevision.export import export_onnx, export_run, policy_metadata
 from activevision.geometry import CameraConfig
 from activevision.runtime import FramePreprocessor, HeadController, robot_session_options
@@ -180,7 +179,7 @@ def conditions() -> dict[str, object]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--run", type=Path, help="training run to export (default: random init)")
     parser.add_argument(
         "--iterations", type=int_in(2, 10**7), default=2000, help="timed decisions per case"

@@ -13,7 +13,6 @@ The last line is one JSON object (``p50_ms``, ``p99_ms``, ``reference_p50_ms``, 
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import tempfile
@@ -24,7 +23,7 @@ import numpy as np
 import torch
 
 from activevision.agents.q_network import QNetwork
-from activevision.cli.args import int_in, refused_by
+from activevision.cli.args import ArgumentParser, int_in, refused_by
 from activevision.export import export_onnx, policy_metadata
 from activevision.geometry import CameraConfig
 from activevision.runtime import HeadController, pretrained_policy_path
@@ -50,7 +49,7 @@ def timed(call, n: int) -> list[float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--policy", type=Path, help="policy.onnx (default: the shipped one)")
     parser.add_argument(
         "--decisions", type=int_in(10, 10**7), default=3000, help="timed, in 10 rounds"

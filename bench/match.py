@@ -10,7 +10,6 @@ bouncing off them). Last line: JSON.
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 
@@ -18,7 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 import activevision.envs  # noqa: F401  (registers both envs)
-from activevision.cli.args import positive_int
+from activevision.cli.args import ArgumentParser, positive_int
 from activevision.envs.match.config import MatchConfig, OthersConfig
 from activevision.envs.robots import RobotsConfig
 
@@ -53,7 +52,7 @@ def single_match_ticks_per_s(ticks: int = 2000) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rounds", type=positive_int, default=3, help="alternating rounds")
     parser.add_argument("--batches", type=positive_int, default=200, help="N-env steps a round")
     args = parser.parse_args()

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from activevision.cli.args import int_in, refused_by
+from activevision.cli.args import ArgumentParser, int_in, refused_by
 from activevision.envs.match.config import MatchConfig
 from activevision.envs.match.heads import EntropyTrackTeacher
 from activevision.envs.match.vector import ActiveVisionMatchVectorEnv
@@ -57,7 +57,7 @@ def match_student(parser: argparse.ArgumentParser, policy: Path) -> HeadControll
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--policy", type=Path, help="a match student's policy.onnx")
     parser.add_argument(
         "--states", type=int_in(20, 10**6), default=200, help="match states timed, per round"

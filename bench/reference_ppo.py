@@ -12,7 +12,6 @@ DAgger run, when given), with the ratio goal-reached(DAgger) / goal-reached(PPO)
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from pathlib import Path
@@ -21,7 +20,7 @@ import gymnasium as gym
 import torch
 
 import activevision  # noqa: F401  (registers ActiveVision-v0)
-from activevision.cli.args import positive_float, positive_int, refused_by
+from activevision.cli.args import ArgumentParser, positive_float, positive_int, refused_by
 from activevision.envs import EnvConfig
 from activevision.experiments.compare import compare
 from activevision.experiments.policies import LearnedPolicy
@@ -67,7 +66,7 @@ def main() -> None:
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.logger import Logger
 
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--minutes", type=positive_float, default=11.0)
     parser.add_argument("--episodes", type=positive_int, default=200)
     parser.add_argument("--out", type=Path, default=Path("runs/ppo_prior"))

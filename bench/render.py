@@ -18,7 +18,6 @@ target leaves for all of them. Prints a table, then one JSON line.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -28,7 +27,7 @@ import numba
 import numpy as np
 from numba import njit
 
-from activevision.cli.args import positive_float, positive_int, seed
+from activevision.cli.args import ArgumentParser, positive_float, positive_int, seed
 from activevision.geometry.camera import CameraConfig
 from activevision.geometry.occlusion import robot_cylinders
 from activevision.rendering import Renderer
@@ -305,7 +304,7 @@ def randomised_world(renderer, pose, pan, tilt, ball, rng, args) -> dict[str, fl
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=positive_float, default=1.0, help="time per measurement")
     parser.add_argument("--rounds", type=positive_int, default=3, help="rounds of all measurements")
     parser.add_argument("--reference-frames", type=positive_int, default=50)

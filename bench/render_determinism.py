@@ -14,7 +14,6 @@ batched. Prints a table, then one JSON line.
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 
@@ -22,7 +21,7 @@ import numba
 import numpy as np
 
 import activevision.rendering.renderer as renderer_module
-from activevision.cli.args import int_in
+from activevision.cli.args import ArgumentParser, int_in
 from activevision.cli.args import seed as seed_arg
 from activevision.geometry import CameraConfig, FieldSpec
 from activevision.rendering import Renderer
@@ -97,7 +96,7 @@ def with_garbage(seed: int, path):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cameras", type=int_in(2, 10**7), default=12000)
     parser.add_argument("--seed", type=seed_arg, default=0)
     args = parser.parse_args()

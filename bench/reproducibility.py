@@ -11,13 +11,12 @@ The last printed line is one JSON object.
 
 from __future__ import annotations
 
-import argparse
 import json
 import subprocess
 import sys
 import time
 
-from activevision.cli.args import positive_int
+from activevision.cli.args import ArgumentParser, positive_int
 
 RUN = """
 import hashlib, sys, tempfile
@@ -55,7 +54,7 @@ def runs(threads: int, onednn_off: bool, repeats: int) -> tuple[int, float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=positive_int, default=4, help="processes per setting")
     args = parser.parse_args()
     results = {}

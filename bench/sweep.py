@@ -16,7 +16,6 @@ The last printed line is one JSON object.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import os
@@ -26,7 +25,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from activevision.cli.args import positive_int
+from activevision.cli.args import ArgumentParser, positive_int
 
 
 def run_sweep(steps: int, num_cpus: int, out_dir: Path) -> dict[str, Any]:
@@ -83,7 +82,7 @@ def run_sweep(steps: int, num_cpus: int, out_dir: Path) -> dict[str, Any]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         "--steps", type=positive_int, default=900, help="environment steps per trial"
     )

@@ -17,7 +17,6 @@ object as the last line.
 
 from __future__ import annotations
 
-import argparse
 import copy
 import json
 import os
@@ -37,7 +36,7 @@ from torch.nn import functional as F
 from activevision.agents.ddqn import DDQNLearner
 from activevision.agents.q_network import QNetwork
 from activevision.agents.replay.prioritized import PrioritizedReplayBuffer
-from activevision.cli.args import int_in, positive_int
+from activevision.cli.args import ArgumentParser, int_in, positive_int
 from activevision.training.config import TrainConfig
 from activevision.training.cpu import configure_torch_cpu, resolve_num_threads
 from activevision.training.trainer import Trainer
@@ -213,7 +212,7 @@ def report_lines(result: dict[str, Any]) -> list[str]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--updates", type=positive_int, default=40, help="timed updates per round")
     parser.add_argument("--rounds", type=positive_int, default=3, help="alternating rounds")
     parser.add_argument(

@@ -5,7 +5,6 @@ frames and info entries that are not byte-identical (dtypes included). Last line
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from typing import Any
@@ -14,7 +13,7 @@ import gymnasium as gym
 import numpy as np
 
 import activevision.envs  # noqa: F401
-from activevision.cli.args import positive_int
+from activevision.cli.args import ArgumentParser, positive_int
 
 N, SEED = 4, 0
 MODES = ("sync", "async", "vector_entry_point")
@@ -90,7 +89,7 @@ def compare(got: list[Batch], want: list[Batch]) -> dict[str, Any]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--steps", type=positive_int, default=1000, help="steps of every rollout")
     steps = parser.parse_args().steps
     actions = np.random.default_rng(1).integers(0, 9, (steps, N))

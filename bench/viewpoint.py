@@ -11,7 +11,6 @@ share the machine). The last line printed is a JSON summary.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -19,7 +18,7 @@ import time
 
 import numpy as np
 
-from activevision.cli.args import int_in, positive_int, seed
+from activevision.cli.args import ArgumentParser, int_in, positive_int, seed
 from activevision.geometry import CameraConfig, FieldSpec, field_landmarks, visible_landmarks
 from activevision.localisation import (
     DEFAULT_UKF,
@@ -60,7 +59,7 @@ def _best_time(fn, repeats: int) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--starts", type=positive_int, default=512)
     parser.add_argument("--loop-starts", type=positive_int, default=40)
     parser.add_argument("--batch", type=positive_int, default=64, help="at most --starts")

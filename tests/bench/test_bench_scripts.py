@@ -52,6 +52,45 @@ def test_help_and_a_bad_value(script):
     assert "Traceback" not in done.stderr and lines[-1].startswith(f"{script}: error: ")
 
 
+#: one option per script that keeps one value, with two good values
+TWICE = {
+    "continuous.py": ["--episodes", "1", "2"],
+    "env.py": ["--rounds", "1", "2"],
+    "fuzz_inputs.py": ["--cases", "1", "2"],
+    "inference.py": ["--iterations", "10", "20"],
+    "inference_inputs.py": ["--policy", "a.onnx", "b.onnx"],
+    "match.py": ["--batches", "1", "2"],
+    "match_student.py": ["--policy", "a.onnx", "b.onnx"],
+    "reference_ppo.py": ["--minutes", "1.5", "2.5"],
+    "render.py": ["--seconds", "1.5", "2.5"],
+    "render_determinism.py": ["--seed", "1", "2"],
+    "reproducibility.py": ["--repeats", "1", "2"],
+    "sweep.py": ["--steps", "1", "2"],
+    "train.py": ["--rounds", "1", "2"],
+    "vectorizers.py": ["--steps", "1", "2"],
+    "viewpoint.py": ["--repeats", "2", "3"],
+}
+
+
+def test_every_script_has_an_option_given_twice_here():
+    assert sorted(TWICE) == SCRIPTS
+
+
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_an_option_given_twice_is_one_line(script):
+    """``python bench/render.py --seconds 1 --seconds 2`` timed 2 s a measurement, the first
+    value dropped silently (a plain argparse parser): refused before any work, naming both,
+    in one line as the package's commands do."""
+    option, first, second = TWICE[script]
+    done = run(script, option, first, option, second)
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert done.returncode == 2, done.stderr
+    assert lines == [
+        f"{script}: error: argument {option}: given twice ({option} {first}, then {option}"
+        f" {second}): give it once (see {script} --help)"
+    ]
+
+
 #: a path option naming what is not there, or not the kind of policy the script times
 BAD_PATHS = [
     ("inference.py", ["--run", "/no/such/run"], "--run /no/such/run: not a training run"),

@@ -153,6 +153,61 @@ def test_a_value_given_twice_is_refused_naming_it(tmp_path, argv, named, one_cle
     assert not (tmp_path / "out").exists()
 
 
+_EXAMPLES = Path(__file__).parents[2] / "examples"
+
+
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [
+        (
+            ["evaluate", "--methods", "random", "scan", "random", "--episodes", "1"],
+            "argument --methods: names the method random twice: give each method once",
+        ),
+        (
+            ["compare", "--methods", "random", "random", "--episodes", "1", "--errors", "0"],
+            "argument --methods: names the method random twice: give each method once",
+        ),
+        (
+            ["match", "--methods", "random", "random", "--matches", "1", "--ticks", "1"],
+            "argument --methods: names the method random twice: give each method once",
+        ),
+        (
+            ["match", "--methods", "entropy_track", "--track-margin", "5", "5.0"]
+            + ["--matches", "1", "--ticks", "1"],
+            "argument --track-margin: names the margin 5 twice: give each margin once",
+        ),
+        (
+            ["evaluate", "--methods", "random", "--episodes", "1", "--strategy"]
+            + [f"{_EXAMPLES / 'centre_ball.py'}:CentreBall"] * 2,
+            "argument --strategy: names the strategy ",
+        ),
+        (
+            ["match", "--methods", "random", "--matches", "1", "--ticks", "1", "--strategy"]
+            + [f"{_EXAMPLES / 'uncertainty_glance.py'}:UncertaintyGlance"] * 2,
+            "argument --strategy: names the strategy ",
+        ),
+        (
+            ["episode", "--policies", "random", "random", "--seed", "1"],
+            "argument --policies: names the policy random twice: give each policy once",
+        ),
+        # the list itself is still given once
+        (
+            ["evaluate", "--methods", "random", "--methods", "scan"],
+            "argument --methods: given twice (--methods random, then --methods scan)",
+        ),
+    ],
+)
+def test_a_method_named_twice_is_refused_naming_it(tmp_path, argv, named, one_clear_line):
+    """``evaluate --methods random scan random`` scored random once, the repeat dropped
+    silently (so did compare's and match's --methods, --strategy, match's --track-margin 5
+    5.0 and episode's --policies, which drew one episode where two were asked for); as a
+    run or model named twice, it is refused, naming it."""
+    out = tmp_path / ("ep.png" if argv[0] == "episode" else "out")
+    assert main([*argv, "--out", str(out)]) == 2
+    one_clear_line(named)
+    assert not out.exists()
+
+
 def test_a_parsed_command_keeps_only_its_own_values():
     """The parser's note of the options given (to refuse one given twice) is not left in
     the namespace the command reads."""

@@ -133,3 +133,83 @@ def test_the_discrete_moves_settings_are_refused_on_a_continuous_run(
     assert main([*args, "--out", str(tmp_path / "d")]) == 0
     config = json.loads((tmp_path / "d" / "config.json").read_text())["env"]
     assert (config["step_deg"], config["action_set"]) != (3.0, "8way")
+
+
+@pytest.mark.parametrize(
+    ("preset", "setting", "why"),
+    [
+        (
+            "match_dagger_continuous",
+            "match.step_deg=5",
+            "only discrete moves read it (the step of the 8-way moves)",
+        ),
+        ("match_dagger", "match.max_move_deg=[5,5]", "only continuous moves are scaled by it"),
+    ],
+)
+def test_the_match_moves_of_the_other_kind_are_refused(
+    tmp_path, preset, setting, why, one_clear_line
+):
+    """``train --preset match_dagger_continuous --set match.step_deg=5`` trained a student
+    whose moves were still of up to 3 degrees, and stored the 5 unread in config.json (so
+    did match.max_move_deg on a discrete match run): refused before the run's folder."""
+    out = tmp_path / "run"
+    args = ["train", "--preset", preset, "--set", setting, "--steps", "40", "--out", str(out)]
+    assert main(args) == 2
+    field = setting.partition("=")[0]
+    one_clear_line(f"'{field}' is never read by this run: {why}")
+    assert not out.exists()
+
+
+def test_the_baselines_beside_a_continuous_run_make_the_papers_moves(
+    continuous_run, trained, tmp_path
+):
+    """Beside ``--run`` of continuous moves, the other methods make the paper's discrete
+    moves (3 degrees, 8 ways). They made the run's env.step_deg and action_set, which a
+    continuous run never reads: a config file carrying others (6 degrees, 4 ways) trained
+    the same kind of policy, yet made scan, random and the oracle move otherwise, and a
+    discrete run of the paper's moves was refused beside it."""
+    values = json.loads((continuous_run / "config.json").read_text())
+    values["env"] |= {"step_deg": 6.0, "action_set": "4way"}
+    carried = tmp_path / "carried.json"
+    carried.write_text(json.dumps(values))
+    run = tmp_path / "carried"
+    assert main(["train", "--config", str(carried), "--out", str(run)]) == 0
+    assert json.loads((run / "config.json").read_text())["env"]["step_deg"] == 6.0
+    episodes = {}
+    for name, scored in (("paper", continuous_run), ("carried", run)):
+        out = tmp_path / f"eval_{name}"
+        args = ["evaluate", "--run", str(scored), "--methods", "scan", "random", "oracle"]
+        assert main([*args, "--episodes", "4", "--out", str(out)]) == 0
+        episodes[name] = (out / "episodes.csv").read_bytes()
+    # the same episodes, moves and scores as beside the run of the paper's (default) values
+    assert episodes["carried"] == episodes["paper"]
+    # a discrete run of the paper's moves plays beside it (was: "moves of 3 deg, 8way,
+    # against 6 deg, 4way")
+    args = ["evaluate", "--run", str(run), "--runs", str(trained), "--methods", "scan"]
+    assert main([*args, "--episodes", "2", "--out", str(tmp_path / "beside")]) == 0
+
+
+def test_the_envs_of_runs_make_their_own_discrete_moves_or_the_papers(tmp_path):
+    """``env_config_of_run``: a discrete run's moves are its own (the episodes' or the
+    match's step), a continuous run's the paper's (3 degrees, 8 ways), whatever step its
+    config carries unread."""
+    import dataclasses
+
+    from activevision.cli.args import env_config_of_run
+    from activevision.training import preset
+    from activevision.training.config import save_config
+
+    cases = {
+        "discrete": (preset("paper"), "env", (6.0, "4way")),
+        "continuous": (preset("dagger_image_continuous"), "env", (3.0, "8way")),
+        "match_discrete": (preset("match_dagger"), "match", (6.0, "8way")),
+        "match_continuous": (preset("match_dagger_continuous"), "match", (3.0, "8way")),
+    }
+    for name, (config, section, moves) in cases.items():
+        world = getattr(config, section)
+        carried = {"step_deg": 6.0} | ({"action_set": "4way"} if section == "env" else {})
+        config = dataclasses.replace(config, **{section: world.replace(**carried)})
+        (tmp_path / name).mkdir()
+        save_config(config, tmp_path / name / "config.json")
+        env = env_config_of_run(tmp_path / name)
+        assert (env.action_type, env.step_deg, env.action_set) == ("discrete", *moves), name

@@ -91,12 +91,17 @@ def test_compare_plays_your_own_policy_at_every_error_level(tmp_path):
     ]
 
 
-def test_compare_plays_methods_in_the_order_given_each_once(tmp_path):
+def test_compare_plays_methods_in_the_order_given_and_refuses_a_repeat(tmp_path):
+    """In the order given (not the default's: oracle before random); a method named twice
+    was played once, the repeat dropped silently: refused (tests/cli/test_careless_files)."""
     out = tmp_path / "c"
-    argv = ["compare", "--methods", "random", "oracle", "random", "--episodes", "1"]
+    argv = ["compare", "--methods", "scan", "oracle", "random", "--episodes", "1"]
     assert main([*argv, "--errors", "0", "--out", str(out)]) == 0
     with (out / "compare.csv").open() as f:
-        assert [r["method"] for r in csv.DictReader(f)] == ["random", "oracle"]
+        assert [r["method"] for r in csv.DictReader(f)] == ["scan", "oracle", "random"]
+    repeat = ["compare", "--methods", "random", "oracle", "random", "--episodes", "1"]
+    assert main([*repeat, "--errors", "0", "--out", str(tmp_path / "r")]) == 2
+    assert not (tmp_path / "r").exists()
 
 
 @pytest.mark.parametrize(

@@ -354,7 +354,9 @@ def test_your_own_strategy_plays_beside_the_built_in_ones(tmp_path, capsys):
         ("folder_xyz:Mirror", "folder_xyz defines no class or function Mirror"),  # a package
         ("mine.txt:Mirror", "mine.txt is no FILE.py"),
         ("broken.py:Mirror", "broken.py:2: "),
-        ("mine.py:Mirror mine.py:Mirror", None),  # the same spec twice plays once
+        # the same spec twice played once, the repeat dropped silently
+        ("mine.py:Mirror mine.py:Mirror", "names the strategy mine.py:Mirror twice"),
+        ("mine.py:Mirror", None),
     ],
 )
 def test_a_bad_strategy_is_one_clear_line(tmp_path, monkeypatch, spec, needle, one_clear_line):

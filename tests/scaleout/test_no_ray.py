@@ -128,6 +128,14 @@ def test_a_set_key_is_checked_against_each_grid_observation_and_validation():
     assert checked_base(preset("paper"), episodes, {"eval_interval": [1000, 3000]})
     with pytest.raises(ValueError, match="this run never validates"):
         checked_base(preset("paper"), episodes, {"eval_interval": [0, 1000]})
+    # the match's moves: max_move_deg holds where every trial's are continuous (match_dagger's
+    # are discrete), and is refused where one trial's are not
+    moves = {"match.max_move_deg": [5.0, 5.0]}
+    continuous = {"match.action_type": ["continuous"]}
+    assert checked_base(preset("match_dagger"), moves, continuous).match.max_move_deg == (5, 5)
+    with pytest.raises(ValueError, match=r"'match\.max_move_deg' is never read by this run"):
+        both = {"match.action_type": ["discrete", "continuous"]}
+        checked_base(preset("match_dagger"), moves, both)
 
 
 def _metrics(run_dir: Path, success: list[float], epoch_steps: int = 300) -> None:

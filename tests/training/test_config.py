@@ -569,6 +569,50 @@ def test_values_another_setting_leaves_unread_are_refused_in_any_order():
     assert head.env.prior_error_range == (0.0, 2.0)
 
 
+def test_the_match_moves_another_setting_leaves_unread_are_refused():
+    """``match.step_deg`` on a match run of continuous moves and ``match.max_move_deg`` on
+    one of discrete moves were stored in config.json and never read (the match scales
+    continuous moves by max_move_deg, and steps discrete ones by step_deg); the setting that
+    makes them read, in either order, takes them, and a preset's values stay."""
+    with pytest.raises(
+        ValueError,
+        match=r"^'match\.step_deg' is never read by this run: only discrete moves read it .*"
+        r" continuous moves are scaled by match\.max_move_deg$",
+    ):
+        apply_overrides(preset("match_dagger_continuous"), ["match.step_deg=5"])
+    with pytest.raises(ValueError, match=r"^'match\.step_deg' is never read by this run"):
+        apply_overrides(
+            preset("match_dagger"), ["match.step_deg=5", "match.action_type=continuous"]
+        )
+    for name in ("match_dagger", "match_ddqn"):
+        with pytest.raises(
+            ValueError,
+            match=r"^'match\.max_move_deg' is never read by this run: only continuous moves are"
+            r" scaled by it \(match\.action_type=continuous\); this run's discrete moves are"
+            r" match\.step_deg$",
+        ):
+            apply_overrides(preset(name), ["match.max_move_deg=[5,5]"])
+    with pytest.raises(ValueError, match=r"^'match\.max_move_deg' is never read by this run"):
+        apply_overrides(
+            preset("match_dagger_continuous"),
+            ["match.max_move_deg=[5,5]", "match.action_type=discrete"],
+        )
+    # each read where the moves are of its kind, whichever comes first
+    config = apply_overrides(
+        preset("match_dagger"), ["match.max_move_deg=[5,5]", "match.action_type=continuous"]
+    )
+    assert (config.match.action_type, config.match.max_move_deg) == ("continuous", (5, 5))
+    config = apply_overrides(
+        preset("match_dagger_continuous"), ["match.action_type=discrete", "match.step_deg=5"]
+    )
+    assert (config.match.action_type, config.match.step_deg) == ("discrete", 5)
+    assert apply_overrides(preset("match_ddqn"), ["match.step_deg=5"]).match.step_deg == 5
+    # a preset's value of the other kind is no setting given (match_dagger's 3-degree moves)
+    assert preset("match_dagger").match.max_move_deg == (3.0, 3.0)
+    continuous = apply_overrides(preset("match_dagger"), ["match.action_type=continuous"])
+    assert continuous.match.max_move_deg == (3.0, 3.0)
+
+
 def test_a_shortened_preset_keeps_its_intervals_as_shares_of_its_run():
     """``--preset quickstart --steps 3000`` kept the 10,000-step validation interval and
     never validated; the preset's intervals scale with the run (hand-computed values)."""

@@ -5,6 +5,7 @@ student plays in ``activevision match`` in either action type."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 
 import numpy as np
@@ -344,10 +345,9 @@ def test_a_match_student_starts_from_another_runs_weights(tmp_path):
     with pytest.raises(ValueError, match=r"dagger\.init_from: .* another network or input"):
         MatchDaggerTrainer(other, tmp_path / "other", loggers=[])
     # a discrete student's moves are the action table's: the continuous moves' size, which
-    # its config carries unread, is no difference (it was refused, naming max_move_deg)
-    wider = tiny(
-        **{"match.max_move_deg": [10.0, 10.0], "dagger.init_from": str(tmp_path / "source")}
-    )
+    # its config carries unread, is no difference (it was refused, naming max_move_deg). Set
+    # on the config itself: --set and replace refuse it on a discrete run (never read)
+    wider = dataclasses.replace(warm, match=warm.match.replace(max_move_deg=(10.0, 10.0)))
     start = MatchDaggerTrainer(wider, tmp_path / "wider", loggers=[]).network.state_dict()
     assert all(torch.equal(start[k].cpu(), source[k]) for k in source)
     # a continuous student's moves are scaled by it: refused, naming it

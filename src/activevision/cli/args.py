@@ -74,6 +74,33 @@ _ONCE_ACTIONS = {
 }
 
 
+def distinct(noun: str) -> type[argparse.Action]:
+    """The action of a list option (``nargs="+"``) that refuses a value given twice, naming
+    it: ``--methods random random`` (``names the method random twice: give each method
+    once``) played random once, the repeat dropped silently. Its list is given once, as
+    every option that keeps one value (:func:`_once`)."""
+
+    class Distinct(argparse._StoreAction):
+        def __call__(
+            self,
+            parser: argparse.ArgumentParser,
+            namespace: argparse.Namespace,
+            values: str | Sequence[Any] | None,
+            option_string: str | None = None,
+        ) -> None:
+            seen: list[object] = []
+            for value in values if isinstance(values, list) else [values]:
+                if value in seen:  # by value: --track-margin 5 5.0 is one margin twice
+                    shown = f"{value:g}" if isinstance(value, float) else str(value)
+                    raise argparse.ArgumentError(
+                        self, f"names the {noun} {shown} twice: give each {noun} once"
+                    )
+                seen.append(value)
+            super().__call__(parser, namespace, values, option_string)
+
+    return _once(Distinct)
+
+
 class ArgumentParser(argparse.ArgumentParser):
     """argparse with a one-line error: ``activevision CMD: error: ...`` and exit code 2; an
     option that keeps one value (not ``--set``'s kind, which collects them) given twice is
@@ -391,11 +418,17 @@ def not_a_run(run_dir: Path, option: str = "--run") -> str:
 
 def env_config_of_run(run_dir: Path | None) -> EnvConfig:
     """The EnvConfig a run trained on (its config.json), else the paper's default. Its
-    actions are the paper's discrete ones: a continuous policy moves by head targets
-    (``HeadTarget``), so every method plays the same env. A run trained on the match
-    (``match_ddqn``) plays episodes through the match's camera, with its moves: the image
-    its network takes and the moves its actions are (its config's ``env`` is the unused
-    default)."""
+    actions are discrete: a continuous policy moves by head targets (``HeadTarget``), so
+    every method plays the same env. A run trained on the match (``match_ddqn``) plays
+    episodes through the match's camera, with its moves: the image its network takes and
+    the moves its actions are (its config's ``env`` is the unused default).
+
+    The discrete moves the other methods (scan, random, oracle, entropy_steps...) make are
+    the run's own where its actions are discrete; beside a run of continuous moves, which
+    never reads ``step_deg`` or ``action_set``, they are the paper's (3 degrees, 8 ways):
+    its config's values were read here, and one it carried unread (from a ``--config``
+    file, or a run trained before ``--set`` refused them) made the baselines' moves
+    silently other than the paper's, and refused discrete ``--runs`` of the paper's."""
     from activevision.envs import EnvConfig
 
     if run_dir is None:
@@ -405,9 +438,13 @@ def env_config_of_run(run_dir: Path | None) -> EnvConfig:
 
     check_run(run_dir)
     config = load_config(run_dir / "config.json")
+    world = config.match if config.env_id == MATCH_ENV_ID else config.env
     env = config.env.replace(action_type="discrete")
     if config.env_id == MATCH_ENV_ID:
         match = config.match
         moves = {"step_deg": match.step_deg, "action_set": MATCH_ACTION_SET}
         env = env.through_camera(match.camera).replace(**moves)
+    if world.action_type == "continuous":  # its step_deg and action_set are unread
+        paper = EnvConfig()
+        env = env.replace(step_deg=paper.step_deg, action_set=paper.action_set)
     return env

@@ -16,6 +16,7 @@ from activevision.cli.args import (
     check_run,
     check_weights,
     choice_list,
+    distinct,
     env_config_of_run,
     error_levels,
     figure_file,
@@ -151,7 +152,7 @@ def _user_methods(
     from activevision.experiments.methods import MethodContext, MethodFactory, user_method
 
     methods: dict[str, Callable[[float], HeadPolicy]] = {}
-    for spec in dict.fromkeys(args.strategy or ()):
+    for spec in args.strategy or ():  # each once: the parser refuses one named twice
         label, factory = user_method(spec)
         if label in taken or label in methods:
             raise ValueError(f"--strategy {spec}: a method named {label!r} plays already")
@@ -355,8 +356,8 @@ def _compare_into(out: Path, args: argparse.Namespace) -> None:
         learned = LearnedPolicy.from_run(args.run, weights=args.weights) if args.run else None
         methods = default_methods(env_config, learned)
         if args.methods:
-            # in the order given, each once
-            methods = {k: methods[k] for k in dict.fromkeys(args.methods) if k in methods}
+            # in the order given (each once: the parser refuses one named twice)
+            methods = {k: methods[k] for k in args.methods if k in methods}
         for name, policy in _more_runs(args, env_config, "learned" in methods).items():
             methods[name] = functools.partial(_same, policy)
         users = _user_methods(args, env_config, methods)
@@ -468,6 +469,7 @@ def _add_runs(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--strategy",
         nargs="+",
+        action=distinct("strategy"),
         metavar="FILE.py:NAME",
         help="your own methods, played beside --methods on the same episodes: NAME(context)"
         " in FILE.py (or MODULE:NAME), given an experiments.methods.MethodContext, returns a"
@@ -487,7 +489,13 @@ def add_parsers(sub: Any) -> None:
     )
     p.set_defaults(func=cmd_evaluate)
     _add_common(p, "a training run: adds the learned policy")
-    p.add_argument("--methods", nargs="+", type=method, help=" ".join(_method_names()))
+    p.add_argument(
+        "--methods",
+        nargs="+",
+        type=method,
+        action=distinct("method"),
+        help=" ".join(_method_names()),
+    )
     _add_runs(p)
     p.add_argument("--episodes", type=int_in(1, MAX_EPISODES), default=100)
     p.add_argument(
@@ -514,6 +522,7 @@ def add_parsers(sub: Any) -> None:
         "--methods",
         nargs="+",
         type=choice_list(_compare_method_names),
+        action=distinct("method"),
         help=" ".join(_compare_method_names()),
     )
     _add_runs(p)
@@ -544,7 +553,11 @@ def add_parsers(sub: Any) -> None:
     p.set_defaults(func=cmd_episode)
     _add_common(p, "a training run (for the learned policy)")
     p.add_argument(
-        "--policies", nargs="+", type=method, help="default: learned random (oracle random)"
+        "--policies",
+        nargs="+",
+        type=method,
+        action=distinct("policy"),
+        help="default: learned random (oracle random)",
     )
     p.add_argument("--out", type=figure_file, required=True, help=FIGURE_AND_GIF_HELP)
     add_overwrite(p)

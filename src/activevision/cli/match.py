@@ -16,6 +16,7 @@ from activevision.cli.args import (
     add_weights,
     check_weights,
     choice_list,
+    distinct,
     float_in,
     int_in,
     name,
@@ -241,8 +242,9 @@ def _strategies(
     models = _models(args.model or [])
     if args.run is not None and not (args.run / "config.json").is_file():
         raise ValueError(not_a_run(args.run))
-    methods = list(dict.fromkeys(args.methods or default_match_methods(args.run)))
-    margins = list(dict.fromkeys(args.track_margin or ()))
+    # each once: the parser refuses a method or margin named twice
+    methods = list(args.methods or default_match_methods(args.run))
+    margins = list(args.track_margin or ())
     if margins and "entropy_track" not in methods:
         raise ValueError("--track-margin sets entropy_track's margin: add it to --methods")
     if models and "onnx_policy" not in methods:
@@ -251,7 +253,7 @@ def _strategies(
         raise ValueError("--run is played by learned: add it to --methods")
     check_weights(args)
     strategies = []
-    for spec in dict.fromkeys(args.strategy or ()):
+    for spec in args.strategy or ():
         label, factory = load_strategy(spec)
         # a row of that name is read as the built-in's: privileged, a run's, the shipped
         # policy (report.md says so), whether or not the built-in plays too
@@ -467,6 +469,7 @@ def add_parsers(sub: Any) -> None:
         "--methods",
         nargs="+",
         type=choice_list(_method_names),
+        action=distinct("method"),
         metavar="NAME",
         help="strategies to play (default: all; learned with --run): " + " ".join(_method_names()),
     )
@@ -554,6 +557,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument(
         "--strategy",
         nargs="+",
+        action=distinct("strategy"),
         metavar="FILE.py:NAME",
         help="your own strategies, played beside --methods: NAME(config) in FILE.py (or"
         " MODULE:NAME) returns an object with reset(n, rng) and act(obs, info)"
@@ -574,6 +578,7 @@ def add_parsers(sub: Any) -> None:
         "--track-margin",
         type=float_in(0, 22, "degrees"),
         nargs="+",
+        action=distinct("margin"),
         metavar="DEG",
         help="how far inside the image entropy_track keeps the ball (default 5; 22, half"
         " the camera's vertical view, is ball tracking); with several, entropy_track plays"

@@ -158,6 +158,7 @@ DECIDING_KEYS = (
     "dagger.act_by",
     "env.observation",
     "env.action_type",
+    "match.action_type",
     "env.prior_error_range",
     "env.success_mode",
     "run.eval_interval",

@@ -659,8 +659,12 @@ def _unread_given(config: TrainConfig, path: str) -> str:
     with continuous ones, the success tolerance where success is by landmarks, validation's
     episodes where the run never validates, and a DAgger key that one match teacher, or one
     way of acting, reads and the run's does not (``_unread_by`` has the algo's and the
-    env's)."""
-    unread = _unread_env(config.env, path) or _unread_run(config.run, path)
+    env's). The match's moves likewise (``match.step_deg``, ``match.max_move_deg``)."""
+    unread = (
+        _unread_env(config.env, path)
+        or _unread_match(config.match, path)
+        or _unread_run(config.run, path)
+    )
     if unread or config.algo != "dagger":
         return unread
     dag = config.dagger
@@ -714,6 +718,24 @@ def _unread_env(env: EnvConfig, path: str) -> str:
         return (
             "only env.success_mode=tolerance ends an episode by it; this run's success is"
             f" {env.success_mode!r} (every landmark of the goal view in view)"
+        )
+    return ""
+
+
+def _unread_match(match: MatchConfig, path: str) -> str:
+    """Why a run on the match (ActiveVisionMatch-v0) never reads the ``match`` value at
+    ``path`` because of how its head moves ("" when it does): the 8-way moves' step with
+    continuous moves, and the continuous moves' size with discrete ones. (A run on another
+    env is refused any ``match.*`` key before this.)"""
+    if path == "match.step_deg" and match.action_type == "continuous":
+        return (
+            "only discrete moves read it (the step of the 8-way moves); this run's continuous"
+            " moves are scaled by match.max_move_deg"
+        )
+    if path == "match.max_move_deg" and match.action_type != "continuous":
+        return (
+            "only continuous moves are scaled by it (match.action_type=continuous); this"
+            " run's discrete moves are match.step_deg"
         )
     return ""
 
