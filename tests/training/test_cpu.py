@@ -56,3 +56,14 @@ def test_busy_machine_note_only_for_a_thread_per_core_on_a_busy_machine():
     assert busy_machine_note(2, load=9.0, cores=2) is None  # the user chose the threads
     assert busy_machine_note(1, load=9.0, cores=2) is None
     assert busy_machine_note(0, load=9.0, cores=1) is None  # one thread already
+
+
+def test_the_busy_machine_note_of_a_resumed_run_gives_no_advice_resume_refuses():
+    """``train --resume`` on a busy machine advised ``--set run.num_threads=1``, which
+    ``--resume`` refuses: its line names the run's own setting and what a new run sets."""
+    from activevision.training.cpu import busy_machine_note
+
+    note = busy_machine_note(0, load=6.5, cores=2, resuming=True)
+    assert note is not None and "load 6.5 on 2 cores" in note
+    assert "this run's setting" in note and "a resumed run keeps its threads" in note
+    assert "new run started with --set run.num_threads=1" in note

@@ -112,7 +112,7 @@ def _resume(args: argparse.Namespace) -> Path | None:
                 )
             print(f"{args.resume} is finished ({total} steps); nothing to train")
         else:
-            _warn_busy_machine(trainer.config.run.num_threads)
+            _warn_busy_machine(trainer.config.run.num_threads, resuming=True)
             trainer.train(args.steps)
     finally:
         trainer.close()
@@ -304,11 +304,11 @@ def _warn_never_synced(config: Any) -> None:
         )
 
 
-def _warn_busy_machine(num_threads: int) -> None:
+def _warn_busy_machine(num_threads: int, *, resuming: bool = False) -> None:
     """Warn where the run's threads would wait on cores other processes keep busy."""
     from activevision.training.cpu import busy_machine_note
 
-    note = busy_machine_note(num_threads)
+    note = busy_machine_note(num_threads, resuming=resuming)
     if note is not None:
         warnings.warn(note, stacklevel=2)
 

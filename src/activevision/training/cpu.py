@@ -71,12 +71,17 @@ BUSY_LOAD_MARGIN = 1.0
 
 
 def busy_machine_note(
-    num_threads: int, load: float | None = None, cores: int | None = None
+    num_threads: int,
+    load: float | None = None,
+    cores: int | None = None,
+    *,
+    resuming: bool = False,
 ) -> str | None:
     """One line for a run about to train with a thread per core (``num_threads`` 0) on a
     machine whose 1-minute load average ``load`` (read here when None) is more than
     :data:`BUSY_LOAD_MARGIN` above its ``cores``; None where it is not, or the user chose
-    the thread count."""
+    the thread count. ``resuming``: a run that continues keeps its ``config.json``'s
+    threads (``--resume`` takes no ``--set``), so the line says what a new run would set."""
     cores = cores or os.cpu_count() or 1
     if num_threads != 0 or cores < 2:
         return None
@@ -87,10 +92,16 @@ def busy_machine_note(
             return None
     if load <= cores + BUSY_LOAD_MARGIN:
         return None
+    busy = f"this machine is busy (load {load:.1f} on {cores} cores): a thread per core"
+    if resuming:
+        return (
+            f"{busy}, this run's setting (its config.json: run.num_threads 0), trains 4x"
+            " slower on such a machine than one thread; a resumed run keeps its threads, a"
+            " new run started with --set run.num_threads=1 uses one (docs/benchmarks.md)"
+        )
     return (
-        f"this machine is busy (load {load:.1f} on {cores} cores): a thread per core, the"
-        " default, trained 4x slower on such a machine than --set run.num_threads=1"
-        " (docs/benchmarks.md)"
+        f"{busy}, the default, trained 4x slower on such a machine than --set"
+        " run.num_threads=1 (docs/benchmarks.md)"
     )
 
 
