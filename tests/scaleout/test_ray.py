@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import logging
 import signal
 import subprocess
 import sys
@@ -183,7 +184,22 @@ def test_compare_ray_prints_the_workers_output_only_when_verbose(tmp_path, monke
     monkeypatch.setattr(module, "ray_session", recording_session)
     with pytest.raises(Started):
         compare_ray(tmp_path, ["random"], [0.0], 2, verbose=verbose)
-    assert started == [{"log_to_driver": verbose}]
+    quiet = {} if verbose else {"logging_level": logging.WARNING}
+    assert started == [{"log_to_driver": verbose, **quiet}]
+
+
+def test_compare_ray_prints_no_info_line_of_rays_start(tmp_path):
+    """From the command line (its own Ray instance): ``compare --ray`` printed Ray's INFO
+    line "Started a local Ray instance", which ``sweep`` hides; now neither does."""
+    out = tmp_path / "compare"
+    command = [sys.executable, "-m", "activevision.cli", "compare", "--ray", "--num-cpus", "1"]
+    command += ["--methods", "random", "--episodes", "2", "--errors", "0", "--out", str(out)]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    printed = done.stdout + done.stderr
+    assert "Started a local Ray instance" not in printed
+    assert "INFO" not in printed, printed
+    assert (out / "compare.csv").is_file()
 
 
 def test_a_failing_trial_is_reported_with_its_error(tmp_path):

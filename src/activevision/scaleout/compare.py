@@ -10,6 +10,7 @@ episode does not depend on what ran before it in the same process.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -95,9 +96,11 @@ def compare_ray(
     starts = list(range(0, episodes, chunk))
     limit = time_limit(ActiveVisionEnv(config))  # the tasks' envs', for the durations' bounds
 
-    # quiet: no worker's output; a chunk's error reaches ray.get as an exception, and an idle
-    # worker that Ray's shutdown stops with SIGTERM may print a traceback ("SystemExit: 1")
-    with ray_session(address, num_cpus, log_to_driver=verbose) as ray:
+    # quiet, as sweep: no INFO line of Ray's start ("Started a local Ray instance") and no
+    # worker's output; a chunk's error reaches ray.get as an exception, and an idle worker
+    # that Ray's shutdown stops with SIGTERM may print a traceback ("SystemExit: 1")
+    quiet_logs = {} if verbose else {"logging_level": logging.WARNING}
+    with ray_session(address, num_cpus, log_to_driver=verbose, **quiet_logs) as ray:
         task = ray.remote(num_cpus=1)(evaluate_chunk)
         config_ref = ray.put(config)
         pending: list[tuple[int, float, dict[str, list[Any]]]] = []
