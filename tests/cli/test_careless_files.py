@@ -280,6 +280,14 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+def _report(run: Path) -> tuple[list[str], str]:
+    """``report RUN --overwrite``'s warnings and page."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["report", str(run), "--overwrite"]) == 0
+    return [str(w.message) for w in caught], (run / "report.md").read_text()
+
+
 def test_report_leaves_out_matches_and_robustness_of_another_run_or_replaced_weights(run, capsys):
     """``match --run`` and ``robustness --run`` recorded nothing of the run they scored, and
     ``report`` showed whatever lay in RUN/match/ and RUN/robustness/ as the run's: another
@@ -305,20 +313,13 @@ def test_report_leaves_out_matches_and_robustness_of_another_run_or_replaced_wei
         assert list(reader.fieldnames or ())[-3:] == list(recorded), table
         assert [{key: row[key] for key in recorded} for row in rows] == [recorded] * len(rows)
 
-    def report() -> tuple[list[str], str]:
-        """report's warnings and page."""
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            assert main(["report", str(run), "--overwrite"]) == 0
-        return [str(w.message) for w in caught], (run / "report.md").read_text()
-
-    warned, page = report()
+    warned, page = _report(run)
     assert warned == []
     assert "## Head control through whole matches" in page and "## Robustness" in page
     # this run's weights replaced since (trained on, retrained): both left out, the page kept
     original = weights.read_bytes()
     weights.write_bytes(original + b" ")
-    warned, page = report()
+    warned, page = _report(run)
     assert len(warned) == 2, warned
     for line, table, again in zip(
         warned, (match_csv, robustness_csv), ("match", "robustness"), strict=True
@@ -331,7 +332,7 @@ def test_report_leaves_out_matches_and_robustness_of_another_run_or_replaced_wei
     weights.write_bytes(original)
     text = match_csv.read_text().replace(recorded["run_config_sha256"], "0" * 64)
     match_csv.write_text(text)
-    warned, page = report()
+    warned, page = _report(run)
     assert len(warned) == 1 and f"left {match_csv} out" in warned[0]
     assert "scored another run's config.json," in warned[0]
     assert "## Head control" not in page and "## Robustness" in page
@@ -340,7 +341,7 @@ def test_report_leaves_out_matches_and_robustness_of_another_run_or_replaced_wei
     assert main([*matches[:-1], "--out", str(run / "match"), "--overwrite"]) == 0
     with match_csv.open(newline="") as f:
         assert not set(recorded) & set(next(csv.reader(f)))
-    warned, page = report()
+    warned, page = _report(run)
     assert warned == [] and "## Head control through whole matches" in page
 
 
@@ -444,14 +445,7 @@ def test_report_leaves_out_figures_and_a_suite_that_played_no_policy_of_the_run(
     suite = ["robustness", "--episodes", "2", "--perturbations", "gain-dark-mild"]
     assert main([*suite, "--run", str(run)]) == 0
 
-    def report() -> tuple[list[str], str]:
-        """report's warnings and page."""
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            assert main(["report", str(run), "--overwrite"]) == 0
-        return [str(w.message) for w in caught], (run / "report.md").read_text()
-
-    warned, page = report()
+    warned, page = _report(run)
     assert warned == []
     for heading in ("## Success vs localisation error", "## One episode", "## Robustness"):
         assert heading in page
@@ -462,7 +456,7 @@ def test_report_leaves_out_figures_and_a_suite_that_played_no_policy_of_the_run(
     assert main(["demo", "--out", str(figure), "--overwrite"]) == 0
     shipped = ["robustness", "--shipped", "--episodes", "2", "--perturbations", "gain-dark-mild"]
     assert main([*shipped, "--out", str(run / "robustness"), "--overwrite"]) == 0
-    warned, page = report()
+    warned, page = _report(run)
     assert [line.split(" out of the report: ")[0] for line in warned] == [
         f"left {path}"
         for path in (run / "compare" / "compare.png", figure, run / "robustness/robustness.csv")
@@ -493,14 +487,6 @@ def test_an_episode_drawn_again_in_another_format_keeps_each_figures_record(run)
         assert main(["report", str(run), "--overwrite"]) == 0
     assert [str(w.message) for w in caught] == []
     assert "## One episode" in (run / "report.md").read_text()
-
-
-def _report(run: Path) -> tuple[list[str], str]:
-    """``report RUN``'s warnings and page."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        assert main(["report", str(run), "--overwrite"]) == 0
-    return [str(w.message) for w in caught], (run / "report.md").read_text()
 
 
 def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
