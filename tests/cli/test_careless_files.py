@@ -190,6 +190,18 @@ _EXAMPLES = Path(__file__).parents[2] / "examples"
             ["episode", "--policies", "random", "random", "--seed", "1"],
             "argument --policies: names the policy random twice: give each policy once",
         ),
+        # a row or a kidnap named twice was played once, the repeat dropped silently
+        (
+            ["robustness", "--method", "random", "--episodes", "1"]
+            + ["--perturbations", "robots-1", "robots-1"],
+            "argument --perturbations: names the perturbation robots-1 twice: give each"
+            " perturbation once",
+        ),
+        (
+            ["match", "--methods", "random", "--matches", "1", "--ticks", "9"]
+            + ["--kidnap-ticks", "5", "5"],
+            "argument --kidnap-ticks: names the tick 5 twice: give each tick once",
+        ),
         # the list itself is still given once
         (
             ["evaluate", "--methods", "random", "--methods", "scan"],
