@@ -352,6 +352,47 @@ def test_a_run_that_never_syncs_its_target_network_says_so(tmp_path, monkeypatch
     assert synced == ["b", "b"]  # steps 25 and 50
 
 
+def _train_warnings(argv, tmp_path, monkeypatch):
+    """The warnings ``train ARGV`` gives before it trains (training and its figures left
+    out: each test here is about the run's settings), and the config it would train."""
+    import activevision.training
+
+    trained = []
+    monkeypatch.setattr(activevision.training, "train", lambda config, run: trained.append(config))
+    monkeypatch.setattr(activevision.training, "plot_run", lambda run: run)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["train", *argv, "--out", str(tmp_path / "run")]) == 0  # nothing written
+    return [str(w.message) for w in caught], trained[0]
+
+
+def test_a_run_whose_validations_outplay_its_training_says_so(tmp_path, monkeypatch):
+    """``--preset data8x --steps 400`` scaled the preset's interval to 13 steps (the same
+    share of the run, rightly), and validated 200 episodes 30 times: 6,000 episodes in a
+    run of 400 steps, unsaid. The line names the fields to set; the presets at their own
+    lengths, the paper's and quickstart's runs say nothing of it."""
+    said, config = _train_warnings(["--preset", "data8x", "--steps", "400"], tmp_path, monkeypatch)
+    assert (config.run.eval_interval, config.run.eval_episodes) == (13, 200)  # 400 // 13 = 30
+    expected = (
+        "run.eval_interval (13) and run.eval_episodes (200): 30 validations play 6000 episodes,"
+        " more than the run's 400 steps, and take most of its time (--set eval_interval=N for"
+        " fewer validations, eval_episodes=N for fewer episodes each)"
+    )
+    assert expected in said
+    # 4 validations of 25 episodes are as many episodes as steps, not more; of 26 they are
+    for episodes, warned in ((25, False), (26, True)):
+        argv = ["--steps", "100", "--set", "eval_interval=25", "--set", f"eval_episodes={episodes}"]
+        said, _ = _train_warnings(argv, tmp_path, monkeypatch)
+        assert any("validations play" in line for line in said) == warned, said
+    from activevision.training.presets import PRESET_NAMES
+
+    for name in PRESET_NAMES:  # quickstart, data8x... at their own lengths
+        said, _ = _train_warnings(["--preset", name], tmp_path, monkeypatch)
+        assert not [line for line in said if "validations play" in line], name
+    said, _ = _train_warnings(["--preset", "quickstart", "--steps", "3000"], tmp_path, monkeypatch)
+    assert not [line for line in said if "validations play" in line]
+
+
 @pytest.mark.parametrize(
     ("starts", "interval", "total", "first"),
     [(40, 30, 60, 60), (40, 30, 61, None), (0, 60, 60, 60), (0, 60, 59, 60), (58, 1, 60, None)],

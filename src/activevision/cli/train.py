@@ -210,6 +210,7 @@ def _train_fresh(args: argparse.Namespace) -> Path:
     if config.run.tensorboard:
         _check_run_folders(run_dir, ("tensorboard",))
     _warn_never_validated(config)
+    _warn_validation_dominates(config)
     _warn_never_updated(config)
     _warn_never_synced(config)
     _warn_busy_machine(config.run.num_threads)
@@ -269,6 +270,28 @@ def _warn_never_validated(config: Any) -> None:
         warnings.warn(
             f"run.eval_interval ({run.eval_interval}) is past the run's {run.total_timesteps}"
             " steps: it never validates (no evaluations.csv rows, no best_policy.safetensors)",
+            stacklevel=2,
+        )
+
+
+def _warn_validation_dominates(config: Any) -> None:
+    """Warn where the run's validations would play more episodes than the run trains steps
+    (each episode is many steps, each validation on the weights of one moment): ``--preset
+    data8x --steps 400`` scaled the preset's interval to 13 steps, and its 30 validations
+    of 200 episodes took most of the run's time, the first ones on weights not yet updated.
+    A preset at its own length plays far fewer (``data8x``: 6,000 episodes in 240,000
+    steps; ``quickstart``: 400 in 40,000; ``paper`` does not validate)."""
+    run = config.run
+    if not 0 < run.eval_interval <= run.total_timesteps:
+        return  # no validation (or none before the run's end: _warn_never_validated)
+    validations = run.total_timesteps // run.eval_interval
+    episodes = validations * run.eval_episodes
+    if episodes > run.total_timesteps:
+        warnings.warn(
+            f"run.eval_interval ({run.eval_interval}) and run.eval_episodes"
+            f" ({run.eval_episodes}): {validations} validations play {episodes} episodes, more"
+            f" than the run's {run.total_timesteps} steps, and take most of its time (--set"
+            " eval_interval=N for fewer validations, eval_episodes=N for fewer episodes each)",
             stacklevel=2,
         )
 
