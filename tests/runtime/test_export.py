@@ -146,3 +146,61 @@ def test_export_run_refuses_a_config_edited_after_training(tmp_path):
     with pytest.raises(CheckpointError, match=message):
         export_run(run, tmp_path / "edited" / "policy.onnx")
     assert not (tmp_path / "edited").exists()
+
+
+@pytest.mark.parametrize("action_type", ["continuous", "discrete"])
+def test_export_run_records_the_moves_the_policy_makes(tmp_path, action_type):
+    """A continuous policy moves by ``max_move_deg``; its policy.json recorded the
+    ``step_deg`` (and ``action_set``) of its config, a field a continuous run never reads
+    (here 4 degrees, as a --config file may carry: the runtime never read it either). It
+    records its max move alone, beside the paper's discrete table (3 degrees, 8 ways); a
+    discrete policy's step stays its own (its actions index that table)."""
+    try:
+        from activevision.agents.q_network import QNetwork
+        from activevision.agents.student import StudentNetwork
+        from activevision.envs.actions import action_table
+        from activevision.training import preset, save_config
+        from activevision.training.checkpoint import save_tensors
+    except Exception as error:  # another subpackage is broken or absent
+        pytest.skip(f"activevision.envs / training not importable: {error}")
+    from activevision.export import export_run
+
+    run = tmp_path / "run"
+    run.mkdir()
+    torch.manual_seed(0)
+    if action_type == "continuous":
+        config = preset("dagger_head_continuous").replace(**{"dagger.act_by": "action"})
+        network: torch.nn.Module = StudentNetwork(2, 2, continuous=True).eval()
+        shape = network.metadata()
+    else:
+        config = preset("paper")
+        network = QNetwork(9).eval()
+        shape = {"n_actions": 9, "stack": 1, "image_shape": [120, 160], "dueling": False}
+    save_config(config, run / "config.json")
+    values = json.loads((run / "config.json").read_text())
+    values["env"]["step_deg"] = 4.0  # carried by the file: --set refuses it for continuous
+    (run / "config.json").write_text(json.dumps(values))
+    save_tensors(run / "policy.safetensors", network.state_dict(), shape)
+
+    written = json.loads(export_run(run, tmp_path / "out", verify=False).metadata_path.read_text())
+    meta = load_metadata(tmp_path / "out" / "policy.json")
+    if action_type == "continuous":
+        assert "step_deg" not in written and "action_set" not in written
+        assert written["max_move_deg"] == list(config.env.max_move_deg) == [10.0, 10.0]
+        assert (meta.step_deg, meta.action_set) == (None, None)
+        np.testing.assert_allclose(meta.action_table, action_table(3.0, "8way"), atol=1e-9)
+    else:
+        assert (written["step_deg"], written["action_set"]) == (4.0, "8way")
+        assert "max_move_deg" not in written
+        np.testing.assert_allclose(meta.action_table, action_table(4.0, "8way"), atol=1e-9)
+
+
+def test_an_older_continuous_policy_json_with_its_step_still_reads():
+    """The shipped policy (continuous) was exported with ``step_deg`` and ``action_set``:
+    it reads as before (the file's bytes are not rewritten)."""
+    from activevision.runtime import pretrained_policy_path
+
+    meta = load_metadata(pretrained_policy_path().with_suffix(".json"))
+    assert meta.action_type == "continuous"
+    assert (meta.step_deg, meta.action_set) == (3.0, "8way")
+    assert meta.max_move == pytest.approx((np.radians(10.0), np.radians(10.0)))

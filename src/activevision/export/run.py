@@ -116,11 +116,21 @@ def _world_metadata(
     or a ``MatchConfig``): its moves, camera, appearance and robots, and the observation;
     and of the run's files it was exported from (``config_sha256``, ``source``: the
     weights', :func:`policy_metadata`'s ``training_weights`` and
-    ``training_weights_sha256``)."""
+    ``training_weights_sha256``).
+
+    A discrete policy's moves are ``step_deg`` in ``action_set`` (its actions index their
+    table); a continuous one's are ``max_move_deg``, and it records no ``step_deg`` nor
+    ``action_set``: a continuous run never reads them, and the value its config carried
+    (the default, or one a ``--config`` file held) was written as if it moved by it. Its
+    ``action_table_deg`` (a key every policy.json has) holds the paper's discrete moves, those
+    the other methods make beside it (``cli.args.env_config_of_run``)."""
+    from activevision.envs import EnvConfig
     from activevision.envs.actions import ACTION_NAMES_8WAY, action_table
 
+    discrete = world.action_type == "discrete"
+    moves = (world.step_deg, action_set) if discrete else (EnvConfig().step_deg, "8way")
     metadata = policy_metadata(
-        action_table(world.step_deg, action_set),
+        action_table(*moves),
         world.camera,
         training_config_sha256=config_sha256,
         action_names=ACTION_NAMES_8WAY,
@@ -128,11 +138,12 @@ def _world_metadata(
         world={"appearance": world.appearance, "robots": world.robots},
         **source,
     )
-    metadata["step_deg"] = world.step_deg
-    metadata["action_set"] = action_set
+    if discrete:
+        metadata["step_deg"] = world.step_deg
+        metadata["action_set"] = action_set
     metadata["observation"] = observation
     metadata["vector_keys"] = list(keys)
     metadata["action_type"] = world.action_type
-    if world.action_type == "continuous":
+    if not discrete:
         metadata["max_move_deg"] = list(world.max_move_deg)
     return metadata

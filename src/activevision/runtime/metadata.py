@@ -81,7 +81,11 @@ alone writes neither.
 ``action_type`` is ``"discrete"`` (absent in older files: the graph scores the rows of
 ``action_table_deg``) or ``"continuous"``: the graph's output is one move ``(pan, tilt)`` in
 [-1, 1], scaled by ``max_move_deg`` (the largest move per decision on each axis, degrees).
-``action_table_deg`` is kept for the discrete moves the env also defines.
+``action_table_deg`` is kept for the discrete moves the env also defines. ``step_deg`` and
+``action_set`` are a discrete policy's: ``export`` writes neither for a continuous one
+(its table is then the paper's 3-degree 8-way moves); continuous files exported before
+(the shipped one's) record the ``step_deg`` their run's config carried unread, which is
+read and checked as before, and not acted on.
 """
 
 from __future__ import annotations
@@ -474,7 +478,8 @@ class PolicyMetadata:
     action_type: str = "discrete"
     max_move: tuple[float, float] | None = None  #: continuous: the largest move (pan, tilt) rad
     #: the env's discrete moves the action table holds: ``step_deg`` degrees a step in
-    #: ``action_set`` ("8way" or "4way"); None: a file written by ``export_onnx`` alone
+    #: ``action_set`` ("8way" or "4way"); None: a file written by ``export_onnx`` alone, or
+    #: a continuous policy's (which moves by ``max_move``)
     step_deg: float | None = None
     action_set: str | None = None
     #: the camera the policy was trained with (None: a policy.json from before it was kept)
