@@ -501,6 +501,48 @@ def test_an_episode_drawn_again_in_another_format_keeps_each_figures_record(run)
     assert "## One episode" in (run / "report.md").read_text()
 
 
+def test_a_figure_whose_gif_is_another_figures_is_refused_naming_it(run, tmp_path, capsys):
+    """``episode --out RUN/episode.svg`` beside RUN/episode.png draws RUN/episode.gif, the
+    GIF episode.png.json records: the refusal said only that episode.gif exists, and with
+    --overwrite from another start it replaced episode.png's GIF, unsaid; report then left
+    episode.png out ("episode.gif is not the one episode.png.json records"). The refusal
+    names the figure whose GIF it is and a name of its own; --overwrite replaces it and
+    warns that episode.png no longer goes with it. The default names are unchanged."""
+    png, svg, gif = run / "episode.png", run / "episode.svg", run / "episode.gif"
+    episode = ["episode", "--run", str(run), "--seed", "1"]
+    assert main(["episode", "--run", str(run), "--out", str(png)]) == 0
+    drawn = gif.read_bytes()
+    capsys.readouterr()
+    assert main([*episode, "--out", str(svg)]) == 2
+    assert capsys.readouterr().err == (
+        f"activevision episode: error: {gif} is the GIF of {png} (episode.png.json records it):"
+        f" name another figure (--out {run / 'episode-2.svg'} draws episode-2.gif), or pass"
+        " --overwrite to replace it (from another start, episode.png then no longer goes with"
+        " it: report leaves it out)\n"
+    )
+    assert not svg.exists() and gif.read_bytes() == drawn
+    # the name it offers draws a GIF of its own: episode.png is still the run's
+    assert main([*episode, "--out", str(run / "episode-2.svg")]) == 0
+    assert (run / "episode-2.gif").read_bytes() != drawn  # another start
+    assert _report(run)[0] == []
+    # --overwrite replaces the GIF, and says what became of episode.png
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main([*episode, "--out", str(svg), "--overwrite"]) == 0
+    assert [str(w.message) for w in caught] == [
+        f"{gif} is no longer the GIF episode.png.json records: draw {png} again (--out {png}"
+        " --overwrite) or remove it (report leaves it out)"
+    ]
+    warned, _ = _report(run)
+    assert len(warned) == 1 and "episode.gif is not the one episode.png.json records" in warned[0]
+    # demo the same: its record (the shipped policy's) owns demo.gif
+    demo = tmp_path / "demo.png"
+    assert main(["demo", "--out", str(demo)]) == 0
+    capsys.readouterr()
+    assert main(["demo", "--seed", "1", "--out", str(demo.with_suffix(".pdf"))]) == 2
+    assert f"{tmp_path / 'demo.gif'} is the GIF of {demo}" in capsys.readouterr().err
+
+
 def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
     """compare.csv recorded only the digest of the weights that played (run_sha256): a
     comparison of best weights the run replaced since was to be written again without

@@ -171,8 +171,10 @@ FIGURE_HELP = "the figure's file, in the format its suffix names (.png, .pdf, .s
 #: ``--out`` of ``episode`` and ``demo``: the record is
 #: :func:`activevision.experiments.provenance.record_path`'s
 FIGURE_AND_GIF_HELP = (
-    FIGURE_HELP + "; the first policy's GIF is written beside it (.gif), and a record of"
-    " what played in them (the figure's name + .json: episode.png.json), which report reads"
+    FIGURE_HELP + "; the first policy's GIF is written beside it (its name without the"
+    " suffix + .gif: episode.gif, one for episode.png and episode.svg; another figure's"
+    " is replaced only with --overwrite), and a record of what played in them (the"
+    " figure's name + .json: episode.png.json), which report reads"
 )
 
 

@@ -15,7 +15,7 @@ from activevision.cli.args import (
     path,
     seed,
 )
-from activevision.cli.outputs import check_figure_path, check_outputs, figure_and_gif
+from activevision.cli.outputs import check_episode_outputs, check_outputs, warn_replaced_gif
 
 
 def _opset(text: str) -> int:
@@ -54,15 +54,13 @@ def cmd_demo(args: argparse.Namespace) -> None:
     """Episode figure and GIF of the shipped (or a given) ONNX policy against random."""
     from activevision.experiments.episode_figure import trace_episode
     from activevision.experiments.policies import OnnxPolicy, RandomPolicy
-    from activevision.experiments.provenance import record_path, write_episode_record
+    from activevision.experiments.provenance import write_episode_record
     from activevision.figures.episode import animate_episode, plot_episodes
     from activevision.io import file_sha256
     from activevision.runtime import pretrained_policy_path
 
-    gif = figure_and_gif(args.out)
-    record = record_path(args.out)  # what played, for report (no run's policy: demo's)
-    check_outputs(named=[args.out, gif, record], overwrite=args.overwrite)
-    check_figure_path(args.out)
+    # the GIF and the record of what played, for report (no run's policy: demo's)
+    gif, record, shared = check_episode_outputs(args.out, overwrite=args.overwrite)
     model = args.policy or pretrained_policy_path()
     policy = OnnxPolicy(model)
     model_sha256 = file_sha256(model)  # as loaded
@@ -86,6 +84,7 @@ def cmd_demo(args: argparse.Namespace) -> None:
         model=None if args.policy is None else str(args.policy),
         model_sha256=model_sha256,
     )
+    warn_replaced_gif(shared, gif)
     print(f"wrote {args.out}, {gif} and {record}")
 
 

@@ -28,12 +28,12 @@ from activevision.cli.args import (
 )
 from activevision.cli.outputs import (
     OutputError,
-    check_figure_path,
+    check_episode_outputs,
     check_outputs,
-    figure_and_gif,
     is_training_run,
     make_output_folder,
     removed_on_failure,
+    warn_replaced_gif,
 )
 
 if TYPE_CHECKING:
@@ -404,16 +404,14 @@ def _try_users(
 def cmd_episode(args: argparse.Namespace) -> None:
     """The paper's qualitative episode figure (and a GIF) for two methods."""
     from activevision.experiments.episode_figure import trace_episode
-    from activevision.experiments.provenance import record_path, write_episode_record
+    from activevision.experiments.provenance import write_episode_record
     from activevision.figures.episode import animate_episode, plot_episodes
     from activevision.training.policy_files import scored_run
 
     check_weights(args)
     check_run(args.run)  # before the outputs inside it
-    gif = figure_and_gif(args.out)
-    record = record_path(args.out)  # what played, for report
-    check_outputs(named=[args.out, gif, record], overwrite=args.overwrite, run=args.run)
-    check_figure_path(args.out)
+    # the GIF and the record of what played, for report
+    gif, record, shared = check_episode_outputs(args.out, overwrite=args.overwrite, run=args.run)
     from activevision.experiments.compare import config_at_error
 
     env_config = config_at_error(env_config_of_run(args.run), 0.0)
@@ -435,6 +433,7 @@ def cmd_episode(args: argparse.Namespace) -> None:
         run=run,
         weights=args.weights,
     )
+    warn_replaced_gif(shared, gif)
     print(f"wrote {args.out}, {gif} and {record}")
 
 

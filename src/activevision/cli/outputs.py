@@ -21,6 +21,7 @@ Rules (what a user of a research tool expects, and what keeps a run loadable):
 from __future__ import annotations
 
 import tempfile
+import warnings
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -123,6 +124,52 @@ def figure_and_gif(figure: Path) -> Path:
             " written beside it"
         )
     return gif
+
+
+def check_episode_outputs(
+    figure: Path, *, overwrite: bool = False, run: Path | None = None
+) -> tuple[Path, Path, list[Path]]:
+    """The GIF and the record ``episode`` and ``demo`` write beside ``figure``
+    (:func:`figure_and_gif`, ``experiments.provenance.record_path``), checked as
+    :func:`check_outputs` and :func:`check_figure_path` check them, and the other figures
+    whose GIF it is too (``episode.svg`` beside ``episode.png``: one ``episode.gif``, which
+    ``episode.png.json`` records). Drawing ``episode.svg`` then replaced ``episode.png``'s
+    GIF, and from another start ``report`` left ``episode.png`` out ("episode.gif is not the
+    one episode.png.json records"): refused without ``overwrite``, naming that figure and
+    another name to draw to; with it, :func:`warn_replaced_gif` says so after drawing."""
+    from activevision.experiments.provenance import figures_sharing_gif, record_path
+
+    gif = figure_and_gif(figure)
+    record = record_path(figure)
+    outputs = [figure, gif, record]
+    check_outputs(named=outputs, overwrite=True, run=run)  # the rules before what exists
+    shared = figures_sharing_gif(figure) if gif.is_file() else []
+    if shared and not overwrite:
+        other, free = shared[0], figure.with_name(f"{figure.stem}-2{figure.suffix}")
+        raise OutputError(
+            f"{gif} is the GIF of {other} ({record_path(other).name} records it): name"
+            f" another figure (--out {free} draws {free.with_suffix('.gif').name}), or pass"
+            f" --overwrite to replace it (from another start, {other.name} then no longer"
+            " goes with it: report leaves it out)"
+        )
+    check_outputs(named=outputs, overwrite=overwrite, run=run)
+    check_figure_path(figure)
+    return gif, record, shared
+
+
+def warn_replaced_gif(shared: Sequence[Path], gif: Path) -> None:
+    """After ``episode``/``demo --overwrite`` drew ``gif``: warn, for each of the ``shared``
+    figures (:func:`check_episode_outputs`) whose record records another GIF, that it no
+    longer goes with it (the same episode drawn again is the same bytes: no warning)."""
+    from activevision.experiments.provenance import record_path, records_other_gif
+
+    for other in shared:
+        if records_other_gif(other, gif):
+            warnings.warn(
+                f"{gif} is no longer the GIF {record_path(other).name} records: draw {other}"
+                f" again (--out {other} --overwrite) or remove it (report leaves it out)",
+                stacklevel=2,
+            )
 
 
 def check_figure_path(figure: Path) -> None:

@@ -18,6 +18,7 @@ export from before the run was trained on or retrained is not the run's policy.
 
 from __future__ import annotations
 
+import glob
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -52,6 +53,40 @@ def record_path(figure: str | Path) -> Path:
     :data:`RECORD_SUFFIX`, one per figure."""
     figure = Path(figure)
     return figure.with_name(figure.name + RECORD_SUFFIX)
+
+
+def figures_sharing_gif(figure: str | Path) -> list[Path]:
+    """The other figures beside ``figure`` whose records (:func:`record_path`) record the
+    GIF ``figure``'s would be (``episode.svg`` beside ``episode.png``: one name without its
+    suffix, one ``episode.gif``), those that exist, by name. A record that does not read is
+    passed over (``report`` names it)."""
+    figure = Path(figure)
+    gif = figure.with_suffix(".gif")
+    shared = []
+    for record in sorted(figure.parent.glob(f"{glob.escape(gif.stem)}.*{RECORD_SUFFIX}")):
+        other = record.with_name(record.name.removesuffix(RECORD_SUFFIX))
+        if other.name == figure.name or other.with_suffix(".gif") != gif or not other.is_file():
+            continue
+        if gif.name in _recorded_files(record):
+            shared.append(other)
+    return shared
+
+
+def records_other_gif(figure: str | Path, gif: str | Path) -> bool:
+    """Whether ``figure``'s record records a GIF of ``gif``'s name other than ``gif`` as it
+    is now (one drawn since for another figure of its name: ``report`` leaves ``figure``
+    out)."""
+    recorded = _recorded_files(record_path(figure)).get(Path(gif).name)
+    return recorded is not None and recorded != file_sha256(gif)
+
+
+def _recorded_files(record: Path) -> dict[str, str]:
+    """The ``files`` a record holds (name -> SHA-256); none where it does not read."""
+    try:
+        files = read_json(record)["files"]
+        return {str(k): str(v) for k, v in dict(files).items()}
+    except (OSError, ValueError, TypeError, KeyError):
+        return {}
 
 
 def write_episode_record(
