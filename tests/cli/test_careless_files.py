@@ -190,6 +190,17 @@ _EXAMPLES = Path(__file__).parents[2] / "examples"
             ["episode", "--policies", "random", "random", "--seed", "1"],
             "argument --policies: names the policy random twice: give each policy once",
         ),
+        (
+            ["robustness", "--method", "random", "--episodes", "1", "--perturbations"]
+            + ["gain-dark-mild", "robots-1", "gain-dark-mild"],
+            "argument --perturbations: names the perturbation gain-dark-mild twice: give each"
+            " perturbation once",
+        ),
+        (
+            ["match", "--methods", "random", "--matches", "1", "--ticks", "9"]
+            + ["--kidnap-ticks", "5", "5"],
+            "argument --kidnap-ticks: names the tick 5 twice: give each tick once",
+        ),
         # the list itself is still given once
         (
             ["evaluate", "--methods", "random", "--methods", "scan"],
@@ -200,8 +211,9 @@ _EXAMPLES = Path(__file__).parents[2] / "examples"
 def test_a_method_named_twice_is_refused_naming_it(tmp_path, argv, named, one_clear_line):
     """``evaluate --methods random scan random`` scored random once, the repeat dropped
     silently (so did compare's and match's --methods, --strategy, match's --track-margin 5
-    5.0 and episode's --policies, which drew one episode where two were asked for); as a
-    run or model named twice, it is refused, naming it."""
+    5.0 and --kidnap-ticks 5 5, robustness --perturbations and episode's --policies, which
+    drew one episode where two were asked for); as a run or model named twice, it is
+    refused, naming it."""
     out = tmp_path / ("ep.png" if argv[0] == "episode" else "out")
     assert main([*argv, "--out", str(out)]) == 2
     one_clear_line(named)

@@ -535,6 +535,7 @@ def add_parsers(sub: Any) -> None:
         "--kidnap-ticks",
         type=positive_int,
         nargs="+",
+        action=distinct("tick"),
         metavar="TICK",
         help="kidnap our robot in these ticks of every match too (1: the first)",
     )

@@ -14,6 +14,7 @@ from activevision.cli.args import (
     check_run,
     check_weights,
     choice_list,
+    distinct,
     env_config_of_run,
     int_in,
     localisation_error,
@@ -188,6 +189,7 @@ def add_parsers(sub: Any) -> None:
         "--perturbations",
         nargs="+",
         type=choice_list(_perturbation_names),
+        action=distinct("perturbation"),
         metavar="NAME",
         help="play only these (clean is always played); default: all (see --list)",
     )
