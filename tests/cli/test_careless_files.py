@@ -529,6 +529,26 @@ def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
     assert list(read_csv(tmp_path / "c" / "compare.csv")[0])[-1] == "run_sha256"
 
 
+def test_a_comparison_of_the_final_weights_is_not_resumed_as_the_best(
+    run, tmp_path, one_clear_line
+):
+    """Where best_policy.safetensors is a copy of policy.safetensors (one digest), ``compare
+    --run R --weights best`` resumed the levels ``--weights final`` played: its rows named
+    both, and report read the CSV it wrote as damaged. Refused, as other weights are."""
+    shutil.copyfile(run / "policy.safetensors", run / "best_policy.safetensors")
+    out = tmp_path / "c"
+    argv = ["compare", "--run", str(run), "--methods", "random", "--episodes", "1"]
+    assert main([*argv, "--errors", "0", "--out", str(out)]) == 0
+    before = (out / "compare.csv").read_bytes()
+    resumed = ["--errors", "0,1", "--weights", "best", "--out", str(out)]
+    assert main([*argv, *resumed]) == 2
+    one_clear_line(
+        "holds levels played by the run's final weights, not its best: resume with --weights"
+        " final, or pass --overwrite"
+    )
+    assert (out / "compare.csv").read_bytes() == before
+
+
 def test_report_tells_a_policy_exported_before_the_run_was_trained_on(run):
     """``demo --policy RUN/policy.onnx --out RUN/episode.png`` was reported as the run's
     policy whenever RUN/policy.onnx was the file it played, though exported before the run
