@@ -510,7 +510,7 @@ def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
 
     shutil.copyfile(run / "policy.safetensors", run / "best_policy.safetensors")
     out = run / "compare"
-    argv = ["compare", "--methods", "random", "--episodes", "1", "--errors", "0"]
+    argv = ["compare", "--methods", "learned", "--episodes", "1", "--errors", "0"]
     assert main([*argv, "--run", str(run), "--weights", "best", "--out", str(out)]) == 0
     digest = _sha256(run / "best_policy.safetensors")
     [row] = read_csv(out / "compare.csv")
@@ -525,8 +525,21 @@ def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
     assert warned[0].endswith(
         f"activevision compare --run {run} --weights best --out {out} --overwrite"
     )
+    argv[2] = "random"  # no run: no learned
     assert main([*argv, "--out", str(tmp_path / "c")]) == 0  # no run: no run_weights
     assert list(read_csv(tmp_path / "c" / "compare.csv")[0])[-1] == "run_sha256"
+
+
+def test_a_comparison_without_learned_does_not_say_learned_plays(run):
+    """``compare --run R --methods random scan`` records the run (its env, its weights'
+    digest), and report said "`learned` plays this run's final weights." of a figure with
+    no learned curve."""
+    out = run / "compare"
+    argv = ["compare", "--run", str(run), "--methods", "random", "--episodes", "1"]
+    assert main([*argv, "--errors", "0", "--out", str(out)]) == 0
+    warned, page = _report(run)
+    assert warned == [] and "## Success vs localisation error" in page
+    assert "`learned` plays" not in page
 
 
 def test_a_comparison_of_the_final_weights_is_not_resumed_as_the_best(
