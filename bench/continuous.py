@@ -26,7 +26,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 import torch
 
-from activevision.cli.args import ArgumentParser, positive_int, refused_by, seed
+from activevision.cli.args import (
+    ArgumentParser,
+    env_config_of_run,
+    positive_int,
+    refused_by,
+    seed,
+)
 from activevision.envs import ActiveVisionEnv
 from activevision.envs.observations import play_differences
 from activevision.experiments.evaluate import evaluate_policy, paired_steps
@@ -52,8 +58,9 @@ def main() -> None:
     kinds: dict[str, str] = {}
     policies = {}
     with refused_by(parser, "--runs"):  # a config or weights file truncated, garbage...
-        config = load_config(args.runs[0] / "config.json")
-        env_config = config.env.replace(action_type="discrete")
+        # the first run's env, with its discrete moves (the oracle's, a discrete run's); the
+        # paper's beside a continuous run, which never reads its step_deg and action_set
+        env_config = env_config_of_run(args.runs[0])
         for run in args.runs:
             other = load_config(run / "config.json").env
             continuous = other.action_type == "continuous"

@@ -212,8 +212,9 @@ _EXAMPLES = Path(__file__).parents[2] / "examples"
 def test_a_method_named_twice_is_refused_naming_it(tmp_path, argv, named, one_clear_line):
     """``evaluate --methods random scan random`` scored random once, the repeat dropped
     silently (so did compare's and match's --methods, --strategy, match's --track-margin 5
-    5.0 and episode's --policies, which drew one episode where two were asked for); as a
-    run or model named twice, it is refused, naming it."""
+    5.0 and --kidnap-ticks 5 5, robustness --perturbations and episode's --policies, which
+    drew one episode where two were asked for); as a run or model named twice, it is
+    refused, naming it."""
     out = tmp_path / ("ep.png" if argv[0] == "episode" else "out")
     assert main([*argv, "--out", str(out)]) == 2
     one_clear_line(named)
@@ -552,7 +553,7 @@ def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
 
     shutil.copyfile(run / "policy.safetensors", run / "best_policy.safetensors")
     out = run / "compare"
-    argv = ["compare", "--methods", "random", "--episodes", "1", "--errors", "0"]
+    argv = ["compare", "--methods", "learned", "--episodes", "1", "--errors", "0"]
     assert main([*argv, "--run", str(run), "--weights", "best", "--out", str(out)]) == 0
     digest = _sha256(run / "best_policy.safetensors")
     [row] = read_csv(out / "compare.csv")
@@ -567,8 +568,41 @@ def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
     assert warned[0].endswith(
         f"activevision compare --run {run} --weights best --out {out} --overwrite"
     )
+    argv[2] = "random"  # no run: no learned
     assert main([*argv, "--out", str(tmp_path / "c")]) == 0  # no run: no run_weights
     assert list(read_csv(tmp_path / "c" / "compare.csv")[0])[-1] == "run_sha256"
+
+
+def test_a_comparison_without_learned_does_not_say_learned_plays(run):
+    """``compare --run R --methods random scan`` records the run (its env, its weights'
+    digest), and report said "`learned` plays this run's final weights." of a figure with
+    no learned curve."""
+    out = run / "compare"
+    argv = ["compare", "--run", str(run), "--methods", "random", "--episodes", "1"]
+    assert main([*argv, "--errors", "0", "--out", str(out)]) == 0
+    warned, page = _report(run)
+    assert warned == [] and "## Success vs localisation error" in page
+    assert "`learned` plays" not in page
+
+
+def test_a_comparison_of_the_final_weights_is_not_resumed_as_the_best(
+    run, tmp_path, one_clear_line
+):
+    """Where best_policy.safetensors is a copy of policy.safetensors (one digest), ``compare
+    --run R --weights best`` resumed the levels ``--weights final`` played: its rows named
+    both, and report read the CSV it wrote as damaged. Refused, as other weights are."""
+    shutil.copyfile(run / "policy.safetensors", run / "best_policy.safetensors")
+    out = tmp_path / "c"
+    argv = ["compare", "--run", str(run), "--methods", "random", "--episodes", "1"]
+    assert main([*argv, "--errors", "0", "--out", str(out)]) == 0
+    before = (out / "compare.csv").read_bytes()
+    resumed = ["--errors", "0,1", "--weights", "best", "--out", str(out)]
+    assert main([*argv, *resumed]) == 2
+    one_clear_line(
+        "holds levels played by the run's final weights, not its best: resume with --weights"
+        " final, or pass --overwrite"
+    )
+    assert (out / "compare.csv").read_bytes() == before
 
 
 def test_report_tells_a_policy_exported_before_the_run_was_trained_on(run):

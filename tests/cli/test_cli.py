@@ -282,6 +282,29 @@ def test_demo_names_the_policy_it_shows(tmp_path, monkeypatch):
     assert shown == [["shipped", "random"], ["my_run", "random"]]
 
 
+def test_demo_of_a_run_folder_records_the_policy_onnx_it_played(tmp_path, monkeypatch):
+    """``demo --policy RUN`` (the folder that holds policy.onnx, as HeadController takes it)
+    was '[Errno 21] Is a directory': the record hashed the path given, not the model read."""
+    import hashlib
+    import shutil
+
+    import activevision.figures.episode as episode_figures
+    from activevision.experiments.provenance import record_path
+    from activevision.runtime import pretrained_policy_path
+
+    monkeypatch.setattr(episode_figures, "plot_episodes", lambda t, out: Path(out).write_bytes(b""))
+    monkeypatch.setattr(episode_figures, "animate_episode", lambda trace, out: out.write_bytes(b""))
+    run = tmp_path / "my_run"
+    run.mkdir()
+    for name in ("policy.onnx", "policy.json"):
+        shutil.copy(pretrained_policy_path().with_name(name), run / name)
+    out = tmp_path / "ep.png"
+    assert main(["demo", "--policy", str(run), "--out", str(out)]) == 0
+    record = json.loads(record_path(out).read_text())
+    played = hashlib.sha256((run / "policy.onnx").read_bytes()).hexdigest()
+    assert (record["model"], record["model_sha256"]) == (str(run), played)
+
+
 def test_the_steps_where_every_method_solves_are_listed_one_space_apart(tmp_path, capsys):
     """The line read "(median): oracle 5,  entropy_jump 1": two spaces after each comma."""
     out = str(tmp_path / "e")

@@ -213,3 +213,32 @@ def test_the_envs_of_runs_make_their_own_discrete_moves_or_the_papers(tmp_path):
         save_config(config, tmp_path / name / "config.json")
         env = env_config_of_run(tmp_path / name)
         assert (env.action_type, env.step_deg, env.action_set) == ("discrete", *moves), name
+
+
+def test_bench_continuous_beside_a_continuous_run_makes_the_papers_moves(
+    continuous_run, trained, tmp_path
+):
+    """``bench/continuous.py --runs CONT DISC``: the first run's env made the discrete moves
+    of its config's env.step_deg and action_set, which a continuous run never reads (as
+    evaluate's did): a continuous run carrying 6 degrees, 4 ways moved the oracle otherwise
+    and refused a discrete run of the paper's moves beside it; it takes the paper's, as
+    ``env_config_of_run`` gives every command."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    values = json.loads((continuous_run / "config.json").read_text())
+    values["env"] |= {"step_deg": 6.0, "action_set": "4way"}
+    carried = tmp_path / "carried.json"
+    carried.write_text(json.dumps(values))
+    run = tmp_path / "carried"
+    assert main(["train", "--config", str(carried), "--out", str(run)]) == 0
+    bench = Path(__file__).parents[2] / "bench" / "continuous.py"
+    done = subprocess.run(
+        [sys.executable, str(bench), "--runs", str(run), str(trained), "--episodes", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "was trained on" not in done.stderr

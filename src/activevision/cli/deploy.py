@@ -63,7 +63,9 @@ def cmd_demo(args: argparse.Namespace) -> None:
     gif, record, shared = check_episode_outputs(args.out, overwrite=args.overwrite)
     model = args.policy or pretrained_policy_path()
     policy = OnnxPolicy(model)
-    model_sha256 = file_sha256(model)  # as loaded
+    # as loaded: the file the controller read (--policy may name the run or export folder
+    # that holds policy.onnx, as HeadController takes it)
+    model_sha256 = file_sha256(policy.controller.model_path)
     # the figure's row says whose policy it is (the class's name, "onnx", said neither): the
     # file's name, or its run's folder for an exported policy.onnx
     if args.policy is None:

@@ -97,14 +97,18 @@ def check_resumable(
     seed: int,
     errors: Sequence[float],
     run_sha256: str | None = None,
+    weights: str = "final",
 ) -> None:
     """Levels already in the CSV are kept only if they were played on the same episodes: the
     same count and seed, and for each error level the episodes its place in ``errors``
     gives (level ``i`` plays seed ``seed + i``'s: a level moved in the list would keep
     another level's episodes); and by the same run: ``run_sha256``, the digest of the
-    weights its learned policy plays (None: no run), against each row's (rows from before
-    the column are kept as before). Another run's levels were resumed as this run's (an
-    interrupted ``compare --run A --out C``, then ``--run B --out C``)."""
+    weights its learned policy plays (None: no run), against each row's, and the run's
+    ``weights`` ("final" or "best") against each row's :data:`WEIGHTS_COLUMN` (rows from
+    before a column are kept as before). Another run's levels were resumed as this run's (an
+    interrupted ``compare --run A --out C``, then ``--run B --out C``), and levels of the
+    final weights as the best's where the two files were one copy (report then read the
+    CSV's two names for the weights as damaged)."""
     places = {float(e): i for i, e in enumerate(errors)}
     for row in rows:
         if RUN_COLUMN in row and (row[RUN_COLUMN] or None) != run_sha256:
@@ -112,6 +116,12 @@ def check_resumable(
             raise ValueError(
                 f"{csv_path} holds levels played by {other}: resume with the same --run and"
                 " --weights, or pass --overwrite to start over"
+            )
+        if run_sha256 and row.get(WEIGHTS_COLUMN, weights) != weights:
+            raise ValueError(
+                f"{csv_path} holds levels played by the run's {row[WEIGHTS_COLUMN]} weights,"
+                f" not its {weights}: resume with --weights {row[WEIGHTS_COLUMN]}, or pass"
+                " --overwrite to start over"
             )
         if (row.get("episodes"), row.get("seed")) != (str(episodes), str(seed)):
             raise ValueError(
@@ -157,7 +167,7 @@ def compare(
     out_dir = Path(out_dir)
     csv_path = out_dir / "compare.csv"
     rows = done_levels(csv_path)
-    check_resumable(csv_path, rows, episodes, seed, errors, run_sha256)
+    check_resumable(csv_path, rows, episodes, seed, errors, run_sha256, weights)
     resumed = list(rows)
     done = {(float(r["error"]), r["method"]) for r in rows}
     config = config or EnvConfig()

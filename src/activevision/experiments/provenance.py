@@ -273,7 +273,11 @@ def compare_provenance(figure: Path, run: Path) -> Provenance:
         return Provenance(False, "it played no run (a compare without --run)", again)
     for played, which in (("final", "final"), ("best", "best validated")):
         if weights in (None, played) and scored_run(run, played)["weights_sha256"] == digest:
-            return Provenance(True, f"`learned` plays this run's {which} weights.")
+            # said only where learned played (--methods may leave it out: the others in
+            # the run's env)
+            learned = any(row["method"] == "learned" for row in rows)
+            said = f"`learned` plays this run's {which} weights." if learned else ""
+            return Provenance(True, said)
     why = f"it played another run's weights, {ANOTHER_RUN}"
     if weights == "best":
         again = f"compare --run {run} --weights best --out {figure.parent} --overwrite"

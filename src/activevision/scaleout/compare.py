@@ -89,7 +89,7 @@ def compare_ray(
     config = config or EnvConfig()
     csv_path = Path(out_dir) / "compare.csv"
     rows = done_levels(csv_path)
-    check_resumable(csv_path, rows, episodes, seed, errors, run_sha256)
+    check_resumable(csv_path, rows, episodes, seed, errors, run_sha256, weights)
     resumed = list(rows)
     done = {(float(r["error"]), r["method"]) for r in rows}
     run = str(run_dir) if run_dir is not None else None
