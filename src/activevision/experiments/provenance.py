@@ -19,7 +19,7 @@ export from before the run was trained on or retrained is not the run's policy.
 from __future__ import annotations
 
 import glob
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -126,7 +126,12 @@ def _damaged(path: Path, why: str) -> ValueError:
     return ValueError(f"{path} is damaged or not a file activevision wrote ({why})")
 
 
-def _stale(current: dict[str, str | None], recorded: dict[str, str | None]) -> list[str]:
+def weights_words(weights: str | None) -> str:
+    """How a page names a run's weights: "best validated" or "final"."""
+    return "best validated" if weights == "best" else "final"
+
+
+def stale_parts(current: Mapping[str, str | None], recorded: Mapping[str, str | None]) -> list[str]:
     """What of a run (``config.json``, ``weights``: those ``current`` holds) a record's
     digests do not match."""
     return [
@@ -156,7 +161,7 @@ class RunExport:
             return f"this run's policy.onnx, {self.why}"
         if self.weights is None:
             return "this run's policy.onnx"
-        which = "best validated" if self.weights == "best" else "final"
+        which = weights_words(self.weights)
         return f"this run's policy.onnx, exported from its {which} weights"
 
 
@@ -185,7 +190,7 @@ def run_export(run: Path, model_sha256: str) -> RunExport | None:
         current = {"config_sha256": current["config_sha256"]}
     else:
         recorded["weights_sha256"] = meta.training_weights_sha256
-    stale = _stale(current, recorded)
+    stale = stale_parts(current, recorded)
     if stale:
         return RunExport(f"exported from another run's {' and '.join(stale)}, {ANOTHER_RUN}")
     return RunExport(weights=weights)
@@ -235,14 +240,13 @@ def episode_provenance(figure: Path, run: Path) -> Provenance:
             why = "it played no policy of this run (an episode without --run)"
         return Provenance(False, why, again)
     weights = "best" if data["weights"] == "best" else "final"
-    stale = _stale(scored_run(run, weights), recorded)
+    stale = stale_parts(scored_run(run, weights), recorded)
     if stale:
         best = " --weights best" if weights == "best" else ""
         why = f"it played another run's {' and '.join(stale)}, {ANOTHER_RUN}"
         return Provenance(False, why, f"episode --run {run}{best} --out {figure} --overwrite")
     if "learned" in policies:
-        which = "best validated" if weights == "best" else "final"
-        played += f"; `learned` plays this run's {which} weights"
+        played += f"; `learned` plays this run's {weights_words(weights)} weights"
     return Provenance(True, played + ".")
 
 

@@ -37,6 +37,8 @@ from activevision.experiments.provenance import (
     compare_provenance,
     episode_provenance,
     run_export,
+    stale_parts,
+    weights_words,
 )
 from activevision.io import read_csv, read_json, write_text
 from activevision.text import counted
@@ -285,15 +287,9 @@ def _own_results(path: Path, rows: list[dict], run: Path, again: str) -> bool:
             f"{path} is damaged or not a file activevision wrote (its run columns"
             f" {', '.join(SCORED_RUN_COLUMNS)} are not one run's)"
         )
-    current = scored_run(run, weights)
-    stale = [
-        what
-        for what, mine, theirs in (
-            ("config.json", current["config_sha256"], config_sha256),
-            ("weights", current["weights_sha256"], weights_sha256),
-        )
-        if (mine or "") != theirs
-    ]
+    recorded_digests = {"config_sha256": config_sha256, "weights_sha256": weights_sha256}
+    current = {key: digest or "" for key, digest in scored_run(run, weights).items()}
+    stale = stale_parts(current, recorded_digests)
     if not stale:
         return True
     best = " --weights best" if weights == "best" else ""
@@ -459,8 +455,7 @@ def _weights_text(data: dict, rows: list[dict[str, str]]) -> str:
     said)."""
     if "weights" not in data or not any(r.get("method") == "learned" for r in rows):
         return ""
-    which = "best validated" if data["weights"] == "best" else "final"
-    return f" `learned` plays the run's {which} weights."
+    return f" `learned` plays the run's {weights_words(data['weights'])} weights."
 
 
 def _error_text(rows: list[dict]) -> str:
@@ -513,8 +508,7 @@ def _match_policies_text(rows: list[dict], run: Path) -> str:
         )
     weights = rows[0].get("run_weights")
     if "learned" in methods and weights:  # recorded: this run's, as it is (_own_results)
-        which = "best validated" if weights == "best" else "final"
-        text.append(f"learned: this run's {which} weights (`match --run`).")
+        text.append(f"learned: this run's {weights_words(weights)} weights (`match --run`).")
     elif "learned" in methods:  # a file from before the record
         text.append("learned: the training run `match --run` named.")
     else:
