@@ -267,24 +267,24 @@ def test_model_file_must_be_a_bare_file_name(tmp_path, capsys, model_file):
     assert_commands_refuse(run / "policy.onnx", tmp_path, capsys, "'model_file' must be")
 
 
-def test_model_file_must_be_beside_policy_json(tmp_path, capsys):
-    """A ``model_file`` of no file beside policy.json (a renamed or misplaced model) is
-    refused when the policy is loaded, naming it and the folder; the metadata alone reads."""
+def test_a_policy_pair_renamed_together_loads(tmp_path):
+    """An exported pair renamed together for the robot (``striker.onnx``, ``striker.json``,
+    whose ``model_file`` still says ``policy.onnx``) loads: the controller reads the
+    metadata named as the model it is given and the model's SHA-256 ties the two (a renamed
+    pair was refused for a ``model_file`` of no file beside it)."""
     from activevision.runtime import HeadController
 
-    model = tmp_path / "policy.onnx"
+    model = tmp_path / "striker.onnx"
     shutil.copy(pretrained_policy_path(), model)
-    path = tmp_path / METADATA_FILENAME
-    path.write_text(json.dumps(edited({"model_file": "missing.onnx"})))
-    assert load_metadata(path).model_file == "missing.onnx"
-    message = rf"^{path}: 'model_file' 'missing\.onnx' is no file beside it in {tmp_path}"
-    with pytest.raises(PolicyFileError, match=message):
+    values = edited({"model_file": "policy.onnx"})
+    (tmp_path / "striker.json").write_text(json.dumps(values))
+    controller = HeadController(model)
+    assert controller.metadata.model_file == "policy.onnx"
+    assert controller.metadata_path == tmp_path / "striker.json"
+    # and the model of another export under the pair's name is still refused
+    (tmp_path / "striker.json").write_text(json.dumps(edited({"model_sha256": "0" * 64})))
+    with pytest.raises(PolicyFileError, match="does not match its metadata"):
         HeadController(model)
-    assert_commands_refuse(model, tmp_path, capsys, "'model_file' 'missing.onnx' is no file")
-    # a model_file beside it, or none (files from before it was written), loads
-    for values in (edited({}), edited({"model_file": REMOVED})):
-        path.write_text(json.dumps(values))
-        assert HeadController(model).metadata.model_file == values.get("model_file")
 
 
 def assert_commands_refuse(model, tmp_path, capsys, message: str) -> None:

@@ -33,7 +33,6 @@ from activevision.runtime.metadata import (
     HeadLimits,
     PolicyFileError,
     PolicyMetadata,
-    check_model_file,
     load_metadata,
     metadata_path_for,
 )
@@ -202,7 +201,6 @@ class HeadController:
                 " its .json beside it) or the run or export folder that holds policy.onnx"
             )
         self.metadata: PolicyMetadata = load_metadata(self.metadata_path)
-        check_model_file(self.metadata, self.metadata_path)
         model_bytes = _read_model(self.model_path)
         if verify_checksum:
             digest = hashlib.sha256(model_bytes).hexdigest()

@@ -67,8 +67,10 @@ neither) come together, and the action table must be their moves. Keys no reader
 (``dueling``, ``preprocessing``, ``package_version``, ``training_config_sha256``,
 ``training_weights``, ``training_weights_sha256``) are checked for their type where present.
 ``model_file``, where present, must be a bare file name (the model sits beside its
-policy.json: no folder, ``..`` or absolute path), and
-:class:`~activevision.runtime.HeadController` refuses one that names no file beside it.
+policy.json: no folder, ``..`` or absolute path). It names the model as export wrote it: a
+controller loads the model it is given and the metadata of the same name beside it (a pair
+renamed together, ``striker.onnx`` and ``striker.json``, still loads; the model's SHA-256
+proves the two belong together), so it reads ``model_file`` for nothing else.
 
 ``training_config_sha256`` is the SHA-256 of the run's ``config.json`` the policy was exported
 from, ``training_weights`` which of its weights (``"final"``: ``policy.safetensors``,
@@ -793,8 +795,8 @@ class _MetadataReader:
 
     def model_file(self) -> str | None:
         """The model's file name, where present: a bare name, as export writes it (the model
-        sits beside its policy.json; :func:`check_model_file` checks it is there), never a
-        path out of the policy's folder, absolute or into a subfolder."""
+        sits beside its policy.json), never a path out of the policy's folder, absolute or
+        into a subfolder."""
         value = self.optional_str("model_file")
         if value is not None and (
             value in ("", ".", "..") or any(c in value for c in ("/", "\\", "\0"))
@@ -978,19 +980,6 @@ def _unique_pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
             raise PolicyFileError(f"duplicate key {key!r} (each key may appear once)")
         values[key] = value
     return values
-
-
-def check_model_file(metadata: PolicyMetadata, path: str | os.PathLike[str]) -> None:
-    """PolicyFileError naming the metadata file ``path`` unless its ``model_file`` (where
-    present) is a file beside it, as export writes the two."""
-    path = Path(path)
-    name = metadata.model_file
-    if name is not None and not (path.parent / name).is_file():
-        raise PolicyFileError(
-            f"{path}: 'model_file' {name!r} is no file beside it in {path.parent} (export"
-            " writes the model beside its policy.json; rename the model back, or set"
-            " 'model_file' to its name)"
-        )
 
 
 def load_metadata(path: str | os.PathLike[str]) -> PolicyMetadata:
