@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+from pathlib import Path
 
 import pytest
 
@@ -160,6 +161,18 @@ def test_the_match_moves_of_the_other_kind_are_refused(
     assert not out.exists()
 
 
+def _carrying_unread_moves(continuous_run: Path, tmp_path: Path) -> Path:
+    """A continuous run trained from ``continuous_run``'s config with env.step_deg 6 and
+    action_set 4way carried in its config file (a continuous run never reads them)."""
+    values = json.loads((continuous_run / "config.json").read_text())
+    values["env"] |= {"step_deg": 6.0, "action_set": "4way"}
+    carried = tmp_path / "carried.json"
+    carried.write_text(json.dumps(values))
+    run = tmp_path / "carried"
+    assert main(["train", "--config", str(carried), "--out", str(run)]) == 0
+    return run
+
+
 def test_the_baselines_beside_a_continuous_run_make_the_papers_moves(
     continuous_run, trained, tmp_path
 ):
@@ -168,12 +181,7 @@ def test_the_baselines_beside_a_continuous_run_make_the_papers_moves(
     continuous run never reads: a config file carrying others (6 degrees, 4 ways) trained
     the same kind of policy, yet made scan, random and the oracle move otherwise, and a
     discrete run of the paper's moves was refused beside it."""
-    values = json.loads((continuous_run / "config.json").read_text())
-    values["env"] |= {"step_deg": 6.0, "action_set": "4way"}
-    carried = tmp_path / "carried.json"
-    carried.write_text(json.dumps(values))
-    run = tmp_path / "carried"
-    assert main(["train", "--config", str(carried), "--out", str(run)]) == 0
+    run = _carrying_unread_moves(continuous_run, tmp_path)
     assert json.loads((run / "config.json").read_text())["env"]["step_deg"] == 6.0
     episodes = {}
     for name, scored in (("paper", continuous_run), ("carried", run)):
@@ -225,14 +233,8 @@ def test_bench_continuous_beside_a_continuous_run_makes_the_papers_moves(
     ``env_config_of_run`` gives every command."""
     import subprocess
     import sys
-    from pathlib import Path
 
-    values = json.loads((continuous_run / "config.json").read_text())
-    values["env"] |= {"step_deg": 6.0, "action_set": "4way"}
-    carried = tmp_path / "carried.json"
-    carried.write_text(json.dumps(values))
-    run = tmp_path / "carried"
-    assert main(["train", "--config", str(carried), "--out", str(run)]) == 0
+    run = _carrying_unread_moves(continuous_run, tmp_path)
     bench = Path(__file__).parents[2] / "bench" / "continuous.py"
     done = subprocess.run(
         [sys.executable, str(bench), "--runs", str(run), str(trained), "--episodes", "1"],
