@@ -282,6 +282,32 @@ def test_demo_names_the_policy_it_shows(tmp_path, monkeypatch):
     assert shown == [["shipped", "random"], ["my_run", "random"]]
 
 
+def test_demo_of_a_run_folder_names_its_rows_after_the_run(tmp_path, monkeypatch):
+    """``demo --policy .`` in the run folder (as ``--policy RUN`` names the folder that holds
+    policy.onnx) drew rows named "": the name came from the path given, not the model read."""
+    import shutil
+
+    import activevision.figures.episode as episode_figures
+    from activevision.runtime import pretrained_policy_path
+
+    shown: list[list[str]] = []
+
+    def plot(traces, out):
+        shown.append([t.policy for t in traces])
+        Path(out).write_bytes(b"")
+
+    monkeypatch.setattr(episode_figures, "plot_episodes", plot)
+    monkeypatch.setattr(episode_figures, "animate_episode", lambda trace, out: out.write_bytes(b""))
+    run = tmp_path / "my_run"
+    run.mkdir()
+    for name in ("policy.onnx", "policy.json"):
+        shutil.copy(pretrained_policy_path().with_name(name), run / name)
+    monkeypatch.chdir(run)
+    assert main(["demo", "--policy", ".", "--out", "a.png"]) == 0
+    assert main(["demo", "--policy", str(run), "--out", "b.png"]) == 0
+    assert shown == [["my_run", "random"], ["my_run", "random"]]
+
+
 def test_demo_of_a_run_folder_records_the_policy_onnx_it_played(tmp_path, monkeypatch):
     """``demo --policy RUN`` (the folder that holds policy.onnx, as HeadController takes it)
     was '[Errno 21] Is a directory': the record hashed the path given, not the model read."""

@@ -67,12 +67,13 @@ def cmd_demo(args: argparse.Namespace) -> None:
     # that holds policy.onnx, as HeadController takes it)
     model_sha256 = file_sha256(policy.controller.model_path)
     # the figure's row says whose policy it is (the class's name, "onnx", said neither): the
-    # file's name, or its run's folder for an exported policy.onnx
+    # file's name, or its run's folder for an exported policy.onnx (that read: --policy may
+    # name its folder, "." in it)
     if args.policy is None:
         policy.name = "shipped"
     else:
-        stem = args.policy.stem
-        policy.name = args.policy.resolve().parent.name if stem == "policy" else stem
+        read = Path(policy.controller.model_path)
+        policy.name = read.resolve().parent.name if read.stem == "policy" else read.stem
     config = policy.env_config()  # the observation the policy takes; an exact prior pose
     traces = [trace_episode(p, args.seed, config) for p in (policy, RandomPolicy(config))]
     plot_episodes(traces, args.out)
