@@ -544,6 +544,24 @@ def test_a_figure_whose_gif_is_another_figures_is_refused_naming_it(run, tmp_pat
     assert f"{tmp_path / 'demo.gif'} is the GIF of {demo}" in capsys.readouterr().err
 
 
+def test_a_figure_of_no_format_beside_a_gifs_figure_is_refused_for_its_format(tmp_path, capsys):
+    """``demo --out demo.txt`` beside demo.png (whose record holds demo.gif) was refused for
+    the GIF, offering ``--out demo-2.txt``, a name refused in turn for its format; with
+    --overwrite, the format. The format is said first, as for any figure."""
+    from activevision.experiments.provenance import record_path
+
+    png, gif = tmp_path / "demo.png", tmp_path / "demo.gif"
+    png.write_bytes(b"png")
+    gif.write_bytes(b"gif")
+    record_path(png).write_text(json.dumps({"files": {"demo.png": "0", "demo.gif": "1"}}))
+    for overwrite in ([], ["--overwrite"]):
+        assert main(["demo", "--out", str(tmp_path / "demo.txt"), *overwrite]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"activevision demo: error: --out {tmp_path / 'demo.txt'}: a figure")
+        assert err.count("\n") == 1 and "demo-2" not in err
+    assert gif.read_bytes() == b"gif"
+
+
 def test_a_comparison_records_which_weights_played_for_report(run, tmp_path):
     """compare.csv recorded only the digest of the weights that played (run_sha256): a
     comparison of best weights the run replaced since was to be written again without

@@ -143,6 +143,7 @@ def check_episode_outputs(
     record = record_path(figure)
     outputs = [figure, gif, record]
     check_outputs(named=outputs, overwrite=True, run=run)  # the rules before what exists
+    check_figure_path(figure)  # before a name of its own is offered in its format
     shared = figures_sharing_gif(figure) if gif.is_file() else []
     if shared and not overwrite:
         other, free = shared[0], figure.with_name(f"{figure.stem}-2{figure.suffix}")
@@ -153,7 +154,6 @@ def check_episode_outputs(
             " goes with it: report leaves it out)"
         )
     check_outputs(named=outputs, overwrite=overwrite, run=run)
-    check_figure_path(figure)
     return gif, record, shared
 
 
